@@ -1,0 +1,276 @@
+"""Parameters of the plant and of the tuned controller: frozen, validated, with units.
+
+Every default lives here. The four tuned settings (``value``, error limit, ``k``,
+``Ts/Tf``, plus the acceleration law) are kept apart from the plant's physical data, so a
+search varies :class:`Settings` and never touches :class:`Plant`.
+
+Units: angles in rad (``_rad``), speeds in rad/s, accelerations in rad/s², torques in
+N·m, inertia in kg·m², time in s or in controller ticks (``_ticks``), encoder positions
+in counts (quadrature ×4).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+from vfgym._validate import check_choice, check_int, check_real
+
+# --- the paper's set-up (seed 000, §4) -------------------------------------------------
+PAPER_TICK_HZ = 140_000.0
+"""Controller sampling frequency f (Hz): the SGME-02A's highest pulse frequency."""
+PAPER_PULSE_RAD = 2.0 * math.pi / 2048.0
+"""Pulse equivalent δ (rad per command pulse): one encoder line of a 2048-line encoder."""
+PAPER_ACCEL_LIMIT_RAD_S2 = 140e3
+"""The motor's acceleration limit the paper tunes against (rad/s²)."""
+PAPER_K = PAPER_TICK_HZ**2 * PAPER_PULSE_RAD / PAPER_ACCEL_LIMIT_RAD_S2
+"""k = a_max / a_motor with a_max = f²·δ (paper eq. 1): ≈ 429.5."""
+PAPER_STEP_RAD = 10.0
+"""The step of the paper's Fig. 4 (rad)."""
+
+ACCEL_LAWS = ("rise", "slew")
+"""``rise``: the error may grow away from zero by at most value/k a tick (the paper's
+reading, default); ``slew``: |e_i − e_prev| ≤ value/k both ways (see MODEL.md §1)."""
+
+
+@dataclass(frozen=True)
+class Settings:
+    """The tuned settings of the V-F controller and the servo's filter.
+
+    value_rad: V-F transformer threshold ``value`` (rad); a pulse per ``value`` of
+        accumulated error, so the position gain is Kv = δ/(value·T).
+    error_limit_rad: error limit ``L`` (rad) applied to the error before the accumulator.
+    k: acceleration ratio a_max/a_motor (≥ 1); the error may rise by value/k a tick.
+    ts_over_tf: the servo's digital filter ratio A = Ts/Tf in (0, 1] (1: no filtering).
+    accel_law: ``"rise"`` (default) or ``"slew"``.
+    """
+
+    value_rad: float = 1.0
+    error_limit_rad: float = 1.0
+    k: float = PAPER_K
+    ts_over_tf: float = 0.25
+    accel_law: str = "rise"
+
+    def __post_init__(self) -> None:
+        _set(self, "value_rad", check_real("value_rad", self.value_rad, 0.0, lo_open=True))
+        _set(
+            self,
+            "error_limit_rad",
+            check_real("error_limit_rad", self.error_limit_rad, 0.0, lo_open=True),
+        )
+        _set(self, "k", check_real("k", self.k, 1.0))
+        _set(
+            self, "ts_over_tf", check_real("ts_over_tf", self.ts_over_tf, 0.0, 1.0, lo_open=True)
+        )
+        check_choice("accel_law", self.accel_law, ACCEL_LAWS)
+
+    def replace(self, **changes: Any) -> Settings:
+        """A copy with some fields changed (validated again)."""
+        return replace(self, **changes)
+
+
+PAPER_SETTINGS = Settings()
+"""The paper's baseline: value = L = 1 rad, k = f²δ/140e3, Ts/Tf = 1/4 (the patent's A)."""
+
+
+@dataclass(frozen=True)
+class Motor:
+    """A servomotor with its load, encoder and torque–speed characteristic.
+
+    The torque available for motoring is ``peak_torque_nm`` up to ``knee_speed_rad_s``,
+    then falls linearly to ``torque_at_max_speed_nm`` at ``max_speed_rad_s``, and is zero
+    above it (the drive's voltage limit). Braking torque (torque against the motion) is
+    available up to ``peak_torque_nm`` at any speed.
+    """
+
+    name: str = "SGME-02A"
+    rotor_inertia_kgm2: float = 0.106e-4
+    inertia_ratio: float = 0.0
+    """Load inertia over rotor inertia; total J = rotor·(1 + ratio)."""
+    viscous_nm_s_rad: float = 0.0
+    coulomb_nm: float = 0.0
+    load_torque_nm: float = 0.0
+    """A constant torque opposing positive motion (e.g. gravity on a vertical axis)."""
+    rated_torque_nm: float = 0.637
+    peak_torque_nm: float = 1.91
+    knee_speed_rad_s: float = 3000.0 * 2.0 * math.pi / 60.0
+    max_speed_rad_s: float = 4500.0 * 2.0 * math.pi / 60.0
+    torque_at_max_speed_nm: float = 0.8
+    encoder_lines: int = 2048
+    accel_limit_rad_s2: float = PAPER_ACCEL_LIMIT_RAD_S2
+    """The acceleration the move must respect (the paper's 140 krad/s²)."""
+
+    def __post_init__(self) -> None:
+        for name, lo in (
+            ("rotor_inertia_kgm2", 0.0),
+            ("rated_torque_nm", 0.0),
+            ("peak_torque_nm", 0.0),
+            ("knee_speed_rad_s", 0.0),
+            ("accel_limit_rad_s2", 0.0),
+        ):
+            _set(self, name, check_real(name, getattr(self, name), lo, lo_open=True))
+        for name in ("inertia_ratio", "viscous_nm_s_rad", "coulomb_nm", "load_torque_nm"):
+            lo = None if name == "load_torque_nm" else 0.0
+            _set(self, name, check_real(name, getattr(self, name), lo))
+        _set(
+            self,
+            "max_speed_rad_s",
+            check_real("max_speed_rad_s", self.max_speed_rad_s, self.knee_speed_rad_s,
+                       lo_open=True),
+        )
+        _set(
+            self,
+            "torque_at_max_speed_nm",
+            check_real("torque_at_max_speed_nm", self.torque_at_max_speed_nm, 0.0,
+                       self.peak_torque_nm),
+        )
+        _set(self, "encoder_lines", check_int("encoder_lines", self.encoder_lines, 1))
+
+    @property
+    def inertia_kgm2(self) -> float:
+        """Total inertia seen by the motor shaft (kg·m²)."""
+        return self.rotor_inertia_kgm2 * (1.0 + self.inertia_ratio)
+
+    @property
+    def counts_per_rev(self) -> int:
+        """Encoder counts per revolution after ×4 quadrature decoding."""
+        return 4 * self.encoder_lines
+
+    @property
+    def count_rad(self) -> float:
+        """Angle of one encoder count (rad)."""
+        return 2.0 * math.pi / self.counts_per_rev
+
+
+# Yaskawa SGME-02A (Σ series, 200 W, 3000 rpm) — the paper's motor.
+#   rated torque 0.637 N·m, instantaneous peak 1.91 N·m, rated speed 3000 rpm, maximum
+#   4500 rpm, 2048-line incremental encoder: Yaskawa Σ-series servomotor catalogue,
+#   SGME-02 ratings table (the figures the issue quotes).
+#   rotor inertia 0.106e-4 kg·m²: the SGME datasheet was not at hand; this is the figure of
+#   the nearest documented Σ-series 200 W motor, as the issue directs.
+#   torque at maximum speed 0.8 N·m: read off the shape of the Σ-series 200 W
+#   torque–speed curve (intermittent zone narrowing to about 40 % of peak at 4500 rpm);
+#   an assumption, stated here and in the README.
+#   No friction or load by default (a bare shaft); scenarios add them.
+SGME_02A = Motor()
+
+
+@dataclass(frozen=True)
+class Servo:
+    """The patent's digital servo (seed 004), less its tuned filter ratio.
+
+    gear: electronic gear, encoder counts per command pulse (whole number).
+    sample_ticks: Ns, the speed counter's sample period Ts = Ns controller ticks.
+    speed_gain_b: B, the speed counter's output multiplier (x = B·count); K2 = B·Ts,
+        so the servo's position gain is Kv = 1/(B·Ts).
+    torque_per_count_nm: K3, the PWM + power amplifier gain (N·m per count of error).
+    """
+
+    gear: int = 4
+    sample_ticks: int = 140
+    speed_gain_b: float = 10.0
+    torque_per_count_nm: float = 3.4e-4
+
+    def __post_init__(self) -> None:
+        _set(self, "gear", check_int("gear", self.gear, 1))
+        _set(self, "sample_ticks", check_int("sample_ticks", self.sample_ticks, 1))
+        _set(self, "speed_gain_b", check_real("speed_gain_b", self.speed_gain_b, 0.0,
+                                              lo_open=True))
+        _set(
+            self,
+            "torque_per_count_nm",
+            check_real("torque_per_count_nm", self.torque_per_count_nm, 0.0, lo_open=True),
+        )
+
+
+@dataclass(frozen=True)
+class Plant:
+    """Everything physical: time base, pulse equivalent, servo, motor."""
+
+    tick_hz: float = PAPER_TICK_HZ
+    pulse_rad: float = PAPER_PULSE_RAD
+    servo: Servo = field(default_factory=Servo)
+    motor: Motor = field(default_factory=Motor)
+
+    def __post_init__(self) -> None:
+        _set(self, "tick_hz", check_real("tick_hz", self.tick_hz, 0.0, lo_open=True))
+        _set(self, "pulse_rad", check_real("pulse_rad", self.pulse_rad, 0.0, lo_open=True))
+        if not isinstance(self.servo, Servo):
+            raise ValueError(f"servo={self.servo!r} must be a vfgym.Servo")
+        if not isinstance(self.motor, Motor):
+            raise ValueError(f"motor={self.motor!r} must be a vfgym.Motor")
+
+    @property
+    def tick_s(self) -> float:
+        """Controller tick T = 1/f (s)."""
+        return 1.0 / self.tick_hz
+
+    @property
+    def sample_s(self) -> float:
+        """Servo sample period Ts = Ns·T (s)."""
+        return self.servo.sample_ticks / self.tick_hz
+
+    @property
+    def pulse_top_speed_rad_s(self) -> float:
+        """v_max = δ·f: one pulse per tick."""
+        return self.pulse_rad * self.tick_hz
+
+    @property
+    def servo_kv(self) -> float:
+        """The servo's position gain Kv = 1/(B·Ts) (1/s), the patent's velocity constant."""
+        return 1.0 / (self.servo.speed_gain_b * self.sample_s)
+
+    def replace(self, **changes: Any) -> Plant:
+        """A copy with some fields changed (validated again)."""
+        return replace(self, **changes)
+
+    def with_motor(self, **changes: Any) -> Plant:
+        """A copy whose motor has some fields changed."""
+        return replace(self, motor=replace(self.motor, **changes))
+
+    def with_servo(self, **changes: Any) -> Plant:
+        """A copy whose servo has some fields changed."""
+        return replace(self, servo=replace(self.servo, **changes))
+
+
+PAPER_PLANT = Plant()
+"""The paper's plant: 140 kHz, δ = 2π/2048, SGME-02A, the servo defaults below."""
+
+
+def paper_k(plant: Plant = PAPER_PLANT, accel_limit_rad_s2: float | None = None) -> float:
+    """k that holds the pulse train's acceleration to the motor's limit: f²δ / a_motor."""
+    limit = plant.motor.accel_limit_rad_s2 if accel_limit_rad_s2 is None else accel_limit_rad_s2
+    return plant.tick_hz**2 * plant.pulse_rad / limit
+
+
+def _set(obj: object, name: str, value: Any) -> None:
+    """Store a validated (normalised) value on a frozen dataclass."""
+    object.__setattr__(obj, name, value)
+
+
+@dataclass(frozen=True)
+class Measures:
+    """Windows and bands of the measures of a move (MODEL.md §5); see :mod:`vfgym.metrics`.
+
+    in_position_counts: half-width of the in-position window around the final command,
+        in encoder counts (a servo drive's "positioning completed width").
+    accel_window_s: window w over which the pulse train's acceleration is taken as the
+        second difference of the pulse count; its quantisation is 2δ/w².
+    steady_window_s: the steady-state error is the mean error over this last stretch.
+    """
+
+    in_position_counts: float = 8.0
+    accel_window_s: float = 1e-3
+    steady_window_s: float = 5e-3
+
+    def __post_init__(self) -> None:
+        _set(self, "in_position_counts",
+             check_real("in_position_counts", self.in_position_counts, 0.0))
+        _set(self, "accel_window_s",
+             check_real("accel_window_s", self.accel_window_s, 0.0, lo_open=True))
+        _set(self, "steady_window_s",
+             check_real("steady_window_s", self.steady_window_s, 0.0, lo_open=True))
+
+
+DEFAULT_MEASURES = Measures()
