@@ -79,4 +79,5 @@ R_TORQUE = 4  # torque applied (N·m)
 R_ERROR = 5  # servo error u = pc − y (counts)
 R_PC = 6  # position counter (counts)
 R_FEEDBACK = 7  # filtered speed feedback y (counts)
-N_ROWS = 8
+R_SPEED_COUNT = 8  # latched speed counter output x = B·count (counts)
+N_ROWS = 9

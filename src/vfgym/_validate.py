@@ -62,7 +62,7 @@ def check_int(name: str, value: Any, lo: int | None = None, hi: int | None = Non
             raise ValueError(f"{name}={value!r} must be one of the {allowed}") from None
         if not math.isfinite(x) or x != round(x):
             raise ValueError(f"{name}={value!r} is not allowed: {allowed}")
-        n = int(round(x))
+        n = round(x)
     if (lo is not None and n < lo) or (hi is not None and n > hi):
         raise ValueError(f"{name}={value!r} is out of range: allowed {allowed}")
     return n

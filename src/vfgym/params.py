@@ -17,6 +17,12 @@ from typing import Any
 
 from vfgym._validate import check_choice, check_int, check_real
 
+
+def _set(obj: object, name: str, value: Any) -> None:
+    """Store a validated (normalised) value on a frozen dataclass."""
+    object.__setattr__(obj, name, value)
+
+
 # --- the paper's set-up (seed 000, §4) -------------------------------------------------
 PAPER_TICK_HZ = 140_000.0
 """Controller sampling frequency f (Hz): the SGME-02A's highest pulse frequency."""
@@ -60,9 +66,7 @@ class Settings:
             check_real("error_limit_rad", self.error_limit_rad, 0.0, lo_open=True),
         )
         _set(self, "k", check_real("k", self.k, 1.0))
-        _set(
-            self, "ts_over_tf", check_real("ts_over_tf", self.ts_over_tf, 0.0, 1.0, lo_open=True)
-        )
+        _set(self, "ts_over_tf", check_real("ts_over_tf", self.ts_over_tf, 0.0, 1.0, lo_open=True))
         check_choice("accel_law", self.accel_law, ACCEL_LAWS)
 
     def replace(self, **changes: Any) -> Settings:
@@ -116,14 +120,16 @@ class Motor:
         _set(
             self,
             "max_speed_rad_s",
-            check_real("max_speed_rad_s", self.max_speed_rad_s, self.knee_speed_rad_s,
-                       lo_open=True),
+            check_real(
+                "max_speed_rad_s", self.max_speed_rad_s, self.knee_speed_rad_s, lo_open=True
+            ),
         )
         _set(
             self,
             "torque_at_max_speed_nm",
-            check_real("torque_at_max_speed_nm", self.torque_at_max_speed_nm, 0.0,
-                       self.peak_torque_nm),
+            check_real(
+                "torque_at_max_speed_nm", self.torque_at_max_speed_nm, 0.0, self.peak_torque_nm
+            ),
         )
         _set(self, "encoder_lines", check_int("encoder_lines", self.encoder_lines, 1))
 
@@ -168,15 +174,14 @@ class Servo:
     """
 
     gear: int = 4
-    sample_ticks: int = 140
-    speed_gain_b: float = 10.0
-    torque_per_count_nm: float = 3.4e-4
+    sample_ticks: int = 70
+    speed_gain_b: float = 12.5
+    torque_per_count_nm: float = 5.3e-4
 
     def __post_init__(self) -> None:
         _set(self, "gear", check_int("gear", self.gear, 1))
         _set(self, "sample_ticks", check_int("sample_ticks", self.sample_ticks, 1))
-        _set(self, "speed_gain_b", check_real("speed_gain_b", self.speed_gain_b, 0.0,
-                                              lo_open=True))
+        _set(self, "speed_gain_b", check_real("speed_gain_b", self.speed_gain_b, 0.0, lo_open=True))
         _set(
             self,
             "torque_per_count_nm",
@@ -244,11 +249,6 @@ def paper_k(plant: Plant = PAPER_PLANT, accel_limit_rad_s2: float | None = None)
     return plant.tick_hz**2 * plant.pulse_rad / limit
 
 
-def _set(obj: object, name: str, value: Any) -> None:
-    """Store a validated (normalised) value on a frozen dataclass."""
-    object.__setattr__(obj, name, value)
-
-
 @dataclass(frozen=True)
 class Measures:
     """Windows and bands of the measures of a move (MODEL.md §5); see :mod:`vfgym.metrics`.
@@ -265,12 +265,21 @@ class Measures:
     steady_window_s: float = 5e-3
 
     def __post_init__(self) -> None:
-        _set(self, "in_position_counts",
-             check_real("in_position_counts", self.in_position_counts, 0.0))
-        _set(self, "accel_window_s",
-             check_real("accel_window_s", self.accel_window_s, 0.0, lo_open=True))
-        _set(self, "steady_window_s",
-             check_real("steady_window_s", self.steady_window_s, 0.0, lo_open=True))
+        _set(
+            self,
+            "in_position_counts",
+            check_real("in_position_counts", self.in_position_counts, 0.0),
+        )
+        _set(
+            self,
+            "accel_window_s",
+            check_real("accel_window_s", self.accel_window_s, 0.0, lo_open=True),
+        )
+        _set(
+            self,
+            "steady_window_s",
+            check_real("steady_window_s", self.steady_window_s, 0.0, lo_open=True),
+        )
 
 
 DEFAULT_MEASURES = Measures()

@@ -1,0 +1,470 @@
+"""The compiled hot loop: V-F controller → digital servo → motor → encoder, tick by tick.
+
+One kernel (:func:`run_one`) over plain arrays and scalars, compiled by numba with
+``cache=True`` and no fastmath, so its floating-point operations are IEEE double in the
+written order and agree bit for bit with :mod:`vfgym.reference`. The equations are those of
+``MODEL.md`` §1–§3; their order within a tick is:
+
+1. pulse source: V-F controller on the command ``cmd[i]`` (or an external pulse array);
+2. servo: encoder count change since the last tick into the position counter (with the
+   gear times the pulse) and the speed counter; every Ns ticks the speed counter is
+   latched (x = B·count), filtered (y += A·(x − y)) and reset;
+3. torque τ = K3·(pc − y), clipped to the torque–speed curve;
+4. motor: exact integration over the tick for τ held constant (viscous, Coulomb, load);
+5. encoder: count = floor(θ / q).
+
+Measures are streamed into an accumulator row as the loop goes (no trace is needed);
+a trace is written only when the caller passes arrays for it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from vfgym._layout import (
+    A_ACC_MOTOR,
+    A_ACC_PULSE,
+    A_FIRST_PULSE,
+    A_LAST_OUT_MOTOR,
+    A_LAST_OUT_PULSE,
+    A_LAST_PULSE,
+    A_MIN_INTERVAL,
+    A_N,
+    A_OMEGA,
+    A_OV_MOTOR,
+    A_OV_PULSE,
+    A_PC,
+    A_PC_MAX,
+    A_PULSES,
+    A_REVERSALS,
+    A_RIPPLE_N,
+    A_RIPPLE_SQ,
+    A_SAT_TICKS,
+    A_SPEED_MAX,
+    A_SS_COUNT,
+    A_SS_SUM_MOTOR,
+    A_SS_SUM_PULSE,
+    A_THETA,
+    A_TICKS,
+    A_TORQUE_MAX,
+    A_TRK_MAX_MOTOR,
+    A_TRK_MAX_PULSE,
+    A_TRK_SQ_MOTOR,
+    A_TRK_SQ_PULSE,
+    N_ACC,
+    N_ROWS,
+    P_A,
+    P_ACC_SCALE,
+    P_ACC_W,
+    P_B,
+    P_COUNT_RAD,
+    P_CTF,
+    P_CTW,
+    P_CWF,
+    P_CWW,
+    P_DAMP,
+    P_DELTA,
+    P_GEAR,
+    P_INV_J,
+    P_K3,
+    P_LAW,
+    P_LIMIT,
+    P_NS,
+    P_SLOPE,
+    P_SS_START,
+    P_STEP,
+    P_TARGET,
+    P_TC,
+    P_TICK_S,
+    P_TLOAD,
+    P_TPEAK,
+    P_USE_EXT,
+    P_VALUE,
+    P_WIN_RAD,
+    P_WKNEE,
+    P_WMAX,
+    R_COMMAND,
+    R_ERROR,
+    R_FEEDBACK,
+    R_OMEGA,
+    R_PC,
+    R_PULSE,
+    R_SPEED_COUNT,
+    R_THETA,
+    R_TORQUE,
+)
+
+_jit = numba.njit(cache=True, fastmath=False, nogil=True)
+
+
+@_jit
+def phi_h(x: float) -> float:
+    """h(x) = (1 − e^(−x))/x, h(0) = 1: ω gain of a held torque over a stretch x = (b/J)·t."""
+    if x < 1e-3:
+        return 1.0 - x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0))))
+    return -math.expm1(-x) / x
+
+
+@_jit
+def phi_g(x: float) -> float:
+    """g(x) = (x − 1 + e^(−x))/x², g(0) = 1/2: θ gain of a held torque over x = (b/J)·t."""
+    if x < 1e-3:
+        return 0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x * (1.0 / 720.0))))
+    return (x + math.expm1(-x)) / (x * x)
+
+
+@_jit
+def vf_pulses_kernel(cmd, delta, value, limit, step, law, out):
+    """V-F controller alone (MODEL.md §1): one pulse (−1, 0, +1) per tick into ``out``."""
+    n = 0
+    s = 0.0
+    e_prev = 0.0
+    for i in range(cmd.shape[0]):
+        e = cmd[i] - n * delta
+        if e > limit:
+            e = limit
+        elif e < -limit:
+            e = -limit
+        if law == 0:
+            if e_prev >= 0.0 and e > e_prev + step:
+                e = e_prev + step
+            if e_prev <= 0.0 and e < e_prev - step:
+                e = e_prev - step
+        else:
+            if e > e_prev + step:
+                e = e_prev + step
+            elif e < e_prev - step:
+                e = e_prev - step
+        e_prev = e
+        s += e
+        if s >= value:
+            out[i] = 1
+            n += 1
+            s -= value
+        elif s <= -value:
+            out[i] = -1
+            n -= 1
+            s += value
+        else:
+            out[i] = 0
+
+
+@_jit
+def run_one(cmd, ext, prm, acc, rec, dec):
+    """Simulate one move; stream its measures into ``acc``; write every ``dec``-th tick's
+    state into ``rec`` (shape (N_ROWS, m), m = 0 for none)."""
+    n_ticks = cmd.shape[0]
+    T = prm[P_TICK_S]
+    delta = prm[P_DELTA]
+    value = prm[P_VALUE]
+    limit = prm[P_LIMIT]
+    step = prm[P_STEP]
+    law = int(prm[P_LAW])
+    gear = int(prm[P_GEAR])
+    ns = int(prm[P_NS])
+    B = prm[P_B]
+    A = prm[P_A]
+    K3 = prm[P_K3]
+    q = prm[P_COUNT_RAD]
+    inv_j = prm[P_INV_J]
+    damp = prm[P_DAMP]
+    cww = prm[P_CWW]
+    cwf = prm[P_CWF]
+    ctw = prm[P_CTW]
+    ctf = prm[P_CTF]
+    tc = prm[P_TC]
+    tload = prm[P_TLOAD]
+    tpeak = prm[P_TPEAK]
+    wknee = prm[P_WKNEE]
+    wmax = prm[P_WMAX]
+    slope = prm[P_SLOPE]
+    target = prm[P_TARGET]
+    win = prm[P_WIN_RAD]
+    ss_start = int(prm[P_SS_START])
+    accw = int(prm[P_ACC_W])
+    acc_scale = prm[P_ACC_SCALE]
+    use_ext = prm[P_USE_EXT] != 0.0
+    n_rec = rec.shape[1] if rec.shape[0] >= N_ROWS else 0
+
+    # state
+    n = 0  # pulses output (signed)
+    s = 0.0  # V-F accumulator
+    e_prev = 0.0
+    c_prev = 0  # encoder count seen by the servo
+    c = 0
+    pc = 0  # position counter (counts)
+    sc = 0  # speed counter (counts this sample)
+    ns_left = ns
+    y = 0.0  # filtered speed feedback
+    x = 0.0  # latched speed counter output
+    theta = 0.0
+    omega = 0.0
+    # measure state
+    p_prev = 0.0  # command before this tick (the plant starts at rest at 0)
+    last_dir = 0.0
+    ov_m = 0.0
+    ov_p = 0.0
+    last_out_m = -1
+    last_out_p = -1
+    ss_m = 0.0
+    ss_p = 0.0
+    ss_n = 0
+    sat = 0
+    trk_sq_m = 0.0
+    trk_mx_m = 0.0
+    trk_sq_p = 0.0
+    trk_mx_p = 0.0
+    rip_sq = 0.0
+    rip_n = 0
+    theta_s0 = 0.0  # θ at the last sample instant
+    v1 = 0.0  # mean speeds of the last two sample periods
+    v2 = 0.0
+    n_samples = 0
+    pulses = 0
+    reversals = 0
+    min_iv = 0
+    first_p = -1
+    last_p = -1
+    last_sign = 0
+    tq_mx = 0.0
+    pc_mx = 0
+    w_mx = 0.0
+    ring_len = 1
+    while ring_len < 2 * accw + 1:
+        ring_len *= 2
+    mask = ring_len - 1
+    ring = np.zeros(ring_len, dtype=np.int64)
+    d2_max = 0
+    dw_max = 0.0
+    rec_left = dec
+    rec_j = 0
+
+    for i in range(n_ticks):
+        P = cmd[i]
+        # 1. pulse source
+        if use_ext:
+            p = int(ext[i])
+        else:
+            e = P - n * delta
+            if e > limit:
+                e = limit
+            elif e < -limit:
+                e = -limit
+            if law == 0:
+                if e_prev >= 0.0 and e > e_prev + step:
+                    e = e_prev + step
+                if e_prev <= 0.0 and e < e_prev - step:
+                    e = e_prev - step
+            else:
+                if e > e_prev + step:
+                    e = e_prev + step
+                elif e < e_prev - step:
+                    e = e_prev - step
+            e_prev = e
+            s += e
+            if s >= value:
+                p = 1
+                s -= value
+            elif s <= -value:
+                p = -1
+                s += value
+            else:
+                p = 0
+        n += p
+        # 2. servo counters and sampled filter
+        dc = c - c_prev
+        c_prev = c
+        pc += gear * p - dc
+        sc += dc
+        ns_left -= 1
+        if ns_left == 0:
+            ns_left = ns
+            x = B * sc
+            y = y + A * (x - y)
+            sc = 0
+            # measure: speed ripple from the mean speeds of consecutive sample periods
+            v0 = (theta - theta_s0) / (ns * T)
+            theta_s0 = theta
+            n_samples += 1
+            if n_samples >= 3:
+                d2 = v0 - 2.0 * v1 + v2
+                rip_sq += d2 * d2
+                rip_n += 1
+            v2 = v1
+            v1 = v0
+        # 3. torque command and the torque–speed limit
+        u = pc - y
+        tau = K3 * u
+        if tau * omega > 0.0:
+            aw = abs(omega)
+            if aw <= wknee:
+                lim = tpeak
+            elif aw < wmax:
+                lim = tpeak + slope * (aw - wknee)
+            else:
+                lim = 0.0
+        else:
+            lim = tpeak
+        if tau > lim:
+            tau = lim
+            sat += 1
+        elif tau < -lim:
+            tau = -lim
+            sat += 1
+        # 4. motor over the tick, torque held
+        net = tau - tload
+        omega_old = omega
+        if tc == 0.0:
+            theta = theta + (ctw * omega + ctf * net)
+            omega = cww * omega + cwf * net
+        elif omega == 0.0:
+            if net > tc or net < -tc:
+                f = net - tc if net > 0.0 else net + tc
+                theta = theta + ctf * f
+                omega = cwf * f
+        else:
+            sgn = 1.0 if omega > 0.0 else -1.0
+            f = net - sgn * tc
+            w_new = cww * omega + cwf * f
+            if w_new * sgn > 0.0:
+                theta = theta + (ctw * omega + ctf * f)
+                omega = w_new
+            else:
+                # the speed reaches zero within the tick: stop there, then restart or stick
+                if damp > 0.0:
+                    t0 = math.log1p(-damp * omega / (f * inv_j)) / damp
+                else:
+                    t0 = -omega / (f * inv_j)
+                if t0 > T:
+                    t0 = T
+                x0 = damp * t0
+                theta = theta + (omega * t0 * phi_h(x0) + f * inv_j * t0 * t0 * phi_g(x0))
+                omega = 0.0
+                rem = T - t0
+                if rem > 0.0 and (net > tc or net < -tc):
+                    f2 = net - tc if net > 0.0 else net + tc
+                    x1 = damp * rem
+                    theta = theta + f2 * inv_j * rem * rem * phi_g(x1)
+                    omega = f2 * inv_j * rem * phi_h(x1)
+        # 5. encoder
+        c = math.floor(theta / q)
+
+        # --- streamed measures -------------------------------------------------------------
+        pos = n * delta
+        if p_prev != P:
+            last_dir = 1.0 if p_prev < P else -1.0
+        elif last_dir != 0.0:
+            o = last_dir * (theta - P)
+            if o > ov_m:
+                ov_m = o
+            o = last_dir * (pos - P)
+            if o > ov_p:
+                ov_p = o
+        p_prev = P
+        if abs(theta - target) > win:
+            last_out_m = i
+        if abs(pos - target) > win:
+            last_out_p = i
+        if i >= ss_start:
+            ss_m += theta - target
+            ss_p += pos - target
+            ss_n += 1
+        ring[i & mask] = n
+        if i >= 2 * accw:
+            d2 = abs(n - 2 * ring[(i - accw) & mask] + ring[(i - 2 * accw) & mask])
+            if d2 > d2_max:
+                d2_max = d2
+        dw = abs(omega - omega_old)
+        if dw > dw_max:
+            dw_max = dw
+        d = P - theta
+        trk_sq_m += d * d
+        if abs(d) > trk_mx_m:
+            trk_mx_m = abs(d)
+        d = P - pos
+        trk_sq_p += d * d
+        if abs(d) > trk_mx_p:
+            trk_mx_p = abs(d)
+        if p != 0:
+            pulses += 1
+            if last_p >= 0:
+                iv = i - last_p
+                if min_iv == 0 or iv < min_iv:
+                    min_iv = iv
+                if p != last_sign:
+                    reversals += 1
+            else:
+                first_p = i
+            last_p = i
+            last_sign = p
+        if abs(tau) > tq_mx:
+            tq_mx = abs(tau)
+        if abs(pc) > pc_mx:
+            pc_mx = abs(pc)
+        if abs(omega) > w_mx:
+            w_mx = abs(omega)
+        if n_rec > 0:
+            rec_left -= 1
+            if rec_left == 0:
+                rec_left = dec
+                if rec_j < n_rec:
+                    rec[R_COMMAND, rec_j] = P
+                    rec[R_PULSE, rec_j] = pos
+                    rec[R_THETA, rec_j] = theta
+                    rec[R_OMEGA, rec_j] = omega
+                    rec[R_TORQUE, rec_j] = tau
+                    rec[R_ERROR, rec_j] = u
+                    rec[R_PC, rec_j] = pc
+                    rec[R_FEEDBACK, rec_j] = y
+                    rec[R_SPEED_COUNT, rec_j] = x
+                    rec_j += 1
+
+    acc[A_OV_MOTOR] = ov_m
+    acc[A_OV_PULSE] = ov_p
+    acc[A_LAST_OUT_MOTOR] = last_out_m
+    acc[A_LAST_OUT_PULSE] = last_out_p
+    acc[A_SS_SUM_MOTOR] = ss_m
+    acc[A_SS_SUM_PULSE] = ss_p
+    acc[A_SS_COUNT] = ss_n
+    acc[A_ACC_PULSE] = d2_max * acc_scale
+    acc[A_ACC_MOTOR] = dw_max / T
+    acc[A_SAT_TICKS] = sat
+    acc[A_TRK_SQ_MOTOR] = trk_sq_m
+    acc[A_TRK_MAX_MOTOR] = trk_mx_m
+    acc[A_TRK_SQ_PULSE] = trk_sq_p
+    acc[A_TRK_MAX_PULSE] = trk_mx_p
+    acc[A_RIPPLE_SQ] = rip_sq
+    acc[A_RIPPLE_N] = rip_n
+    acc[A_PULSES] = pulses
+    acc[A_REVERSALS] = reversals
+    acc[A_MIN_INTERVAL] = min_iv
+    acc[A_FIRST_PULSE] = first_p
+    acc[A_LAST_PULSE] = last_p
+    acc[A_TORQUE_MAX] = tq_mx
+    acc[A_PC_MAX] = pc_mx
+    acc[A_THETA] = theta
+    acc[A_OMEGA] = omega
+    acc[A_N] = n
+    acc[A_PC] = pc
+    acc[A_SPEED_MAX] = w_mx
+    acc[A_TICKS] = n_ticks
+
+
+@numba.njit(cache=True, fastmath=False, nogil=True, parallel=True)
+def run_batch(cmd_flat, cmd_off, ext_flat, ext_off, scen, prm, acc):
+    """Run ``prm.shape[0]`` moves in parallel; run r simulates scenario ``scen[r]`` whose
+    command is ``cmd_flat[cmd_off[j]:cmd_off[j+1]]`` (and pulses likewise in ext_flat)."""
+    rec = np.zeros((N_ROWS, 0), dtype=np.float64)
+    for r in numba.prange(prm.shape[0]):
+        j = scen[r]
+        cmd = cmd_flat[cmd_off[j] : cmd_off[j + 1]]
+        ext = ext_flat[ext_off[j] : ext_off[j + 1]]
+        run_one(cmd, ext, prm[r], acc[r], rec, 1)
+
+
+def new_acc(runs: int = 0) -> np.ndarray:
+    """A zeroed accumulator row (or ``runs`` rows)."""
+    return np.zeros(N_ACC if runs == 0 else (runs, N_ACC), dtype=np.float64)

@@ -1,0 +1,236 @@
+"""Public simulation entry points: the V-F pulse train alone, and the whole plant.
+
+``params → simulate → trace``: :func:`simulate` packs the frozen parameters into the
+kernel's plain float row (:func:`pack`), runs the compiled kernel once and returns a
+:class:`Trace` (per-tick arrays, optionally decimated) together with the measures the
+kernel streamed while it ran.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from vfgym import _kernel as K
+from vfgym import _layout as L
+from vfgym._validate import check_choice, check_finite_array, check_int, check_real
+from vfgym.params import (
+    ACCEL_LAWS,
+    DEFAULT_MEASURES,
+    PAPER_PLANT,
+    PAPER_PULSE_RAD,
+    PAPER_SETTINGS,
+    Measures,
+    Plant,
+    Settings,
+)
+
+
+def vf_pulses(
+    command_rad: np.ndarray,
+    *,
+    value_rad: float,
+    error_limit_rad: float,
+    k: float,
+    accel_law: str = "rise",
+    pulse_rad: float = PAPER_PULSE_RAD,
+) -> np.ndarray:
+    """The V-F controller's pulse train for a position command given per tick.
+
+    Returns an int8 array, one entry per tick: +1, −1 or 0 (at most one pulse a tick).
+    The controller's position feedback is its own pulse counter (MODEL.md §1).
+    """
+    cmd = check_finite_array("command_rad", command_rad)
+    s = Settings(value_rad=value_rad, error_limit_rad=error_limit_rad, k=k, accel_law=accel_law)
+    delta = check_real("pulse_rad", pulse_rad, 0.0, lo_open=True)
+    out = np.empty(cmd.shape[0], dtype=np.int8)
+    K.vf_pulses_kernel(
+        cmd,
+        delta,
+        s.value_rad,
+        s.error_limit_rad,
+        s.value_rad / s.k,
+        ACCEL_LAWS.index(s.accel_law),
+        out,
+    )
+    return out
+
+
+def motor_coefficients(plant: Plant) -> tuple[float, float, float, float]:
+    """Exact one-tick zero-order-hold coefficients of J·dω/dt = F − b·ω.
+
+    ω(T) = cww·ω + cwf·F and θ(T) = θ + ctw·ω + ctf·F for a net torque F held over T.
+    """
+    m = plant.motor
+    inv_j = 1.0 / m.inertia_kgm2
+    T = plant.tick_s
+    x = m.viscous_nm_s_rad * inv_j * T
+    h = K.phi_h.py_func(x)
+    g = K.phi_g.py_func(x)
+    return math.exp(-x), T * h * inv_j, T * h, T * T * g * inv_j
+
+
+def pack(
+    settings: Settings,
+    plant: Plant,
+    measures: Measures,
+    target_rad: float,
+    n_ticks: int,
+    use_ext: bool = False,
+) -> np.ndarray:
+    """The kernel's parameter row for one run (see :mod:`vfgym._layout`)."""
+    m, sv = plant.motor, plant.servo
+    prm = np.zeros(L.N_PARAMS, dtype=np.float64)
+    T = plant.tick_s
+    cww, cwf, ctw, ctf = motor_coefficients(plant)
+    accw = max(1, round(measures.accel_window_s * plant.tick_hz))
+    prm[L.P_TICK_S] = T
+    prm[L.P_DELTA] = plant.pulse_rad
+    prm[L.P_VALUE] = settings.value_rad
+    prm[L.P_LIMIT] = settings.error_limit_rad
+    prm[L.P_STEP] = settings.value_rad / settings.k
+    prm[L.P_LAW] = ACCEL_LAWS.index(settings.accel_law)
+    prm[L.P_GEAR] = sv.gear
+    prm[L.P_NS] = sv.sample_ticks
+    prm[L.P_B] = sv.speed_gain_b
+    prm[L.P_A] = settings.ts_over_tf
+    prm[L.P_K3] = sv.torque_per_count_nm
+    prm[L.P_COUNT_RAD] = m.count_rad
+    prm[L.P_INV_J] = 1.0 / m.inertia_kgm2
+    prm[L.P_DAMP] = m.viscous_nm_s_rad / m.inertia_kgm2
+    prm[L.P_CWW], prm[L.P_CWF], prm[L.P_CTW], prm[L.P_CTF] = cww, cwf, ctw, ctf
+    prm[L.P_TC] = m.coulomb_nm
+    prm[L.P_TLOAD] = m.load_torque_nm
+    prm[L.P_TPEAK] = m.peak_torque_nm
+    prm[L.P_WKNEE] = m.knee_speed_rad_s
+    prm[L.P_WMAX] = m.max_speed_rad_s
+    prm[L.P_SLOPE] = (m.torque_at_max_speed_nm - m.peak_torque_nm) / (
+        m.max_speed_rad_s - m.knee_speed_rad_s
+    )
+    prm[L.P_TARGET] = target_rad
+    prm[L.P_WIN_RAD] = measures.in_position_counts * m.count_rad
+    prm[L.P_SS_START] = max(0, n_ticks - round(measures.steady_window_s * plant.tick_hz))
+    prm[L.P_ACC_W] = accw
+    prm[L.P_ACC_SCALE] = plant.pulse_rad / (accw * T) ** 2
+    prm[L.P_USE_EXT] = 1.0 if use_ext else 0.0
+    return prm
+
+
+def check_pulses(pulses: np.ndarray, n_ticks: int) -> np.ndarray:
+    """An external pulse train: int8, one entry per tick, each −1, 0 or +1."""
+    arr = np.asarray(pulses)
+    if arr.ndim != 1 or arr.shape[0] != n_ticks:
+        raise ValueError(
+            f"pulses must hold one entry per tick of the command ({n_ticks}), got shape {arr.shape}"
+        )
+    if arr.size and (arr.min() < -1 or arr.max() > 1):
+        raise ValueError(
+            f"pulses holds {int(arr.min())}..{int(arr.max())}: allowed values are -1, 0, +1"
+        )
+    return np.ascontiguousarray(arr, dtype=np.int8)
+
+
+@dataclass(frozen=True)
+class Trace:
+    """What the plant did, tick by tick (every ``decimation``-th tick).
+
+    Sample j is the state at the end of tick i = (j+1)·decimation − 1, time (i+1)·T.
+    ``acc`` holds the measures streamed over every tick (see :mod:`vfgym.metrics`).
+    """
+
+    time_s: np.ndarray
+    command_rad: np.ndarray
+    pulse_rad: np.ndarray
+    """Pulse position n·δ: the V-F controller's own position feedback (rad)."""
+    motor_rad: np.ndarray
+    speed_rad_s: np.ndarray
+    torque_nm: np.ndarray
+    servo_error_counts: np.ndarray
+    """u = pc − y, the error calculator's output (counts)."""
+    position_counter: np.ndarray
+    feedback_counts: np.ndarray
+    """y, the filtered speed feedback (counts)."""
+    speed_count: np.ndarray
+    """x = B·count, the speed counter's latched output (counts)."""
+    acc: np.ndarray = field(repr=False)
+    settings: Settings
+    plant: Plant
+    measures: Measures
+    decimation: int = 1
+
+    @property
+    def pulse_count(self) -> np.ndarray:
+        """Signed pulses output so far (n)."""
+        return np.rint(self.pulse_rad / self.plant.pulse_rad).astype(np.int64)
+
+    @property
+    def pulses(self) -> np.ndarray:
+        """The pulse per tick (−1, 0, +1); only for an undecimated trace."""
+        if self.decimation != 1:
+            raise ValueError("pulses per tick need decimation=1")
+        return np.diff(self.pulse_count, prepend=0).astype(np.int8)
+
+    @property
+    def n_ticks(self) -> int:
+        """Ticks simulated."""
+        return int(self.acc[L.A_TICKS])
+
+
+def simulate(
+    command_rad: np.ndarray,
+    settings: Settings = PAPER_SETTINGS,
+    plant: Plant = PAPER_PLANT,
+    *,
+    pulses: np.ndarray | None = None,
+    measures: Measures = DEFAULT_MEASURES,
+    decimation: int = 1,
+) -> Trace:
+    """Simulate the plant for a position command given per tick (rad).
+
+    pulses: an external pulse train (int8 per tick) that replaces the V-F controller,
+        e.g. :func:`vfgym.pulse_sources.scurve_pulses`; the command is then only the
+        reference the measures compare against.
+    decimation: keep every ``decimation``-th tick in the trace (measures always see all).
+    """
+    cmd = check_finite_array("command_rad", command_rad)
+    dec = check_int("decimation", decimation, 1, cmd.shape[0])
+    if not isinstance(settings, Settings):
+        raise ValueError(f"settings={settings!r} must be a vfgym.Settings")
+    if not isinstance(plant, Plant):
+        raise ValueError(f"plant={plant!r} must be a vfgym.Plant")
+    n_ticks = cmd.shape[0]
+    ext = np.zeros(0, dtype=np.int8) if pulses is None else check_pulses(pulses, n_ticks)
+    prm = pack(settings, plant, measures, float(cmd[-1]), n_ticks, pulses is not None)
+    acc = K.new_acc()
+    rec = np.empty((L.N_ROWS, n_ticks // dec), dtype=np.float64)
+    K.run_one(cmd, ext, prm, acc, rec, dec)
+    time_s = np.arange(1, rec.shape[1] + 1, dtype=np.float64) * (dec * plant.tick_s)
+    return Trace(
+        time_s=time_s,
+        command_rad=rec[L.R_COMMAND],
+        pulse_rad=rec[L.R_PULSE],
+        motor_rad=rec[L.R_THETA],
+        speed_rad_s=rec[L.R_OMEGA],
+        torque_nm=rec[L.R_TORQUE],
+        servo_error_counts=rec[L.R_ERROR],
+        position_counter=rec[L.R_PC],
+        feedback_counts=rec[L.R_FEEDBACK],
+        speed_count=rec[L.R_SPEED_COUNT],
+        acc=acc,
+        settings=settings,
+        plant=plant,
+        measures=measures,
+        decimation=dec,
+    )
+
+
+def step_command(distance_rad: float, n_ticks: int) -> np.ndarray:
+    """A step of ``distance_rad`` at tick 0, held for ``n_ticks`` ticks."""
+    d = check_real("distance_rad", distance_rad)
+    n = check_int("n_ticks", n_ticks, 1)
+    return np.full(n, d, dtype=np.float64)
+
+
+__all__ = ["Trace", "check_choice", "pack", "simulate", "step_command", "vf_pulses"]
