@@ -373,10 +373,9 @@ def run_one(cmd, ext, prm, acc, rec, dec):
             ss_p += pos - target
             ss_n += 1
         ring[i & mask] = n
-        if i >= 2 * accw:
-            d2 = abs(n - 2 * ring[(i - accw) & mask] + ring[(i - 2 * accw) & mask])
-            if d2 > d2_max:
-                d2_max = d2
+        d2 = abs(n - 2 * ring[(i - accw) & mask] + ring[(i - 2 * accw) & mask])
+        if d2 > d2_max:
+            d2_max = d2
         dw = abs(omega - omega_old)
         if dw > dw_max:
             dw_max = dw

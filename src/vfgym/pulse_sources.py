@@ -76,7 +76,8 @@ class ScurveProfile:
     Attributes:
         total_pulses: pulses requested.
         output_pulses: pulses actually output; equals ``total_pulses`` unless a
-            decelerating stop cut the move short.
+            decelerating stop cut the move short (the move's exact length then, having
+            been completed to a whole pulse at the peak speed).
         initial_speed_pps, drive_speed_pps, jerk_pps3, tick_hz: the settings (pps,
             pps, pps/s², Hz).
         triangle_prevention: whether the rule of 1/12 was applied.
@@ -141,9 +142,7 @@ class ScurveProfile:
         pos = np.zeros_like(t)
         vel = np.zeros_like(t)
         acc = np.zeros_like(t)
-        p_end = self.accel_pulses * 2.0 + self.plateau_pulses
-        if not self.stopped:
-            p_end = float(self.total_pulses)
+        p_end = float(self.output_pulses)
 
         m = (t >= 0.0) & (t < self.t_acc_end)
         pos[m], vel[m], acc[m] = self._acc_phase(t[m])
@@ -296,10 +295,11 @@ def scurve_profile(
       at ``ts``;
     - while cruising (or on the plateau): the mirrored deceleration starts at ``ts``.
 
-    A stop at or after the start of deceleration changes nothing. The stopped move's
-    output is its exact length ``p_end`` rounded to the nearest whole pulse, which can be
-    0; the pulse train then rounds ``p - (p_end - output)/2`` instead of ``p`` (at most
-    3/4 pulse from ``p``) so that it stays mirror symmetric.
+    A stop at or after the start of deceleration changes nothing. The pulses output
+    before the stop are never changed by it. The stopped move is completed to a whole
+    number of pulses (at least 1): the fraction of a pulse left over, less than one, is
+    output at the peak speed just before the deceleration, as the manual does with the
+    excess pulses of a short move, so the move stays mirror symmetric.
 
     Raises:
         ValueError: a setting out of range (see :func:`scurve_pulses`), or a move longer
@@ -333,7 +333,8 @@ def scurve_profile(
     segs, (t_acc, p_acc, v_peak, _) = _integrate(SV, pieces)
     cruise = max(P - 2.0 * p_acc, 0.0) if (reached or prevention) else 0.0
     t_dec = t_acc + cruise / v_peak
-    p_end = float(P)
+    guard = _FLOOR_GUARD_ABS + _FLOOR_GUARD_REL * P
+    output = P
     stopped = False
     if stop is not None and stop / f < t_dec:
         ts = stop / f
@@ -347,6 +348,8 @@ def scurve_profile(
         segs, (t_acc, p_acc, v_peak, _) = _integrate(SV, pieces)
         t_dec = max(ts, t_acc)
         p_end = 2.0 * p_acc + v_peak * (t_dec - t_acc)
+        output = min(P, max(1, math.ceil(p_end - guard)))
+        t_dec += max(output - p_end, 0.0) / v_peak
 
     t_end = t_dec + t_acc
     n_ticks = max(1, math.ceil(t_end * f - 1e-6))
@@ -355,8 +358,6 @@ def scurve_profile(
             f"total_pulses={P} gives a move of {n_ticks} ticks at tick_hz={f:g}, more than "
             f"MAX_TICKS={MAX_TICKS}: raise initial_speed_pps, drive_speed_pps or jerk_pps3"
         )
-    guard = _FLOOR_GUARD_ABS + _FLOOR_GUARD_REL * P
-    output = P if not stopped else min(P, math.floor(p_end + 0.5 + guard))
     return ScurveProfile(
         total_pulses=P,
         output_pulses=output,
@@ -451,10 +452,7 @@ def scurve_pulses(
     pos = prof.position(t)
     pos[n:] = pos[-1]  # the move has ended at t_n >= t_end (up to rounding of t_end)
     guard = _FLOOR_GUARD_ABS + _FLOOR_GUARD_REL * prof.total_pulses
-    # A stopped move's exact length p_end is not whole: shift the rounding thresholds by
-    # half its excess over the output (|shift| <= 1/4 pulse) so the train stays symmetric.
-    shift = 0.5 * (float(pos[-1]) - prof.output_pulses)
-    counts = np.floor(pos - shift + 0.5 + guard).astype(np.int64)
+    counts = np.floor(pos + 0.5 + guard).astype(np.int64)
     counts[n:] = prof.output_pulses
     counts[0] = 0
     return _train_from_counts(counts, n, prof.output_pulses)

@@ -190,8 +190,8 @@ def reference_run(
     w = int(prm[L.P_ACC_W])
     acc_scale = float(prm[L.P_ACC_SCALE])
     ns = servo.ns
+    n_hist = [0] * (2 * w)
 
-    n_hist: list[int] = []
     rows: list[list[float]] = []
     a = np.zeros(L.N_ACC)
     ov_m = ov_p = 0.0
@@ -249,9 +249,8 @@ def reference_run(
             ss_m += theta - target
             ss_p += pos - target
             ss_n += 1
-        n_hist.append(n)
-        if i >= 2 * w:
-            acc_p = max(acc_p, abs(n - 2 * n_hist[i - w] + n_hist[i - 2 * w]) * acc_scale)
+        n_hist.append(n)  # n_hist[2w + i] is n after tick i; the plant was at rest before
+        acc_p = max(acc_p, abs(n - 2 * n_hist[i + w] + n_hist[i]) * acc_scale)
         acc_m = max(acc_m, abs(omega - omega_old) / T)
         for k, ref in ((0, theta), (2, pos)):
             d = P - ref
