@@ -221,6 +221,40 @@ def test_reaching_drive_speed_matches_ta_and_pa(sv, dv, jk, total, prevention):
 # ---------------------------------------------------------------- rule of 1/12
 
 
+def test_threshold_between_short_and_long_moves():
+    sv, dv, jk = SHORT["initial_speed_pps"], SHORT["drive_speed_pps"], SHORT["jerk_pps3"]
+    _, pa = ta_pa(sv, dv, jk)
+    at = scurve_profile(**dict(SHORT, total_pulses=math.ceil(2 * pa)))
+    below = scurve_profile(**dict(SHORT, total_pulses=math.floor(2 * pa)))
+    assert at.reached_drive_speed and at.peak_speed_pps == pytest.approx(dv)
+    assert not below.reached_drive_speed and below.peak_speed_pps < dv
+
+
+def test_rule_of_one_twelfth_only_for_moves_that_cannot_reach_drive_speed():
+    # SV = 20 kpps: P/12 is passed before the acceleration's natural switch at T, yet
+    # 2 Pa <= P, so the move reaches DV with the plain S-curve: the rule only shapes
+    # moves too short for DV (the manual's case), it does not slow long ones.
+    kw = dict(SHORT, initial_speed_pps=20_000.0, total_pulses=3000)
+    sv, dv, jk = kw["initial_speed_pps"], kw["drive_speed_pps"], kw["jerk_pps3"]
+    ta, pa = ta_pa(sv, dv, jk)
+    assert 2 * pa <= 3000 and switch_time(sv, jk, 3000) < ta / 2
+    prof = scurve_profile(**kw)
+    assert prof.reached_drive_speed
+    assert prof.t_acc_increase == pytest.approx(ta / 2, rel=1e-12)
+    assert prof.peak_speed_pps == pytest.approx(dv, rel=1e-12)
+
+
+def test_train_builder_caps_rounding_to_one_pulse_per_tick():
+    # Rounding at DV = tick_hz could in principle step the count by two in one tick; the
+    # builder delays the extra pulse by a tick and extends the train if need be.
+    from vfgym.pulse_sources import _train_from_counts
+
+    train = _train_from_counts(np.array([0, 1, 3, 4, 5, 5, 5, 5]), 5, 5)
+    np.testing.assert_array_equal(train, [1, 1, 1, 1, 1])
+    train = _train_from_counts(np.array([0, 2, 3, 4, 5, 5, 5, 5]), 4, 5)
+    np.testing.assert_array_equal(train, [1, 1, 1, 1, 1])
+
+
 @pytest.mark.parametrize("sv", [1.0, 500.0, 5_000.0])
 def test_rule_of_one_twelfth_switch_time(sv):
     kw = dict(SHORT, initial_speed_pps=sv)

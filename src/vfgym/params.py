@@ -234,6 +234,17 @@ class Plant:
         """A copy whose motor has some fields changed."""
         return replace(self, motor=replace(self.motor, **changes))
 
+    def with_sample_period(self, sample_period_s: float) -> Plant:
+        """A copy whose servo samples every ``sample_period_s`` (a whole number of ticks)."""
+        ts = check_real("sample_period_s", sample_period_s, 0.0, lo_open=True)
+        ticks = ts * self.tick_hz
+        if abs(ticks - round(ticks)) > 1e-9 * max(1.0, ticks) or round(ticks) < 1:
+            raise ValueError(
+                f"sample_period_s={sample_period_s!r} is not a whole number of ticks "
+                f"(T = {self.tick_s:.6g} s): allowed whole multiples of T"
+            )
+        return self.with_servo(sample_ticks=round(ticks))
+
     def with_servo(self, **changes: Any) -> Plant:
         """A copy whose servo has some fields changed."""
         return replace(self, servo=replace(self.servo, **changes))

@@ -450,10 +450,9 @@ def scurve_pulses(
     pad = 8
     t = np.arange(n + 1 + pad, dtype=np.float64) / prof.tick_hz
     pos = prof.position(t)
-    pos[n:] = pos[-1]  # the move has ended at t_n >= t_end (up to rounding of t_end)
     guard = _FLOOR_GUARD_ABS + _FLOOR_GUARD_REL * prof.total_pulses
     counts = np.floor(pos + 0.5 + guard).astype(np.int64)
-    counts[n:] = prof.output_pulses
+    counts[n:] = prof.output_pulses  # the move has ended at t_n >= t_end (up to rounding)
     counts[0] = 0
     return _train_from_counts(counts, n, prof.output_pulses)
 

@@ -206,7 +206,7 @@ def simulate(
     acc = K.new_acc()
     rec = np.empty((L.N_ROWS, n_ticks // dec), dtype=np.float64)
     K.run_one(cmd, ext, prm, acc, rec, dec)
-    time_s = np.arange(1, rec.shape[1] + 1, dtype=np.float64) * (dec * plant.tick_s)
+    time_s = np.arange(1, rec.shape[1] + 1, dtype=np.float64) * dec / plant.tick_hz
     return Trace(
         time_s=time_s,
         command_rad=rec[L.R_COMMAND],
