@@ -82,8 +82,13 @@ def test_patent_following_error_20_and_kv_50(patent_run):
 
 def test_patent_filter_at_20_with_input_24_outputs_21():
     servo = DigitalServo(
-        pack(PAPER_SETTINGS, PAPER_PLANT.with_servo(sample_ticks=1, speed_gain_b=4.0),
-             DEFAULT_MEASURES, 0.0, 1)
+        pack(
+            PAPER_SETTINGS,
+            PAPER_PLANT.with_servo(sample_ticks=1, speed_gain_b=4.0),
+            DEFAULT_MEASURES,
+            0.0,
+            1,
+        )
     )
     servo.y = 20.0
     servo.tick(0, 6)  # 6 counts in the sample: x = 4·6 = 24

@@ -30,8 +30,8 @@ def window_accel(n: np.ndarray, w: int) -> np.ndarray:
 
 
 def test_paper_constants():
-    assert DELTA * F == pytest.approx(429.5, abs=0.05)  # v_max, the paper's "430 rad/s"
-    assert PAPER_K == pytest.approx(429.5, abs=0.05)  # k = f²δ / 140e3
+    assert pytest.approx(429.5, abs=0.05) == DELTA * F  # v_max, the paper's "430 rad/s"
+    assert pytest.approx(429.5, abs=0.05) == PAPER_K  # k = f²δ / 140e3
 
 
 def test_paper_step_ramps_over_about_k_ticks_then_one_pulse_per_tick():
@@ -56,7 +56,7 @@ def test_paper_step_rise_acceleration_within_limit_to_one_pulse(w):
     a = window_accel(n[: 4 * int(PAPER_K)], w)
     quantum = 2 * DELTA / (w * T) ** 2  # each window count is off by less than one pulse
     assert a.max() <= LIMIT + quantum
-    if 100 <= w and 2 * w <= PAPER_K:  # the limit is used, not merely respected
+    if w >= 100 and 2 * w <= PAPER_K:  # the limit is used, not merely respected
         assert a.max() >= 0.9 * LIMIT
 
 
@@ -70,7 +70,7 @@ def test_paper_step_ends_at_3259_or_3260_and_never_overshoots_by_more_than_one_p
     p = paper_step(200_000)
     n = np.cumsum(p)
     assert n[-1] in (3259, 3260)
-    assert 10.0 / DELTA == pytest.approx(3259.5, abs=0.01)
+    assert pytest.approx(3259.5, abs=0.01) == 10.0 / DELTA
     assert n.max() <= 3260  # one pulse past 10 rad at most
     assert n.max() * DELTA - 10.0 < DELTA
     # after the move it dithers between the two pulses that bracket 10 rad
@@ -95,7 +95,7 @@ def test_error_limit_value_over_m_gives_one_pulse_per_m_ticks(m):
     assert np.all(gaps == m)
 
 
-def test_error_limit_below_value_caps_speed_at_L_over_value_pulses_per_tick():
+def test_error_limit_below_value_caps_speed_at_limit_over_value_pulses_per_tick():
     # value/L not whole: intervals alternate between floor and ceil of value/L
     p = paper_step(60_000, error_limit_rad=0.3, k=1.0)
     ticks = np.flatnonzero(p)[10:500]
@@ -106,7 +106,7 @@ def test_error_limit_below_value_caps_speed_at_L_over_value_pulses_per_tick():
 
 
 @pytest.mark.parametrize("value", [0.5, 1.0, 2.0])
-def test_tail_gain_is_delta_over_value_T(value):
+def test_tail_gain_is_delta_over_value_times_tick(value):
     """Unsaturated, the pulse speed is Kv·e with Kv = δ/(value·T): regress windowed pulse
     speed on the windowed mean error over the tail."""
     p = paper_step(300_000, value_rad=value, error_limit_rad=value)

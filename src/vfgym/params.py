@@ -275,7 +275,16 @@ class Measures:
     accel_window_s: float = 1e-3
     steady_window_s: float = 5e-3
 
+    in_position_pct: float | None = None
+    """If set, the in-position half-width is this % of the move instead (as step_info)."""
+
     def __post_init__(self) -> None:
+        if self.in_position_pct is not None:
+            _set(
+                self,
+                "in_position_pct",
+                check_real("in_position_pct", self.in_position_pct, 0.0, 100.0, lo_open=True),
+            )
         _set(
             self,
             "in_position_counts",
@@ -294,3 +303,10 @@ class Measures:
 
 
 DEFAULT_MEASURES = Measures()
+
+
+def in_position_rad(measures: Measures, plant: Plant, distance_rad: float) -> float:
+    """Half-width of the in-position window (rad) for a move of ``distance_rad``."""
+    if measures.in_position_pct is not None:
+        return abs(distance_rad) * measures.in_position_pct / 100.0
+    return measures.in_position_counts * plant.motor.count_rad

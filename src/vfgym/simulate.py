@@ -25,6 +25,7 @@ from vfgym.params import (
     Measures,
     Plant,
     Settings,
+    in_position_rad,
 )
 
 
@@ -110,7 +111,7 @@ def pack(
         m.max_speed_rad_s - m.knee_speed_rad_s
     )
     prm[L.P_TARGET] = target_rad
-    prm[L.P_WIN_RAD] = measures.in_position_counts * m.count_rad
+    prm[L.P_WIN_RAD] = in_position_rad(measures, plant, target_rad)
     prm[L.P_SS_START] = max(0, n_ticks - round(measures.steady_window_s * plant.tick_hz))
     prm[L.P_ACC_W] = accw
     prm[L.P_ACC_SCALE] = plant.pulse_rad / (accw * T) ** 2
@@ -159,6 +160,17 @@ class Trace:
     plant: Plant
     measures: Measures
     decimation: int = 1
+    target_rad: float = 0.0
+    """The command's final value: the in-position target."""
+    command_end_s: float = 0.0
+    """Time at which the command reached its final value."""
+
+    @property
+    def metrics(self) -> dict:
+        """The measures of this move (streamed over every tick; see :mod:`vfgym.metrics`)."""
+        from vfgym.metrics import of_trace
+
+        return of_trace(self)
 
     @property
     def pulse_count(self) -> np.ndarray:
@@ -223,7 +235,17 @@ def simulate(
         plant=plant,
         measures=measures,
         decimation=dec,
+        target_rad=float(cmd[-1]),
+        command_end_s=command_end_s(cmd, plant.tick_hz),
     )
+
+
+def command_end_s(command: np.ndarray, tick_hz: float) -> float:
+    """Time at which the command reached its final value: tick of its last change × T
+    (the plant starts at rest at 0, so a step at tick 0 ends at 0)."""
+    c = np.concatenate([[0.0], np.asarray(command, dtype=np.float64)])
+    changes = np.flatnonzero(c[1:] != c[:-1])
+    return float(changes[-1]) / tick_hz if changes.size else 0.0
 
 
 def step_command(distance_rad: float, n_ticks: int) -> np.ndarray:

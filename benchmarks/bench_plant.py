@@ -1,0 +1,80 @@
+"""Plant throughput and cold start: prints figures, asserts nothing (machines are noisy).
+
+Ticks per second on the paper step (10 rad, baseline settings) for the compiled kernel
+with measures only, with the full per-tick trace, and for the plain-Python reference;
+ratios are taken within this one run. Cold start: `import vfgym` plus the first
+simulation in a fresh process, with numba's cache cold (a new cache directory) and warm.
+
+    python benchmarks/bench_plant.py [--ticks N] [--repeats R]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from vfgym import DEFAULT_MEASURES, PAPER_PLANT, PAPER_SETTINGS, step_command
+from vfgym import _kernel as K
+from vfgym import _layout as L
+from vfgym.reference import reference_run
+from vfgym.simulate import pack
+
+COLD = "import time; t=time.perf_counter(); import vfgym; " \
+    "vfgym.simulate(vfgym.step_command(10.0, 14000)); print(time.perf_counter()-t)"
+
+
+def best_rate(fn, ticks: int, repeats: int) -> float:
+    """Best of ``repeats`` runs, in ticks per second."""
+    best = float("inf")
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return ticks / best
+
+
+def cold_start(cache_dir: str) -> float:
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
+    out = subprocess.run([sys.executable, "-c", COLD], env=env, check=True,
+                         capture_output=True, text=True)
+    return float(out.stdout.strip())
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--ticks", type=int, default=2_800_000, help="ticks per kernel run")
+    ap.add_argument("--ref-ticks", type=int, default=70_000, help="ticks per reference run")
+    ap.add_argument("--repeats", type=int, default=5)
+    args = ap.parse_args()
+    n = args.ticks
+    cmd = step_command(10.0, n)
+    prm = pack(PAPER_SETTINGS, PAPER_PLANT, DEFAULT_MEASURES, 10.0, n)
+    ext = np.zeros(0, np.int8)
+    acc = K.new_acc()
+    no_rec = np.zeros((L.N_ROWS, 0))
+    rec = np.empty((L.N_ROWS, n))
+    K.run_one(cmd[:100], ext, prm, acc, no_rec, 1)  # compile outside the timing
+    metrics = best_rate(lambda: K.run_one(cmd, ext, prm, acc, no_rec, 1), n, args.repeats)
+    full = best_rate(lambda: K.run_one(cmd, ext, prm, acc, rec, 1), n, args.repeats)
+    m = args.ref_ticks
+    ref = best_rate(lambda: reference_run(cmd[:m], ext, prm), m, 1)
+    print(f"paper step, {n} ticks, one core")
+    print(f"  kernel, measures only : {metrics / 1e6:8.1f} M ticks/s   (target >= 50)")
+    print(f"  kernel, full trace    : {full / 1e6:8.1f} M ticks/s   (target >= 25)")
+    print(f"  plain-Python reference: {ref / 1e6:8.3f} M ticks/s")
+    print(f"  kernel / reference    : {metrics / ref:8.0f} x         (target >= 20)")
+    with tempfile.TemporaryDirectory() as cache:
+        cold = cold_start(cache)
+        warm = cold_start(cache)
+    print(f"cold start, import + first simulation: {cold:.2f} s cold cache (target <= 3), "
+          f"{warm:.2f} s warm cache (target <= 1)")
+
+
+if __name__ == "__main__":
+    main()
