@@ -100,7 +100,17 @@ def assert_matches_profile(prof: ScurveProfile, train: np.ndarray) -> None:
     c = counts(train)[: prof.n_ticks + 1]
     p = prof.position(prof.tick_times()[: c.size])
     assert np.all(np.abs(c - p) <= 0.5 + 1e-6)
-    assert prof.position(prof.t_end) == prof.output_pulses
+    assert prof.position(prof.t_end) == prof.end_position
+    assert prof.output_pulses == math.floor(prof.end_position + 0.5 + 1e-9)
+
+
+def assert_profile_symmetric(prof: ScurveProfile) -> None:
+    # The exact speed curve is its own mirror image: v(t_end - t) = v(t).
+    t = np.linspace(0.0, prof.t_end, 4001)[1:-1]
+    np.testing.assert_allclose(prof.speed(t), prof.speed(prof.t_end - t), rtol=1e-9)
+    assert prof.t_end - prof.t_dec_start == pytest.approx(
+        prof.t_acc_end, rel=1e-9, abs=1e-12 * prof.t_end
+    )
 
 
 # ---------------------------------------------------------------- S-curve: basics
@@ -141,10 +151,8 @@ def test_speed_limit_is_tight_when_cruising_at_drive_speed():
 def test_acceleration_and_deceleration_symmetric(case, prevention):
     prof, train = both(**case, triangle_prevention=prevention)
     assert_mirror_symmetric(train)
-    t = np.linspace(0.0, prof.t_end, 4001)[1:-1]
-    np.testing.assert_allclose(prof.speed(t), prof.speed(prof.t_end - t), rtol=1e-9)
+    assert_profile_symmetric(prof)
     # Deceleration time and pulses equal the acceleration's.
-    assert prof.t_end - prof.t_dec_start == pytest.approx(prof.t_acc_end, rel=1e-12)
     dec_pulses = prof.total_pulses - prof.position(prof.t_dec_start)
     assert dec_pulses == pytest.approx(prof.accel_pulses, rel=1e-9)
 
@@ -355,24 +363,21 @@ def test_stop_during_acceleration_increase_with_prevention():
     assert prof.stopped and not prof.reached_drive_speed
     assert prof.t_acc_increase == pytest.approx(ts)
     assert prof.t_acc_end == pytest.approx(2 * ts)
-    vp = sv + jk * ts**2
-    assert prof.peak_speed_pps == pytest.approx(vp)
+    assert prof.t_dec_start == pytest.approx(2 * ts)  # no plateau after a stop
+    assert prof.peak_speed_pps == pytest.approx(sv + jk * ts**2)
     exact = 2 * (2 * sv * ts + jk * ts**3)  # pulses of the shortened S-curve
-    assert prof.output_pulses == math.ceil(exact) < LONG["total_pulses"]
-    # Only the fraction needed to complete a whole pulse is output at the peak.
-    assert prof.plateau_pulses == pytest.approx(math.ceil(exact) - exact)
-    assert prof.t_dec_start - prof.t_acc_end < 1 / vp
+    assert prof.end_position == pytest.approx(exact)
+    assert prof.output_pulses == round(exact) < LONG["total_pulses"]
     assert_basic_train(train, prof.output_pulses)
-    assert prof.t_end == pytest.approx(4 * ts + (math.ceil(exact) - exact) / vp)
-    assert train.size == prof.n_ticks == math.ceil(prof.t_end * F - 1e-6)
+    assert train.size == prof.n_ticks == math.ceil(4 * stop - 1e-6)
     # Nothing changes before the stop is issued.
     np.testing.assert_array_equal(train[:stop], full[:stop])
     assert not np.array_equal(train[: 2 * stop], full[: 2 * stop])
     # Smooth: the acceleration passes through zero at the peak.
     dt = 1e-7
     assert 0 < prof.acceleration(2 * ts - dt) <= jk * dt * 1.001
-    assert -jk * dt * 1.001 <= prof.acceleration(prof.t_dec_start + dt) < 0
-    assert_mirror_symmetric(train)
+    assert -jk * dt * 1.001 <= prof.acceleration(2 * ts + dt) < 0
+    assert_profile_symmetric(prof)
     assert_matches_profile(prof, train)
 
 
@@ -383,17 +388,16 @@ def test_stop_during_acceleration_increase_without_prevention():
     sv, jk = LONG["initial_speed_pps"], LONG["jerk_pps3"]
     exact = 2 * (sv * ts + jk * ts**3 / 6)
     assert prof.t_acc_end == pytest.approx(ts)
-    assert prof.t_dec_start == pytest.approx(
-        ts + (math.ceil(exact) - exact) / (sv + jk * ts**2 / 2)
-    )
-    assert prof.output_pulses == math.ceil(exact)
+    assert prof.t_dec_start == pytest.approx(ts)
+    assert prof.output_pulses == round(exact)
     assert_basic_train(train, prof.output_pulses)
     dt = 1e-7
     a_before = prof.acceleration(ts - dt)
-    a_after = prof.acceleration(prof.t_dec_start + dt)
+    a_after = prof.acceleration(ts + dt)
     assert a_before == pytest.approx(jk * ts, rel=1e-3)
     assert a_after == pytest.approx(-jk * ts, rel=1e-3)  # the triangle's jump
-    assert_mirror_symmetric(train)
+    assert_profile_symmetric(prof)
+    assert_matches_profile(prof, train)
 
 
 def test_stop_during_acceleration_decrease_lets_acceleration_reach_zero():
@@ -402,12 +406,12 @@ def test_stop_during_acceleration_decrease_lets_acceleration_reach_zero():
     prof, train = both(**LONG, stop_tick=stop)
     assert full_prof.t_acc_increase < stop / F < full_prof.t_acc_end
     assert prof.t_acc_end == pytest.approx(full_prof.t_acc_end)
-    # Decelerate straight away (after completing the last whole pulse at the peak).
-    assert 0 <= prof.t_dec_start - prof.t_acc_end < 1 / LONG["drive_speed_pps"]
+    assert prof.t_dec_start == prof.t_acc_end  # decelerate straight away
     assert prof.peak_speed_pps == pytest.approx(LONG["drive_speed_pps"])
-    assert prof.output_pulses == math.ceil(2 * full_prof.accel_pulses)
+    assert prof.output_pulses == round(2 * full_prof.accel_pulses)
     assert_basic_train(train, prof.output_pulses)
-    assert_mirror_symmetric(train)
+    assert_profile_symmetric(prof)
+    assert_matches_profile(prof, train)
 
 
 def test_stop_while_cruising_starts_the_mirrored_deceleration():
@@ -416,7 +420,7 @@ def test_stop_while_cruising_starts_the_mirrored_deceleration():
     prof, train = both(**LONG, stop_tick=stop)
     assert full_prof.t_acc_end < stop / F < full_prof.t_dec_start
     assert prof.reached_drive_speed
-    assert 0 <= prof.t_dec_start - stop / F < 1 / LONG["drive_speed_pps"]
+    assert prof.t_dec_start == pytest.approx(stop / F)
     assert prof.t_end - prof.t_dec_start == pytest.approx(full_prof.t_acc_end)
     assert_basic_train(train, prof.output_pulses)
     assert prof.output_pulses < LONG["total_pulses"]
@@ -488,7 +492,8 @@ def test_property_decelerating_stop(kw, frac):
     assert prof.output_pulses <= kw["total_pulses"]
     assert_speed_limit(train, kw["drive_speed_pps"], F)
     assert_matches_profile(prof, train)
-    assert_mirror_symmetric(train)
+    assert_profile_symmetric(prof)
+    assert prof.t_end <= full_prof.t_end * (1 + 1e-12)  # a stop never lengthens the move
     n = min(stop, train.size, full.size)
     np.testing.assert_array_equal(train[:n], full[:n])
     if stop / F >= full_prof.t_dec_start:

@@ -76,8 +76,9 @@ class ScurveProfile:
     Attributes:
         total_pulses: pulses requested.
         output_pulses: pulses actually output; equals ``total_pulses`` unless a
-            decelerating stop cut the move short (the move's exact length then, having
-            been completed to a whole pulse at the peak speed).
+            decelerating stop cut the move short: then ``round(end_position)``.
+        end_position: exact position at the end of the move, pulses; ``total_pulses``
+            unless a decelerating stop cut the move short.
         initial_speed_pps, drive_speed_pps, jerk_pps3, tick_hz: the settings (pps,
             pps, pps/s², Hz).
         triangle_prevention: whether the rule of 1/12 was applied.
@@ -98,6 +99,7 @@ class ScurveProfile:
 
     total_pulses: int
     output_pulses: int
+    end_position: float
     initial_speed_pps: float
     drive_speed_pps: float
     jerk_pps3: float
@@ -142,7 +144,7 @@ class ScurveProfile:
         pos = np.zeros_like(t)
         vel = np.zeros_like(t)
         acc = np.zeros_like(t)
-        p_end = float(self.output_pulses)
+        p_end = self.end_position
 
         m = (t >= 0.0) & (t < self.t_acc_end)
         pos[m], vel[m], acc[m] = self._acc_phase(t[m])
@@ -295,11 +297,12 @@ def scurve_profile(
       at ``ts``;
     - while cruising (or on the plateau): the mirrored deceleration starts at ``ts``.
 
-    A stop at or after the start of deceleration changes nothing. The pulses output
-    before the stop are never changed by it. The stopped move is completed to a whole
-    number of pulses (at least 1): the fraction of a pulse left over, less than one, is
-    output at the peak speed just before the deceleration, as the manual does with the
-    excess pulses of a short move, so the move stays mirror symmetric.
+    A stop at or after the start of deceleration changes nothing, and the pulses output
+    before the stop are never changed by it. The stopped move's exact length
+    ``end_position`` is in general not a whole number of pulses; it outputs
+    ``round(end_position)`` pulses (possibly 0), the pulse train being the rounded exact
+    position as always, so the profile is exactly mirror symmetric and the train is
+    within half a pulse of it.
 
     Raises:
         ValueError: a setting out of range (see :func:`scurve_pulses`), or a move longer
@@ -335,6 +338,7 @@ def scurve_profile(
     t_dec = t_acc + cruise / v_peak
     guard = _FLOOR_GUARD_ABS + _FLOOR_GUARD_REL * P
     output = P
+    p_end = float(P)
     stopped = False
     if stop is not None and stop / f < t_dec:
         ts = stop / f
@@ -348,8 +352,7 @@ def scurve_profile(
         segs, (t_acc, p_acc, v_peak, _) = _integrate(SV, pieces)
         t_dec = max(ts, t_acc)
         p_end = 2.0 * p_acc + v_peak * (t_dec - t_acc)
-        output = min(P, max(1, math.ceil(p_end - guard)))
-        t_dec += max(output - p_end, 0.0) / v_peak
+        output = min(P, math.floor(p_end + 0.5 + guard))
 
     t_end = t_dec + t_acc
     n_ticks = max(1, math.ceil(t_end * f - 1e-6))
@@ -361,6 +364,7 @@ def scurve_profile(
     return ScurveProfile(
         total_pulses=P,
         output_pulses=output,
+        end_position=p_end,
         initial_speed_pps=SV,
         drive_speed_pps=DV,
         jerk_pps3=J,
