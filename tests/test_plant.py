@@ -316,13 +316,14 @@ def test_batch_kernel_equals_single_runs():
     sets = [PAPER_SETTINGS, Settings(value_rad=0.5, error_limit_rad=0.4, k=100.0)]
     flat = np.concatenate(cmds)
     off = np.array([0, len(cmds[0]), len(flat)], dtype=np.int64)
-    ext_off = np.zeros(3, dtype=np.int64)
+    ext_off = np.zeros(2, dtype=np.int64)
     runs = [(j, s) for j in range(2) for s in sets]
     prm = np.stack(
         [pack(s, plants[j], DEFAULT_MEASURES, float(cmds[j][-1]), len(cmds[j])) for j, s in runs]
     )
     acc = K.new_acc(len(runs))
-    K.run_batch(flat, off, np.zeros(0, np.int8), ext_off, np.array([j for j, _ in runs]), prm, acc)
+    idx = np.array([j for j, _ in runs])
+    K.run_batch(flat, off, idx, np.zeros(0, np.int8), ext_off, np.zeros_like(idx), prm, acc)
     for r, (j, s) in enumerate(runs):
         np.testing.assert_array_equal(acc[r], simulate(cmds[j], s, plants[j]).acc)
 

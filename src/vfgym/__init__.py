@@ -4,6 +4,7 @@ The plant (MODEL.md): V-F controller (paper) → digital servo with a filtered s
 (patent) → motor, load and quadrature encoder; MCX514-style S-curve pulse source.
 """
 
+from vfgym import baselines
 from vfgym.params import (
     DEFAULT_MEASURES,
     PAPER_ACCEL_LIMIT_RAD_S2,
@@ -21,6 +22,9 @@ from vfgym.params import (
     Settings,
     paper_k,
 )
+from vfgym.pulse_sources import fixed_frequency_pulses, scurve_pulses
+from vfgym.scenarios import SCENARIOS, Scenario, get_scenario, random_scenario, scenario_set
+from vfgym.scoring import Bounds, CostWeights, Evaluation, evaluate
 from vfgym.simulate import Trace, simulate, step_command, vf_pulses
 
 __version__ = "0.1.0"
@@ -34,14 +38,26 @@ __all__ = [
     "PAPER_SETTINGS",
     "PAPER_STEP_RAD",
     "PAPER_TICK_HZ",
+    "SCENARIOS",
     "SGME_02A",
+    "Bounds",
+    "CostWeights",
+    "Evaluation",
     "Measures",
     "Motor",
     "Plant",
+    "Scenario",
     "Servo",
     "Settings",
     "Trace",
+    "baselines",
+    "evaluate",
+    "fixed_frequency_pulses",
+    "get_scenario",
     "paper_k",
+    "random_scenario",
+    "scenario_set",
+    "scurve_pulses",
     "simulate",
     "step_command",
     "vf_pulses",

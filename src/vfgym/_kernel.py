@@ -453,14 +453,17 @@ def run_one(cmd, ext, prm, acc, rec, dec):
 
 
 @numba.njit(cache=True, fastmath=False, nogil=True, parallel=True)
-def run_batch(cmd_flat, cmd_off, ext_flat, ext_off, scen, prm, acc):
-    """Run ``prm.shape[0]`` moves in parallel; run r simulates scenario ``scen[r]`` whose
-    command is ``cmd_flat[cmd_off[j]:cmd_off[j+1]]`` (and pulses likewise in ext_flat)."""
+def run_batch(cmd_flat, cmd_off, cmd_idx, ext_flat, ext_off, ext_idx, prm, acc):
+    """Run ``prm.shape[0]`` moves in parallel (numba threads over the runs). Run r reads
+    command ``cmd_idx[r]``, i.e. ``cmd_flat[cmd_off[j]:cmd_off[j+1]]``, and external pulses
+    ``ext_idx[r]`` from ``ext_flat`` likewise (an empty segment when the V-F controller
+    makes the pulses); it writes measures only, into ``acc[r]``."""
     rec = np.zeros((N_ROWS, 0), dtype=np.float64)
     for r in numba.prange(prm.shape[0]):
-        j = scen[r]
+        j = cmd_idx[r]
+        e = ext_idx[r]
         cmd = cmd_flat[cmd_off[j] : cmd_off[j + 1]]
-        ext = ext_flat[ext_off[j] : ext_off[j + 1]]
+        ext = ext_flat[ext_off[e] : ext_off[e + 1]]
         run_one(cmd, ext, prm[r], acc[r], rec, 1)
 
 

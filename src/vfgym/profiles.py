@@ -1,0 +1,156 @@
+"""Position commands, one value per controller tick (rad), for the V-F controller.
+
+Each profile starts from rest at 0 rad (the plant's initial position). ``step`` and
+``sine`` are the paper's Fig. 4 and Fig. 5; ``ramp``, ``trapezoid`` and ``scurve`` are
+smooth point-to-point commands; ``multi`` strings several moves with dwells.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from vfgym._validate import check_int, check_real
+
+PROFILES = ("step", "sine", "ramp", "trapezoid", "scurve", "multi")
+
+
+def _ticks(duration_s: float, tick_hz: float) -> int:
+    d = check_real("duration_s", duration_s, 0.0, lo_open=True)
+    return check_int("n_ticks", max(1, round(d * tick_hz)), 1)
+
+
+def _time(n: int, tick_hz: float) -> np.ndarray:
+    return np.arange(n, dtype=np.float64) / tick_hz
+
+
+def step(distance_rad: float, duration_s: float, tick_hz: float) -> np.ndarray:
+    """A step to ``distance_rad`` at tick 0 (paper Fig. 4: 10 rad)."""
+    d = check_real("distance_rad", distance_rad)
+    return np.full(_ticks(duration_s, tick_hz), d)
+
+
+def sine(amplitude_rad: float, freq_hz: float, duration_s: float, tick_hz: float) -> np.ndarray:
+    """A·sin(2π·f·t) from t = 0 (paper Fig. 5; the text gives neither A nor f)."""
+    a = check_real("amplitude_rad", amplitude_rad)
+    f = check_real("freq_hz", freq_hz, 0.0, lo_open=True)
+    return a * np.sin(2.0 * math.pi * f * _time(_ticks(duration_s, tick_hz), tick_hz))
+
+
+def ramp(distance_rad: float, speed_rad_s: float, duration_s: float, tick_hz: float) -> np.ndarray:
+    """Constant speed from 0 until ``distance_rad`` is reached, then hold."""
+    d = check_real("distance_rad", distance_rad)
+    v = check_real("speed_rad_s", speed_rad_s, 0.0, lo_open=True)
+    t = _time(_ticks(duration_s, tick_hz), tick_hz)
+    return math.copysign(1.0, d) * np.minimum(v * t, abs(d))
+
+
+def trapezoid_position(t: np.ndarray, distance: float, v: float, a: float) -> np.ndarray:
+    """Position of a symmetric trapezoidal (or triangular) speed profile over |distance|."""
+    if distance * a >= v * v:  # reaches v
+        ta = v / a
+        tc = distance / v - ta
+    else:
+        ta = math.sqrt(distance / a)
+        tc = 0.0
+        v = a * ta
+    t_end = 2 * ta + tc
+    p = np.where(
+        t < ta,
+        0.5 * a * t**2,
+        np.where(
+            t < ta + tc,
+            0.5 * a * ta**2 + v * (t - ta),
+            distance - 0.5 * a * np.clip(t_end - t, 0.0, None) ** 2,
+        ),
+    )
+    return np.where(t >= t_end, distance, p)
+
+
+def trapezoid(
+    distance_rad: float, speed_rad_s: float, accel_rad_s2: float, duration_s: float, tick_hz: float
+) -> np.ndarray:
+    """Trapezoidal speed (constant acceleration, cruise, deceleration) to ``distance_rad``."""
+    d = check_real("distance_rad", distance_rad)
+    v = check_real("speed_rad_s", speed_rad_s, 0.0, lo_open=True)
+    a = check_real("accel_rad_s2", accel_rad_s2, 0.0, lo_open=True)
+    t = _time(_ticks(duration_s, tick_hz), tick_hz)
+    return math.copysign(1.0, d) * trapezoid_position(t, abs(d), v, a)
+
+
+def scurve(
+    distance_rad: float,
+    speed_rad_s: float,
+    accel_rad_s2: float,
+    duration_s: float,
+    tick_hz: float,
+    pulse_rad: float,
+) -> np.ndarray:
+    """The MCX514 S-curve fixed-pulse drive used as a position command: jerk chosen so the
+    peak acceleration when reaching ``speed_rad_s`` is ``accel_rad_s2`` (see
+    :func:`scurve_source_args`); triangle form prevention on."""
+    from vfgym.pulse_sources import scurve_pulses
+
+    d = check_real("distance_rad", distance_rad)
+    n = _ticks(duration_s, tick_hz)
+    total = round(abs(d) / pulse_rad)
+    out = np.zeros(n)
+    if total == 0:
+        return out
+    pulses = scurve_pulses(
+        total, **scurve_source_args(speed_rad_s, accel_rad_s2, tick_hz, pulse_rad)
+    )
+    m = min(n, pulses.size)
+    out[:m] = np.cumsum(pulses[:m], dtype=np.int64)
+    out[m:] = out[m - 1] if m else 0.0
+    return math.copysign(pulse_rad, d) * out
+
+
+def scurve_source_args(
+    speed_rad_s: float,
+    accel_rad_s2: float,
+    tick_hz: float,
+    pulse_rad: float,
+    initial_speed_rad_s: float | None = None,
+) -> dict[str, float]:
+    """MCX514 drive settings (pps units) for a top speed and a peak acceleration in rad.
+
+    DV = speed/δ (at most one pulse a tick), SV = 1 % of DV by default (the IC cannot start
+    from 0), jerk JK = a_peak²/(DV − SV) so that the S-curve reaching DV peaks at a_peak.
+    """
+    v = check_real("speed_rad_s", speed_rad_s, 0.0, lo_open=True)
+    a = check_real("accel_rad_s2", accel_rad_s2, 0.0, lo_open=True)
+    dv = min(v / pulse_rad, tick_hz)
+    sv = 0.01 * dv if initial_speed_rad_s is None else initial_speed_rad_s / pulse_rad
+    sv = check_real("initial_speed_rad_s", sv, 0.0, dv, lo_open=True)
+    a_pps = a / pulse_rad
+    jerk = a_pps**2 / max(dv - sv, 1e-9)
+    return {
+        "initial_speed_pps": sv,
+        "drive_speed_pps": dv,
+        "jerk_pps3": jerk,
+        "tick_hz": tick_hz,
+    }
+
+
+def multi(
+    moves: Sequence[tuple[float, float]], tick_hz: float, settle_s: float = 0.0
+) -> np.ndarray:
+    """Steps by the relative distances of ``moves``, each held for its dwell (s): e.g.
+    ((5.0, 0.05), (-8.0, 0.06), (3.0, 0.08)) goes to 5, then −3, then 0 rad."""
+    if not moves:
+        raise ValueError("moves=() is not allowed: give at least one (distance_rad, dwell_s)")
+    parts = []
+    pos = 0.0
+    for i, (dist, dwell) in enumerate(moves):
+        pos += check_real(f"moves[{i}].distance_rad", dist)
+        parts.append(
+            np.full(
+                _ticks(check_real(f"moves[{i}].dwell_s", dwell, 0.0, lo_open=True), tick_hz), pos
+            )
+        )
+    if settle_s > 0:
+        parts.append(np.full(_ticks(settle_s, tick_hz), pos))
+    return np.concatenate(parts)

@@ -1,0 +1,291 @@
+"""Named, frozen scenarios (a command and the plant it drives), and a seeded random
+distribution of moves with disjoint train and test seeds.
+
+A scenario is data: a profile with its numbers, a duration, and the changes it makes to
+the base plant (load inertia, friction, load torque). ``command()`` and ``plant()`` build
+what the simulator needs; both are cached, so every caller (env, objective, evaluation)
+simulates exactly the same arrays.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from vfgym import profiles
+from vfgym._validate import check_choice, check_int, check_real
+from vfgym.params import PAPER_PLANT, PAPER_STEP_RAD, Plant
+
+PAPER_SINE_AMPLITUDE_RAD = 5.0
+"""Fig. 5's sine: the text gives no numbers. 5 rad at 10 Hz peaks at 314 rad/s (73 % of
+v_max) and 19.7 krad/s² (14 % of the motor's limit): well inside both."""
+PAPER_SINE_FREQ_HZ = 10.0
+
+SPLITS = ("train", "test")
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One move: a command profile and the plant it drives.
+
+    profile: one of :data:`vfgym.profiles.PROFILES`.
+    distance_rad: the move (the amplitude for ``sine``); negative moves go backwards.
+    duration_s: how long to simulate, including time to settle.
+    speed_rad_s, accel_rad_s2: cruise speed and acceleration of ramp / trapezoid / scurve
+        profiles (default: the pulse train's top speed δ·f and the motor's limit).
+    freq_hz: sine frequency.
+    moves: for ``multi``: (relative distance rad, dwell s) pairs.
+    inertia_ratio, coulomb_nm, viscous_nm_s_rad, load_torque_nm: the plant's load.
+    """
+
+    name: str
+    profile: str = "step"
+    distance_rad: float = PAPER_STEP_RAD
+    duration_s: float = 0.15
+    speed_rad_s: float | None = None
+    accel_rad_s2: float | None = None
+    freq_hz: float = PAPER_SINE_FREQ_HZ
+    moves: tuple[tuple[float, float], ...] = ()
+    inertia_ratio: float = 0.0
+    coulomb_nm: float = 0.0
+    viscous_nm_s_rad: float = 0.0
+    load_torque_nm: float = 0.0
+    description: str = field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        check_choice("profile", self.profile, profiles.PROFILES)
+        check_real("distance_rad", self.distance_rad)
+        check_real("duration_s", self.duration_s, 0.0, 60.0, lo_open=True)
+        if self.profile == "multi" and not self.moves:
+            raise ValueError("moves=() is not allowed for profile 'multi': give (distance, dwell)")
+        object.__setattr__(self, "moves", tuple((float(d), float(w)) for d, w in self.moves))
+
+    @property
+    def tracking(self) -> bool:
+        """True for a moving reference (sine), judged by tracking error, not settling."""
+        return self.profile == "sine"
+
+    def plant(self, base: Plant = PAPER_PLANT) -> Plant:
+        """The base plant with this scenario's load."""
+        return base.with_motor(
+            inertia_ratio=self.inertia_ratio,
+            coulomb_nm=self.coulomb_nm,
+            viscous_nm_s_rad=self.viscous_nm_s_rad,
+            load_torque_nm=self.load_torque_nm,
+        )
+
+    def command(self, plant: Plant = PAPER_PLANT) -> np.ndarray:
+        """The position command per tick (rad), read-only and cached."""
+        return _command(self, plant.tick_hz, plant.pulse_rad, plant.motor.accel_limit_rad_s2)
+
+    def speed(self, plant: Plant) -> float:
+        return self.speed_rad_s if self.speed_rad_s is not None else plant.pulse_top_speed_rad_s
+
+    def accel(self, plant: Plant) -> float:
+        return (
+            self.accel_rad_s2 if self.accel_rad_s2 is not None else plant.motor.accel_limit_rad_s2
+        )
+
+    def move_list(self, plant: Plant = PAPER_PLANT) -> list[tuple[int, float]]:
+        """Point-to-point moves as (start tick, relative distance rad), for pulse sources
+        that replace the V-F controller; empty for a moving reference."""
+        if self.tracking:
+            return []
+        if self.profile != "multi":
+            return [(0, self.distance_rad)]
+        out, tick = [], 0
+        for dist, dwell in self.moves:
+            out.append((tick, dist))
+            tick += max(1, round(dwell * plant.tick_hz))
+        return out
+
+    def ideal_time_s(self, plant: Plant = PAPER_PLANT) -> float:
+        """Shortest time for the moves at the pulse train's top speed and the motor's
+        acceleration limit (bang–coast–bang); the yardstick for move times. For ``multi``
+        the last move's start plus its ideal time."""
+        v = plant.pulse_top_speed_rad_s
+        a = plant.motor.accel_limit_rad_s2
+
+        def one(d: float) -> float:
+            d = abs(d)
+            return d / v + v / a if d * a >= v * v else 2.0 * math.sqrt(d / a)
+
+        moves = self.move_list(plant)
+        if not moves:
+            return self.duration_s
+        start, dist = moves[-1]
+        return start / plant.tick_hz + one(dist)
+
+    def with_(self, **changes: Any) -> Scenario:
+        """A copy with some fields changed."""
+        return replace(self, **changes)
+
+
+@functools.lru_cache(maxsize=256)
+def _command(sc: Scenario, tick_hz: float, pulse_rad: float, accel_limit: float) -> np.ndarray:
+    v = sc.speed_rad_s if sc.speed_rad_s is not None else pulse_rad * tick_hz
+    a = sc.accel_rad_s2 if sc.accel_rad_s2 is not None else accel_limit
+    d, dur = sc.distance_rad, sc.duration_s
+    if sc.profile == "step":
+        c = profiles.step(d, dur, tick_hz)
+    elif sc.profile == "sine":
+        c = profiles.sine(d, sc.freq_hz, dur, tick_hz)
+    elif sc.profile == "ramp":
+        c = profiles.ramp(d, v, dur, tick_hz)
+    elif sc.profile == "trapezoid":
+        c = profiles.trapezoid(d, v, a, dur, tick_hz)
+    elif sc.profile == "scurve":
+        c = profiles.scurve(d, v, a, dur, tick_hz, pulse_rad)
+    else:
+        c = profiles.multi(sc.moves, tick_hz)
+        n = max(1, round(dur * tick_hz))
+        c = np.concatenate([c, np.full(max(0, n - c.size), c[-1])])[:n]
+    c.setflags(write=False)
+    return c
+
+
+SCENARIOS: dict[str, Scenario] = {
+    s.name: s
+    for s in (
+        Scenario(
+            "paper-step",
+            "step",
+            PAPER_STEP_RAD,
+            0.15,
+            description="the paper's Fig. 4: a 10 rad step, bare SGME-02A",
+        ),
+        Scenario(
+            "paper-sine",
+            "sine",
+            PAPER_SINE_AMPLITUDE_RAD,
+            0.3,
+            description="the paper's Fig. 5: 5 rad, 10 Hz sine (3 periods)",
+        ),
+        Scenario(
+            "short-move",
+            "step",
+            0.5,
+            0.06,
+            description="0.5 rad: too short to reach top speed (triangle regime)",
+        ),
+        Scenario(
+            "long-move", "step", 100.0, 0.40, description="100 rad: a long cruise at top speed"
+        ),
+        Scenario(
+            "reversal",
+            "multi",
+            0.0,
+            0.20,
+            moves=((5.0, 0.02), (-10.0, 0.18)),
+            description="to +5 rad, then straight back to −5 rad after 20 ms",
+        ),
+        Scenario(
+            "heavy-load",
+            "step",
+            PAPER_STEP_RAD,
+            0.30,
+            inertia_ratio=5.0,
+            description="the paper step with a load of 5× the rotor's inertia",
+        ),
+        Scenario(
+            "friction",
+            "step",
+            PAPER_STEP_RAD,
+            0.15,
+            coulomb_nm=0.003,
+            viscous_nm_s_rad=2e-4,
+            description="the paper step with Coulomb 3 mN·m and viscous 0.2 mN·m·s/rad "
+            "(the P-type servo's dead band τc/K3 stays inside the in-position window)",
+        ),
+        Scenario(
+            "multi-move",
+            "multi",
+            0.0,
+            0.36,
+            moves=((3.0, 0.06), (-6.0, 0.07), (1.5, 0.05), (8.0, 0.08), (-6.5, 0.10)),
+            description="five moves with dwells, both directions",
+        ),
+    )
+}
+
+
+def get_scenario(name: str | Scenario) -> Scenario:
+    """A named scenario (or a random one named ``train-<seed>`` / ``test-<seed>``)."""
+    if isinstance(name, Scenario):
+        return name
+    if name in SCENARIOS:
+        return SCENARIOS[name]
+    split, _, seed = str(name).partition("-")
+    if split in SPLITS and seed.isdigit():
+        return random_scenario(int(seed), split)
+    raise ValueError(
+        f"scenario={name!r} is not known: choose one of {', '.join(SCENARIOS)}, "
+        "or train-<seed> / test-<seed>"
+    )
+
+
+def random_scenario(seed: int, split: str = "train") -> Scenario:
+    """A move drawn from the scenario distribution.
+
+    Train and test draws never coincide: the generator's key is (split, seed) and the
+    drawn scenario is named after both. Distribution: distance log-uniform in
+    [0.2, 50] rad with a random sign; profile step (50 %), trapezoid (25 %) or scurve
+    (25 %); inertia ratio uniform in [0, 5]; Coulomb friction uniform in [0, 4] mN·m
+    (half of the draws: none; more would leave the P-type servo's dead band τc/K3 outside
+    the in-position window); viscous friction uniform in [0, 3e-4] N·m·s/rad; load torque
+    uniform in [−4, 4] mN·m (a quarter of the draws, else none). Duration: the ideal
+    move time (for the loaded motor's own limit) times 2, plus 80 ms to settle.
+    """
+    check_choice("split", split, SPLITS)
+    seed = check_int("seed", seed, 0, 2**63 - 1)
+    rng = np.random.default_rng([SPLITS.index(split), seed])
+    dist = float(np.exp(rng.uniform(math.log(0.2), math.log(50.0)))) * rng.choice([-1.0, 1.0])
+    profile = str(rng.choice(["step", "step", "trapezoid", "scurve"]))
+    ratio = float(rng.uniform(0.0, 5.0))
+    coulomb = float(rng.uniform(0.0, 0.004)) if rng.random() < 0.5 else 0.0
+    viscous = float(rng.uniform(0.0, 3e-4))
+    load = float(rng.uniform(-0.004, 0.004)) if rng.random() < 0.25 else 0.0
+    plant = PAPER_PLANT
+    v = plant.pulse_top_speed_rad_s
+    a = min(
+        plant.motor.accel_limit_rad_s2,
+        plant.motor.peak_torque_nm / (plant.motor.rotor_inertia_kgm2 * (1 + ratio)),
+    )
+    d = abs(dist)
+    t_ideal = d / v + v / a if d * a >= v * v else 2.0 * math.sqrt(d / a)
+    duration = round(2.0 * t_ideal + 0.08, 4)
+    return Scenario(
+        name=f"{split}-{seed}",
+        profile=profile,
+        distance_rad=round(dist, 6),
+        duration_s=duration,
+        inertia_ratio=round(ratio, 4),
+        coulomb_nm=round(coulomb, 5),
+        viscous_nm_s_rad=round(viscous, 7),
+        load_torque_nm=round(load, 4),
+        description=f"random {split} move, seed {seed}",
+    )
+
+
+def scenario_set(
+    spec: str | Scenario | list | tuple, count: int = 16, first_seed: int = 0
+) -> list[Scenario]:
+    """Scenarios from a spec: a name, ``named`` (all eight), ``train`` / ``test`` (``count``
+    random draws from ``first_seed``), a comma-separated list, or a list of these."""
+    if isinstance(spec, Scenario):
+        return [spec]
+    if isinstance(spec, (list, tuple)):
+        return [s for item in spec for s in scenario_set(item, count, first_seed)]
+    spec = str(spec)
+    if "," in spec:
+        return scenario_set([p.strip() for p in spec.split(",") if p.strip()], count, first_seed)
+    if spec == "named":
+        return list(SCENARIOS.values())
+    if spec in SPLITS:
+        n = check_int("count", count, 1)
+        return [random_scenario(first_seed + i, spec) for i in range(n)]
+    return [get_scenario(spec)]
