@@ -362,3 +362,22 @@ def test_bad_input_names_parameter_value_and_range(make, name):
 
 def test_sample_period_in_seconds():
     assert PAPER_PLANT.with_sample_period(5e-3).servo.sample_ticks == 700
+
+
+def test_segments_with_the_same_parameters_equal_one_run():
+    """The stateful kernel (online tuning steps 140 ticks at a time) continues exactly."""
+    pl = PAPER_PLANT.with_motor(coulomb_nm=0.01, inertia_ratio=1.5)
+    cmd = step_command(4.0, 9000)
+    prm = pack(PAPER_SETTINGS, pl, DEFAULT_MEASURES, 4.0, cmd.size)
+    whole = simulate(cmd, PAPER_SETTINGS, pl)
+    st = np.empty(L.N_STATE)
+    ring = np.empty(K.ring_size(prm), dtype=np.int64)
+    K.init_state(prm, st, ring)
+    rec = np.empty((L.N_ROWS, cmd.size))
+    for start in range(0, cmd.size, 140):
+        stop = min(cmd.size, start + 140)
+        K.run_segment(cmd, np.zeros(0, np.int8), prm, st, ring, stop, rec[:, start:stop], 1)
+    acc = K.new_acc()
+    K.finish(st, acc, cmd.size, prm[L.P_TICK_S], prm[L.P_ACC_SCALE])
+    np.testing.assert_array_equal(acc, whole.acc)
+    np.testing.assert_array_equal(rec[L.R_THETA], whole.motor_rad)

@@ -56,6 +56,7 @@ from vfgym._layout import (
     A_TRK_SQ_PULSE,
     N_ACC,
     N_ROWS,
+    N_STATE,
     P_A,
     P_ACC_SCALE,
     P_ACC_W,
@@ -95,6 +96,52 @@ from vfgym._layout import (
     R_SPEED_COUNT,
     R_THETA,
     R_TORQUE,
+    S_C,
+    S_CPREV,
+    S_D2MX,
+    S_DWMX,
+    S_EPREV,
+    S_FIRSTP,
+    S_LASTDIR,
+    S_LASTP,
+    S_LASTSIGN,
+    S_LOM,
+    S_LOP,
+    S_MINIV,
+    S_N,
+    S_NSAMP,
+    S_NSLEFT,
+    S_OMEGA,
+    S_OVM,
+    S_OVP,
+    S_PC,
+    S_PCMX,
+    S_PPREV,
+    S_PULSES,
+    S_REV,
+    S_RIPN,
+    S_RIPSQ,
+    S_SAT,
+    S_SC,
+    S_SSM,
+    S_SSN,
+    S_SSP,
+    S_SUM,
+    S_TAU,
+    S_THETA,
+    S_THS0,
+    S_TICK,
+    S_TMXM,
+    S_TMXP,
+    S_TQMX,
+    S_TSQM,
+    S_TSQP,
+    S_U,
+    S_V1,
+    S_V2,
+    S_WMX,
+    S_X,
+    S_Y,
 )
 
 _jit = numba.njit(cache=True, fastmath=False, nogil=True)
@@ -153,10 +200,63 @@ def vf_pulses_kernel(cmd, delta, value, limit, step, law, out):
 
 
 @_jit
-def run_one(cmd, ext, prm, acc, rec, dec):
-    """Simulate one move; stream its measures into ``acc``; write every ``dec``-th tick's
-    state into ``rec`` (shape (N_ROWS, m), m = 0 for none)."""
-    n_ticks = cmd.shape[0]
+def init_state(prm, st, ring):
+    """Start a move: the plant at rest at 0, every measure at its initial value."""
+    st[S_N] = 0
+    st[S_SUM] = 0.0
+    st[S_EPREV] = 0.0
+    st[S_CPREV] = 0
+    st[S_C] = 0
+    st[S_PC] = 0
+    st[S_SC] = 0
+    st[S_NSLEFT] = prm[P_NS]
+    st[S_Y] = 0.0
+    st[S_X] = 0.0
+    st[S_THETA] = 0.0
+    st[S_OMEGA] = 0.0
+    st[S_TAU] = 0.0
+    st[S_U] = 0.0
+    st[S_PPREV] = 0.0
+    st[S_LASTDIR] = 0.0
+    st[S_OVM] = 0.0
+    st[S_OVP] = 0.0
+    st[S_LOM] = -1
+    st[S_LOP] = -1
+    st[S_SSM] = 0.0
+    st[S_SSP] = 0.0
+    st[S_SSN] = 0
+    st[S_SAT] = 0
+    st[S_TSQM] = 0.0
+    st[S_TMXM] = 0.0
+    st[S_TSQP] = 0.0
+    st[S_TMXP] = 0.0
+    st[S_RIPSQ] = 0.0
+    st[S_RIPN] = 0
+    st[S_THS0] = 0.0
+    st[S_V1] = 0.0
+    st[S_V2] = 0.0
+    st[S_NSAMP] = 0
+    st[S_PULSES] = 0
+    st[S_REV] = 0
+    st[S_MINIV] = 0
+    st[S_FIRSTP] = -1
+    st[S_LASTP] = -1
+    st[S_LASTSIGN] = 0
+    st[S_TQMX] = 0.0
+    st[S_PCMX] = 0
+    st[S_WMX] = 0.0
+    st[S_D2MX] = 0
+    st[S_DWMX] = 0.0
+    st[S_TICK] = 0
+    ring[:] = 0
+
+
+@_jit
+def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
+    """Advance the move in ``st`` from tick ``st[S_TICK]`` to tick ``i1`` (exclusive),
+    streaming its measures into ``st`` and writing every ``dec``-th tick's state into
+    ``rec`` (shape (N_ROWS, m), m = 0 for none). ``cmd`` and ``ext`` are indexed by the
+    move's own tick number; ``prm`` may change between segments (online tuning)."""
     T = prm[P_TICK_S]
     delta = prm[P_DELTA]
     value = prm[P_VALUE]
@@ -185,64 +285,59 @@ def run_one(cmd, ext, prm, acc, rec, dec):
     win = prm[P_WIN_RAD]
     ss_start = int(prm[P_SS_START])
     accw = int(prm[P_ACC_W])
-    acc_scale = prm[P_ACC_SCALE]
     use_ext = prm[P_USE_EXT] != 0.0
     n_rec = rec.shape[1] if rec.shape[0] >= N_ROWS else 0
 
-    # state
-    n = 0  # pulses output (signed)
-    s = 0.0  # V-F accumulator
-    e_prev = 0.0
-    c_prev = 0  # encoder count seen by the servo
-    c = 0
-    pc = 0  # position counter (counts)
-    sc = 0  # speed counter (counts this sample)
-    ns_left = ns
-    y = 0.0  # filtered speed feedback
-    x = 0.0  # latched speed counter output
-    theta = 0.0
-    omega = 0.0
-    # measure state
-    p_prev = 0.0  # command before this tick (the plant starts at rest at 0)
-    last_dir = 0.0
-    ov_m = 0.0
-    ov_p = 0.0
-    last_out_m = -1
-    last_out_p = -1
-    ss_m = 0.0
-    ss_p = 0.0
-    ss_n = 0
-    sat = 0
-    trk_sq_m = 0.0
-    trk_mx_m = 0.0
-    trk_sq_p = 0.0
-    trk_mx_p = 0.0
-    rip_sq = 0.0
-    rip_n = 0
-    theta_s0 = 0.0  # θ at the last sample instant
-    v1 = 0.0  # mean speeds of the last two sample periods
-    v2 = 0.0
-    n_samples = 0
-    pulses = 0
-    reversals = 0
-    min_iv = 0
-    first_p = -1
-    last_p = -1
-    last_sign = 0
-    tq_mx = 0.0
-    pc_mx = 0
-    w_mx = 0.0
-    ring_len = 1
-    while ring_len < 2 * accw + 1:
-        ring_len *= 2
-    mask = ring_len - 1
-    ring = np.zeros(ring_len, dtype=np.int64)
-    d2_max = 0
-    dw_max = 0.0
+    mask = ring.shape[0] - 1
+    i0 = int(st[S_TICK])
     rec_left = dec
     rec_j = 0
-
-    for i in range(n_ticks):
+    n = int(st[S_N])
+    s = st[S_SUM]
+    e_prev = st[S_EPREV]
+    c_prev = int(st[S_CPREV])
+    c = int(st[S_C])
+    pc = int(st[S_PC])
+    sc = int(st[S_SC])
+    ns_left = int(st[S_NSLEFT])
+    y = st[S_Y]
+    x = st[S_X]
+    theta = st[S_THETA]
+    omega = st[S_OMEGA]
+    tau = st[S_TAU]
+    u = st[S_U]
+    p_prev = st[S_PPREV]
+    last_dir = st[S_LASTDIR]
+    ov_m = st[S_OVM]
+    ov_p = st[S_OVP]
+    last_out_m = int(st[S_LOM])
+    last_out_p = int(st[S_LOP])
+    ss_m = st[S_SSM]
+    ss_p = st[S_SSP]
+    ss_n = int(st[S_SSN])
+    sat = int(st[S_SAT])
+    trk_sq_m = st[S_TSQM]
+    trk_mx_m = st[S_TMXM]
+    trk_sq_p = st[S_TSQP]
+    trk_mx_p = st[S_TMXP]
+    rip_sq = st[S_RIPSQ]
+    rip_n = int(st[S_RIPN])
+    theta_s0 = st[S_THS0]
+    v1 = st[S_V1]
+    v2 = st[S_V2]
+    n_samples = int(st[S_NSAMP])
+    pulses = int(st[S_PULSES])
+    reversals = int(st[S_REV])
+    min_iv = int(st[S_MINIV])
+    first_p = int(st[S_FIRSTP])
+    last_p = int(st[S_LASTP])
+    last_sign = int(st[S_LASTSIGN])
+    tq_mx = st[S_TQMX]
+    pc_mx = int(st[S_PCMX])
+    w_mx = st[S_WMX]
+    d2_max = int(st[S_D2MX])
+    dw_max = st[S_DWMX]
+    for i in range(i0, i1):
         P = cmd[i]
         # 1. pulse source
         if use_ext:
@@ -421,35 +516,106 @@ def run_one(cmd, ext, prm, acc, rec, dec):
                     rec[R_SPEED_COUNT, rec_j] = x
                     rec_j += 1
 
-    acc[A_OV_MOTOR] = ov_m
-    acc[A_OV_PULSE] = ov_p
-    acc[A_LAST_OUT_MOTOR] = last_out_m
-    acc[A_LAST_OUT_PULSE] = last_out_p
-    acc[A_SS_SUM_MOTOR] = ss_m
-    acc[A_SS_SUM_PULSE] = ss_p
-    acc[A_SS_COUNT] = ss_n
-    acc[A_ACC_PULSE] = d2_max * acc_scale
-    acc[A_ACC_MOTOR] = dw_max / T
-    acc[A_SAT_TICKS] = sat
-    acc[A_TRK_SQ_MOTOR] = trk_sq_m
-    acc[A_TRK_MAX_MOTOR] = trk_mx_m
-    acc[A_TRK_SQ_PULSE] = trk_sq_p
-    acc[A_TRK_MAX_PULSE] = trk_mx_p
-    acc[A_RIPPLE_SQ] = rip_sq
-    acc[A_RIPPLE_N] = rip_n
-    acc[A_PULSES] = pulses
-    acc[A_REVERSALS] = reversals
-    acc[A_MIN_INTERVAL] = min_iv
-    acc[A_FIRST_PULSE] = first_p
-    acc[A_LAST_PULSE] = last_p
-    acc[A_TORQUE_MAX] = tq_mx
-    acc[A_PC_MAX] = pc_mx
-    acc[A_THETA] = theta
-    acc[A_OMEGA] = omega
-    acc[A_N] = n
-    acc[A_PC] = pc
-    acc[A_SPEED_MAX] = w_mx
+    st[S_N] = n
+    st[S_SUM] = s
+    st[S_EPREV] = e_prev
+    st[S_CPREV] = c_prev
+    st[S_C] = c
+    st[S_PC] = pc
+    st[S_SC] = sc
+    st[S_NSLEFT] = ns_left
+    st[S_Y] = y
+    st[S_X] = x
+    st[S_THETA] = theta
+    st[S_OMEGA] = omega
+    st[S_TAU] = tau
+    st[S_U] = u
+    st[S_PPREV] = p_prev
+    st[S_LASTDIR] = last_dir
+    st[S_OVM] = ov_m
+    st[S_OVP] = ov_p
+    st[S_LOM] = last_out_m
+    st[S_LOP] = last_out_p
+    st[S_SSM] = ss_m
+    st[S_SSP] = ss_p
+    st[S_SSN] = ss_n
+    st[S_SAT] = sat
+    st[S_TSQM] = trk_sq_m
+    st[S_TMXM] = trk_mx_m
+    st[S_TSQP] = trk_sq_p
+    st[S_TMXP] = trk_mx_p
+    st[S_RIPSQ] = rip_sq
+    st[S_RIPN] = rip_n
+    st[S_THS0] = theta_s0
+    st[S_V1] = v1
+    st[S_V2] = v2
+    st[S_NSAMP] = n_samples
+    st[S_PULSES] = pulses
+    st[S_REV] = reversals
+    st[S_MINIV] = min_iv
+    st[S_FIRSTP] = first_p
+    st[S_LASTP] = last_p
+    st[S_LASTSIGN] = last_sign
+    st[S_TQMX] = tq_mx
+    st[S_PCMX] = pc_mx
+    st[S_WMX] = w_mx
+    st[S_D2MX] = d2_max
+    st[S_DWMX] = dw_max
+    st[S_TICK] = i1
+
+
+@_jit
+def finish(st, acc, n_ticks, T, acc_scale):
+    """The accumulator row of a move from its loop state (see :mod:`vfgym._layout`)."""
+    acc[A_OV_MOTOR] = st[S_OVM]
+    acc[A_OV_PULSE] = st[S_OVP]
+    acc[A_LAST_OUT_MOTOR] = st[S_LOM]
+    acc[A_LAST_OUT_PULSE] = st[S_LOP]
+    acc[A_SS_SUM_MOTOR] = st[S_SSM]
+    acc[A_SS_SUM_PULSE] = st[S_SSP]
+    acc[A_SS_COUNT] = st[S_SSN]
+    acc[A_ACC_PULSE] = st[S_D2MX] * acc_scale
+    acc[A_ACC_MOTOR] = st[S_DWMX] / T
+    acc[A_SAT_TICKS] = st[S_SAT]
+    acc[A_TRK_SQ_MOTOR] = st[S_TSQM]
+    acc[A_TRK_MAX_MOTOR] = st[S_TMXM]
+    acc[A_TRK_SQ_PULSE] = st[S_TSQP]
+    acc[A_TRK_MAX_PULSE] = st[S_TMXP]
+    acc[A_RIPPLE_SQ] = st[S_RIPSQ]
+    acc[A_RIPPLE_N] = st[S_RIPN]
+    acc[A_PULSES] = st[S_PULSES]
+    acc[A_REVERSALS] = st[S_REV]
+    acc[A_MIN_INTERVAL] = st[S_MINIV]
+    acc[A_FIRST_PULSE] = st[S_FIRSTP]
+    acc[A_LAST_PULSE] = st[S_LASTP]
+    acc[A_TORQUE_MAX] = st[S_TQMX]
+    acc[A_PC_MAX] = st[S_PCMX]
+    acc[A_THETA] = st[S_THETA]
+    acc[A_OMEGA] = st[S_OMEGA]
+    acc[A_N] = st[S_N]
+    acc[A_PC] = st[S_PC]
+    acc[A_SPEED_MAX] = st[S_WMX]
     acc[A_TICKS] = n_ticks
+
+
+@_jit
+def ring_size(prm):
+    """Length of the pulse-count history: a power of two above 2w."""
+    size = 1
+    while size < 2 * int(prm[P_ACC_W]) + 1:
+        size *= 2
+    return size
+
+
+@_jit
+def run_one(cmd, ext, prm, acc, rec, dec):
+    """Simulate one whole move; stream its measures into ``acc``; write every ``dec``-th
+    tick's state into ``rec`` (shape (N_ROWS, m), m = 0 for none)."""
+    st = np.empty(N_STATE, dtype=np.float64)
+    ring = np.empty(ring_size(prm), dtype=np.int64)
+    init_state(prm, st, ring)
+    run_segment(cmd, ext, prm, st, ring, cmd.shape[0], rec, dec)
+    finish(st, acc, cmd.shape[0], prm[P_TICK_S], prm[P_ACC_SCALE])
 
 
 @numba.njit(cache=True, fastmath=False, nogil=True, parallel=True)

@@ -1,0 +1,40 @@
+"""``vfgym simulate``: one move, its measures printed (and the trace written as CSV)."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "simulate", help="simulate one scenario and print its measures", description=__doc__
+    )
+    p.add_argument(
+        "--scenario",
+        default="paper-step",
+        help="scenario name (see `vfgym simulate --list`), or train-<seed>/test-<seed>",
+    )
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--settings", help="YAML file of V-F settings")
+    g.add_argument("--baseline", help="paper, rule-of-thumb, fixed-frequency or scurve")
+    p.add_argument("--list", action="store_true", help="list the named scenarios and exit")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from vfgym.commands._common import controller_from_args
+    from vfgym.scenarios import SCENARIOS, get_scenario
+    from vfgym.scoring import evaluate
+
+    if args.list:
+        for s in SCENARIOS.values():
+            print(f"{s.name:12s} {s.description}")
+        return 0
+    scenario = get_scenario(args.scenario)
+    ev = evaluate(controller_from_args(args), [scenario])
+    m = ev.metrics[0][0]
+    print(f"{ev.labels()[0]} on {scenario.name}: cost {ev.cost[0, 0]:.4g}")
+    for key in sorted(m):
+        v = m[key]
+        print(f"  {key:30s} {v:.6g}" if isinstance(v, float) else f"  {key:30s} {v}")
+    return 0

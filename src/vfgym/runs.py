@@ -1,0 +1,87 @@
+"""Run folders: one folder per run with its config, command line and results.
+
+As in rl-baselines3-zoo: ``runs/<kind>/<name>/`` holds ``config.yaml`` (the resolved
+configuration), ``command.txt`` (the command line that made it) and whatever the run
+writes. Files are written atomically (temporary file, then rename), so an interrupted run
+never leaves a half-written result behind.
+"""
+
+from __future__ import annotations
+
+import os
+import shlex
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+
+def new_run_dir(root: str | Path, kind: str, name: str | None = None) -> Path:
+    """Create (or reuse, when ``name`` is given) ``root/kind/name``."""
+    base = Path(root) / kind
+    if name is None:
+        name = time.strftime("%Y%m%d-%H%M%S")
+        candidate = base / name
+        i = 1
+        while candidate.exists():
+            candidate = base / f"{name}-{i}"
+            i += 1
+        name = candidate.name
+    path = base / name
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """Write ``text`` atomically."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def write_yaml(path: str | Path, data: Any) -> Path:
+    """Write ``data`` as YAML atomically (keys in the given order)."""
+    return write_text(path, yaml.safe_dump(_plain(data), sort_keys=False))
+
+
+def read_yaml(path: str | Path) -> Any:
+    """Read a YAML file; a missing or malformed file raises ``ValueError`` naming it."""
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"{p}: no such file")
+    try:
+        return yaml.safe_load(p.read_text(encoding="utf-8"))
+    except yaml.YAMLError as exc:
+        raise ValueError(f"{p}: not valid YAML ({exc.__class__.__name__})") from None
+
+
+def record_command(run_dir: str | Path, argv: list[str] | None = None) -> None:
+    """Write the command line that made this run to ``command.txt``."""
+    argv = sys.argv if argv is None else argv
+    cmd = " ".join(shlex.quote(a) for a in ["vfgym", *argv[1:]]) if argv else "vfgym"
+    write_text(Path(run_dir) / "command.txt", cmd + "\n")
+
+
+def _plain(x: Any) -> Any:
+    """Numpy scalars and tuples as plain YAML types."""
+    if isinstance(x, dict):
+        return {str(k): _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if hasattr(x, "item") and callable(x.item):
+        return x.item()
+    if isinstance(x, Path):
+        return str(x)
+    return x

@@ -1,0 +1,141 @@
+"""The search space of the tuned settings, defined once.
+
+It drives Optuna's suggestions (:func:`suggest`), the agents' action scaling
+(:func:`from_action` maps a point of [−1, 1]⁴ onto the settings, :func:`to_action` back),
+the exhaustive grid (:func:`grid`) and the checks on settings files. Ranges spanning
+decades are searched on a log scale.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vfgym._validate import check_choice
+from vfgym.params import ACCEL_LAWS, Settings
+
+
+@dataclass(frozen=True)
+class Dim:
+    """One tuned setting: its name in :class:`vfgym.Settings`, range and scale."""
+
+    name: str
+    low: float
+    high: float
+    log: bool
+    doc: str
+
+    def from_unit(self, u: float) -> float:
+        """Map u ∈ [−1, 1] onto [low, high] (log-linearly if ``log``)."""
+        t = (min(max(float(u), -1.0), 1.0) + 1.0) / 2.0
+        if self.log:
+            return float(
+                math.exp(math.log(self.low) + t * (math.log(self.high) - math.log(self.low)))
+            )
+        return self.low + t * (self.high - self.low)
+
+    def to_unit(self, x: float) -> float:
+        """The inverse of :meth:`from_unit` (clipped to [−1, 1])."""
+        if self.log:
+            t = (math.log(x) - math.log(self.low)) / (math.log(self.high) - math.log(self.low))
+        else:
+            t = (x - self.low) / (self.high - self.low)
+        return min(max(2.0 * t - 1.0, -1.0), 1.0)
+
+
+SPACE: tuple[Dim, ...] = (
+    Dim("value_rad", 0.05, 10.0, True, "V-F threshold value (rad)"),
+    Dim("error_limit_rad", 0.05, 10.0, True, "error limit L (rad)"),
+    Dim("k", 1.0, 10_000.0, True, "acceleration ratio k"),
+    Dim("ts_over_tf", 0.02, 1.0, True, "servo filter ratio A = Ts/Tf"),
+)
+"""The four continuous settings; the acceleration law is a categorical choice."""
+
+NAMES = tuple(d.name for d in SPACE)
+
+
+def from_action(action: Any, accel_law: str = "rise") -> Settings:
+    """Settings for an action in [−1, 1]⁴ (order: value, error limit, k, Ts/Tf)."""
+    a = np.asarray(action, dtype=np.float64).reshape(-1)
+    if a.shape != (len(SPACE),):
+        raise ValueError(f"action must hold {len(SPACE)} numbers, got shape {np.shape(action)}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"action={a.tolist()} is out of range: allowed finite values in [-1, 1]")
+    if np.any(np.abs(a) > 1.0 + 1e-6):
+        raise ValueError(f"action={a.tolist()} is out of range: allowed [-1, 1] per entry")
+    check_choice("accel_law", accel_law, ACCEL_LAWS)
+    return Settings(
+        **{d.name: d.from_unit(x) for d, x in zip(SPACE, a, strict=True)}, accel_law=accel_law
+    )
+
+
+def to_action(settings: Settings) -> np.ndarray:
+    """The action in [−1, 1]⁴ that gives these settings (clipped to the space)."""
+    return np.array([d.to_unit(getattr(settings, d.name)) for d in SPACE], dtype=np.float32)
+
+
+def suggest(trial: Any, laws: tuple[str, ...] = ("rise",)) -> Settings:
+    """Settings suggested by an Optuna trial over :data:`SPACE` (and the law, if several)."""
+    kw: dict[str, Any] = {
+        d.name: trial.suggest_float(d.name, d.low, d.high, log=d.log) for d in SPACE
+    }
+    law = trial.suggest_categorical("accel_law", list(laws)) if len(laws) > 1 else laws[0]
+    return Settings(**kw, accel_law=law)
+
+
+def distributions(laws: tuple[str, ...] = ("rise",)) -> dict[str, Any]:
+    """Optuna distributions of the space (for enqueueing and grid samplers)."""
+    import optuna
+
+    out: dict[str, Any] = {
+        d.name: optuna.distributions.FloatDistribution(d.low, d.high, log=d.log) for d in SPACE
+    }
+    if len(laws) > 1:
+        out["accel_law"] = optuna.distributions.CategoricalDistribution(list(laws))
+    return out
+
+
+def grid(
+    points: int | dict[str, int] = 8,
+    laws: tuple[str, ...] = ("rise",),
+    fixed: dict[str, float] | None = None,
+) -> list[Settings]:
+    """A dense grid over the space: ``points`` values per dimension (log-spaced where the
+    dimension is), every combination, for each law; ``fixed`` pins dimensions."""
+    fixed = fixed or {}
+    axes = []
+    for d in SPACE:
+        if d.name in fixed:
+            axes.append([float(fixed[d.name])])
+            continue
+        n = points.get(d.name, 8) if isinstance(points, dict) else int(points)
+        u = np.linspace(-1.0, 1.0, max(1, n)) if n > 1 else np.array([0.0])
+        axes.append([d.from_unit(x) for x in u])
+    return [
+        Settings(**dict(zip(NAMES, combo, strict=True)), accel_law=law)
+        for law in laws
+        for combo in itertools.product(*axes)
+    ]
+
+
+def settings_to_dict(s: Settings) -> dict[str, Any]:
+    """Plain dict of settings, as written to YAML."""
+    return {d.name: float(getattr(s, d.name)) for d in SPACE} | {"accel_law": s.accel_law}
+
+
+def settings_from_dict(data: Any, source: str = "settings") -> Settings:
+    """Settings from a mapping (e.g. a YAML file); unknown keys or bad values raise
+    ``ValueError`` naming them. Missing keys keep the paper's values."""
+    if not isinstance(data, dict):
+        raise ValueError(f"{source}: expected a mapping of settings, got {type(data).__name__}")
+    allowed = (*NAMES, "accel_law")
+    unknown = sorted(set(data) - set(allowed))
+    if unknown:
+        raise ValueError(
+            f"{source}: unknown key(s) {', '.join(unknown)}; allowed: {', '.join(allowed)}"
+        )
+    return Settings(**data)
