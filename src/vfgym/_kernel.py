@@ -1,7 +1,7 @@
 """The compiled hot loop: V-F controller → digital servo → motor → encoder, tick by tick.
 
-One kernel (:func:`run_one`) over plain arrays and scalars, compiled by numba with
-``cache=True`` and no fastmath, so its floating-point operations are IEEE double in the
+One kernel (:func:`run_segment`) over plain arrays and scalars, compiled by numba with
+``cache=True`` (where it can write one) and no fastmath, so its floating-point operations are IEEE double in the
 written order and agree bit for bit with :mod:`vfgym.reference`. The equations are those of
 ``MODEL.md`` §1–§3; their order within a tick is:
 
@@ -144,7 +144,26 @@ from vfgym._layout import (
     S_Y,
 )
 
-_jit = numba.njit(cache=True, fastmath=False, nogil=True)
+
+def _probe() -> None:  # a function of this file, for the cache check below
+    return None
+
+
+def _can_cache() -> bool:
+    """Whether numba can cache this module's machine code somewhere writable: next to the
+    source, in NUMBA_CACHE_DIR, or in the user's cache directory. On a read-only install
+    with nowhere to write, compile every session instead of failing at import."""
+    from numba.core.caching import FunctionCache
+
+    try:
+        FunctionCache(_probe)
+    except RuntimeError:
+        return False
+    return True
+
+
+CACHE = _can_cache()
+_jit = numba.njit(cache=CACHE, fastmath=False, nogil=True)
 
 
 @_jit
@@ -618,7 +637,7 @@ def run_one(cmd, ext, prm, acc, rec, dec):
     finish(st, acc, cmd.shape[0], prm[P_TICK_S], prm[P_ACC_SCALE])
 
 
-@numba.njit(cache=True, fastmath=False, nogil=True, parallel=True)
+@numba.njit(cache=CACHE, fastmath=False, nogil=True, parallel=True)
 def run_batch(cmd_flat, cmd_off, cmd_idx, ext_flat, ext_off, ext_idx, prm, acc):
     """Run ``prm.shape[0]`` moves in parallel (numba threads over the runs). Run r reads
     command ``cmd_idx[r]``, i.e. ``cmd_flat[cmd_off[j]:cmd_off[j+1]]``, and external pulses

@@ -133,6 +133,24 @@ def check_pulses(pulses: np.ndarray, n_ticks: int) -> np.ndarray:
     return np.ascontiguousarray(arr, dtype=np.int8)
 
 
+def run_move(
+    cmd: np.ndarray, ext: np.ndarray, prm: np.ndarray, rec: np.ndarray, dec: int = 1
+) -> np.ndarray:
+    """One whole move through the compiled segment kernel; returns its accumulator row.
+
+    Equivalent to ``_kernel.run_one``, but the state set-up and the final read-out run as
+    plain Python (the kernel functions' own ``py_func``), so a first simulation compiles
+    only the hot loop: this is most of vfgym's cold-start time.
+    """
+    st = np.empty(L.N_STATE, dtype=np.float64)
+    ring = np.empty(K.ring_size.py_func(prm), dtype=np.int64)
+    K.init_state.py_func(prm, st, ring)
+    K.run_segment(cmd, ext, prm, st, ring, cmd.shape[0], rec, dec)
+    acc = K.new_acc()
+    K.finish.py_func(st, acc, cmd.shape[0], prm[L.P_TICK_S], prm[L.P_ACC_SCALE])
+    return acc
+
+
 @dataclass(frozen=True)
 class Trace:
     """What the plant did, tick by tick (every ``decimation``-th tick).
@@ -215,9 +233,8 @@ def simulate(
     n_ticks = cmd.shape[0]
     ext = np.zeros(0, dtype=np.int8) if pulses is None else check_pulses(pulses, n_ticks)
     prm = pack(settings, plant, measures, float(cmd[-1]), n_ticks, pulses is not None)
-    acc = K.new_acc()
     rec = np.empty((L.N_ROWS, n_ticks // dec), dtype=np.float64)
-    K.run_one(cmd, ext, prm, acc, rec, dec)
+    acc = run_move(cmd, ext, prm, rec, dec)
     time_s = np.arange(1, rec.shape[1] + 1, dtype=np.float64) * dec / plant.tick_hz
     return Trace(
         time_s=time_s,
