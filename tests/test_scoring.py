@@ -62,8 +62,11 @@ def linear_step(pct: float):
     """A smooth response: the servo in its linear regime (fine encoder, no torque limit)
     on a quick step of pulses, measured with a ±pct % band like step_info."""
     pl = PAPER_PLANT.with_motor(
-        encoder_lines=2**18, peak_torque_nm=1e9, torque_at_max_speed_nm=1e9,
-        knee_speed_rad_s=1e9, max_speed_rad_s=2e9,
+        encoder_lines=2**18,
+        peak_torque_nm=1e9,
+        torque_at_max_speed_nm=1e9,
+        knee_speed_rad_s=1e9,
+        max_speed_rad_s=2e9,
     ).with_servo(gear=64, sample_ticks=7, speed_gain_b=200.0)
     pl = pl.replace(pulse_rad=64 * pl.motor.count_rad)  # one pulse is one gear's worth
     k4 = pl.motor.counts_per_rev / (2 * math.pi) / pl.motor.inertia_kgm2
@@ -71,8 +74,9 @@ def linear_step(pct: float):
     ext = np.zeros(int(0.12 * pl.tick_hz), dtype=np.int8)
     ext[:16] = 1
     cmd = np.cumsum(ext) * pl.pulse_rad
-    return simulate(cmd, Settings(ts_over_tf=0.25), pl, pulses=ext,
-                    measures=Measures(in_position_pct=pct))
+    return simulate(
+        cmd, Settings(ts_over_tf=0.25), pl, pulses=ext, measures=Measures(in_position_pct=pct)
+    )
 
 
 @pytest.mark.parametrize("pct", [2.0, 5.0])
@@ -109,9 +113,12 @@ def test_cost_is_about_one_for_an_ideal_move_and_grows_with_its_terms():
     ev = evaluate(["paper"], ["paper-step"])
     m = ev.metrics[0][0]
     w = vfgym.scoring.DEFAULT_WEIGHTS
-    expected = (m["move_time_s"] / m["ideal_time_s"] + w.overshoot * m["overshoot_rad"]
-                / m["window_rad"] + w.accel * max(0.0, ev.constraints[0, 0, 0])
-                + w.torque * m["torque_limit_time_s"] / m["ideal_time_s"])
+    expected = (
+        m["move_time_s"] / m["ideal_time_s"]
+        + w.overshoot * m["overshoot_rad"] / m["window_rad"]
+        + w.accel * max(0.0, ev.constraints[0, 0, 0])
+        + w.torque * m["torque_limit_time_s"] / m["ideal_time_s"]
+    )
     assert ev.cost[0, 0] == pytest.approx(expected)
     assert 1.0 < ev.cost[0, 0] < 4.0
 
@@ -149,8 +156,9 @@ def test_pulse_source_baselines_output_each_move():
         n = np.cumsum(train)
         moves = sc.move_list(pl)
         pos = 0.0
-        for (start, dist), nxt in zip(moves, [m[0] for m in moves[1:]] + [len(train)],
-                                      strict=True):
+        for (_start, dist), nxt in zip(
+            moves, [m[0] for m in moves[1:]] + [len(train)], strict=True
+        ):
             pos += dist
             assert n[nxt - 1] == round(pos / pl.pulse_rad)
         assert set(np.unique(train)) <= {-1, 0, 1}

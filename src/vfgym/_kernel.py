@@ -1,9 +1,9 @@
 """The compiled hot loop: V-F controller → digital servo → motor → encoder, tick by tick.
 
 One kernel (:func:`run_segment`) over plain arrays and scalars, compiled by numba with
-``cache=True`` (where it can write one) and no fastmath, so its floating-point operations are IEEE double in the
-written order and agree bit for bit with :mod:`vfgym.reference`. The equations are those of
-``MODEL.md`` §1–§3; their order within a tick is:
+``cache=True`` (where it can write one) and no fastmath, so its floating-point operations
+are IEEE double in the written order and agree bit for bit with :mod:`vfgym.reference`.
+The equations are those of ``MODEL.md`` §1–§3; their order within a tick is:
 
 1. pulse source: V-F controller on the command ``cmd[i]`` (or an external pulse array);
 2. servo: encoder count change since the last tick into the position counter (with the
