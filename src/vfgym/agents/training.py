@@ -1,0 +1,286 @@
+"""Training stable-baselines3 agents on the vfgym environments, one run folder per run.
+
+A run folder (``runs/train/<name>/``) holds ``config.yaml`` (the resolved
+hyperparameters, algorithm, env, seed), ``command.txt``, TensorBoard logs (``tb/``),
+checkpoints (``checkpoints/model_<steps>_steps.zip`` and, for off-policy algorithms, the
+replay buffer), ``best_model.zip`` chosen on held-out scenarios by
+:class:`HeldOutEval` (``evaluations.csv`` logs every evaluation) and ``final_model.zip``.
+Starting the same run again continues from its last checkpoint; an interrupt (Ctrl-C)
+saves a checkpoint first, so nothing trained is lost.
+
+Held-out scenarios: the train split's seeds from :data:`VALIDATION_SEED0` on, which
+training (seeds drawn in [0, 2³¹)) never reaches; the test split is kept for the final
+report.
+"""
+
+from __future__ import annotations
+
+import csv
+import re
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vfgym.agents.hyperparams import algo_class
+from vfgym.runs import read_yaml, write_text, write_yaml
+from vfgym.scenarios import Scenario, random_scenario
+
+VALIDATION_SEED0 = 2**40
+"""First train-split seed of the held-out validation scenarios."""
+
+
+def validation_scenarios(n: int) -> list[Scenario]:
+    """The held-out scenarios the evaluation callback scores (never drawn in training)."""
+    return [random_scenario(VALIDATION_SEED0 + i, "train") for i in range(n)]
+
+
+def _activation(name: str) -> Any:
+    import torch
+
+    return {
+        "tanh": torch.nn.Tanh,
+        "relu": torch.nn.ReLU,
+        "elu": torch.nn.ELU,
+        "leaky_relu": torch.nn.LeakyReLU,
+    }[name]
+
+
+def make_env(env_id: str, env_kwargs: dict[str, Any] | None = None, **kw: Any) -> Any:
+    """One (non-vector) environment."""
+    import gymnasium as gym
+
+    import vfgym.envs  # noqa: F401  (registers the ids)
+
+    return gym.make(env_id, **(env_kwargs or {}), **kw)
+
+
+def rollout_cost(model: Any, env: Any, scenario: Scenario) -> dict[str, Any]:
+    """Run the policy (deterministic) on one scenario; the scoring path's info at the end."""
+    obs, _ = env.reset(options={"scenario": scenario})
+    while True:
+        action, _ = model.predict(obs, deterministic=True)
+        obs, _, terminated, truncated, info = env.step(action)
+        if terminated or truncated:
+            return info
+
+
+def evaluate_policy_costs(model: Any, env: Any, scenarios: list[Scenario]) -> np.ndarray:
+    """The scoring path's cost of the policy on each scenario."""
+    return np.array([float(rollout_cost(model, env, sc)["cost"]) for sc in scenarios])
+
+
+def _callbacks(
+    run: Path,
+    params: dict[str, Any],
+    env_id: str,
+    n_envs: int,
+    progress: bool,
+    total: int,
+    env_kwargs: dict[str, Any],
+) -> list[Any]:
+    from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback
+
+    class HeldOutEval(BaseCallback):
+        """Every ``eval_freq`` steps: mean cost on the held-out scenarios; the best model
+        is saved as ``best_model.zip``, every evaluation logged to ``evaluations.csv``."""
+
+        def __init__(self, freq: int, scenarios: list[Scenario]) -> None:
+            super().__init__()
+            self.freq, self.scenarios = freq, scenarios
+            self.env = make_env(env_id, env_kwargs)
+            self.best = _best_so_far(run)
+            self.next_at = 0
+
+        def _on_step(self) -> bool:
+            if self.num_timesteps >= self.next_at:
+                self.next_at = self.num_timesteps + self.freq
+                costs = evaluate_policy_costs(self.model, self.env, self.scenarios)
+                mean = float(np.mean(costs))
+                self.logger.record("eval/mean_cost", mean)
+                new = not np.isfinite(self.best) or mean < self.best
+                if new:
+                    self.best = mean
+                    self.model.save(run / "best_model.zip")
+                _append_eval(run, self.num_timesteps, mean, float(np.median(costs)), new)
+            return True
+
+    class Progress(BaseCallback):
+        """A tqdm bar over the timesteps, with the best held-out cost so far."""
+
+        def __init__(self, evaluator: Any) -> None:
+            super().__init__()
+            self.evaluator = evaluator
+
+        def _on_training_start(self) -> None:
+            from tqdm.auto import tqdm
+
+            self.bar = tqdm(
+                total=total,
+                initial=self.model.num_timesteps,
+                unit="step",
+                desc="train",
+                dynamic_ncols=True,
+            )
+
+        def _on_step(self) -> bool:
+            if np.isfinite(self.evaluator.best):
+                self.bar.set_postfix(best_cost=f"{self.evaluator.best:.3f}", refresh=False)
+            self.bar.update(self.model.num_timesteps - self.bar.n)  # redraws at most 10/s
+            return True
+
+        def _on_training_end(self) -> None:
+            self.bar.close()
+
+    evaluator = HeldOutEval(
+        params.get("eval_freq", 10_000), validation_scenarios(params.get("n_eval_scenarios", 16))
+    )
+    ckpt = CheckpointCallback(
+        save_freq=max(1, params.get("checkpoint_freq", 20_000) // n_envs),
+        save_path=str(run / "checkpoints"),
+        name_prefix="model",
+        save_replay_buffer=True,
+    )
+    cbs = [ckpt, evaluator]
+    if progress:
+        cbs.append(Progress(evaluator))
+    return cbs
+
+
+def _best_so_far(run: Path) -> float:
+    path = run / "evaluations.csv"
+    if not path.is_file():
+        return float("inf")
+    with path.open() as fh:
+        costs = [float(r["mean_cost"]) for r in csv.DictReader(fh)]
+    return min(costs) if costs else float("inf")
+
+
+def _append_eval(run: Path, steps: int, mean: float, median: float, best: bool) -> None:
+    path = run / "evaluations.csv"
+    text = path.read_text() if path.is_file() else "timesteps,mean_cost,median_cost,best\n"
+    write_text(path, text + f"{steps},{mean:.6g},{median:.6g},{int(best)}\n")
+
+
+def latest_checkpoint(run: Path) -> tuple[Path, int] | None:
+    """The newest ``checkpoints/model_<steps>_steps.zip`` and its step count."""
+    best = None
+    for p in (run / "checkpoints").glob("model_*_steps.zip"):
+        m = re.fullmatch(r"model_(\d+)_steps\.zip", p.name)
+        if m and (best is None or int(m.group(1)) > best[1]):
+            best = (p, int(m.group(1)))
+    return best
+
+
+def _save_checkpoint(model: Any, run: Path) -> None:
+    steps = model.num_timesteps
+    path = run / "checkpoints" / f"model_{steps}_steps.zip"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    model.save(path)
+    if hasattr(model, "save_replay_buffer") and getattr(model, "replay_buffer", None):
+        model.save_replay_buffer(run / "checkpoints" / f"model_replay_buffer_{steps}_steps.pkl")
+
+
+def train(
+    algo: str,
+    env_id: str,
+    params: dict[str, Any],
+    run: Path,
+    *,
+    seed: int = 0,
+    device: str = "cpu",
+    progress: bool = True,
+    log: Callable[[str], None] = print,
+) -> Any:
+    """Train (or continue) the run in ``run``; returns the trained model.
+
+    ``params`` are validated hyperparameters (:func:`vfgym.agents.hyperparams.load`). A
+    run folder that already holds a config must hold the same algorithm, env and seed.
+    """
+    from stable_baselines3.common.noise import NormalActionNoise
+
+    from vfgym.envs.sb3 import make_sb3_vec_env
+
+    cls = algo_class(algo)
+    config = {"algo": algo, "env": env_id, "seed": seed, "device": device, "hyperparams": params}
+    old = run / "config.yaml"
+    if old.is_file():
+        prev = read_yaml(old) or {}
+        for key in ("algo", "env", "seed"):
+            if prev.get(key) != config[key]:
+                raise ValueError(
+                    f"{run}: holds a run with {key}={prev.get(key)!r}, not "
+                    f"{config[key]!r}; choose another --name"
+                )
+    write_yaml(old, config)
+
+    n_envs = int(params.get("n_envs", 1))
+    total = int(params.get("n_timesteps", 10_000))
+    env_kwargs = dict(params.get("env_kwargs") or {})
+    venv = make_sb3_vec_env(env_id, n_envs=n_envs, seed=seed, **env_kwargs)
+    kwargs = {
+        k: v
+        for k, v in params.items()
+        if k
+        not in (
+            "n_envs",
+            "n_timesteps",
+            "policy",
+            "policy_kwargs",
+            "env_kwargs",
+            "action_noise_std",
+            "eval_freq",
+            "n_eval_scenarios",
+            "checkpoint_freq",
+        )
+    }
+    pk = dict(params.get("policy_kwargs") or {})
+    if "activation_fn" in pk:
+        pk["activation_fn"] = _activation(pk["activation_fn"])
+    if "action_noise_std" in params:
+        dim = venv.action_space.shape[0]
+        kwargs["action_noise"] = NormalActionNoise(
+            np.zeros(dim), params["action_noise_std"] * np.ones(dim)
+        )
+    ckpt = latest_checkpoint(run)
+    if ckpt is not None:
+        path, steps = ckpt
+        log(f"continuing {run} from {path.name} ({steps} steps)")
+        model = cls.load(
+            path,
+            env=venv,
+            device=device,
+            tensorboard_log=str(run / "tb"),
+            **({"action_noise": kwargs["action_noise"]} if "action_noise" in kwargs else {}),
+        )
+        buf = run / "checkpoints" / f"model_replay_buffer_{steps}_steps.pkl"
+        if buf.is_file() and hasattr(model, "load_replay_buffer"):
+            model.load_replay_buffer(buf)
+    else:
+        model = cls(
+            params.get("policy", "MlpPolicy"),
+            venv,
+            policy_kwargs=pk or None,
+            tensorboard_log=str(run / "tb"),
+            seed=seed,
+            device=device,
+            verbose=0,
+            **kwargs,
+        )
+    remaining = total - model.num_timesteps
+    if remaining > 0:
+        cbs = _callbacks(run, params, env_id, n_envs, progress, total, env_kwargs)
+        try:
+            model.learn(
+                remaining, callback=cbs, reset_num_timesteps=ckpt is None, tb_log_name="run"
+            )
+        except KeyboardInterrupt:
+            _save_checkpoint(model, run)
+            raise
+        _save_checkpoint(model, run)
+    model.save(run / "final_model.zip")
+    if not (run / "best_model.zip").is_file():
+        model.save(run / "best_model.zip")
+    venv.close()
+    return model

@@ -1,0 +1,199 @@
+"""stable-baselines3 agents: tiny training runs of every algorithm on both envs, save/load,
+determinism, resuming, and hyperparameter checks before training."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+pytest.importorskip("stable_baselines3")
+
+from vfgym.agents import hyperparams as hp
+from vfgym.agents import load_model, policy_settings
+from vfgym.agents.training import train
+from vfgym.cli import main
+from vfgym.commands._common import load_settings
+
+REPO = Path(__file__).resolve().parents[1]
+TINY = {
+    "ppo": {"n_envs": 4, "n_steps": 16, "batch_size": 32, "n_epochs": 1},
+    "sac": {"n_envs": 2, "learning_starts": 16, "batch_size": 16, "buffer_size": 1000},
+    "td3": {"n_envs": 2, "learning_starts": 16, "batch_size": 16, "buffer_size": 1000},
+}
+
+
+def tiny(algo: str, env_id: str, **extra) -> dict:
+    over = TINY[algo] | {
+        "n_timesteps": 64,
+        "eval_freq": 10_000,
+        "n_eval_scenarios": 2,
+        "checkpoint_freq": 32,
+        "policy_kwargs": {"net_arch": [16, 16]},
+    }
+    return hp.load(algo, env_id, REPO / "agents" / "hyperparams" / f"{algo}.yml", over | extra)
+
+
+@pytest.mark.parametrize("env_id", ["vfgym/VFTune-v0", "vfgym/VFServo-v0"])
+@pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
+def test_each_algorithm_trains_saves_loads_and_predicts_the_same(algo, env_id, tmp_path):
+    run = tmp_path / "run"
+    run.mkdir()
+    model = train(algo, env_id, tiny(algo, env_id), run, seed=1, progress=False)
+    for name in ("final_model.zip", "best_model.zip", "config.yaml", "evaluations.csv"):
+        assert (run / name).is_file(), name
+    assert any((run / "checkpoints").glob("model_*_steps.zip"))
+    assert any((run / "tb").iterdir())
+    loaded, cfg = load_model(run / "final_model.zip")
+    assert cfg["algo"] == algo and cfg["env"] == env_id
+    obs = np.random.default_rng(0).uniform(-1, 1, (5, *model.observation_space.shape))
+    a1, _ = model.predict(obs.astype(np.float32), deterministic=True)
+    a2, _ = loaded.predict(obs.astype(np.float32), deterministic=True)
+    np.testing.assert_array_equal(a1, a2)
+
+
+def test_same_seed_same_first_evaluation(tmp_path):
+    firsts = []
+    for i in range(2):
+        run = tmp_path / f"r{i}"
+        run.mkdir()
+        train(
+            "ppo",
+            "vfgym/VFTune-v0",
+            tiny("ppo", "vfgym/VFTune-v0", eval_freq=32),
+            run,
+            seed=7,
+            progress=False,
+        )
+        firsts.append((run / "evaluations.csv").read_text().splitlines()[1:3])
+    assert firsts[0] == firsts[1]
+
+
+def test_a_run_started_again_continues_from_its_last_checkpoint(tmp_path, capsys):
+    run = tmp_path / "run"
+    run.mkdir()
+    params = tiny("ppo", "vfgym/VFTune-v0")
+    train("ppo", "vfgym/VFTune-v0", params, run, seed=3, progress=False)
+    params = params | {"n_timesteps": 128}
+    model = train("ppo", "vfgym/VFTune-v0", params, run, seed=3, progress=False)
+    assert "continuing" in capsys.readouterr().out
+    assert model.num_timesteps == 128
+    steps = sorted(int(p.stem.split("_")[1]) for p in (run / "checkpoints").glob("model_*.zip"))
+    assert steps[-1] == 128 and 64 in steps
+
+
+def test_an_interrupt_saves_a_checkpoint_first(tmp_path, monkeypatch):
+    from stable_baselines3 import PPO
+
+    run = tmp_path / "run"
+    run.mkdir()
+    calls = {"n": 0}
+    real = PPO.train
+
+    def interrupted(self):
+        calls["n"] += 1
+        if calls["n"] == 1:  # after the first rollout of 64 steps
+            raise KeyboardInterrupt
+        return real(self)
+
+    monkeypatch.setattr(PPO, "train", interrupted)
+    params = tiny("ppo", "vfgym/VFTune-v0", checkpoint_freq=10_000, n_timesteps=128)
+    with pytest.raises(KeyboardInterrupt):
+        train("ppo", "vfgym/VFTune-v0", params, run, seed=0, progress=False)
+    saved = [p.name for p in (run / "checkpoints").glob("model_*_steps.zip")]
+    assert saved == ["model_64_steps.zip"], "the interrupt did not save what it had"
+    monkeypatch.setattr(PPO, "train", real)
+    model = train("ppo", "vfgym/VFTune-v0", params, run, seed=0, progress=False)
+    assert model.num_timesteps == 128
+
+
+def test_cli_train_then_predict_gives_a_settings_file_evaluate_reads(tmp_path, capsys):
+    code = main(
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--env",
+            "vfgym/VFTune-v0",
+            "--runs-dir",
+            str(tmp_path),
+            "--name",
+            "t",
+            "--no-progress",
+            "--hyperparams-file",
+            str(REPO / "agents/hyperparams/ppo.yml"),
+            "--hyperparams",
+            "n_timesteps=32",
+            "n_envs=4",
+            "n_steps=8",
+            "batch_size=16",
+            "eval_freq=16",
+            "n_eval_scenarios=2",
+        ]
+    )
+    assert code == 0
+    run = tmp_path / "train" / "t"
+    assert (run / "command.txt").read_text().startswith("vfgym ")
+    out = tmp_path / "s.yaml"
+    capsys.readouterr()
+    assert (
+        main(
+            [
+                "predict",
+                "--model",
+                str(run / "best_model.zip"),
+                "--scenario",
+                "test-3",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    printed = yaml.safe_load(capsys.readouterr().out)
+    s = load_settings(str(out))
+    assert printed["settings"]["k"] == s.k
+    assert policy_settings(run / "best_model.zip")("test-3") == s
+
+
+@pytest.mark.parametrize(
+    ("content", "match"),
+    [
+        ({"vfgym/VFTune-v0": {"n_envs": 2, "learning_rat": 0.1}}, "unknown key 'learning_rat'"),
+        ({"vfgym/VFTune-v0": {"n_steps": "many"}}, "n_steps='many' has the wrong type"),
+        ({"vfgym/VFTune-v0": {"n_envs": 0}}, "n_envs=0 is out of range"),
+        (
+            {"vfgym/VFTune-v0": {"policy_kwargs": {"net_arch": [8], "activation_fn": "sine"}}},
+            "activation_fn='sine'",
+        ),
+        ({"vfgym/Other-v0": {}}, "unknown environment id"),
+    ],
+)
+def test_bad_hyperparameter_files_fail_before_training(tmp_path, content, match, capsys):
+    f = tmp_path / "ppo.yml"
+    f.write_text(yaml.safe_dump(content))
+    code = main(
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--runs-dir",
+            str(tmp_path / "runs"),
+            "--hyperparams-file",
+            str(f),
+        ]
+    )
+    err = capsys.readouterr().err
+    assert code == 2 and match in err and err.count("\n") == 1
+    assert not (tmp_path / "runs").exists()  # nothing started
+
+
+def test_unknown_algorithm_and_bad_override(tmp_path, capsys):
+    assert main(["train", "--algo", "dqn", "--runs-dir", str(tmp_path)]) == 2
+    assert "algo='dqn' is not known" in capsys.readouterr().err
+    assert (
+        main(["train", "--algo", "ppo", "--runs-dir", str(tmp_path), "--hyperparams", "gamma"]) == 2
+    )
+    assert "key=value" in capsys.readouterr().err
