@@ -33,8 +33,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``vfgym`` console script."""
+    from vfgym.runs import set_command_line
+
     parser = build_parser()
     args = parser.parse_args(argv)
+    set_command_line(sys.argv[1:] if argv is None else argv)
     try:
         return int(args.func(args) or 0)
     except ValueError as exc:

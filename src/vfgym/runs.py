@@ -43,6 +43,7 @@ def write_text(path: str | Path, text: str) -> Path:
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(text)
+        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; give the usual file mode
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
@@ -67,9 +68,22 @@ def read_yaml(path: str | Path) -> Any:
         raise ValueError(f"{p}: not valid YAML ({exc.__class__.__name__})") from None
 
 
+_UMASK = os.umask(0o022)
+os.umask(_UMASK)
+_COMMAND_LINE: list[str] | None = None
+
+
+def set_command_line(args: list[str] | None) -> None:
+    """The arguments of the running ``vfgym`` command (set by :func:`vfgym.cli.main`, so a
+    command called as ``main([...])`` records those, not the caller's ``sys.argv``)."""
+    global _COMMAND_LINE
+    _COMMAND_LINE = None if args is None else list(args)
+
+
 def record_command(run_dir: str | Path, argv: list[str] | None = None) -> None:
     """Write the command line that made this run to ``command.txt``."""
-    argv = sys.argv if argv is None else argv
+    if argv is None:
+        argv = ["vfgym", *_COMMAND_LINE] if _COMMAND_LINE is not None else sys.argv
     cmd = " ".join(shlex.quote(a) for a in ["vfgym", *argv[1:]]) if argv else "vfgym"
     write_text(Path(run_dir) / "command.txt", cmd + "\n")
 

@@ -1,0 +1,182 @@
+"""``vfgym evaluate``: tuned settings (and agents) against baselines on a scenario set.
+
+Prints the table (per scenario, in aggregate with n and spread, win/loss against each
+baseline) and writes it to ``runs/evaluate/<name>/`` as ``results.csv`` (per scenario and
+controller), ``summary.csv`` (spreads), ``results.json`` (everything) and ``table.txt``,
+with ``config.yaml`` and ``command.txt``. Every number comes from :func:`vfgym.evaluate`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+AGENTS_HINT = 'pip install -c constraints.txt -e ".[agents]"'
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    from vfgym.commands._common import positive_int
+
+    p = sub.add_parser(
+        "evaluate",
+        help="compare tuned settings or an agent with baselines on scenarios",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument(
+        "--settings",
+        action="append",
+        default=[],
+        metavar="FILE.yaml",
+        help="settings file (key `settings:` as best.yaml); repeat to compare several",
+    )
+    p.add_argument(
+        "--model",
+        action="append",
+        default=[],
+        metavar="MODEL.zip",
+        help="trained agent: picks settings per scenario (needs the agents extra)",
+    )
+    p.add_argument(
+        "--against",
+        default="paper,rule-of-thumb,fixed-frequency,scurve",
+        metavar="NAMES",
+        help="comma-separated baselines: paper, rule-of-thumb, fixed-frequency, scurve, "
+        "or 'none' (default: all four)",
+    )
+    p.add_argument(
+        "--scenarios",
+        default="test",
+        metavar="SPEC",
+        help="a scenario name, 'named', 'train', 'test' or a comma list (default: test)",
+    )
+    p.add_argument(
+        "--count",
+        type=positive_int,
+        default=32,
+        help="random scenarios drawn for train/test (default: 32)",
+    )
+    p.add_argument(
+        "--first-seed",
+        type=int,
+        default=0,
+        help="seed of the first random scenario (default: 0)",
+    )
+    p.add_argument(
+        "--bootstrap",
+        type=positive_int,
+        default=2000,
+        metavar="N",
+        help="bootstrap resamples for the 95%% interval of means (default: 2000)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="bootstrap seed (default: 0)")
+    p.add_argument("--name", help="run folder name (default: a timestamp)")
+    p.add_argument("--runs-dir", default="runs", help="root of run folders (default: runs)")
+    p.set_defaults(func=run)
+
+
+def _labels(paths: list[str], taken: set[str]) -> list[str]:
+    """Short labels: the file's stem, or its path when stems clash."""
+    stems = [Path(p).stem for p in paths]
+    out = []
+    for p, s in zip(paths, stems, strict=True):
+        out.append(p if (stems.count(s) > 1 or s in taken) else s)
+    return out
+
+
+def load_settings_file(path: str) -> Any:
+    """Settings from a file; any problem raises a one-line ``ValueError`` naming the file."""
+    from vfgym.commands._common import load_settings
+
+    try:
+        return load_settings(path)
+    except ValueError as exc:
+        msg = str(exc)
+        raise ValueError(msg if msg.startswith(str(path)) else f"{path}: {msg}") from None
+
+
+def load_policy(model_path: str) -> Any:
+    """The per-scenario settings policy of a trained agent (``vfgym.agents``), imported
+    only when asked for; without the agents extra this is a one-line ``ValueError``."""
+    p = Path(model_path)
+    if not p.is_file():
+        raise ValueError(f"{model_path}: no such file")
+    try:
+        from vfgym.agents import policy_settings
+    except ImportError as exc:
+        raise ValueError(
+            f"--model {model_path}: agent support is not installed ({exc}); install the "
+            f"agents extra: {AGENTS_HINT}"
+        ) from None
+    return policy_settings(str(p))
+
+
+def run(args: argparse.Namespace) -> int:
+    from dataclasses import asdict
+
+    from vfgym.baselines import BASELINE_NAMES
+    from vfgym.report import Candidate, baseline_candidates, compare, format_table, write_report
+    from vfgym.runs import new_run_dir, record_command, write_yaml
+    from vfgym.scenarios import scenario_set
+    from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS
+    from vfgym.space import settings_to_dict
+
+    if not args.settings and not args.model:
+        raise ValueError("nothing to evaluate: give --settings FILE.yaml and/or --model MODEL.zip")
+    if args.first_seed < 0:
+        raise ValueError(f"--first-seed={args.first_seed} is out of range: allowed >= 0")
+    against = args.against.strip()
+    if against in ("all", ""):
+        against = ",".join(BASELINE_NAMES)
+    base = [] if against == "none" else baseline_candidates(against)
+    settings = [load_settings_file(f) for f in args.settings]
+    taken = {b.label for b in base}
+    s_labels = _labels(args.settings, taken)
+    m_labels = [f"agent:{lab}" for lab in _labels(args.model, taken)]
+    policies = [load_policy(m) for m in args.model]
+    scenarios = scenario_set(args.scenarios, args.count, args.first_seed)
+    cands = [
+        Candidate(lab, s, source=f)
+        for lab, s, f in zip(s_labels, settings, args.settings, strict=True)
+    ]
+    cands += [
+        Candidate(lab, policy=pol, source=m)
+        for lab, pol, m in zip(m_labels, policies, args.model, strict=True)
+    ]
+    report = compare(
+        cands,
+        base,
+        scenarios,
+        resamples=args.bootstrap,
+        seed=args.seed,
+    )
+    report.scenario_spec = args.scenarios
+    run_dir = new_run_dir(args.runs_dir, "evaluate", args.name)
+    write_yaml(
+        run_dir / "config.yaml",
+        {
+            "kind": "evaluate",
+            "settings": [
+                {"file": f, "label": lab, "settings": settings_to_dict(s)}
+                for f, lab, s in zip(args.settings, s_labels, settings, strict=True)
+            ],
+            "models": [
+                {"file": m, "label": lab} for m, lab in zip(args.model, m_labels, strict=True)
+            ],
+            "against": [b.label for b in base],
+            "scenarios": args.scenarios,
+            "count": args.count,
+            "first_seed": args.first_seed,
+            "scenario_names": [s.name for s in scenarios],
+            "bootstrap": {"resamples": args.bootstrap, "seed": args.seed, "level": 0.95},
+            "plant": "PAPER_PLANT (each scenario applies its load)",
+            "weights": asdict(DEFAULT_WEIGHTS),
+            "bounds": asdict(DEFAULT_BOUNDS),
+        },
+    )
+    record_command(run_dir)
+    paths = write_report(report, run_dir)
+    print(format_table(report), end="")
+    print(f"\nwrote {run_dir}/ ({', '.join(paths)}, config.yaml, command.txt)")
+    return 0
