@@ -25,8 +25,10 @@ from vfgym import _layout as L
 from vfgym.reference import reference_run
 from vfgym.simulate import pack
 
-COLD = "import time; t=time.perf_counter(); import vfgym; " \
+COLD = (
+    "import time; t=time.perf_counter(); import vfgym; "
     "vfgym.simulate(vfgym.step_command(10.0, 14000)); print(time.perf_counter()-t)"
+)
 
 
 def best_rate(fn, ticks: int, repeats: int) -> float:
@@ -41,8 +43,9 @@ def best_rate(fn, ticks: int, repeats: int) -> float:
 
 def cold_start(cache_dir: str) -> float:
     env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
-    out = subprocess.run([sys.executable, "-c", COLD], env=env, check=True,
-                         capture_output=True, text=True)
+    out = subprocess.run(
+        [sys.executable, "-c", COLD], env=env, check=True, capture_output=True, text=True
+    )
     return float(out.stdout.strip())
 
 
@@ -72,8 +75,10 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as cache:
         cold = cold_start(cache)
         warm = cold_start(cache)
-    print(f"cold start, import + first simulation: {cold:.2f} s cold cache (target <= 3), "
-          f"{warm:.2f} s warm cache (target <= 1)")
+    print(
+        f"cold start, import + first simulation: {cold:.2f} s cold cache (target <= 3), "
+        f"{warm:.2f} s warm cache (target <= 1)"
+    )
 
 
 if __name__ == "__main__":

@@ -24,8 +24,14 @@ A_LIM = PAPER_PLANT.motor.accel_limit_rad_s2
 
 def test_named_scenarios_exist_and_end_at_rest():
     assert set(SCENARIOS) == {
-        "paper-step", "paper-sine", "short-move", "long-move", "reversal", "heavy-load",
-        "friction", "multi-move",
+        "paper-step",
+        "paper-sine",
+        "short-move",
+        "long-move",
+        "reversal",
+        "heavy-load",
+        "friction",
+        "multi-move",
     }
     for sc in SCENARIOS.values():
         cmd = sc.command()
@@ -55,8 +61,9 @@ def test_paper_sine_stays_within_the_motor_limits():
 @pytest.mark.parametrize("profile", ["ramp", "trapezoid", "scurve"])
 @pytest.mark.parametrize("distance", [0.3, 25.0, -4.0])
 def test_smooth_profiles_reach_the_distance_within_speed_and_acceleration(profile, distance):
-    sc = SCENARIOS["paper-step"].with_(name="x", profile=profile, distance_rad=distance,
-                                       duration_s=0.2)
+    sc = SCENARIOS["paper-step"].with_(
+        name="x", profile=profile, distance_rad=distance, duration_s=0.2
+    )
     cmd = sc.command()
     assert cmd[-1] == pytest.approx(distance, abs=PAPER_PLANT.pulse_rad)
     assert np.all(np.sign(cmd[cmd != 0]) == np.sign(distance))
@@ -95,8 +102,9 @@ def test_random_scenarios_are_deterministic_and_named_by_split_and_seed():
 
 def test_train_and_test_never_share_a_scenario():
     def physics(sc):
-        return tuple(v for k, v in dataclasses.asdict(sc).items() if k not in ("name",
-                                                                              "description"))
+        return tuple(
+            v for k, v in dataclasses.asdict(sc).items() if k not in ("name", "description")
+        )
 
     train = {physics(random_scenario(s, "train")) for s in range(400)}
     test = {physics(random_scenario(s, "test")) for s in range(400)}

@@ -4,7 +4,7 @@ The plant (MODEL.md): V-F controller (paper) → digital servo with a filtered s
 (patent) → motor, load and quadrature encoder; MCX514-style S-curve pulse source.
 """
 
-from vfgym import baselines
+from vfgym import baselines, envs  # importing envs registers vfgym/VFTune-v0, VFServo-v0
 from vfgym.params import (
     DEFAULT_MEASURES,
     PAPER_ACCEL_LIMIT_RAD_S2,
@@ -51,6 +51,7 @@ __all__ = [
     "Settings",
     "Trace",
     "baselines",
+    "envs",
     "evaluate",
     "fixed_frequency_pulses",
     "get_scenario",

@@ -58,7 +58,12 @@ class Scenario:
 
     def __post_init__(self) -> None:
         check_choice("profile", self.profile, profiles.PROFILES)
-        check_real("distance_rad", self.distance_rad)
+        d = check_real("distance_rad", self.distance_rad)
+        if d == 0.0 and self.profile != "multi":
+            raise ValueError(
+                f"distance_rad={self.distance_rad!r} is not allowed for profile "
+                f"{self.profile!r}: allowed any nonzero distance (rad)"
+            )
         check_real("duration_s", self.duration_s, 0.0, 60.0, lo_open=True)
         if self.profile == "multi" and not self.moves:
             raise ValueError("moves=() is not allowed for profile 'multi': give (distance, dwell)")

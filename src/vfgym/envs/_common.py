@@ -1,0 +1,261 @@
+"""What both environments share: where an episode's scenario comes from, the features that
+describe a move and its plant, reset options, and the info of a scored move."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vfgym import profiles
+from vfgym._validate import check_choice, check_int
+from vfgym.params import Measures, Plant, in_position_rad
+from vfgym.scenarios import SPLITS, Scenario, get_scenario, random_scenario
+from vfgym.scoring import CONSTRAINTS, Bounds, CostWeights
+
+SEED_LIMIT = 2**63 - 1
+"""Scenario seeds are whole numbers in [0, SEED_LIMIT) (as :func:`vfgym.random_scenario`)."""
+DEFAULT_SEED_RANGE = (0, 2**31)
+RESET_OPTIONS = ("scenario", "scenario_seed")
+
+# scales of the scenario features: the random distribution's ranges (vfgym.scenarios)
+INERTIA_RATIO_SCALE = 5.0
+COULOMB_SCALE_NM = 0.004
+VISCOUS_SCALE_NM_S_RAD = 3e-4
+LOAD_SCALE_NM = 0.004
+
+SCENARIO_FEATURES = (
+    "direction",
+    "log_distance",
+    "log_ideal_time",
+    "time_budget",
+    *(f"profile_{p}" for p in profiles.PROFILES),
+    "moves",
+    "profile_speed",
+    "profile_accel",
+    "sine_freq",
+    "inertia_ratio",
+    "coulomb",
+    "viscous",
+    "load_torque",
+    "torque_accel",
+)
+"""The features describing a move and its plant (definitions in :func:`scenario_features`)."""
+
+
+def _clip(x: float, bound: float = 10.0) -> float:
+    return min(max(float(x), -bound), bound)
+
+
+def main_move(sc: Scenario, plant: Plant) -> float:
+    """The move that sets the scale of a scenario (rad, signed): the distance of a single
+    move or the amplitude of a sine; for several moves, the largest one."""
+    moves = sc.move_list(plant)
+    if len(moves) <= 1 or sc.tracking:
+        return float(sc.distance_rad)
+    return float(max((d for _, d in moves), key=abs))
+
+
+def scenario_features(sc: Scenario, base: Plant, plant: Plant | None = None) -> np.ndarray:
+    """The move and its plant, normalised (float64, each clipped to [-10, 10]).
+
+    direction: sign of :func:`main_move`; log_distance: log10(|move| / 1 rad) / 2;
+    log_ideal_time: log10(ideal time / 1 ms) / 2; time_budget: duration / ideal time / 10;
+    profile_*: one-hot of the command profile; moves: point-to-point moves / 5;
+    profile_speed, profile_accel: the profile's cruise speed / δ·f and acceleration / the
+    motor's limit; sine_freq: frequency / 100 Hz (0 unless a sine); inertia_ratio / 5,
+    coulomb / 4 mN·m, viscous / 0.3 mN·m·s/rad, load_torque / 4 mN·m (the random
+    distribution's ranges); torque_accel: peak torque / (J · acceleration limit), ≥ 1 when
+    the loaded motor can reach the limit.
+    """
+    plant = sc.plant(base) if plant is None else plant
+    m = plant.motor
+    d = main_move(sc, plant)
+    ideal = sc.ideal_time_s(plant)
+    out = [
+        math.copysign(1.0, d) if d != 0.0 else 0.0,
+        math.log10(max(abs(d), 1e-6)) / 2.0,
+        math.log10(ideal / 1e-3) / 2.0,
+        sc.duration_s / ideal / 10.0,
+        *(1.0 if sc.profile == p else 0.0 for p in profiles.PROFILES),
+        len(sc.move_list(plant)) / 5.0,
+        sc.speed(plant) / plant.pulse_top_speed_rad_s,
+        sc.accel(plant) / m.accel_limit_rad_s2,
+        sc.freq_hz / 100.0 if sc.tracking else 0.0,
+        m.inertia_ratio / INERTIA_RATIO_SCALE,
+        m.coulomb_nm / COULOMB_SCALE_NM,
+        m.viscous_nm_s_rad / VISCOUS_SCALE_NM_S_RAD,
+        m.load_torque_nm / LOAD_SCALE_NM,
+        m.peak_torque_nm / (m.inertia_kgm2 * m.accel_limit_rad_s2),
+    ]
+    return np.array([_clip(x) for x in out], dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class Episode:
+    """A scenario made ready to simulate: its plant, command and yardsticks."""
+
+    scenario: Scenario
+    plant: Plant
+    command: np.ndarray
+    target_rad: float
+    command_end_s: float
+    command_end_tick: int
+    """Ticks after which the command is at its final value (0 if it never changes)."""
+    ideal_time_s: float
+    window_rad: float
+    scale_rad: float
+    features: np.ndarray
+
+    @classmethod
+    def make(cls, sc: Scenario, base: Plant, measures: Measures) -> Episode:
+        plant = sc.plant(base)
+        if sc.ideal_time_s(plant) <= 0.0:
+            raise ValueError(
+                f"scenario={sc.name!r} has no move (distance 0): nothing to tune or score"
+            )
+        cmd = sc.command(plant)
+        target = float(cmd[-1])
+        window = in_position_rad(measures, plant, target)
+        scale = max(abs(main_move(sc, plant)), abs(target), window, 1e-9)
+        # the last change of the command: the first tick of its final run of equal values
+        # (the plant is at 0 before tick 0); as vfgym.simulate.command_end_s finds it
+        off = np.flatnonzero(cmd != target)
+        last = int(off[-1]) + 1 if off.size else (0 if target != 0.0 else -1)
+        return cls(
+            scenario=sc,
+            plant=plant,
+            command=cmd,
+            target_rad=target,
+            command_end_s=float(last) / plant.tick_hz if last >= 0 else 0.0,
+            command_end_tick=last + 1,
+            ideal_time_s=sc.ideal_time_s(plant),
+            window_rad=window,
+            scale_rad=scale,
+            features=scenario_features(sc, base, plant),
+        )
+
+
+class ScenarioSource:
+    """Where each episode's scenario comes from: a fixed one, or seeded draws from one
+    split (train or test) of the random distribution, seeds in ``seed_range`` = [lo, hi)."""
+
+    def __init__(
+        self,
+        scenario: str | Scenario | None,
+        split: str,
+        seed_range: tuple[int, int] | None,
+        base: Plant,
+        measures: Measures,
+    ) -> None:
+        check_choice("split", split, SPLITS)
+        lo, hi = DEFAULT_SEED_RANGE if seed_range is None else _check_range(seed_range)
+        self.split = split
+        self.seed_range = (lo, hi)
+        self.base = base
+        self.measures = measures
+        self.fixed = None if scenario is None else get_scenario(_check_scenario(scenario))
+        self._cache: dict[Scenario, Episode] = {}
+        if self.fixed is not None:
+            self.episode(self.fixed)  # a bad scenario fails here, not at reset
+
+    def episode(self, sc: Scenario) -> Episode:
+        """The (cached) episode data of a scenario."""
+        ep = self._cache.get(sc)
+        if ep is None:
+            if len(self._cache) >= 64:
+                self._cache.clear()
+            ep = self._cache[sc] = Episode.make(sc, self.base, self.measures)
+        return ep
+
+    def draw(self, rng: np.random.Generator, options: dict[str, Any] | None) -> Episode:
+        """The next episode: from ``options`` if they name one, else fixed, else drawn."""
+        opts = check_options(options)
+        if "scenario" in opts:
+            return self.episode(get_scenario(_check_scenario(opts["scenario"])))
+        if "scenario_seed" in opts:
+            seed = check_int("scenario_seed", opts["scenario_seed"], 0, SEED_LIMIT - 1)
+            return self.episode(random_scenario(seed, self.split))
+        if self.fixed is not None:
+            return self.episode(self.fixed)
+        seed = int(rng.integers(self.seed_range[0], self.seed_range[1]))
+        return self.episode(random_scenario(seed, self.split))
+
+
+def _check_scenario(sc: Any) -> str | Scenario:
+    if not isinstance(sc, (str, Scenario)):
+        raise ValueError(
+            f"scenario={sc!r} is not allowed: give a scenario name (e.g. 'paper-step', "
+            "'train-3') or a vfgym.Scenario"
+        )
+    return sc
+
+
+def _check_range(seed_range: Any) -> tuple[int, int]:
+    try:
+        lo, hi = seed_range
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"seed_range={seed_range!r} is not allowed: give (low, high), whole numbers with "
+            f"0 <= low < high <= {SEED_LIMIT}"
+        ) from None
+    lo = check_int("seed_range[0]", lo, 0, SEED_LIMIT - 1)
+    hi = check_int("seed_range[1]", hi, lo + 1, SEED_LIMIT)
+    return lo, hi
+
+
+def check_options(options: Any) -> dict[str, Any]:
+    """Reset options: ``scenario`` (a name or Scenario) or ``scenario_seed`` (a seed of the
+    env's split); unknown keys raise ``ValueError``."""
+    if options is None:
+        return {}
+    if not isinstance(options, dict):
+        raise ValueError(f"options={options!r} must be a dict (or None)")
+    unknown = sorted(set(options) - set(RESET_OPTIONS), key=str)
+    if unknown:
+        raise ValueError(
+            f"options has unknown key(s) {', '.join(map(repr, unknown))}: allowed "
+            f"{', '.join(RESET_OPTIONS)}"
+        )
+    if "scenario" in options and "scenario_seed" in options:
+        raise ValueError("options: give either 'scenario' or 'scenario_seed', not both")
+    return options
+
+
+def check_scoring(weights: Any, bounds: Any, measures: Any, plant: Any) -> None:
+    """The scoring path's inputs have the right types."""
+    for name, value, kind in (
+        ("weights", weights, CostWeights),
+        ("bounds", bounds, Bounds),
+        ("measures", measures, Measures),
+        ("plant", plant, Plant),
+    ):
+        if not isinstance(value, kind):
+            raise ValueError(f"{name}={value!r} must be a vfgym {kind.__name__}")
+
+
+def as_action(action: Any) -> np.ndarray:
+    """An action as a float64 array of 4 numbers (range checks are the caller's)."""
+    try:
+        a = np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"action={action!r} is not allowed: give 4 numbers in [-1, 1]") from None
+    if a.shape != (4,):
+        raise ValueError(f"action must hold 4 numbers in [-1, 1], got shape {a.shape}")
+    return a
+
+
+def scored_info(
+    ep: Episode, metrics: dict[str, Any], cost: float, constraints: np.ndarray
+) -> dict[str, Any]:
+    """The info of a scored move: the scenario, every measure, the cost and each
+    constraint value (feasible when ≤ 0)."""
+    info: dict[str, Any] = {"scenario": ep.scenario.name}
+    info.update(metrics)
+    info["cost"] = float(cost)
+    for name, value in zip(CONSTRAINTS, constraints, strict=True):
+        info[f"constraint_{name}"] = float(value)
+    info["feasible"] = bool(np.all(np.asarray(constraints) <= 0.0))
+    return info

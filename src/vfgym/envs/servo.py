@@ -1,0 +1,441 @@
+"""``vfgym/VFServo-v0``: retune the four settings every control interval during a move."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from vfgym import _kernel as K
+from vfgym import _layout as L
+from vfgym._validate import check_choice, check_real
+from vfgym.metrics import from_acc
+from vfgym.params import (
+    ACCEL_LAWS,
+    DEFAULT_MEASURES,
+    PAPER_PLANT,
+    PAPER_SETTINGS,
+    Measures,
+    Plant,
+    Settings,
+)
+from vfgym.scenarios import Scenario
+from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights, score
+from vfgym.simulate import pack
+from vfgym.space import SPACE, from_action, to_action
+
+from . import _batch as B
+from ._common import SCENARIO_FEATURES, Episode, ScenarioSource, as_action, check_scoring
+from ._common import scored_info as _scored_info
+
+_step_one = B.step_one
+_BAD_ACTION = B.BAD_ACTION
+_ENDED = B.ENDED
+
+SERVO_FEATURES = B.OBS_DYNAMIC + SCENARIO_FEATURES
+"""Names of VFServo-v0's observation entries, in order."""
+SETTING_FIELDS = ("value_rad", "error_limit_rad", "k", "ts_over_tf")
+"""The order in which the compiled step reads the search space's dimensions."""
+
+
+def servo_spaces() -> tuple[spaces.Box, spaces.Box]:
+    """(observation space, action space) of VFServo-v0."""
+    obs = spaces.Box(-B.OBS_BOUND, B.OBS_BOUND, shape=(len(SERVO_FEATURES),), dtype=np.float32)
+    act = spaces.Box(-1.0, 1.0, shape=(len(SPACE),), dtype=np.float32)
+    return obs, act
+
+
+def _space_table() -> np.ndarray:
+    """(action index, low, high, log) of each setting, read from :data:`vfgym.space.SPACE`;
+    a log dimension's low and high as their logarithms (the very numbers ``from_unit``
+    computes, so the compiled mapping stays bit for bit the search space's)."""
+    names = [d.name for d in SPACE]
+    if sorted(names) != sorted(SETTING_FIELDS):
+        raise RuntimeError(f"the search space {names} is not the four settings {SETTING_FIELDS}")
+    rows = []
+    for field in SETTING_FIELDS:
+        j = names.index(field)
+        d = SPACE[j]
+        lo, hi = (math.log(d.low), math.log(d.high)) if d.log else (d.low, d.high)
+        rows.append((float(j), lo, hi, 1.0 if d.log else 0.0))
+    return np.array(rows, dtype=np.float64).reshape(-1)
+
+
+def raise_bad_action(action: np.ndarray, accel_law: str, index: int | None = None) -> None:
+    """Raise the search space's own ``ValueError`` for an action the kernel refused."""
+    try:
+        from_action(action, accel_law)  # raises for NaN / out of the box
+    except ValueError as e:
+        if index is None:
+            raise
+        raise ValueError(f"actions[{index}]: {e}") from None
+    raise ValueError(f"action={np.asarray(action).tolist()} is not allowed")
+
+
+class ServoCore:
+    """VFServo-v0's configuration and the Python half of its step, shared by the single env
+    and the vector env so that both compute the same numbers: filling a workspace row at
+    reset, and the end-of-episode scoring."""
+
+    def __init__(
+        self,
+        scenario: str | Scenario | None,
+        split: str,
+        seed_range: tuple[int, int] | None,
+        accel_law: str,
+        interval_s: float,
+        settle_time_s: float,
+        initial_settings: Settings,
+        tracking_weight: float,
+        terminate_on_violation: bool,
+        violation_penalty: float,
+        plant: Plant,
+        measures: Measures,
+        weights: CostWeights,
+        bounds: Bounds,
+    ) -> None:
+        check_scoring(weights, bounds, measures, plant)
+        self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
+        if not isinstance(initial_settings, Settings):
+            raise ValueError(f"initial_settings={initial_settings!r} must be a vfgym.Settings")
+        self.initial_settings = initial_settings.replace(accel_law=self.accel_law)
+        f = plant.tick_hz
+        ticks = check_real("interval_s", interval_s, 0.0, lo_open=True) * f
+        if abs(ticks - round(ticks)) > 1e-9 * max(1.0, ticks) or round(ticks) < 1:
+            raise ValueError(
+                f"interval_s={interval_s!r} is not a whole number of ticks "
+                f"(T = {plant.tick_s:.6g} s): allowed whole multiples of T"
+            )
+        self.interval_ticks = round(ticks)
+        self.hold_ticks = round(check_real("settle_time_s", settle_time_s, 0.0, 1.0) * f)
+        self.tracking_weight = check_real("tracking_weight", tracking_weight, 0.0)
+        if not isinstance(terminate_on_violation, bool):
+            raise ValueError(f"terminate_on_violation={terminate_on_violation!r} must be a bool")
+        self.terminate_on_violation = terminate_on_violation
+        self.violation_penalty = check_real("violation_penalty", violation_penalty, 0.0)
+        self.plant = plant
+        self.measures = measures
+        self.weights = weights
+        self.bounds = bounds
+        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.n_obs = len(SERVO_FEATURES)
+        self.width = B.width(self.n_obs)
+        self.ring_len = B.ring_size(pack(PAPER_SETTINGS, plant, measures, 1.0, 1))
+        self._dims = _space_table()
+        self._set0 = to_action(self.initial_settings).astype(np.float64)
+
+    def start(self, w: np.ndarray, ring: np.ndarray, cmd: np.ndarray, ep: Episode) -> None:
+        """Fill workspace row ``w`` for a new episode on ``ep`` whose command is ``cmd``."""
+        n = ep.command.size
+        w[:] = 0.0
+        w[B.W_PRM : B.W_PRM + L.N_PARAMS] = pack(
+            self.initial_settings, ep.plant, self.measures, ep.target_rad, n
+        )
+        wt, bd = self.weights, self.bounds
+        sc = ep.scenario
+        cfg = {
+            B.C_N: n,
+            B.C_I: self.interval_ticks,
+            B.C_END: ep.command_end_tick,
+            B.C_HOLD: self.hold_ticks,
+            B.C_IDEAL: ep.ideal_time_s,
+            B.C_WIN: ep.window_rad,
+            B.C_SCALE: ep.scale_rad,
+            B.C_LIMIT: ep.plant.motor.accel_limit_rad_s2,
+            B.C_VMAX: ep.plant.pulse_top_speed_rad_s,
+            B.C_TRACKING: 1.0 if sc.tracking else 0.0,
+            B.C_TRK_SCALE: 0.1 * abs(sc.distance_rad),
+            B.C_W_TIME: wt.time,
+            B.C_W_TRACK: wt.tracking,
+            B.C_W_OV: wt.overshoot,
+            B.C_W_ACC: wt.accel,
+            B.C_W_TQ: wt.torque,
+            B.C_W_UNS: wt.unsettled,
+            B.C_B_OV: bd.overshoot_windows,
+            B.C_B_TQ: bd.torque_limit_time_s,
+            B.C_SHAPE: self.tracking_weight,
+            B.C_VIOL: 1.0 if self.terminate_on_violation else 0.0,
+        }
+        for k, v in cfg.items():
+            w[k] = v
+        w[B.C_DIMS : B.C_DIMS + 16] = self._dims
+        w[B.X_SET : B.X_SET + 4] = self._set0
+        w[B.W_OBS + B.N_DYN : B.W_OBS + self.n_obs] = ep.features
+        B.reset_row(w, ring, cmd)
+
+    def finish(self, w: np.ndarray, ep: Episode, flags: int) -> tuple[float, dict[str, Any]]:
+        """The last interval's reward and the episode's info: the scoring path's measures
+        and cost of the whole move (the settings held after the episode's end)."""
+        acc = w[B.W_ACC : B.W_ACC + L.N_ACC]
+        m = from_acc(acc, ep.plant, self.measures, ep.target_rad, ep.command_end_s)
+        cost, cons, _objs, extra = score(
+            m, ep.scenario, ep.plant, self.measures, self.weights, self.bounds
+        )
+        violation = bool(flags & B.VIOLATION)
+        reward = float(w[B.X_COST_PREV] - cost) - float(w[B.X_SHAPE])
+        if violation:
+            reward -= self.violation_penalty
+        info = _scored_info(ep, m | extra, cost, cons)
+        info["ended_settled"] = bool(flags & B.SETTLED)
+        info["ended_violation"] = violation
+        info["control_ticks"] = int(w[B.X_TICK_END])
+        info["steps"] = int(w[B.X_STEPS])
+        return reward, info
+
+
+class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
+    """Tune the V-F controller and the servo's filter online, one control interval a step.
+
+    ## Description
+
+    One episode is one move of the plant of MODEL.md (V-F controller → digital servo →
+    motor). Each step is one control interval (default 1 ms = 140 ticks): the action sets
+    the four settings for that interval, and the compiled, stateful kernel
+    (:func:`vfgym._kernel.run_segment`) advances the plant through it; its state (the V-F
+    accumulator, the servo's counters and filter, the motor) carries over from one interval
+    to the next. At the episode's end ``info`` holds the scoring path's measures and cost of
+    the whole move, so online tuning compares like for like with fixed settings from
+    :func:`vfgym.evaluate` (a constant action gives exactly ``evaluate``'s cost).
+
+    ## Action Space
+
+    ``Box(-1, 1, (4,), float32)``: value, error limit L, k and Ts/Tf for the next
+    interval, mapped onto their ranges by the search space (:data:`vfgym.space.SPACE`, log
+    scales). The acceleration law is the ``accel_law`` argument. NaN or out-of-box actions
+    raise ``ValueError``.
+
+    ## Observation Space
+
+    ``Box(-10, 10, (37,), float32)``, each entry clipped. With P the command on the last
+    tick simulated (0 before the first), θ, ω, τ the motor's angle, speed and torque, D
+    the move's size (its largest move, or amplitude) and W the in-position half-width:
+
+    | index | name | definition |
+    |---|---|---|
+    | 0 | error | (P − θ) / D |
+    | 1 | error_log | sign(P − θ) · log10(1 + \\|P − θ\\| / W) / 4 |
+    | 2 | remaining | (target − θ) / D |
+    | 3 | command_remaining | (target − P) / D |
+    | 4 | command_ahead | (command at the end of the next interval − P) / D |
+    | 5 | speed | ω / (δ·f) |
+    | 6 | accel | mean acceleration over the last interval / motor limit |
+    | 7 | torque | τ / peak torque |
+    | 8 | torque_saturation | share of the last interval's ticks at the torque limit |
+    | 9 | pulse_error | (P − n·δ) / D, the V-F controller's own error |
+    | 10 | following_error | servo position counter (counts) × count angle / D |
+    | 11 | overshoot_log | log10(1 + overshoot so far / W) / 4 |
+    | 12 | accel_peak | peak pulse-train acceleration so far / motor limit |
+    | 13 | progress | ticks simulated / ticks of the move |
+    | 14-17 | setting_* | the settings in force, as an action in [-1, 1] |
+    | 18-36 | | the move and its plant, as VFTune-v0's observation |
+
+    ## Rewards
+
+    Per interval, ``r = C(before) − C(after) − tracking_weight · ΔISE · T / (D² · t_ideal)``
+    where C is the scoring path's cost formula (:func:`vfgym.scoring.score`) on the
+    measures streamed so far: time out of the in-position window / ideal time (or RMS
+    tracking error for a moving reference), + 0.1 × overshoot in windows, + 5 × the
+    acceleration over the limit (so a violation shades the reward by its degree), + time at
+    the torque limit / ideal time (weights from ``weights``); ΔISE is the interval's sum of
+    squared tracking error (P − θ)². On the last step C(after) is the scoring path's cost
+    of the whole move, including the unsettled penalty, ΔISE runs to the end of the move,
+    and ``violation_penalty`` is subtracted on a violation. So the return of an episode is
+    minus the cost of its move (to rounding) when ``tracking_weight=0``; C(before) = 0.
+
+    ## Starting State
+
+    As VFTune-v0: the scenario comes from the ``scenario`` argument, the reset options
+    (``scenario``, ``scenario_seed``) or a seeded draw from the split. The plant is at rest
+    at 0, the settings in force are ``initial_settings`` (the paper's).
+
+    ## Episode End
+
+    Terminated when the motor has settled: the command is at its final value and the motor
+    has stayed in the in-position window for ``settle_time_s``; or, with
+    ``terminate_on_violation``, as soon as a constraint (acceleration, torque, overshoot)
+    is violated. Truncated at the end of the scenario's command (its duration). When an
+    episode ends early the rest of the move is simulated with the last settings held, so
+    that the end-of-episode measures cover the whole command, as ``evaluate``'s do.
+
+    ## Arguments
+
+    ``gymnasium.make("vfgym/VFServo-v0", scenario=None, split="train", seed_range=None,
+    accel_law="rise", interval_s=1e-3, settle_time_s=5e-3,
+    initial_settings=PAPER_SETTINGS, tracking_weight=0.0, terminate_on_violation=False,
+    violation_penalty=5.0, plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
+    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``
+
+    * ``scenario``, ``split``, ``seed_range``, ``accel_law``, ``plant``, ``measures``,
+      ``weights``, ``bounds``: as VFTune-v0.
+    * ``interval_s``: the control interval, a whole number of ticks.
+    * ``settle_time_s``: how long the motor must stay in position to end the episode.
+    * ``initial_settings``: the settings in force before the first action.
+    * ``tracking_weight``: weight of the tracking-error shaping term (0: none).
+    * ``terminate_on_violation``, ``violation_penalty``: end on a constraint violation,
+      with this extra negative reward.
+    * ``render_mode``: ``"rgb_array"`` draws the episode's move so far (position, speed,
+      acceleration, command against motor) as an (480, 640, 3) uint8 array.
+
+    ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)`` gives
+    :class:`vfgym.envs.vector.VFServoVectorEnv`, which steps all N envs in one compiled,
+    multi-threaded call.
+
+    ## Version History
+
+    * v0: Initial version.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 30}
+
+    def __init__(
+        self,
+        scenario: str | Scenario | None = None,
+        *,
+        split: str = "train",
+        seed_range: tuple[int, int] | None = None,
+        accel_law: str = "rise",
+        interval_s: float = 1e-3,
+        settle_time_s: float = 5e-3,
+        initial_settings: Settings = PAPER_SETTINGS,
+        tracking_weight: float = 0.0,
+        terminate_on_violation: bool = False,
+        violation_penalty: float = 5.0,
+        plant: Plant = PAPER_PLANT,
+        measures: Measures = DEFAULT_MEASURES,
+        weights: CostWeights = DEFAULT_WEIGHTS,
+        bounds: Bounds = DEFAULT_BOUNDS,
+        render_mode: str | None = None,
+    ) -> None:
+        self.core = ServoCore(
+            scenario,
+            split,
+            seed_range,
+            accel_law,
+            interval_s,
+            settle_time_s,
+            initial_settings,
+            tracking_weight,
+            terminate_on_violation,
+            violation_penalty,
+            plant,
+            measures,
+            weights,
+            bounds,
+        )
+        if render_mode is not None:
+            check_choice("render_mode", render_mode, self.metadata["render_modes"])
+        self.render_mode = render_mode
+        self.observation_space, self.action_space = servo_spaces()
+        self._w = np.zeros(self.core.width, dtype=np.float64)
+        self._w0 = self._w.copy()
+        self._ring = np.zeros(self.core.ring_len, dtype=np.int64)
+        self._obs = slice(B.W_OBS, B.W_OBS + self.core.n_obs)
+        self._obs32 = np.zeros(self.core.n_obs, dtype=np.float32)
+        self._ep: Episode | None = None
+        self._cmd: np.ndarray | None = None
+        self._ended = False
+        self._record: list[tuple[np.ndarray, int]] = []
+
+    @property
+    def episode(self) -> Episode | None:
+        """The current episode (scenario, plant, command), or None before ``reset``."""
+        return self._ep
+
+    @property
+    def accel_law(self) -> str:
+        """The acceleration law the actions' settings use."""
+        return self.core.accel_law
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        super().reset(seed=seed)
+        ep = self.core.source.draw(self.np_random, options)
+        self._ep = ep
+        self._cmd = ep.command
+        self.core.start(self._w, self._ring, self._cmd, ep)
+        self._ended = False
+        if self.render_mode is not None:
+            self._w0 = self._w.copy()
+            self._record = []
+        return self._w[self._obs].astype(np.float32), {"scenario": ep.scenario.name}
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        if self._ended or self._cmd is None:
+            raise gym.error.ResetNeeded(
+                "call reset() before step(): "
+                + ("the episode has ended" if self._ended else "no episode yet")
+            )
+        a = action
+        # the fast path takes any 1-D numeric array as it is (the kernel checks its length
+        # and values); anything else goes through as_action
+        if type(a) is not np.ndarray or a.ndim != 1 or a.dtype.kind not in "fi":
+            a = as_action(action)
+        reward, flags = _step_one(a, self._w, self._ring, self._cmd, self._obs32)
+        if flags & _BAD_ACTION:
+            raise_bad_action(as_action(a), self.core.accel_law)
+        if self.render_mode is not None:
+            self._record.append((np.array(a, dtype=np.float64), int(self._w[B.X_TICK_END])))
+        obs = self._obs32.copy()
+        if not flags & _ENDED:
+            return obs, reward, False, False, {}
+        self._ended = True
+        reward, info = self.core.finish(self._w, self._ep, flags)
+        return obs, reward, bool(flags & B.TERMINATED), bool(flags & B.TRUNCATED), info
+
+    def render(self) -> np.ndarray | None:
+        """The episode's move so far (the whole move once it has ended) as an RGB array."""
+        if self.render_mode is None:
+            gym.logger.warn(
+                "VFServo-v0.render() without a render_mode: make the env with "
+                'render_mode="rgb_array"'
+            )
+            return None
+        if self._ep is None:
+            raise gym.error.ResetNeeded("call reset() before render()")
+        from .render import move_picture
+
+        ep = self._ep
+        rec = self._replay()
+        title = f"VFServo-v0, {ep.scenario.name}, {len(self._record)} steps"
+        if rec.shape[1] == 0:
+            return move_picture(
+                ep.plant, ep.command, None, None, None, self.core.measures.accel_window_s, title
+            )
+        return move_picture(
+            ep.plant,
+            rec[L.R_COMMAND],
+            rec[L.R_PULSE],
+            rec[L.R_THETA],
+            rec[L.R_OMEGA],
+            self.core.measures.accel_window_s,
+            title,
+        )
+
+    def _replay(self) -> np.ndarray:
+        """Every tick of the episode so far, simulated again from its start with the same
+        settings interval by interval (the kernel is deterministic), as trace rows."""
+        w = self._w0.copy()
+        ring = np.zeros_like(self._ring)
+        cmd = self._cmd
+        B.reset_row(w, ring, cmd)
+        prm = w[B.W_PRM : B.W_PRM + L.N_PARAMS]
+        st = w[B.W_ST : B.W_ST + L.N_STATE]
+        ext = np.zeros(0, dtype=np.int8)
+        ends = [i1 for _, i1 in self._record]
+        if self._ended:
+            ends[-1] = cmd.size
+        parts = []
+        i0 = 0
+        for (act, _), i1 in zip(self._record, ends, strict=True):
+            B.apply_action(act, w)
+            part = np.empty((L.N_ROWS, i1 - i0), dtype=np.float64)
+            K.run_segment(cmd, ext, prm, st, ring, i1, part, 1)
+            parts.append(part)
+            i0 = i1
+        if not parts:
+            return np.zeros((L.N_ROWS, 0))
+        return np.concatenate(parts, axis=1)

@@ -1,0 +1,280 @@
+"""``vfgym/VFTune-v0``: choose the four settings for a whole move, in one step."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from vfgym import _kernel as K
+from vfgym._validate import check_choice
+from vfgym.metrics import from_acc
+from vfgym.params import ACCEL_LAWS, DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.scenarios import Scenario
+from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights, evaluate, score
+from vfgym.simulate import pack, simulate
+from vfgym.space import SPACE, from_action, settings_to_dict
+
+from ._common import (
+    SCENARIO_FEATURES,
+    Episode,
+    ScenarioSource,
+    as_action,
+    check_scoring,
+    scored_info,
+)
+
+OBS_BOUND = 10.0
+
+
+def tune_spaces() -> tuple[spaces.Box, spaces.Box]:
+    """(observation space, action space) of VFTune-v0."""
+    n = len(SCENARIO_FEATURES)
+    obs = spaces.Box(-OBS_BOUND, OBS_BOUND, shape=(n,), dtype=np.float32)
+    act = spaces.Box(-1.0, 1.0, shape=(len(SPACE),), dtype=np.float32)
+    return obs, act
+
+
+def action_settings(action: Any, accel_law: str) -> Settings:
+    """The settings an action in [-1, 1]⁴ stands for (:func:`vfgym.space.from_action`);
+    NaN, out-of-box or misshapen actions raise ``ValueError``."""
+    return from_action(as_action(action), accel_law)
+
+
+class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
+    """Tune the V-F controller and the servo's filter for one move, in one step.
+
+    ## Description
+
+    Each episode is one move of the plant of MODEL.md (V-F controller → digital servo →
+    motor): ``reset`` picks a scenario (a command profile and the load on the motor), the
+    agent answers with the four settings, and ``step`` simulates the whole move tick by tick
+    and scores it through :func:`vfgym.evaluate`, the one scoring path, so the reward is
+    exactly minus the cost that the Optuna sweeps and the evaluation reports see.
+
+    ## Action Space
+
+    ``Box(-1, 1, (4,), float32)``: value, error limit L, k and Ts/Tf, each mapped onto its
+    range by the search space (:data:`vfgym.space.SPACE`, log scales for ranges spanning
+    decades): value and L in [0.05, 10] rad, k in [1, 10⁴], Ts/Tf in [0.02, 1]. The
+    acceleration law is the ``accel_law`` argument. NaN or out-of-box actions raise
+    ``ValueError``.
+
+    ## Observation Space
+
+    ``Box(-10, 10, (19,), float32)``, the move and its plant, normalised (each clipped):
+
+    | index | name | definition |
+    |---|---|---|
+    | 0 | direction | sign of the (largest) move |
+    | 1 | log_distance | log10(\\|move\\| / 1 rad) / 2 |
+    | 2 | log_ideal_time | log10(ideal move time / 1 ms) / 2 |
+    | 3 | time_budget | simulated duration / ideal time / 10 |
+    | 4-9 | profile_* | one-hot: step, sine, ramp, trapezoid, scurve, multi |
+    | 10 | moves | point-to-point moves / 5 |
+    | 11 | profile_speed | profile cruise speed / δ·f |
+    | 12 | profile_accel | profile acceleration / motor limit |
+    | 13 | sine_freq | sine frequency / 100 Hz (0 otherwise) |
+    | 14 | inertia_ratio | load / rotor inertia, / 5 |
+    | 15 | coulomb | Coulomb friction / 4 mN·m |
+    | 16 | viscous | viscous friction / 0.3 mN·m·s/rad |
+    | 17 | load_torque | load torque / 4 mN·m |
+    | 18 | torque_accel | peak torque / (J · acceleration limit) |
+
+    ## Rewards
+
+    ``-cost`` of the move from :func:`vfgym.evaluate` (lower cost is better; a perfect
+    point-to-point move costs about 1): move time / ideal time (or RMS tracking error for a
+    moving reference) plus weighted overshoot, acceleration over the limit, time at the
+    torque limit and not settling (:class:`vfgym.CostWeights`). ``info`` carries every
+    measure of :mod:`vfgym.metrics`, ``ideal_time_s``, ``time_ratio``, ``window_rad``,
+    ``cost``, the constraint values ``constraint_accel``, ``constraint_torque``,
+    ``constraint_overshoot`` (feasible when ≤ 0), ``feasible``, ``scenario`` and the
+    settings used.
+
+    ## Starting State
+
+    A scenario: the ``scenario`` argument or ``options={"scenario": name}`` if given,
+    ``options={"scenario_seed": s}`` for a seed of the split, else a seed drawn from the
+    env's ``np_random`` in ``seed_range`` and the move ``random_scenario(seed, split)``.
+    Train and test scenarios never coincide. The plant starts at rest at 0.
+
+    ## Episode End
+
+    Always after one step (``terminated=True``); stepping again needs ``reset()``.
+
+    ## Arguments
+
+    ``gymnasium.make("vfgym/VFTune-v0", scenario=None, split="train", seed_range=None,
+    accel_law="rise", plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
+    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``
+
+    * ``scenario``: a fixed scenario (name such as ``"paper-step"`` or ``"test-7"``, or a
+      :class:`vfgym.Scenario`); None draws one per episode.
+    * ``split``: ``"train"`` or ``"test"``, the random distribution's split to draw from.
+    * ``seed_range``: (low, high), scenario seeds drawn in [low, high) (default [0, 2³¹)).
+    * ``accel_law``: ``"rise"`` (the paper's reading) or ``"slew"``.
+    * ``plant``, ``measures``, ``weights``, ``bounds``: the scoring path's inputs.
+    * ``render_mode``: ``"rgb_array"`` draws the last move (position, speed, acceleration,
+      command against motor) as an (480, 640, 3) uint8 array.
+
+    ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)`` gives
+    :class:`vfgym.envs.vector.VFTuneVectorEnv`, which scores all N moves in one compiled
+    call.
+
+    ## Version History
+
+    * v0: Initial version.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}
+
+    def __init__(
+        self,
+        scenario: str | Scenario | None = None,
+        *,
+        split: str = "train",
+        seed_range: tuple[int, int] | None = None,
+        accel_law: str = "rise",
+        plant: Plant = PAPER_PLANT,
+        measures: Measures = DEFAULT_MEASURES,
+        weights: CostWeights = DEFAULT_WEIGHTS,
+        bounds: Bounds = DEFAULT_BOUNDS,
+        render_mode: str | None = None,
+    ) -> None:
+        check_scoring(weights, bounds, measures, plant)
+        self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
+        if render_mode is not None:
+            check_choice("render_mode", render_mode, self.metadata["render_modes"])
+        self.render_mode = render_mode
+        self.plant = plant
+        self.measures = measures
+        self.weights = weights
+        self.bounds = bounds
+        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.observation_space, self.action_space = tune_spaces()
+        self._ep: Episode | None = None
+        self._settings: Settings | None = None
+        self._done = False
+
+    @property
+    def episode(self) -> Episode | None:
+        """The current episode (scenario, plant, command), or None before ``reset``."""
+        return self._ep
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        super().reset(seed=seed)
+        self._ep = self.source.draw(self.np_random, options)
+        self._settings = None
+        self._done = False
+        return self._ep.features.astype(np.float32), {"scenario": self._ep.scenario.name}
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        if self._ep is None or self._done:
+            raise gym.error.ResetNeeded(
+                "VFTune-v0 episodes are one step long: call reset() before step()"
+            )
+        ep = self._ep
+        settings = action_settings(action, self.accel_law)
+        ev = evaluate(
+            settings,
+            ep.scenario,
+            plant=self.plant,
+            measures=self.measures,
+            weights=self.weights,
+            bounds=self.bounds,
+        )
+        cost = float(ev.cost[0, 0])
+        info = scored_info(ep, ev.metrics[0][0], cost, ev.constraints[0, 0])
+        info.update(settings_to_dict(settings))
+        self._settings = settings
+        self._done = True
+        return ep.features.astype(np.float32), -cost, True, False, info
+
+    def render(self) -> np.ndarray | None:
+        """The last move (or, before a step, the command) as an RGB array."""
+        if self.render_mode is None:
+            gym.logger.warn(
+                "VFTune-v0.render() without a render_mode: make the env with "
+                'render_mode="rgb_array"'
+            )
+            return None
+        if self._ep is None:
+            raise gym.error.ResetNeeded("call reset() before render()")
+        from .render import move_picture
+
+        ep = self._ep
+        title = f"VFTune-v0, {ep.scenario.name}"
+        if self._settings is None:
+            return move_picture(
+                ep.plant, ep.command, None, None, None, self.measures.accel_window_s, title
+            )
+        tr = simulate(ep.command, self._settings, ep.plant, measures=self.measures)
+        s = self._settings
+        title += f": value {s.value_rad:.3g}, L {s.error_limit_rad:.3g}, k {s.k:.3g}, "
+        title += f"Ts/Tf {s.ts_over_tf:.3g}"
+        return move_picture(
+            ep.plant,
+            tr.command_rad,
+            tr.pulse_rad,
+            tr.motor_rad,
+            tr.speed_rad_s,
+            self.measures.accel_window_s,
+            title,
+        )
+
+
+def evaluate_pairs(
+    settings: Sequence[Settings],
+    episodes: Sequence[Episode],
+    *,
+    measures: Measures,
+    weights: CostWeights,
+    bounds: Bounds,
+) -> list[tuple[float, dict[str, Any], np.ndarray]]:
+    """Score ``settings[i]`` on ``episodes[i]`` for every i in one compiled, multi-threaded
+    call: the kernel :func:`vfgym.evaluate` runs (:func:`vfgym._kernel.run_batch`), then the
+    scoring path's own measures (:func:`vfgym.metrics.from_acc`) and cost
+    (:func:`vfgym.scoring.score`). ``evaluate`` scores every controller on every scenario
+    (a cross product); this is its pairwise form, equal to it pair by pair (tested).
+    Returns (cost, metrics, constraints) per pair."""
+    if len(settings) != len(episodes):
+        raise ValueError(f"{len(settings)} settings for {len(episodes)} episodes")
+    slots: dict[int, int] = {}
+    cmds: list[np.ndarray] = []
+    cmd_idx = np.empty(len(episodes), np.int64)
+    for r, ep in enumerate(episodes):
+        j = slots.setdefault(id(ep.command), len(cmds))
+        if j == len(cmds):
+            cmds.append(ep.command)
+        cmd_idx[r] = j
+    cmd_flat = np.concatenate(cmds)
+    cmd_off = np.concatenate([[0], np.cumsum([c.size for c in cmds])]).astype(np.int64)
+    prm = np.stack(
+        [
+            pack(s, ep.plant, measures, ep.target_rad, ep.command.size)
+            for s, ep in zip(settings, episodes, strict=True)
+        ]
+    )
+    acc = K.new_acc(len(episodes))
+    K.run_batch(
+        cmd_flat,
+        cmd_off,
+        cmd_idx,
+        np.zeros(0, np.int8),
+        np.zeros(2, np.int64),
+        np.zeros(len(episodes), np.int64),
+        prm,
+        acc,
+    )
+    out = []
+    for r, ep in enumerate(episodes):
+        m = from_acc(acc[r], ep.plant, measures, ep.target_rad, ep.command_end_s)
+        cost, cons, _objs, extra = score(m, ep.scenario, ep.plant, measures, weights, bounds)
+        out.append((float(cost), m | extra, cons))
+    return out

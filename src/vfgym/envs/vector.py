@@ -1,0 +1,419 @@
+"""Native vector envs: N copies of VFTune-v0 or VFServo-v0 simulated in one compiled call.
+
+Sub-env i behaves exactly as a single env would: its own random generator (``reset(seed=s)``
+seeds sub-env i with s + i, as Gymnasium's ``SyncVectorEnv`` does), the same scenario
+draws, the same compiled arithmetic. Autoreset follows Gymnasium 1.x: ``next-step`` by
+default (an episode's end is reported, the sub-env is reset on the next ``step`` and that
+step's action for it is ignored), ``same-step`` (reset at once; the last observation and
+info under ``info["final_obs"]``, ``info["final_info"]``) or ``disabled`` (reset with
+``options={"reset_mask": mask}``). Infos are batched as ``SyncVectorEnv`` batches them.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium.error import ResetNeeded
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from vfgym import _layout as L
+from vfgym._validate import check_choice, check_int
+from vfgym.params import (
+    ACCEL_LAWS,
+    DEFAULT_MEASURES,
+    PAPER_PLANT,
+    PAPER_SETTINGS,
+    Measures,
+    Plant,
+    Settings,
+)
+from vfgym.scenarios import Scenario
+from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights
+from vfgym.space import settings_to_dict
+
+from . import _batch as B
+from ._common import Episode, ScenarioSource, check_scoring, scored_info
+from .servo import ServoCore, raise_bad_action, servo_spaces
+from .tune import action_settings, evaluate_pairs, tune_spaces
+
+Infos = dict[str, Any]
+
+
+def _autoreset_mode(mode: Any) -> AutoresetMode:
+    if isinstance(mode, AutoresetMode):
+        return mode
+    try:
+        return AutoresetMode(mode)
+    except ValueError:
+        allowed = ", ".join(repr(m.value) for m in AutoresetMode)
+        raise ValueError(
+            f"autoreset_mode={mode!r} is not allowed: choose one of {allowed}"
+        ) from None
+
+
+class _BatchVectorEnv(VectorEnv):
+    """Seeding, reset options, autoreset and info batching; subclasses simulate."""
+
+    metadata: ClassVar[dict[str, Any]] = {
+        "render_modes": [],
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+    }
+
+    def __init__(self, num_envs: int, autoreset_mode: Any, render_mode: str | None) -> None:
+        self.num_envs = check_int("num_envs", num_envs, 1)
+        self.autoreset_mode = _autoreset_mode(autoreset_mode)
+        self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
+        if render_mode is not None:
+            raise ValueError(
+                f"render_mode={render_mode!r} is not allowed for a vector env: render a "
+                "single env (gymnasium.make) instead"
+            )
+        self.render_mode = None
+        self._rngs: list[np.random.Generator | None] = [None] * self.num_envs
+        self._seeds: list[int | None] = [None] * self.num_envs
+        self._autoreset = np.zeros(self.num_envs, dtype=np.bool_)
+        self._started = False
+        self._all = np.ones(self.num_envs, dtype=np.bool_)
+
+    # --- subclass hooks -------------------------------------------------------------------
+    def _reset_one(self, i: int, options: dict[str, Any] | None) -> Infos:
+        """Start a new episode in sub-env i (its rng is ready); return its reset info."""
+        raise NotImplementedError
+
+    def _simulate(
+        self, actions: np.ndarray, active: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[int, Infos]]:
+        """Step the active sub-envs: rewards, terminated, truncated (0 / False for the
+        inactive ones) and the infos of the sub-envs whose episode ended."""
+        raise NotImplementedError
+
+    def _observations(self) -> np.ndarray:
+        """The current observations, a new (num_envs, n) float32 array."""
+        raise NotImplementedError
+
+    def _check_actions(self, actions: Any, active: np.ndarray) -> np.ndarray:
+        """The actions as a C-contiguous float array; a misshapen batch, or a NaN or
+        out-of-box action of an active sub-env, raises ``ValueError`` before anything
+        changes."""
+        a = np.asarray(actions)
+        if a.shape != (self.num_envs, 4) or a.dtype.kind not in "fiu":
+            raise ValueError(
+                f"actions must be a ({self.num_envs}, 4) array of numbers in [-1, 1], "
+                f"got shape {a.shape} dtype {a.dtype}"
+            )
+        if a.dtype not in (np.float32, np.float64) or not a.flags.c_contiguous:
+            a = np.ascontiguousarray(a, dtype=np.float64)
+        ok = (np.abs(a.astype(np.float64, copy=False)) <= 1.0 + B.ACTION_TOL).all(axis=1)
+        bad = np.flatnonzero(active & ~ok)
+        if bad.size:
+            raise_bad_action(a[bad[0]], "rise", int(bad[0]))  # the law plays no part here
+        return a
+
+    # --- reset ----------------------------------------------------------------------------
+    def _rng_for(self, i: int, seed: int | None) -> None:
+        if seed is not None:
+            self._rngs[i], self._seeds[i] = seeding.np_random(seed)
+        elif self._rngs[i] is None:
+            self._rngs[i], self._seeds[i] = seeding.np_random()
+
+    def _seed_list(self, seed: Any) -> list[int | None]:
+        if seed is None:
+            return [None] * self.num_envs
+        if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+            return [int(seed) + i for i in range(self.num_envs)]
+        seeds = list(seed)
+        if len(seeds) != self.num_envs:
+            raise ValueError(
+                f"seed holds {len(seeds)} seeds: give one per sub-env ({self.num_envs}), "
+                "an int (sub-env i gets seed + i) or None"
+            )
+        return [None if s is None else check_int(f"seed[{i}]", s, 0) for i, s in enumerate(seeds)]
+
+    def _reset_indices(
+        self,
+        indices: Any,
+        seeds: list[int | None],
+        options: list[dict[str, Any] | None],
+    ) -> list[Infos]:
+        out = []
+        for i in indices:
+            self._rng_for(int(i), seeds[i])
+            out.append(self._reset_one(int(i), options[i]))
+            self._autoreset[i] = False
+        self._started = True
+        return out
+
+    def reset(
+        self,
+        *,
+        seed: int | list[int | None] | None = None,
+        options: dict[str, Any] | None = None,
+    ) -> tuple[np.ndarray, Infos]:
+        """Reset every sub-env (or those in ``options["reset_mask"]``); ``seed``: None, an
+        int (sub-env i gets seed + i) or one seed per sub-env. Other options (``scenario``,
+        ``scenario_seed``) go to every sub-env reset."""
+        seeds = self._seed_list(seed)
+        if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+            super().reset(seed=int(seed))
+        if options is not None and not isinstance(options, dict):
+            raise ValueError(f"options={options!r} must be a dict (or None)")
+        opts = dict(options or {})
+        mask = opts.pop("reset_mask", None)
+        if mask is None:
+            indices = range(self.num_envs)
+        else:
+            if not (
+                isinstance(mask, np.ndarray)
+                and mask.dtype == np.bool_
+                and mask.shape == (self.num_envs,)
+                and mask.any()
+            ):
+                raise ValueError(
+                    f"options['reset_mask'] must be a bool array of shape ({self.num_envs},) "
+                    "with at least one True"
+                )
+            indices = np.flatnonzero(mask)
+        infos: Infos = {}
+        per_env = self._reset_indices(indices, seeds, [opts or None] * self.num_envs)
+        for i, info in zip(indices, per_env, strict=True):
+            infos = self._add_info(infos, info, int(i))
+        return self._observations(), infos
+
+    # --- step -----------------------------------------------------------------------------
+    def _step_same(
+        self, actions: Any
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[int, Infos], dict[int, Any]]:
+        """Step every sub-env and reset those whose episode ended at once. Returns
+        rewards, terminated, truncated, their end infos, and per ended sub-env
+        (last observation, reset info)."""
+        if not self._started:
+            raise ResetNeeded("call reset() before step()")
+        a = self._check_actions(actions, self._all)
+        rew, term, trunc, ends = self._simulate(a, self._all)
+        done = np.flatnonzero(term | trunc)
+        finals: dict[int, Any] = {}
+        if done.size:
+            last = self._observations()
+            for i in done:
+                i = int(i)
+                finals[i] = (
+                    last[i],
+                    self._reset_indices([i], [None] * self.num_envs, [None] * self.num_envs)[0],
+                )
+        return rew, term, trunc, ends, finals
+
+    def step(
+        self, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Infos]:
+        if not self._started:
+            raise ResetNeeded("call reset() before step()")
+        n = self.num_envs
+        per_env: dict[int, list[Infos]] = {}
+        if self.autoreset_mode == AutoresetMode.SAME_STEP:
+            rew, term, trunc, ends, finals = self._step_same(actions)
+            for i, info in ends.items():
+                obs_i, reset_info = finals[i]
+                per_env[i] = [{"final_obs": obs_i, "final_info": info}, reset_info]
+        else:
+            active = (
+                self._all if self.autoreset_mode == AutoresetMode.DISABLED else ~self._autoreset
+            )
+            a = self._check_actions(actions, active)
+            if self.autoreset_mode == AutoresetMode.DISABLED:
+                if self._autoreset.any():
+                    raise ValueError(
+                        f"sub-envs {np.flatnonzero(self._autoreset).tolist()} have ended: "
+                        "reset them with options={'reset_mask': mask} before stepping "
+                        "(autoreset_mode='Disabled')"
+                    )
+            else:
+                resets = np.flatnonzero(self._autoreset)
+                infos_r = self._reset_indices(resets, [None] * n, [None] * n)
+                for i, info in zip(resets, infos_r, strict=True):
+                    per_env.setdefault(int(i), []).append(info)
+            rew, term, trunc, ends = self._simulate(a, active)
+            for i, info in ends.items():
+                per_env.setdefault(i, []).append(info)
+            self._autoreset = term | trunc
+        infos: Infos = {}
+        for i in sorted(per_env):
+            for info in per_env[i]:
+                infos = self._add_info(infos, info, i)
+        return self._observations(), rew, term, trunc, infos
+
+    @property
+    def np_random_seed(self) -> tuple[int | None, ...]:  # type: ignore[override]
+        """The seed of each sub-env's generator (−1 if set directly)."""
+        return tuple(self._seeds)
+
+
+class VFTuneVectorEnv(_BatchVectorEnv):
+    """N VFTune-v0 envs; each ``step`` scores all N moves in one compiled, multi-threaded
+    kernel call (:func:`vfgym.envs.tune.evaluate_pairs`).
+
+    Made by ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)``; takes VFTune-v0's
+    arguments plus ``autoreset_mode`` (``"NextStep"``, ``"SameStep"`` or ``"Disabled"``).
+    Its numbers equal those of N single envs reset with seeds s, s+1, ... (tested)."""
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        scenario: str | Scenario | None = None,
+        *,
+        split: str = "train",
+        seed_range: tuple[int, int] | None = None,
+        accel_law: str = "rise",
+        plant: Plant = PAPER_PLANT,
+        measures: Measures = DEFAULT_MEASURES,
+        weights: CostWeights = DEFAULT_WEIGHTS,
+        bounds: Bounds = DEFAULT_BOUNDS,
+        autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        render_mode: str | None = None,
+    ) -> None:
+        super().__init__(num_envs, autoreset_mode, render_mode)
+        check_scoring(weights, bounds, measures, plant)
+        self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
+        self.measures = measures
+        self.weights = weights
+        self.bounds = bounds
+        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.single_observation_space, self.single_action_space = tune_spaces()
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._eps: list[Episode | None] = [None] * self.num_envs
+        self._obs = np.zeros(self.observation_space.shape, dtype=np.float32)
+
+    def _reset_one(self, i: int, options: dict[str, Any] | None) -> Infos:
+        ep = self.source.draw(self._rngs[i], options)
+        self._eps[i] = ep
+        self._obs[i] = ep.features
+        return {"scenario": ep.scenario.name}
+
+    def _observations(self) -> np.ndarray:
+        return self._obs.copy()
+
+    def _simulate(
+        self, actions: np.ndarray, active: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[int, Infos]]:
+        idx = np.flatnonzero(active)
+        settings = []
+        for i in idx:
+            try:
+                settings.append(action_settings(actions[i], self.accel_law))
+            except ValueError as e:
+                raise ValueError(f"actions[{i}]: {e}") from None
+        eps = [self._eps[i] for i in idx]
+        rew = np.zeros(self.num_envs)
+        term = np.zeros(self.num_envs, dtype=np.bool_)
+        ends: dict[int, Infos] = {}
+        if idx.size:
+            results = evaluate_pairs(
+                settings, eps, measures=self.measures, weights=self.weights, bounds=self.bounds
+            )
+            for i, s, ep, (cost, metrics, cons) in zip(idx, settings, eps, results, strict=True):
+                rew[i] = -cost
+                term[i] = True
+                info = scored_info(ep, metrics, cost, cons)
+                info.update(settings_to_dict(s))
+                ends[int(i)] = info
+        return rew, term, np.zeros(self.num_envs, dtype=np.bool_), ends
+
+
+class VFServoVectorEnv(_BatchVectorEnv):
+    """N VFServo-v0 envs; each ``step`` advances all N by one control interval in one
+    compiled call, numba threads over the envs (:func:`vfgym.envs._batch.step_batch`).
+
+    Made by ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)``; takes VFServo-v0's
+    arguments plus ``autoreset_mode``. Its numbers equal those of N single envs reset with
+    seeds s, s+1, ... (tested)."""
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        scenario: str | Scenario | None = None,
+        *,
+        split: str = "train",
+        seed_range: tuple[int, int] | None = None,
+        accel_law: str = "rise",
+        interval_s: float = 1e-3,
+        settle_time_s: float = 5e-3,
+        initial_settings: Settings = PAPER_SETTINGS,
+        tracking_weight: float = 0.0,
+        terminate_on_violation: bool = False,
+        violation_penalty: float = 5.0,
+        plant: Plant = PAPER_PLANT,
+        measures: Measures = DEFAULT_MEASURES,
+        weights: CostWeights = DEFAULT_WEIGHTS,
+        bounds: Bounds = DEFAULT_BOUNDS,
+        autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        render_mode: str | None = None,
+    ) -> None:
+        super().__init__(num_envs, autoreset_mode, render_mode)
+        self.core = ServoCore(
+            scenario,
+            split,
+            seed_range,
+            accel_law,
+            interval_s,
+            settle_time_s,
+            initial_settings,
+            tracking_weight,
+            terminate_on_violation,
+            violation_penalty,
+            plant,
+            measures,
+            weights,
+            bounds,
+        )
+        n = self.num_envs
+        self.single_observation_space, self.single_action_space = servo_spaces()
+        self.observation_space = batch_space(self.single_observation_space, n)
+        self.action_space = batch_space(self.single_action_space, n)
+        self._W = np.zeros((n, self.core.width), dtype=np.float64)
+        self._RING = np.zeros((n, self.core.ring_len), dtype=np.int64)
+        self._CMD = np.zeros((n, 1), dtype=np.float64)
+        self._flags = np.zeros(n, dtype=np.int64)
+        self._eps: list[Episode | None] = [None] * n
+        self._obs = slice(B.W_OBS, B.W_OBS + self.core.n_obs)
+
+    @property
+    def accel_law(self) -> str:
+        """The acceleration law the actions' settings use."""
+        return self.core.accel_law
+
+    @property
+    def ticks_simulated(self) -> np.ndarray:
+        """Ticks each sub-env's current move has simulated so far."""
+        return self._W[:, B.W_ST + L.S_TICK].astype(np.int64)
+
+    def _reset_one(self, i: int, options: dict[str, Any] | None) -> Infos:
+        ep = self.core.source.draw(self._rngs[i], options)
+        n = ep.command.size
+        if n > self._CMD.shape[1]:
+            grown = np.zeros((self.num_envs, max(n, 2 * self._CMD.shape[1])))
+            grown[:, : self._CMD.shape[1]] = self._CMD
+            self._CMD = grown
+        self._CMD[i, :n] = ep.command
+        self._eps[i] = ep
+        self.core.start(self._W[i], self._RING[i], self._CMD[i, :n], ep)
+        return {"scenario": ep.scenario.name}
+
+    def _observations(self) -> np.ndarray:
+        return self._W[:, self._obs].astype(np.float32)
+
+    def _simulate(
+        self, actions: np.ndarray, active: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[int, Infos]]:
+        bad = B.step_batch_balanced(actions, self._W, self._RING, self._CMD, active, self._flags)
+        if bad >= 0:
+            raise_bad_action(actions[bad], self.core.accel_law, bad)
+        flags = self._flags
+        rew = np.where(active, self._W[:, B.X_REWARD], 0.0)
+        ends: dict[int, Infos] = {}
+        for i in np.flatnonzero(flags & B.ENDED):
+            i = int(i)
+            rew[i], ends[i] = self.core.finish(self._W[i], self._eps[i], int(flags[i]))
+        return rew, (flags & B.TERMINATED) != 0, (flags & B.TRUNCATED) != 0, ends
