@@ -187,40 +187,46 @@ def phi_g(x: float) -> float:
     return (x + math.expm1(-x)) / (x * x)
 
 
+@numba.njit(cache=CACHE, fastmath=False, nogil=True, inline="always")
+def vf_tick(P, n, s, e_prev, delta, value, limit, step, law):
+    """One tick of the V-F controller (MODEL.md §1): returns (pulse, sum, limited error).
+
+    Error against the pulse counter, the error limit, the acceleration law (0 = rise:
+    only growth away from zero is held to value/k a tick; 1 = slew: both ways), the
+    accumulator against value, at most one pulse."""
+    e = P - n * delta
+    if e > limit:
+        e = limit
+    elif e < -limit:
+        e = -limit
+    if law == 0:
+        if e_prev >= 0.0 and e > e_prev + step:
+            e = e_prev + step
+        if e_prev <= 0.0 and e < e_prev - step:
+            e = e_prev - step
+    else:
+        if e > e_prev + step:
+            e = e_prev + step
+        elif e < e_prev - step:
+            e = e_prev - step
+    s += e
+    if s >= value:
+        return 1, s - value, e
+    if s <= -value:
+        return -1, s + value, e
+    return 0, s, e
+
+
 @_jit
 def vf_pulses_kernel(cmd, delta, value, limit, step, law, out):
-    """V-F controller alone (MODEL.md §1): one pulse (−1, 0, +1) per tick into ``out``."""
+    """V-F controller alone: one pulse (−1, 0, +1) per tick into ``out``."""
     n = 0
     s = 0.0
     e_prev = 0.0
     for i in range(cmd.shape[0]):
-        e = cmd[i] - n * delta
-        if e > limit:
-            e = limit
-        elif e < -limit:
-            e = -limit
-        if law == 0:
-            if e_prev >= 0.0 and e > e_prev + step:
-                e = e_prev + step
-            if e_prev <= 0.0 and e < e_prev - step:
-                e = e_prev - step
-        else:
-            if e > e_prev + step:
-                e = e_prev + step
-            elif e < e_prev - step:
-                e = e_prev - step
-        e_prev = e
-        s += e
-        if s >= value:
-            out[i] = 1
-            n += 1
-            s -= value
-        elif s <= -value:
-            out[i] = -1
-            n -= 1
-            s += value
-        else:
-            out[i] = 0
+        p, s, e_prev = vf_tick(cmd[i], n, s, e_prev, delta, value, limit, step, law)
+        out[i] = p
+        n += p
 
 
 @_jit
@@ -367,31 +373,7 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
         if use_ext:
             p = int(ext[i])
         else:
-            e = P - n * delta
-            if e > limit:
-                e = limit
-            elif e < -limit:
-                e = -limit
-            if law == 0:
-                if e_prev >= 0.0 and e > e_prev + step:
-                    e = e_prev + step
-                if e_prev <= 0.0 and e < e_prev - step:
-                    e = e_prev - step
-            else:
-                if e > e_prev + step:
-                    e = e_prev + step
-                elif e < e_prev - step:
-                    e = e_prev - step
-            e_prev = e
-            s += e
-            if s >= value:
-                p = 1
-                s -= value
-            elif s <= -value:
-                p = -1
-                s += value
-            else:
-                p = 0
+            p, s, e_prev = vf_tick(P, n, s, e_prev, delta, value, limit, step, law)
         n += p
         # 2. servo counters and sampled filter
         dc = c - c_prev
