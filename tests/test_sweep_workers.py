@@ -1,0 +1,192 @@
+"""`vfgym sweep` across processes: workers sharing one study end with exactly the trials
+asked for; a worker killed mid-trial loses nothing (its trial is failed and retried); an
+interrupted sweep continues where it stopped. On the journal, SQLite and — when
+``VFGYM_TEST_POSTGRES_URL`` names a server (``.ci/postgres.sh`` starts one) — PostgreSQL."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+import uuid
+from collections import Counter
+from pathlib import Path
+
+import optuna
+import pytest
+import yaml
+
+from vfgym import tuning
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+PG_URL = os.environ.get("VFGYM_TEST_POSTGRES_URL")
+needs_pg = pytest.mark.skipif(
+    not PG_URL, reason="VFGYM_TEST_POSTGRES_URL is not set (source .ci/postgres.sh to start one)"
+)
+COMPLETE = optuna.trial.TrialState.COMPLETE
+RUNNING = optuna.trial.TrialState.RUNNING
+FAIL = optuna.trial.TrialState.FAIL
+WAITING = optuna.trial.TrialState.WAITING
+
+
+def storage_param(kind: str):
+    return pytest.param(kind, marks=needs_pg) if kind == "postgresql" else kind
+
+
+def storage_arg(kind: str) -> str:
+    return PG_URL if kind == "postgresql" else kind  # type: ignore[return-value]
+
+
+def cmd(tmp_path: Path, study: str, kind: str, *args: str) -> list[str]:
+    return [
+        sys.executable, "-m", "vfgym.cli", "sweep", "--runs-dir", str(tmp_path), "--study", study,
+        "--storage", storage_arg(kind), "--scenarios", "short-move", "--no-progress",
+        "--no-plots", *args,
+    ]  # fmt: skip
+
+
+def env() -> dict[str, str]:
+    e = dict(os.environ)
+    e["PYTHONPATH"] = os.pathsep.join([str(SRC), e.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+    e["MPLBACKEND"] = "Agg"
+    return e
+
+
+def start(argv: list[str]) -> subprocess.Popen:
+    return subprocess.Popen(argv, env=env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)  # fmt: skip
+
+
+def load(tmp_path: Path, study: str, kind: str, timeout: float = 60.0) -> optuna.Study:
+    spec = tuning.resolve_storage(storage_arg(kind), tmp_path / "sweep" / study)
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            return optuna.load_study(study_name=study, storage=tuning.open_storage(spec))
+        except (KeyError, ValueError):
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.1)
+
+
+def wait_complete(study: optuna.Study, n: int, proc: subprocess.Popen, timeout=60.0) -> None:
+    deadline = time.monotonic() + timeout
+    while len(study.get_trials(deepcopy=False, states=(COMPLETE,))) < n:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "the sweep made no progress"
+        time.sleep(0.05)
+
+
+def name(kind: str) -> str:
+    return f"{kind[:2]}-{uuid.uuid4().hex[:10]}"  # unique on a shared server
+
+
+@pytest.mark.parametrize(
+    ("kind", "n"), [("journal", 60), pytest.param("postgresql", 15, marks=needs_pg)]
+)
+def test_three_workers_share_one_study_and_end_with_exactly_the_trials_asked(tmp_path, kind, n):
+    study_name = name(kind)
+    p = subprocess.run(
+        cmd(tmp_path, study_name, kind, "--workers", "3", "--trials", str(n)),
+        env=env(), capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert p.returncode == 0, p.stderr
+    study = load(tmp_path, study_name, kind)
+    assert Counter(t.state for t in study.trials) == {COMPLETE: n}
+    assert sorted(t.number for t in study.trials) == list(range(n))
+    summary = yaml.safe_load((tmp_path / "sweep" / study_name / "summary.yaml").read_text())
+    reports = summary["workers"]
+    assert len(reports) == 3 and all(r["exit"] == 0 and r["stopped"] == "done" for r in reports)
+    ran = [i for r in reports for i in r["trials"]]
+    assert sorted(ran) == list(range(n))  # each trial run by exactly one worker
+    workers = {t.user_attrs["worker"] for t in study.trials}
+    assert len(workers) >= 2  # shared (a worker may start after the others are done)
+    assert f"{n}/{n} completed trials" in p.stdout
+
+
+def _kill_mid_trial(study: optuna.Study, proc: subprocess.Popen, timeout=60.0) -> tuple[int, int]:
+    """Freeze a worker that is inside a trial, check the trial is still running, kill it."""
+    parent = proc.pid
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        assert proc.poll() is None, "the sweep ended before a worker was caught in a trial"
+        for t in study.get_trials(deepcopy=False, states=(RUNNING,)):
+            worker = t.user_attrs.get("worker")
+            if not worker:
+                continue
+            pid = int(worker.split("/")[1])
+            if pid == parent:
+                continue
+            os.kill(pid, signal.SIGSTOP)
+            if study.get_trials(deepcopy=False)[t.number].state == RUNNING:
+                os.kill(pid, signal.SIGKILL)
+                return t.number, pid
+            os.kill(pid, signal.SIGCONT)
+        time.sleep(0.02)
+    raise AssertionError("no worker was caught inside a trial")
+
+
+@pytest.mark.parametrize(
+    ("kind", "n"),
+    [("sqlite", 14), ("journal", 40), pytest.param("postgresql", 14, marks=needs_pg)],
+)
+def test_worker_killed_mid_trial_loses_nothing(tmp_path, kind, n):
+    study_name = name(kind)
+    args = ("--workers", "3", "--trials", str(n), "--heartbeat", "1", "--grace", "2")
+    p = start(cmd(tmp_path, study_name, kind, *args))
+    study = load(tmp_path, study_name, kind)
+    wait_complete(study, 3, p)
+    victim, _ = _kill_mid_trial(study, p)
+    kept = {t.number: t.values for t in study.get_trials(deepcopy=False, states=(COMPLETE,))}
+    out, err = p.communicate(timeout=180)
+    assert p.returncode == 0, err
+    final = load(tmp_path, study_name, kind)
+    trials = final.trials
+    assert trials[victim].state == FAIL
+    retries = [t for t in trials if t.system_attrs.get("failed_trial") == victim]
+    assert len(retries) == 1 and retries[0].state == COMPLETE
+    # Settings chosen before the kill are kept; the rest are drawn when it runs again.
+    assert trials[victim].params.items() <= retries[0].params.items()
+    assert Counter(t.state for t in trials) == {COMPLETE: n, FAIL: 1}
+    for n, values in kept.items():  # nothing a worker finished is lost
+        assert trials[n].state == COMPLETE and trials[n].values == values
+    summary = yaml.safe_load((tmp_path / "sweep" / study_name / "summary.yaml").read_text())
+    assert sorted(r["exit"] for r in summary["workers"]) == [-9, 0, 0]
+    assert victim in {n for r in summary["workers"] for n in r.get("recovered", [])}
+    assert "dead workers' trials retried" in out
+
+
+@pytest.mark.parametrize("kind", ["sqlite", "journal"])
+def test_interrupted_sweep_continues_where_it_stopped(tmp_path, kind):
+    p = start(cmd(tmp_path, "r", kind, "--trials", "2000"))
+    study = load(tmp_path, "r", kind)
+    wait_complete(study, 6, p)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 130, err
+    assert "--study r" in err and err.strip().splitlines()[-1].startswith("vfgym sweep: inter")
+    study = load(tmp_path, "r", kind)
+    states = Counter(t.state for t in study.trials)
+    k = states[COMPLETE]
+    assert 6 <= k < 2000 and states[RUNNING] == 0
+    # An interrupted trial is failed and enqueued again; nothing else is left behind.
+    assert states[FAIL] == states[WAITING] <= 1
+    kept = {t.number: t.values for t in study.trials if t.state == COMPLETE}
+    run_dir = tmp_path / "sweep" / "r"
+    assert (run_dir / "trials.csv").read_text().count("\n") == len(study.trials) + 1
+
+    q = subprocess.run(cmd(tmp_path, "r", kind, "--trials", str(k + 4)), env=env(),
+                       capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert q.returncode == 0, q.stderr
+    assert f"(continued: {k}/{k + 4} trials done)" in q.stdout
+    final = load(tmp_path, "r", kind)
+    assert Counter(t.state for t in final.trials)[COMPLETE] == k + 4
+    for n, values in kept.items():
+        assert final.trials[n].state == COMPLETE and final.trials[n].values == values
+    for t in final.trials:
+        if t.state == FAIL:
+            (again,) = [u for u in final.trials if u.system_attrs.get("failed_trial") == t.number]
+            assert again.state == COMPLETE and t.params.items() <= again.params.items()
+    assert len((run_dir / "command.txt").read_text().splitlines()) == 2
