@@ -452,7 +452,14 @@ def test_the_box_edge_is_the_search_space_tolerance(env_cls):
         ("paper-step", "must be a dict"),
         ({"scenario": "no-such-move"}, "not known"),
         ({"scenario": 3}, "scenario name"),
-        ({"scenario": get_scenario("paper-step").with_(name="still", distance_rad=0.0)}, "no move"),
+        (
+            {
+                "scenario": get_scenario("paper-step").with_(
+                    name="still", profile="multi", distance_rad=0.0, moves=((0.0, 0.1),)
+                )
+            },
+            "no move",
+        ),
         ({"scenario_seed": -1}, "scenario_seed"),
         ({"scenario_seed": 1.5}, "scenario_seed"),
         ({"scenario": "paper-step", "scenario_seed": 3}, "not both"),

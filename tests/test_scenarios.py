@@ -132,6 +132,7 @@ def test_random_distribution_covers_its_ranges():
         (lambda: SCENARIOS["paper-step"].with_(duration_s=0.0), "duration_s"),
         (lambda: SCENARIOS["paper-step"].with_(distance_rad=float("nan")), "distance_rad"),
         (lambda: profiles.multi((), F), "moves"),
+        (lambda: SCENARIOS["paper-step"].with_(distance_rad=0.0), "distance_rad"),
         (lambda: profiles.sine(1.0, -2.0, 0.1, F), "freq_hz"),
     ],
 )
