@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import linear_plant
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy import signal
@@ -31,19 +32,6 @@ from vfgym.simulate import pack
 
 F = PAPER_TICK_HZ
 T = 1.0 / F
-
-
-def linear_plant(gear: int, sample_ticks: int, b: float, wn: float) -> Plant:
-    """No torque limit, a fine encoder: the regime where patent Fig. 7's G(s) holds."""
-    pl = PAPER_PLANT.with_motor(
-        encoder_lines=2**18,
-        peak_torque_nm=1e9,
-        torque_at_max_speed_nm=1e9,
-        knee_speed_rad_s=1e9,
-        max_speed_rad_s=2e9,
-    ).with_servo(gear=gear, sample_ticks=sample_ticks, speed_gain_b=b)
-    k4 = pl.motor.counts_per_rev / (2 * math.pi) / pl.motor.inertia_kgm2
-    return pl.with_servo(torque_per_count_nm=wn**2 / k4)
 
 
 # --- the patent's worked numbers (gear 1, Ts = 5 ms, B = 4) ------------------------------

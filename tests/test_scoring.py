@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import linear_plant
 
 import vfgym
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, Measures, Settings, evaluate, simulate
@@ -61,16 +62,8 @@ def test_batch_equals_one_by_one():
 def linear_step(pct: float):
     """A smooth response: the servo in its linear regime (fine encoder, no torque limit)
     on a quick step of pulses, measured with a ±pct % band like step_info."""
-    pl = PAPER_PLANT.with_motor(
-        encoder_lines=2**18,
-        peak_torque_nm=1e9,
-        torque_at_max_speed_nm=1e9,
-        knee_speed_rad_s=1e9,
-        max_speed_rad_s=2e9,
-    ).with_servo(gear=64, sample_ticks=7, speed_gain_b=200.0)
+    pl = linear_plant(gear=64, sample_ticks=7, b=200.0, wn=150.0)
     pl = pl.replace(pulse_rad=64 * pl.motor.count_rad)  # one pulse is one gear's worth
-    k4 = pl.motor.counts_per_rev / (2 * math.pi) / pl.motor.inertia_kgm2
-    pl = pl.with_servo(torque_per_count_nm=150.0**2 / k4)
     ext = np.zeros(int(0.12 * pl.tick_hz), dtype=np.int8)
     ext[:16] = 1
     cmd = np.cumsum(ext) * pl.pulse_rad

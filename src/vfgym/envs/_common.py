@@ -18,6 +18,16 @@ from vfgym.scoring import CONSTRAINTS, Bounds, CostWeights
 SEED_LIMIT = 2**63 - 1
 """Scenario seeds are whole numbers in [0, SEED_LIMIT) (as :func:`vfgym.random_scenario`)."""
 DEFAULT_SEED_RANGE = (0, 2**31)
+
+# VFServo-v0's own defaults, shared by the single and the vector env
+SERVO_INTERVAL_S = 1e-3
+"""Control interval: the settings may change every 1 ms (140 ticks at 140 kHz)."""
+SERVO_SETTLE_TIME_S = 5e-3
+"""The episode ends once the motor has stayed in position this long after the command."""
+SERVO_TRACKING_WEIGHT = 0.0
+"""Weight of the per-interval tracking-error shaping term (0: the return is −cost)."""
+SERVO_VIOLATION_PENALTY = 5.0
+"""Subtracted at a constraint violation when ``terminate_on_violation`` is on."""
 RESET_OPTIONS = ("scenario", "scenario_seed")
 
 # scales of the scenario features: the random distribution's ranges (vfgym.scenarios)

@@ -28,7 +28,17 @@ from vfgym.simulate import pack
 from vfgym.space import SPACE, from_action, to_action
 
 from . import _batch as B
-from ._common import SCENARIO_FEATURES, Episode, ScenarioSource, as_action, check_scoring
+from ._common import (
+    SCENARIO_FEATURES,
+    SERVO_INTERVAL_S,
+    SERVO_SETTLE_TIME_S,
+    SERVO_TRACKING_WEIGHT,
+    SERVO_VIOLATION_PENALTY,
+    Episode,
+    ScenarioSource,
+    as_action,
+    check_scoring,
+)
 from ._common import scored_info as _scored_info
 
 _step_one = B.step_one
@@ -297,12 +307,12 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         split: str = "train",
         seed_range: tuple[int, int] | None = None,
         accel_law: str = "rise",
-        interval_s: float = 1e-3,
-        settle_time_s: float = 5e-3,
+        interval_s: float = SERVO_INTERVAL_S,
+        settle_time_s: float = SERVO_SETTLE_TIME_S,
         initial_settings: Settings = PAPER_SETTINGS,
-        tracking_weight: float = 0.0,
+        tracking_weight: float = SERVO_TRACKING_WEIGHT,
         terminate_on_violation: bool = False,
-        violation_penalty: float = 5.0,
+        violation_penalty: float = SERVO_VIOLATION_PENALTY,
         plant: Plant = PAPER_PLANT,
         measures: Measures = DEFAULT_MEASURES,
         weights: CostWeights = DEFAULT_WEIGHTS,

@@ -35,7 +35,16 @@ from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights
 from vfgym.space import settings_to_dict
 
 from . import _batch as B
-from ._common import Episode, ScenarioSource, check_scoring, scored_info
+from ._common import (
+    SERVO_INTERVAL_S,
+    SERVO_SETTLE_TIME_S,
+    SERVO_TRACKING_WEIGHT,
+    SERVO_VIOLATION_PENALTY,
+    Episode,
+    ScenarioSource,
+    check_scoring,
+    scored_info,
+)
 from .servo import ServoCore, raise_bad_action, servo_spaces
 from .tune import action_settings, evaluate_pairs, tune_spaces
 
@@ -338,12 +347,12 @@ class VFServoVectorEnv(_BatchVectorEnv):
         split: str = "train",
         seed_range: tuple[int, int] | None = None,
         accel_law: str = "rise",
-        interval_s: float = 1e-3,
-        settle_time_s: float = 5e-3,
+        interval_s: float = SERVO_INTERVAL_S,
+        settle_time_s: float = SERVO_SETTLE_TIME_S,
         initial_settings: Settings = PAPER_SETTINGS,
-        tracking_weight: float = 0.0,
+        tracking_weight: float = SERVO_TRACKING_WEIGHT,
         terminate_on_violation: bool = False,
-        violation_penalty: float = 5.0,
+        violation_penalty: float = SERVO_VIOLATION_PENALTY,
         plant: Plant = PAPER_PLANT,
         measures: Measures = DEFAULT_MEASURES,
         weights: CostWeights = DEFAULT_WEIGHTS,
