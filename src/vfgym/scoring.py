@@ -172,6 +172,89 @@ def score(
     return cost, np.array([c_acc, c_tq, c_ov]), np.array([ov_w, ratio, max(0.0, c_acc)]), extra
 
 
+@dataclass(frozen=True)
+class Move:
+    """A scenario made ready to simulate: its plant, its command and when that ends."""
+
+    scenario: Scenario
+    plant: Plant
+    command: np.ndarray
+    command_end_s: float
+
+    @classmethod
+    def of(cls, scenario: Scenario, base: Plant = PAPER_PLANT) -> Move:
+        plant = scenario.plant(base)
+        cmd = scenario.command(plant)
+        return cls(scenario, plant, cmd, command_end_s(cmd, plant.tick_hz))
+
+
+def _as_run(c: Controller, move: Any) -> tuple[Settings, np.ndarray | None] | None:
+    """The settings and external pulse train a controller runs with on a move (``None``
+    pulses: the V-F controller makes them), or ``None`` if it cannot run it."""
+    c = resolve(c, move.plant)
+    if isinstance(c, Settings):
+        return c, None
+    train = c.pulses(move.scenario, move.plant)
+    return None if train is None else (Settings(ts_over_tf=c.ts_over_tf), train)
+
+
+def score_pairs(
+    controllers: Sequence[Controller],
+    moves: Sequence[Any],
+    *,
+    measures: Measures = DEFAULT_MEASURES,
+    weights: CostWeights = DEFAULT_WEIGHTS,
+    bounds: Bounds = DEFAULT_BOUNDS,
+) -> list[tuple[float, np.ndarray, np.ndarray, dict[str, Any]] | None]:
+    """Score ``controllers[i]`` on ``moves[i]`` for every i in one compiled, multi-threaded
+    call: (cost, constraints, objectives, measures) per pair, ``None`` where a pulse source
+    cannot run the move. A move is a :class:`Move` or anything with its attributes (the
+    envs' episodes); moves sharing a command array share it in the batch."""
+    if len(controllers) != len(moves):
+        raise ValueError(f"{len(controllers)} controllers for {len(moves)} moves")
+    slots: dict[int, int] = {}
+    cmds: list[np.ndarray] = []
+    ext_parts: list[np.ndarray] = [np.zeros(0, np.int8)]
+    prm, cmd_idx, ext_idx, rows = [], [], [], []
+    for r, (c, mv) in enumerate(zip(controllers, moves, strict=True)):
+        run = _as_run(c, mv)
+        if run is None:
+            continue
+        settings, train = run
+        j = slots.setdefault(id(mv.command), len(cmds))
+        if j == len(cmds):
+            cmds.append(mv.command)
+        e = 0
+        if train is not None:
+            ext_parts.append(train)
+            e = len(ext_parts) - 1
+        cmd = mv.command
+        prm.append(pack(settings, mv.plant, measures, float(cmd[-1]), cmd.size, e > 0))
+        cmd_idx.append(j)
+        ext_idx.append(e)
+        rows.append(r)
+    out: list[tuple[float, np.ndarray, np.ndarray, dict[str, Any]] | None] = [None] * len(moves)
+    if not rows:
+        return out
+    acc = K.new_acc(len(rows))
+    K.run_batch(
+        np.concatenate(cmds),
+        np.concatenate([[0], np.cumsum([c.size for c in cmds])]).astype(np.int64),
+        np.array(cmd_idx, np.int64),
+        np.concatenate(ext_parts),
+        np.concatenate([[0], np.cumsum([x.size for x in ext_parts])]).astype(np.int64),
+        np.array(ext_idx, np.int64),
+        np.stack(prm),
+        acc,
+    )
+    for k, r in enumerate(rows):
+        mv = moves[r]
+        m = from_acc(acc[k], mv.plant, measures, float(mv.command[-1]), mv.command_end_s)
+        cost, cons, objs, extra = score(m, mv.scenario, mv.plant, measures, weights, bounds)
+        out[r] = (float(cost), cons, objs, m | extra)
+    return out
+
+
 def evaluate(
     settings: Controller | Sequence[Controller],
     scenarios: str | Scenario | Sequence[str | Scenario] = "paper-step",
@@ -183,7 +266,7 @@ def evaluate(
     keep_traces: bool = False,
     decimation: int = 1,
 ) -> Evaluation:
-    """Score controllers on scenarios through one batched kernel call.
+    """Score every controller on every scenario through one batched kernel call.
 
     settings: V-F :class:`Settings`, a baseline pulse source, a baseline name or
         :class:`~vfgym.baselines.Baseline` (derived per scenario plant), or a sequence.
@@ -194,66 +277,36 @@ def evaluate(
     """
     ctrls = _check_controllers(settings)
     scens = scenario_set(scenarios)
-    plants = [sc.plant(plant) for sc in scens]
-    cmds = [sc.command(p) for sc, p in zip(scens, plants, strict=True)]
-    cmd_flat = np.concatenate(cmds)
-    cmd_off = np.concatenate([[0], np.cumsum([c.size for c in cmds])]).astype(np.int64)
-    ext_parts: list[np.ndarray] = [np.zeros(0, np.int8)]
-    prm, cmd_idx, ext_idx, pairs = [], [], [], []
-    for ci, c0 in enumerate(ctrls):
-        for si, (sc, p, cmd) in enumerate(zip(scens, plants, cmds, strict=True)):
-            c = resolve(c0, p)
-            s = c if isinstance(c, Settings) else Settings(ts_over_tf=c.ts_over_tf)
-            e = 0
-            if not isinstance(c, Settings):
-                train = c.pulses(sc, p)
-                if train is None:
-                    continue
-                ext_parts.append(train)
-                e = len(ext_parts) - 1
-            prm.append(pack(s, p, measures, float(cmd[-1]), cmd.size, e > 0))
-            cmd_idx.append(si)
-            ext_idx.append(e)
-            pairs.append((ci, si))
-    ext_flat = np.concatenate(ext_parts)
-    ext_off = np.concatenate([[0], np.cumsum([x.size for x in ext_parts])]).astype(np.int64)
-    acc = K.new_acc(max(1, len(prm)))
-    if prm:
-        K.run_batch(
-            cmd_flat,
-            cmd_off,
-            np.array(cmd_idx, np.int64),
-            ext_flat,
-            ext_off,
-            np.array(ext_idx, np.int64),
-            np.stack(prm),
-            acc,
-        )
-
+    moves = [Move.of(sc, plant) for sc in scens]
     nc, ns = len(ctrls), len(scens)
+    results = score_pairs(
+        [c for c in ctrls for _ in moves],
+        [mv for _ in ctrls for mv in moves],
+        measures=measures,
+        weights=weights,
+        bounds=bounds,
+    )
     nan_m = dict.fromkeys(METRIC_NAMES, math.nan)
     metrics = [[dict(nan_m) for _ in range(ns)] for _ in range(nc)]
     cost = np.full((nc, ns), np.nan)
     cons = np.full((nc, ns, len(CONSTRAINTS)), np.nan)
     objs = np.full((nc, ns, len(OBJECTIVES)), np.nan)
-    ends = [command_end_s(cmd, p.tick_hz) for cmd, p in zip(cmds, plants, strict=True)]
-    for r, (ci, si) in enumerate(pairs):
-        sc, p = scens[si], plants[si]
-        m = from_acc(acc[r], p, measures, float(cmds[si][-1]), ends[si])
-        cost[ci, si], cons[ci, si], objs[ci, si], extra = score(m, sc, p, measures, weights, bounds)
-        metrics[ci][si] = m | extra
-    traces = None
-    if keep_traces:
-        traces = [[None] * ns for _ in range(nc)]
-        for r, (ci, si) in enumerate(pairs):
-            c = resolve(ctrls[ci], plants[si])
-            s = c if isinstance(c, Settings) else Settings(ts_over_tf=c.ts_over_tf)
-            ext = (
-                None
-                if isinstance(c, Settings)
-                else ext_flat[ext_off[ext_idx[r]] : ext_off[ext_idx[r] + 1]]
-            )
+    traces: list[list[Trace | None]] | None = (
+        [[None] * ns for _ in range(nc)] if keep_traces else None
+    )
+    for r, res in enumerate(results):
+        ci, si = divmod(r, ns)
+        if res is None:
+            continue
+        cost[ci, si], cons[ci, si], objs[ci, si], metrics[ci][si] = res
+        if traces is not None:
+            s, ext = _as_run(ctrls[ci], moves[si])
             traces[ci][si] = simulate(
-                cmds[si], s, plants[si], pulses=ext, measures=measures, decimation=decimation
+                moves[si].command,
+                s,
+                moves[si].plant,
+                pulses=ext,
+                measures=measures,
+                decimation=decimation,
             )
     return Evaluation(ctrls, scens, metrics, cost, cons, objs, traces)

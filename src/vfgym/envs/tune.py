@@ -9,13 +9,18 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from vfgym import _kernel as K
 from vfgym._validate import check_choice
-from vfgym.metrics import from_acc
 from vfgym.params import ACCEL_LAWS, DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.scenarios import Scenario
-from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights, evaluate, score
-from vfgym.simulate import pack, simulate
+from vfgym.scoring import (
+    DEFAULT_BOUNDS,
+    DEFAULT_WEIGHTS,
+    Bounds,
+    CostWeights,
+    evaluate,
+    score_pairs,
+)
+from vfgym.simulate import simulate
 from vfgym.space import SPACE, from_action, settings_to_dict
 
 from ._common import (
@@ -238,43 +243,9 @@ def evaluate_pairs(
     bounds: Bounds,
 ) -> list[tuple[float, dict[str, Any], np.ndarray]]:
     """Score ``settings[i]`` on ``episodes[i]`` for every i in one compiled, multi-threaded
-    call: the kernel :func:`vfgym.evaluate` runs (:func:`vfgym._kernel.run_batch`), then the
-    scoring path's own measures (:func:`vfgym.metrics.from_acc`) and cost
-    (:func:`vfgym.scoring.score`). ``evaluate`` scores every controller on every scenario
-    (a cross product); this is its pairwise form, equal to it pair by pair (tested).
+    call: :func:`vfgym.scoring.score_pairs`, the pairwise core of :func:`vfgym.evaluate`.
     Returns (cost, metrics, constraints) per pair."""
-    if len(settings) != len(episodes):
-        raise ValueError(f"{len(settings)} settings for {len(episodes)} episodes")
-    slots: dict[int, int] = {}
-    cmds: list[np.ndarray] = []
-    cmd_idx = np.empty(len(episodes), np.int64)
-    for r, ep in enumerate(episodes):
-        j = slots.setdefault(id(ep.command), len(cmds))
-        if j == len(cmds):
-            cmds.append(ep.command)
-        cmd_idx[r] = j
-    cmd_flat = np.concatenate(cmds)
-    cmd_off = np.concatenate([[0], np.cumsum([c.size for c in cmds])]).astype(np.int64)
-    prm = np.stack(
-        [
-            pack(s, ep.plant, measures, ep.target_rad, ep.command.size)
-            for s, ep in zip(settings, episodes, strict=True)
-        ]
+    results = score_pairs(
+        list(settings), list(episodes), measures=measures, weights=weights, bounds=bounds
     )
-    acc = K.new_acc(len(episodes))
-    K.run_batch(
-        cmd_flat,
-        cmd_off,
-        cmd_idx,
-        np.zeros(0, np.int8),
-        np.zeros(2, np.int64),
-        np.zeros(len(episodes), np.int64),
-        prm,
-        acc,
-    )
-    out = []
-    for r, ep in enumerate(episodes):
-        m = from_acc(acc[r], ep.plant, measures, ep.target_rad, ep.command_end_s)
-        cost, cons, _objs, extra = score(m, ep.scenario, ep.plant, measures, weights, bounds)
-        out.append((float(cost), m | extra, cons))
-    return out
+    return [(cost, m, cons) for cost, cons, _objs, m in results]
