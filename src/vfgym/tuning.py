@@ -92,6 +92,17 @@ def _laws(v: Any) -> tuple[str, ...]:
     return laws
 
 
+def _check_scenario_fields(cfg: Any) -> None:
+    """Normalise and check the scenario-set and law fields a sweep and a grid share."""
+    s = object.__setattr__
+    if isinstance(cfg.scenarios, (list, tuple)):
+        s(cfg, "scenarios", ",".join(str(x) for x in cfg.scenarios))
+    s(cfg, "scenarios", str(cfg.scenarios))
+    s(cfg, "scenario_count", check_int("scenario_count", cfg.scenario_count, 1))
+    s(cfg, "first_seed", check_int("first_seed", cfg.first_seed, 0))
+    s(cfg, "laws", _laws(cfg.laws))
+
+
 def _bool(name: str, v: Any) -> bool:
     if isinstance(v, bool):
         return v
@@ -168,12 +179,7 @@ class SweepConfig(_Options):
 
     def __post_init__(self) -> None:
         s = object.__setattr__
-        if isinstance(self.scenarios, (list, tuple)):
-            s(self, "scenarios", ",".join(str(x) for x in self.scenarios))
-        s(self, "scenarios", str(self.scenarios))
-        s(self, "scenario_count", check_int("scenario_count", self.scenario_count, 1))
-        s(self, "first_seed", check_int("first_seed", self.first_seed, 0))
-        s(self, "laws", _laws(self.laws))
+        _check_scenario_fields(self)
         check_choice("sampler", self.sampler, SAMPLERS)
         form = self.objective or ("pareto" if self.sampler == "nsga2" else "cost")
         check_choice("objective", form, FORMS)
@@ -1201,12 +1207,7 @@ class GridConfig(_Options):
 
     def __post_init__(self) -> None:
         s = object.__setattr__
-        if isinstance(self.scenarios, (list, tuple)):
-            s(self, "scenarios", ",".join(str(x) for x in self.scenarios))
-        s(self, "scenarios", str(self.scenarios))
-        s(self, "scenario_count", check_int("scenario_count", self.scenario_count, 1))
-        s(self, "first_seed", check_int("first_seed", self.first_seed, 0))
-        s(self, "laws", _laws(self.laws))
+        _check_scenario_fields(self)
         s(self, "points", check_int("points", self.points, 2, 64))
         s(self, "refine", check_int("refine", self.refine, 0, 10))
         s(self, "keep", check_int("keep", self.keep, 1, 64))
