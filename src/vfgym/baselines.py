@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vfgym._validate import check_real
-from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings
+from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings, paper_k
 from vfgym.profiles import scurve_source_args
 from vfgym.pulse_sources import fixed_frequency_pulses, scurve_pulses
 
@@ -119,7 +119,7 @@ def rule_of_thumb(plant: Plant = PAPER_PLANT) -> Settings:
     return Settings(
         value_rad=value,
         error_limit_rad=value,
-        k=max(1.0, f * f * d / a),
+        k=max(1.0, paper_k(plant, a)),
         ts_over_tf=PAPER_SETTINGS.ts_over_tf,
     )
 

@@ -85,7 +85,7 @@ class Scenario:
 
     def command(self, plant: Plant = PAPER_PLANT) -> np.ndarray:
         """The position command per tick (rad), read-only and cached."""
-        return _command(self, plant.tick_hz, plant.pulse_rad, plant.motor.accel_limit_rad_s2)
+        return _command(self, plant)
 
     def speed(self, plant: Plant) -> float:
         return self.speed_rad_s if self.speed_rad_s is not None else plant.pulse_top_speed_rad_s
@@ -131,9 +131,9 @@ class Scenario:
 
 
 @functools.lru_cache(maxsize=256)
-def _command(sc: Scenario, tick_hz: float, pulse_rad: float, accel_limit: float) -> np.ndarray:
-    v = sc.speed_rad_s if sc.speed_rad_s is not None else pulse_rad * tick_hz
-    a = sc.accel_rad_s2 if sc.accel_rad_s2 is not None else accel_limit
+def _command(sc: Scenario, plant: Plant) -> np.ndarray:
+    v, a = sc.speed(plant), sc.accel(plant)
+    tick_hz, pulse_rad = plant.tick_hz, plant.pulse_rad
     d, dur = sc.distance_rad, sc.duration_s
     if sc.profile == "step":
         c = profiles.step(d, dur, tick_hz)

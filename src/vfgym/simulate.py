@@ -15,7 +15,7 @@ import numpy as np
 
 from vfgym import _kernel as K
 from vfgym import _layout as L
-from vfgym._validate import check_choice, check_finite_array, check_int, check_real
+from vfgym._validate import check_finite_array, check_int, check_real
 from vfgym.params import (
     ACCEL_LAWS,
     DEFAULT_MEASURES,
@@ -272,4 +272,4 @@ def step_command(distance_rad: float, n_ticks: int) -> np.ndarray:
     return np.full(n, d, dtype=np.float64)
 
 
-__all__ = ["Trace", "check_choice", "pack", "simulate", "step_command", "vf_pulses"]
+__all__ = ["Trace", "pack", "simulate", "step_command", "vf_pulses"]
