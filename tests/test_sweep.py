@@ -108,6 +108,18 @@ def test_repeated_settings_are_not_simulated_twice():
     assert study.trials[4].value == t[1].value and study.trials[4].user_attrs["cached_from"] == 1
 
 
+def test_a_retried_trial_is_claimed_under_its_new_worker_before_the_lock_is_released():
+    """A retry inherits its dead worker's user attributes; when the claim lock is let go,
+    other workers' recovery must already see the live worker's name on it."""
+    study = optuna.create_study()
+    study.enqueue_trial(tuning.baseline_params(("rise",)), user_attrs={tuning.WORKER_ATTR: "h/1/x"})
+    obj = tuning.Objective(tuning.SweepConfig().scenario_list(), ("rise",), "cost")
+    seen = []
+    obj.on_enter = lambda: seen.append(study.trials[-1].user_attrs[tuning.WORKER_ATTR])
+    study.optimize(obj, n_trials=1)
+    assert seen == [tuning._worker_id()] != ["h/1/x"]
+
+
 def _trial_list(tmp_path: Path, study: str) -> list[tuple]:
     return [
         (r["params_value_rad"], r["params_error_limit_rad"], r["params_k"], r["value"])

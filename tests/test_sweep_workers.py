@@ -6,9 +6,11 @@ interrupted sweep continues where it stopped. On the journal, SQLite and — whe
 from __future__ import annotations
 
 import os
+import random
 import signal
 import subprocess
 import sys
+import threading
 import time
 import uuid
 from collections import Counter
@@ -190,3 +192,35 @@ def test_interrupted_sweep_continues_where_it_stopped(tmp_path, kind):
             (again,) = [u for u in final.trials if u.system_attrs.get("failed_trial") == t.number]
             assert again.state == COMPLETE and t.params.items() <= again.params.items()
     assert len((run_dir / "command.txt").read_text().splitlines()) == 2
+
+
+@pytest.mark.parametrize("kind", ["sqlite", "journal"])
+def test_an_interrupt_at_any_moment_leaves_a_clean_study(tmp_path, kind):
+    """Ctrl-C at many random moments of a worker's loop (evaluation, Optuna's storage
+    writes, the claim lock, waiting): each time the worker stops with KeyboardInterrupt and
+    nothing else, no trial is left running, completed trials are kept, and at most the
+    interrupted trial waits to be retried."""
+    cfg = tuning.SweepConfig(scenarios="short-move", trials=100_000, seed=3, storage=kind)
+    spec = tuning.resolve_storage(kind, tmp_path)
+    scenarios = cfg.scenario_list()
+    tuning.create_or_load(tuning.open_storage(spec), "s", cfg, scenarios)
+    rng = random.Random(0)
+    main = threading.get_ident()
+    kept: dict[int, list[float]] = {}
+    for _ in range(30):
+        delay = rng.uniform(0.0, 0.15)
+        timer = threading.Timer(delay, signal.pthread_kill, (main, signal.SIGINT))
+        timer.start()
+        try:
+            with pytest.raises(KeyboardInterrupt):
+                tuning.run_worker(cfg, spec, "s", poll_s=0.01)
+        finally:
+            timer.cancel()
+        study = optuna.load_study(study_name="s", storage=tuning.open_storage(spec))
+        trials = study.get_trials(deepcopy=False)
+        states = Counter(t.state for t in trials)
+        assert states[RUNNING] == 0 and states[WAITING] <= 1, (delay, states)
+        for n, values in kept.items():
+            assert trials[n].state == COMPLETE and trials[n].values == values
+        kept = {t.number: t.values for t in trials if t.state == COMPLETE}
+    assert len(kept) >= 10

@@ -34,6 +34,7 @@ reported against (as a gap in %).
 
 from __future__ import annotations
 
+import copy
 import csv
 import datetime as _dt
 import hashlib
@@ -46,10 +47,11 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 import warnings
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
@@ -517,26 +519,25 @@ class Objective:
         self.cache: dict[tuple, tuple[Any, dict[str, Any]]] = {}
         self.simulated = 0
         self.on_enter: Callable[[], None] | None = None
-        self.on_exit: Callable[[], None] | None = None
+        self.guard: Callable[[], Any] = nullcontext
         self.current: int | None = None
 
     def __call__(self, trial: Any) -> float | list[float]:
         self.current = trial.number
+        # Before the claim lock goes: a retried trial inherits its dead worker's attribute,
+        # and another worker's recovery must not see this one running under that name.
+        trial.set_user_attr(WORKER_ATTR, _worker_id())
         if self.on_enter:
             self.on_enter()
-        try:
-            return self._run(trial)
-        finally:
-            if self.on_exit:
-                self.on_exit()
+        return self._run(trial)
 
     def _run(self, trial: Any) -> float | list[float]:
-        trial.set_user_attr(WORKER_ATTR, _worker_id())
         settings = space.suggest(trial, self.laws)
         key = settings_key(settings)
         hit = self.cache.get(key) or self._lookup(trial.study, settings)
         if hit is None:
-            values, attrs = self.score(settings)
+            with self.guard():  # the only place a trial may be interrupted
+                values, attrs = self.score(settings)
             self.simulated += 1
             self.cache[key] = (values, attrs | {"cached_from": trial.number})
         else:
@@ -698,35 +699,57 @@ def create_or_load(
 # --- workers -------------------------------------------------------------------------------
 
 
-@contextmanager
-def _sigint_blocked() -> Iterator[None]:
-    """Hold SIGINT back (it stays pending) in this thread and in threads started inside."""
-    if not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+class DeferredInterrupt:
+    """SIGINT raises KeyboardInterrupt only inside :meth:`allowed` blocks (a trial's
+    simulation, a wait); anywhere else it is held until the next such block or the end of
+    the ``with``, so a storage write or a lock is never cut in half.
 
+    The decision is taken by the Python-level handler, which runs in the main thread
+    between bytecodes, so there is no window between "the signal arrived" and "the block
+    closed" in which an interrupt can escape into Optuna's bookkeeping. Off the main thread
+    (where handlers cannot be installed) the process's handler is left as it is."""
 
-def _unblock_sigint() -> None:
-    if hasattr(signal, "pthread_sigmask"):
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    def __init__(self) -> None:
+        self.open = False
+        self.pending = False
+        self._old: Any = None
+        self._installed = False
 
+    def __enter__(self) -> DeferredInterrupt:
+        if threading.current_thread() is threading.main_thread():
+            self._old = signal.signal(signal.SIGINT, self._handle)
+            self._installed = True
+        return self
 
-def _block_sigint() -> None:
-    if hasattr(signal, "pthread_sigmask"):
-        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    def __exit__(self, kind: Any, exc: Any, tb: Any) -> None:
+        if self._installed:
+            signal.signal(signal.SIGINT, self._old)
+            self._installed = False
+        if self.pending and kind is None:
+            self.pending = False
+            raise KeyboardInterrupt
 
+    def _handle(self, signum: int, frame: Any) -> None:
+        if self.open:
+            self.open = False
+            raise KeyboardInterrupt
+        self.pending = True
 
-def _interruptible_sleep(seconds: float) -> None:
-    _unblock_sigint()
-    try:
-        time.sleep(seconds)
-    finally:
-        _block_sigint()
+    def check(self) -> None:
+        """Raise an interrupt that was held back."""
+        if self.pending:
+            self.pending = False
+            raise KeyboardInterrupt
+
+    @contextmanager
+    def allowed(self) -> Iterator[None]:
+        """Let an interrupt through here (raising at once one that was held back)."""
+        self.check()
+        self.open = True
+        try:
+            yield
+        finally:
+            self.open = False
 
 
 def counts(study: Any) -> dict[str, int]:
@@ -744,7 +767,6 @@ def recover(study: Any, storage: Any, spec: StorageSpec, orphan_s: float) -> lis
     RDB storages: Optuna's heartbeat (``fail_stale_trials``). Journal: a running trial
     whose worker process on this host is gone. Any storage: a running trial that never
     reached its objective (no worker recorded) for ``orphan_s`` seconds."""
-    import copy
 
     import optuna
 
@@ -827,9 +849,9 @@ def run_worker(
 ) -> WorkerReport:
     """Run trials of ``study_name`` until it holds the trials asked for (or the timeout).
 
-    SIGINT is held back except inside a trial's evaluation and while waiting; an
-    interrupted trial is marked failed and enqueued again before KeyboardInterrupt
-    propagates."""
+    SIGINT is held back (:class:`DeferredInterrupt`) except inside a trial's evaluation
+    and while waiting; an interrupted trial is marked failed and enqueued again before
+    KeyboardInterrupt propagates."""
     import optuna
 
     # ERROR: an interrupted trial is reported by the sweep, not as Optuna's warning with a
@@ -844,24 +866,21 @@ def run_worker(
     orphan_s = max(30.0, 3.0 * grace)
     seed = None if cfg.seed is None else cfg.seed + index
     deadline = math.inf if cfg.timeout is None else time.monotonic() + cfg.timeout
-    with _sigint_blocked():
+    with DeferredInterrupt() as interrupts:
         storage = open_storage(spec, cfg.heartbeat, cfg.grace)
         study = optuna.load_study(
             study_name=study_name, storage=storage, sampler=make_sampler(cfg, seed)
         )
         objective = Objective(scenarios, cfg.laws, cfg.objective)
-        # First call compiles/loads the kernel and starts its threads with SIGINT held back.
+        # First call compiles/loads the kernel before any trial is claimed.
         evaluate(PAPER_SETTINGS, scenarios[:1])
         lock = _claim_lock(spec, study_name)
 
-        def enter() -> None:
-            lock.release()
-            _unblock_sigint()
-
-        objective.on_enter = enter
-        objective.on_exit = _block_sigint
+        objective.on_enter = lock.release
+        objective.guard = interrupts.allowed
         try:
             while True:
+                interrupts.check()
                 busy = False
                 lock.acquire()
                 try:
@@ -880,7 +899,8 @@ def run_worker(
                 finally:
                     lock.release()
                 if busy:
-                    _interruptible_sleep(poll_s)
+                    with interrupts.allowed():
+                        time.sleep(poll_s)
                     continue
                 if objective.current is not None:
                     rep.trials.append(objective.current)
@@ -889,7 +909,7 @@ def run_worker(
         except KeyboardInterrupt:
             rep.stopped = "interrupted"
             if objective.current is not None:
-                t = study.get_trials(deepcopy=True)[objective.current]
+                t = copy.deepcopy(study.get_trials(deepcopy=False)[objective.current])
                 if t.state == optuna.trial.TrialState.FAIL:
                     _retry(study, t)
                 elif t.state == optuna.trial.TrialState.RUNNING:
