@@ -5,14 +5,16 @@ Ratios are taken within this one run. Figures:
 1. VFServo-v0 ``step`` time against Gymnasium's CartPole-v1 ``step`` in the same process,
    both made by ``gymnasium.make`` (same wrapper stack) and both unwrapped (target ≤ 0.5×).
    Resets are outside the timing.
-2. The native VFServo-v0 vector env at N envs (default 64), 140 ticks a step, with numba
-   on 1 and on 2 threads: env-steps/s and plant ticks/s (run-outs at episode ends
-   included), the per-tick ratio to the single-env kernel (``run_one``, one core), and
-   the gain from the second thread (targets: ≥ 1 M env-steps/s, ≥ 1.5× per tick on one
-   core, near-linear gain). Measured on a fixed scenario (the command is built once) and
-   on the random train distribution (a new scenario, built in Python, per episode).
-   On a machine whose cores are busy with other work, OpenMP's spinning threads stall the
-   parallel calls; compare with OMP_WAIT_POLICY=PASSIVE (or NUMBA_THREADING_LAYER=workqueue).
+2. The native VFServo-v0 vector env at N envs (default 64), 140 ticks a step: the compiled
+   batch step on one thread with the envs in SIMD lanes (vfgym._lanes) and env by env
+   (the single-env kernel), and with the blocks forced onto all numba threads; env-steps/s
+   (also counting only the steps in which no episode ended: the run-out of an ending
+   episode's move is simulated env by env), plant ticks/s (run-outs included) and the
+   per-tick ratio to the single-env kernel (``run_one``, one core); then
+   ``VectorEnv.step`` as the library runs it (targets: >= 1 M env-steps/s, >= 1.5x per
+   tick on one core, near-linear gain from the second core). Measured on a fixed scenario
+   (the command is built once) and on the random train distribution (a new scenario,
+   built in Python, per episode).
 3. The stable-baselines3 adapter's throughput against the raw vector env (target ≥ 50 %).
 4. VFTune-v0 episodes/s on ``paper-step``: single env (reset + step) and vector env.
 
@@ -33,6 +35,7 @@ import numpy as np
 import vfgym.envs  # noqa: F401  (registers the ids)
 from vfgym import DEFAULT_MEASURES, PAPER_SETTINGS
 from vfgym import _kernel as K
+from vfgym import _lanes as LN
 from vfgym import _layout as L
 from vfgym.envs import _batch as B
 from vfgym.envs.vector import VFServoVectorEnv, VFTuneVectorEnv
@@ -101,28 +104,44 @@ def vector_rate(venv: VFServoVectorEnv, seconds: float) -> tuple[float, float]:
     return steps / spent, ticks / spent
 
 
-def raw_batch_rate(venv: VFServoVectorEnv, seconds: float) -> tuple[float, float]:
-    """(env-steps/s, ticks/s) of the compiled batch step alone (no Python shell), on
-    episodes restarted in place (the same command) when they end."""
+def raw_batch_rate(
+    venv: VFServoVectorEnv,
+    seconds: float,
+    lane_min: int = B.LANE_MIN,
+    parallel_min: int | None = None,
+) -> tuple[float, float, float]:
+    """(env-steps/s, ticks/s, steady env-steps/s) of the compiled batch step alone (no
+    Python shell), on episodes restarted in place (the same command) when they end; the
+    steady rate counts only the steps in which no episode ended (no run-outs). ``lane_min``
+    above LANES: every env on its own (the single-env kernel); ``parallel_min``: envs from
+    which the blocks go to numba's threads (default: the library's)."""
     n = venv.num_envs
     actions = np.tile(ACTION, (n, 1))
     venv.reset(seed=0)
     w0 = venv._W.copy()
+    lanes = venv._lanes
     active = np.ones(n, dtype=np.bool_)
     flags = np.zeros(n, dtype=np.int64)
-    steps = ticks = 0
-    spent = 0.0
+    steps = ticks = steady_steps = 0
+    spent = steady_spent = 0.0
     while spent < seconds:
         before = venv.ticks_simulated
         t = time.perf_counter()
-        B.step_batch_balanced(actions, venv._W, venv._RING, venv._CMD, active, flags)
-        spent += time.perf_counter() - t
+        B.step_batch_balanced(
+            actions, venv._W, venv._RING, venv._CMD, active, flags, lanes, lane_min, parallel_min
+        )
+        dt = time.perf_counter() - t
+        spent += dt
         ticks += int((venv.ticks_simulated - before).sum())
         steps += n
-        for i in np.flatnonzero(flags & B.ENDED):
+        ended = np.flatnonzero(flags & B.ENDED)
+        if ended.size == 0:
+            steady_spent += dt
+            steady_steps += n
+        for i in ended:
             venv._W[i] = w0[i]
             B.reset_row(venv._W[i], venv._RING[i], venv._CMD[i, : int(w0[i, B.C_N])])
-    return steps / spent, ticks / spent
+    return steps / spent, ticks / spent, steady_steps / max(steady_spent, 1e-12)
 
 
 def sb3_rate(venv, seconds: float) -> float:
@@ -186,6 +205,7 @@ def main() -> None:
         np.zeros((1, 1)),
         np.zeros(1, np.bool_),
         np.zeros(1, np.int64),
+        *B.lane_scratch(1, 1, 1),
     )  # threads up
     layer = numba.threading_layer()
     policy = os.environ.get("OMP_WAIT_POLICY", "unset")
@@ -227,41 +247,42 @@ def main() -> None:
         f"VFServo-v0 vector env, N = {n}, 140 ticks a step "
         f"(single-env kernel run_one: {kern / 1e6:.1f} M ticks/s on one core)"
     )
-    thread_counts = sorted({1, threads})
     for scen, label in ((fixed, f"fixed scenario {fixed}"), (None, "random train scenarios")):
         venv = VFServoVectorEnv(num_envs=n, scenario=scen)
-        measures = {}
-        for th in thread_counts:
-            measures[("raw", th)] = with_threads(th, partial(raw_batch_rate, venv, s))
-            measures[("env", th)] = with_threads(th, partial(vector_rate, venv, s))
+        measures = {
+            "lanes": with_threads(1, partial(raw_batch_rate, venv, s)),
+            "alone": with_threads(1, partial(raw_batch_rate, venv, s, LN.LANES + 1)),
+            "threads": with_threads(threads, partial(raw_batch_rate, venv, s, B.LANE_MIN, 1)),
+            "env": partial(vector_rate, venv, s),
+        }
         if scen == fixed:
             sb3 = make_sb3_vec_env("vfgym/VFServo-v0", n, seed=0, scenario=fixed)
-            measures[("sb3", threads)] = with_threads(threads, partial(sb3_rate, sb3, s))
-        r = best_of(rounds, {str(k): v for k, v in measures.items()})
-        for th in thread_counts:
-            raw, env = r[str(("raw", th))], r[str(("env", th))]
-            print(f"  {label}, {th} thread(s):")
-            print(
-                f"    compiled batch alone: {raw[0] / 1e6:6.3f} M env-steps/s, "
-                f"{raw[1] / 1e6:6.1f} M ticks/s = {raw[1] / kern:.2f}x the kernel per tick"
-            )
-            print(
-                f"    VectorEnv.step      : {env[0] / 1e6:6.3f} M env-steps/s, "
-                f"{env[1] / 1e6:6.1f} M ticks/s = {env[1] / kern:.2f}x the kernel per tick"
-            )
-        if len(thread_counts) > 1:
-            r1, r2 = (
-                (r[str(("raw", 1))], r[str(("env", 1))]),
-                (r[str(("raw", threads))], r[str(("env", threads))]),
-            )
-            print(
-                f"    gain from {threads} threads: compiled batch {r2[0][1] / r1[0][1]:.2f}x, "
-                f"VectorEnv.step {r2[1][1] / r1[1][1]:.2f}x"
-            )
+            measures["sb3"] = partial(sb3_rate, sb3, s)
+        r = best_of(rounds, measures)
+        lanes, alone, par, env = r["lanes"], r["alone"], r["threads"], r["env"]
+        print(f"  {label}:")
+        print(
+            f"    compiled batch, 1 thread, SIMD lanes : {lanes[0] / 1e6:6.3f} M env-steps/s "
+            f"({lanes[2] / 1e6:.3f} M in steps without episode ends), {lanes[1] / 1e6:6.1f} M "
+            f"ticks/s = {lanes[1] / kern:.2f}x the kernel per tick"
+        )
+        print(
+            f"    compiled batch, 1 thread, env by env : {alone[0] / 1e6:6.3f} M env-steps/s "
+            f"({alone[2] / 1e6:.3f} M without ends), {alone[1] / 1e6:6.1f} M ticks/s;  lanes "
+            f"gain {lanes[0] / alone[0]:.2f}x ({lanes[2] / alone[2]:.2f}x without ends)"
+        )
+        print(
+            f"    compiled batch, {threads} threads, lanes  : {par[0] / 1e6:6.3f} M env-steps/s "
+            f"({par[2] / 1e6:.3f} M without ends) = {par[0] / lanes[0]:.2f}x one thread"
+        )
+        print(
+            f"    VectorEnv.step (library default)    : {env[0] / 1e6:6.3f} M env-steps/s, "
+            f"{env[1] / 1e6:6.1f} M ticks/s = {env[1] / kern:.2f}x the kernel per tick"
+        )
         if scen == fixed:
-            sb3, env = r[str(("sb3", threads))], r[str(("env", threads))]
+            sb3 = r["sb3"]
             sb3_line = (
-                f"SB3 adapter, N = {n}, {fixed}, {threads} thread(s): "
+                f"SB3 adapter, N = {n}, {fixed}: "
                 f"{sb3 / 1e6:.3f} M env-steps/s = {sb3 / env[0]:.0%} of the raw "
                 "VectorEnv.step   (target >= 50%)"
             )

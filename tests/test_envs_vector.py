@@ -13,6 +13,7 @@ import pytest
 from gymnasium.vector import AutoresetMode
 
 import vfgym.envs
+import vfgym.envs._batch
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, evaluate
 from vfgym.envs._common import ScenarioSource
 from vfgym.envs.tune import evaluate_pairs
@@ -49,7 +50,7 @@ def assert_same(x, y, path="") -> None:
         assert x == y, path
 
 
-def compare_runs(env_id, n, steps, mode, seed=21, **kwargs):
+def compare_runs(env_id, n, steps, mode, seed=21, probe=None, **kwargs):
     """Step the native vector env and a SyncVectorEnv of single envs side by side."""
     native = gym.make_vec(
         env_id, num_envs=n, vectorization_mode="vector_entry_point", autoreset_mode=mode, **kwargs
@@ -70,6 +71,8 @@ def compare_runs(env_id, n, steps, mode, seed=21, **kwargs):
         out_native, out_sync = native.step(a), sync.step(a)
         assert_same(out_native, out_sync)
         ended += int(np.sum(out_native[2] | out_native[3]))
+        if probe is not None:
+            probe(native)
     return ended
 
 
@@ -79,10 +82,29 @@ def test_tune_vector_env_equals_single_envs(mode):
 
 
 @pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
-def test_servo_vector_env_equals_single_envs(mode):
-    # short random moves so that several episodes end and sub-envs autoreset
-    ended = compare_runs(SERVO, 4, 260, mode, seed_range=(0, 50), settle_time_s=0.002)
-    assert ended >= 6
+@pytest.mark.parametrize("n", [4, 21])
+def test_servo_vector_env_equals_single_envs(mode, n):
+    # Short random moves, so that several episodes end and sub-envs autoreset. With 21
+    # envs, the first 16 tick in SIMD lanes and leave them at their episodes' ends (the
+    # last, partial interval runs alone); the other 5 are too few for a block of lanes.
+    ended = compare_runs(SERVO, n, 260, mode, seed_range=(0, 50), settle_time_s=0.002)
+    assert ended >= 6 * (n // 4)
+
+
+def test_servo_lanes_with_friction_and_envs_leaving_the_lanes():
+    """Random train moves (Coulomb friction on about half, loads, random settings): envs
+    enter the lanes, leave them at their episodes' ends and for the autoreset step (their
+    counts go back to their rings), and come back; every number equals the single envs'."""
+    seen = {"lanes": 0, "friction": 0}
+
+    def probe(native) -> None:
+        env = native.unwrapped
+        seen["lanes"] += int((env._W[:, vfgym.envs._batch.X_LANE] != 0).sum())
+        seen["friction"] += sum(ep.scenario.coulomb_nm > 0 for ep in env._eps)
+
+    ended = compare_runs(SERVO, 18, 200, AutoresetMode.NEXT_STEP, seed=8, probe=probe,
+                         seed_range=(0, 400), settle_time_s=0.002)  # fmt: skip
+    assert ended >= 20 and seen["lanes"] > 1000 and seen["friction"] > 200
 
 
 def test_servo_vector_env_equals_single_envs_with_violation_endings():
@@ -181,18 +203,26 @@ def test_vector_env_arguments_are_checked():
         VFServoVectorEnv(2).step(np.zeros((2, 4)))
 
 
-def test_thread_count_changes_no_number():
+@pytest.mark.parametrize("n", [6, 40])
+def test_thread_count_changes_no_number(n, monkeypatch):
+    # every block on numba's threads, whatever the batch's size
+    monkeypatch.setattr(vfgym.envs._batch, "PARALLEL_MIN_ENVS", 1)
     outs = []
     threads = numba.get_num_threads()
     try:
         for th in sorted({1, threads}):
             numba.set_num_threads(th)
-            venv = VFServoVectorEnv(6, seed_range=(0, 30))
+            venv = VFServoVectorEnv(n, seed_range=(0, 30))
             venv.reset(seed=3)
-            acts = np.random.default_rng(2).uniform(-1, 1, (40, 6, 4))
+            acts = np.random.default_rng(2).uniform(-1, 1, (40, n, 4))
             outs.append([venv.step(a)[:4] for a in acts])
     finally:
         numba.set_num_threads(threads)
+    monkeypatch.undo()  # and on the calling thread alone
+    venv = VFServoVectorEnv(n, seed_range=(0, 30))
+    venv.reset(seed=3)
+    acts = np.random.default_rng(2).uniform(-1, 1, (40, n, 4))
+    outs.append([venv.step(a)[:4] for a in acts])
     for other in outs[1:]:
         assert_same(outs[0], other)
 

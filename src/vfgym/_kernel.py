@@ -19,8 +19,12 @@ a trace is written only when the caller passes arrays for it.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
+from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 # numba's OpenMP workers spin while waiting by default; on a busy machine that makes every
 # parallel call (evaluate's batch, the vector envs) 20-40x slower. A user's own choice wins.
@@ -168,6 +172,38 @@ def _can_cache() -> bool:
 
 
 CACHE = _can_cache()
+
+
+def guard_cache(dispatcher: Any, sources: tuple[ModuleType, ...]) -> None:
+    """Drop the numba cache of ``dispatcher``'s module when any of ``sources`` changed.
+
+    numba keys a cached function on its own file only, so a module whose functions
+    compile this kernel into themselves would keep stale machine code after an edit of
+    the kernel. Call this at the end of such a module, before any of its functions run;
+    the sources' hash is kept next to the cache files."""
+    try:
+        cache_dir = Path(dispatcher._cache._cache_path)
+    except AttributeError:  # no cache, or a numba without this layout: nothing to guard
+        return
+    stem = Path(dispatcher.py_func.__code__.co_filename).stem
+    digest = hashlib.sha256()
+    for mod in sources:
+        digest.update(Path(str(mod.__file__)).read_bytes())
+    stamp = cache_dir / f"{stem}.kernel-sha256"
+    try:
+        if stamp.read_text() == digest.hexdigest():
+            return
+    except OSError:
+        pass
+    for f in cache_dir.glob(f"{stem}.*.nb[ic]"):
+        f.unlink(missing_ok=True)
+    try:
+        cache_dir.mkdir(parents=True, exist_ok=True)
+        stamp.write_text(digest.hexdigest())
+    except OSError:
+        pass
+
+
 _jit = numba.njit(cache=CACHE, fastmath=False, nogil=True)
 
 
@@ -185,6 +221,26 @@ def phi_g(x: float) -> float:
     if x < 1e-3:
         return 0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x * (1.0 / 720.0))))
     return (x + math.expm1(-x)) / (x * x)
+
+
+@numba.njit(cache=CACHE, fastmath=False, nogil=True, inline="always")
+def stop_within_tick(theta, omega, f, net, tc, damp, inv_j, T):
+    """Motor over a tick in which Coulomb friction brings the speed to zero (force ``f``
+    on the moving motor, ``net`` once stopped): stop there, then restart or stick.
+    Returns (θ, ω) at the tick's end."""
+    t0 = math.log1p(-damp * omega / (f * inv_j)) / damp if damp > 0.0 else -omega / (f * inv_j)
+    if t0 > T:
+        t0 = T
+    x0 = damp * t0
+    theta = theta + (omega * t0 * phi_h(x0) + f * inv_j * t0 * t0 * phi_g(x0))
+    omega = 0.0
+    rem = T - t0
+    if rem > 0.0 and (net > tc or net < -tc):
+        f2 = net - tc if net > 0.0 else net + tc
+        x1 = damp * rem
+        theta = theta + f2 * inv_j * rem * rem * phi_g(x1)
+        omega = f2 * inv_j * rem * phi_h(x1)
+    return theta, omega
 
 
 @numba.njit(cache=CACHE, fastmath=False, nogil=True, inline="always")
@@ -434,22 +490,7 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
                 theta = theta + (ctw * omega + ctf * f)
                 omega = w_new
             else:
-                # the speed reaches zero within the tick: stop there, then restart or stick
-                if damp > 0.0:
-                    t0 = math.log1p(-damp * omega / (f * inv_j)) / damp
-                else:
-                    t0 = -omega / (f * inv_j)
-                if t0 > T:
-                    t0 = T
-                x0 = damp * t0
-                theta = theta + (omega * t0 * phi_h(x0) + f * inv_j * t0 * t0 * phi_g(x0))
-                omega = 0.0
-                rem = T - t0
-                if rem > 0.0 and (net > tc or net < -tc):
-                    f2 = net - tc if net > 0.0 else net + tc
-                    x1 = damp * rem
-                    theta = theta + f2 * inv_j * rem * rem * phi_g(x1)
-                    omega = f2 * inv_j * rem * phi_h(x1)
+                theta, omega = stop_within_tick(theta, omega, f, net, tc, damp, inv_j, T)
         # 5. encoder
         c = math.floor(theta / q)
 

@@ -19,14 +19,13 @@ the whole move.
 
 from __future__ import annotations
 
-import hashlib
 import math
-from pathlib import Path
 
 import numba
 import numpy as np
 
 from vfgym import _kernel as K
+from vfgym import _lanes as LN
 from vfgym import _layout as L
 
 _jit = numba.njit(cache=True, fastmath=False, nogil=True)
@@ -81,7 +80,11 @@ X_REWARD = _x + 3  # reward of the last interval (before the end-of-episode corr
 X_STEPS = _x + 4  # intervals stepped
 X_TICK_END = _x + 5  # ticks simulated under the agent's control
 X_SET = _x + 6  # the action in force, clipped to [-1, 1] (4 slots)
-W_ACC = X_SET + 4  # accumulator row of the whole move (written at the episode's end)
+X_OMEGA0 = X_SET + 4  # speed, saturated ticks and Σ tracking error² at the interval's start
+X_SAT0 = X_SET + 5
+X_TSQ0 = X_SET + 6
+X_LANE = X_SET + 7  # 1: the last counts are in the lane block's history, not the ring
+W_ACC = X_SET + 8  # accumulator row of the whole move (written at the episode's end)
 W_OBS = W_ACC + L.N_ACC
 
 OBS_DYNAMIC = (
@@ -258,33 +261,40 @@ def reset_row(w, ring, cmd) -> None:
     w[X_REWARD] = 0.0
     w[X_STEPS] = 0.0
     w[X_TICK_END] = 0.0
+    w[X_LANE] = 0.0
     w[W_ACC : W_ACC + L.N_ACC] = 0.0
     write_obs(w, cmd, 0.0, 0.0, 0)
 
 
 @_jit
-def env_step(act, w, ring, cmd) -> int:
-    """Advance one env by one control interval; returns its flags (see the constants)."""
+def begin_step(act, w) -> bool:
+    """Set the action's settings and note the interval's starting values; False if the
+    action is bad (nothing changed)."""
     if not apply_action(act, w):
-        return BAD_ACTION
-    prm = w[W_PRM : W_PRM + L.N_PARAMS]
+        return False
+    w[X_OMEGA0] = w[W_ST + L.S_OMEGA]
+    w[X_SAT0] = w[W_ST + L.S_SAT]
+    w[X_TSQ0] = w[W_ST + L.S_TSQM]
+    return True
+
+
+@_jit
+def interval_end(w) -> int:
+    """The tick the interval that starts now ends at."""
+    return min(int(w[W_ST + L.S_TICK]) + int(w[C_I]), int(w[C_N]))
+
+
+@_jit
+def interval_flags(w, cmd, i0: int) -> int:
+    """After the interval from tick ``i0``: running cost, observation and the flags."""
     st = w[W_ST : W_ST + L.N_STATE]
-    ext = np.zeros(0, dtype=np.int8)
-    rec = np.zeros((L.N_ROWS, 0), dtype=np.float64)
     n = int(w[C_N])
-    i0 = int(st[L.S_TICK])
-    i1 = min(i0 + int(w[C_I]), n)
-    omega0 = st[L.S_OMEGA]
-    sat0 = st[L.S_SAT]
-    tsq0 = st[L.S_TSQM]
-    K.run_segment(cmd, ext, prm, st, ring, i1, rec, 1)
-    c_prev = w[X_COST]
-    c_now = running_cost(w)
-    w[X_COST_PREV] = c_prev
-    w[X_COST] = c_now
+    i1 = int(st[L.S_TICK])
+    w[X_COST_PREV] = w[X_COST]
+    w[X_COST] = running_cost(w)
     w[X_STEPS] += 1.0
     w[X_TICK_END] = i1
-    write_obs(w, cmd, omega0, sat0, i1 - i0)
+    write_obs(w, cmd, w[X_OMEGA0], w[X_SAT0], i1 - i0)
     flags = 0
     if i1 >= w[C_END] and (i1 - 1) - st[L.S_LOM] >= w[C_HOLD]:
         flags = TERMINATED | SETTLED
@@ -292,18 +302,51 @@ def env_step(act, w, ring, cmd) -> int:
         flags |= TERMINATED | VIOLATION
     if flags == 0 and i1 >= n:
         flags = TRUNCATED
-    if flags != 0:
-        # the rest of the move with the settings held, so that the end-of-episode measures
-        # cover the whole command, as the scoring path's do
-        if i1 < n:
-            K.run_segment(cmd, ext, prm, st, ring, n, rec, 1)
-        K.finish(st, w[W_ACC : W_ACC + L.N_ACC], n, prm[L.P_TICK_S], prm[L.P_ACC_SCALE])
+    return flags
+
+
+@_jit
+def run_out(w, ring, cmd) -> None:
+    """At the episode's end: the rest of the move with the settings held, so that the
+    end-of-episode measures cover the whole command, as the scoring path's do; then the
+    move's accumulators."""
+    prm = w[W_PRM : W_PRM + L.N_PARAMS]
+    st = w[W_ST : W_ST + L.N_STATE]
+    n = int(w[C_N])
+    if int(st[L.S_TICK]) < n:
+        ext = np.zeros(0, dtype=np.int8)
+        rec = np.zeros((L.N_ROWS, 0), dtype=np.float64)
+        K.run_segment(cmd, ext, prm, st, ring, n, rec, 1)
+    K.finish(st, w[W_ACC : W_ACC + L.N_ACC], n, prm[L.P_TICK_S], prm[L.P_ACC_SCALE])
+
+
+@_jit
+def set_reward(w) -> None:
+    """The interval's reward: running cost before minus after, minus the shaping term
+    (over the run-out too, at the episode's end)."""
     shape = 0.0
     if w[C_SHAPE] != 0.0:
         D = w[C_SCALE]
-        shape = w[C_SHAPE] * ((st[L.S_TSQM] - tsq0) * prm[L.P_TICK_S]) / (D * D * w[C_IDEAL])
+        tsq = w[W_ST + L.S_TSQM] - w[X_TSQ0]
+        shape = w[C_SHAPE] * (tsq * w[W_PRM + L.P_TICK_S]) / (D * D * w[C_IDEAL])
     w[X_SHAPE] = shape
-    w[X_REWARD] = (c_prev - c_now) - shape
+    w[X_REWARD] = (w[X_COST_PREV] - w[X_COST]) - shape
+
+
+@_jit
+def env_step(act, w, ring, cmd) -> int:
+    """Advance one env by one control interval; returns its flags (see the constants)."""
+    if not begin_step(act, w):
+        return BAD_ACTION
+    i0 = int(w[W_ST + L.S_TICK])
+    ext = np.zeros(0, dtype=np.int8)
+    rec = np.zeros((L.N_ROWS, 0), dtype=np.float64)
+    prm = w[W_PRM : W_PRM + L.N_PARAMS]
+    K.run_segment(cmd, ext, prm, w[W_ST : W_ST + L.N_STATE], ring, interval_end(w), rec, 1)
+    flags = interval_flags(w, cmd, i0)
+    if flags != 0:
+        run_out(w, ring, cmd)
+    set_reward(w)
     return flags
 
 
@@ -317,31 +360,153 @@ def step_one(act, w, ring, cmd, obs):
     return w[X_REWARD], flags
 
 
+LANE_MIN = LN.LANES // 2
+"""A block runs in SIMD lanes when at least this many of its envs can; else env by env."""
+PARALLEL_MIN_ENVS = 512
+"""From this many envs a step spreads its blocks over numba's threads. Below, it stays on
+the calling thread: a step of 64 envs takes ~150 us on one core, and waking numba's
+sleeping workers costs ~55 us per call (OMP_WAIT_POLICY=PASSIVE), so on the 2-core
+machine measured (benchmarks/bench_envs.py) a second thread only paid from ~512 envs."""
+
+
+@_jit
+def _lane_ready(w, m: int, acc_w: int) -> bool:
+    """Whether this env's next interval can run in a lane: a whole interval of ``m`` ticks
+    left, the V-F controller as pulse source, the block's acceleration window."""
+    return (
+        int(w[C_I]) == m
+        and int(w[W_ST + L.S_TICK]) + m <= int(w[C_N])
+        and w[W_PRM + L.P_USE_EXT] == 0.0
+        and int(w[W_PRM + L.P_ACC_W]) == acc_w
+    )
+
+
+@_jit
+def _step_block(b: int, W, RING, CMD, active, Z, CB, H, G, lane_min: int) -> None:
+    """Advance the active envs of lane block ``b`` (envs b·LANES …) by one interval: in
+    SIMD lanes (:mod:`vfgym._lanes`) when enough of them can, else one by one."""
+    N = W.shape[0]
+    m = CB.shape[0]
+    acc_w = (H.shape[0] - m) // 2
+    first = b * LN.LANES
+    last = min(first + LN.LANES, N)
+    ready = np.zeros(LN.LANES, dtype=np.bool_)
+    count = 0
+    lead = -1
+    for r in range(first, last):
+        if active[r] and _lane_ready(W[r], m, acc_w):
+            ready[r - first] = True
+            count += 1
+            if lead < 0:
+                lead = r
+    lanes = count >= lane_min
+    g = G[b]
+    for r in range(first, last):
+        e = r - first
+        # the block's history is about to be overwritten: give the envs that leave it
+        # their counts back
+        if W[r, X_LANE] != 0.0 and not (lanes and ready[e]):
+            LN.flush_history(H, e, RING[r], int(W[r, W_ST + L.S_TICK]), g, acc_w)
+            W[r, X_LANE] = 0.0
+    if lanes:
+        for e in range(LN.LANES):
+            r = first + e if first + e < last and ready[e] else lead
+            w = W[r]
+            LN.load_lane(Z, CB, e, w[W_PRM : W_PRM + L.N_PARAMS], w[W_ST : W_ST + L.N_STATE],
+                         CMD[r], m)  # fmt: skip
+            if r == first + e and w[X_LANE] == 0.0:
+                LN.load_history(H, e, RING[r], int(w[W_ST + L.S_TICK]), g, acc_w)
+        LN.run_block(Z, CB, H, g, m, acc_w)
+        G[b] = g + m
+        for e in range(last - first):
+            if ready[e]:
+                r = first + e
+                LN.store_lane(Z, e, W[r, W_ST : W_ST + L.N_STATE])
+                W[r, X_LANE] = 1.0
+    ext = np.zeros(0, dtype=np.int8)
+    rec = np.zeros((L.N_ROWS, 0), dtype=np.float64)
+    for r in range(first, last):
+        if active[r] and not (lanes and ready[r - first]):
+            w = W[r]
+            K.run_segment(CMD[r, : int(w[C_N])], ext, w[W_PRM : W_PRM + L.N_PARAMS],
+                          w[W_ST : W_ST + L.N_STATE], RING[r], interval_end(w), rec, 1)  # fmt: skip
+
+
+@_jit
+def _end_block(b: int, W, RING, CMD, active, flags, I0, H, G, m: int) -> None:
+    """Rewards, observations and flags of block ``b``'s active envs after their interval;
+    an env whose episode ended runs the rest of its move (its counts back in its ring)."""
+    acc_w = (H.shape[0] - m) // 2
+    for r in range(b * LN.LANES, min((b + 1) * LN.LANES, W.shape[0])):
+        if active[r]:
+            w = W[r]
+            cmd = CMD[r, : int(w[C_N])]
+            f = interval_flags(w, cmd, I0[r])
+            if f != 0:
+                if w[X_LANE] != 0.0:
+                    e = r % LN.LANES
+                    LN.flush_history(H, e, RING[r], int(w[W_ST + L.S_TICK]), G[b], acc_w)
+                    w[X_LANE] = 0.0
+                run_out(w, RING[r], cmd)
+            set_reward(w)
+            flags[r] = f
+
+
 @numba.njit(cache=True, fastmath=False, nogil=True, parallel=True)
-def step_batch(act, W, RING, CMD, active, flags) -> int:
-    """Step every env ``r`` with ``active[r]`` by one interval, in parallel; ``flags[r]``
-    gets its flags (0 for inactive envs). Returns −1, or the first env whose action is
-    bad, in which case no env has been stepped."""
+def step_batch(
+    act, W, RING, CMD, active, flags, Z, CB, H, G, lane_min=LANE_MIN, parallel_min=PARALLEL_MIN_ENVS
+) -> int:
+    """Step every env ``r`` with ``active[r]`` by one interval; ``flags[r]`` gets its flags
+    (0 for inactive envs). Returns −1, or the first env whose action is bad, in which case
+    no env has been stepped.
+
+    Envs are simulated in lane blocks of :data:`vfgym._lanes.LANES` (env r in block
+    r // LANES, lane r % LANES), numba threads over the blocks from ``parallel_min``
+    envs (:data:`PARALLEL_MIN_ENVS`); a block with fewer than
+    ``lane_min`` envs that can tick in lanes runs them one by one. ``Z``, ``CB``, ``H``:
+    one block scratch each per block (:func:`vfgym._lanes.scratch`); ``G``: each block's
+    tick counter. While an env's last counts live in its block's history (``X_LANE``),
+    its ring is out of date; they are written back whenever it leaves the lanes."""
     N = W.shape[0]
     for r in range(N):
         flags[r] = 0
         if active[r] and (act.shape[1] != 4 or not action_ok(act[r])):
             flags[r] = BAD_ACTION
             return r
-    for r in numba.prange(N):
+    I0 = np.empty(N, dtype=np.int64)
+    for r in range(N):
+        I0[r] = int(W[r, W_ST + L.S_TICK])
         if active[r]:
-            flags[r] = env_step(act[r], W[r], RING[r], CMD[r, : int(W[r, C_N])])
+            begin_step(act[r], W[r])
+    m = CB.shape[1]
+    if W.shape[0] >= parallel_min:
+        for b in numba.prange(G.shape[0]):
+            _step_block(b, W, RING, CMD, active, Z[b], CB[b], H[b], G, lane_min)
+            _end_block(b, W, RING, CMD, active, flags, I0, H[b], G, m)
+    else:
+        for b in range(G.shape[0]):
+            _step_block(b, W, RING, CMD, active, Z[b], CB[b], H[b], G, lane_min)
+            _end_block(b, W, RING, CMD, active, flags, I0, H[b], G, m)
     return -1
 
 
-def step_batch_balanced(act, W, RING, CMD, active, flags) -> int:
-    """:func:`step_batch` with one env per work chunk, handed out as threads free up (an
-    env whose episode ends runs the rest of its move in the same call, so the envs' work
-    is uneven). The chunk size is set from Python: set inside the compiled function it
-    would stop numba from caching it."""
+def lane_scratch(num_envs: int, interval_ticks: int, acc_window: int) -> tuple[np.ndarray, ...]:
+    """The (Z, CB, H, G) arrays :func:`step_batch` needs for ``num_envs`` envs."""
+    blocks = -(-num_envs // LN.LANES)
+    return (*LN.scratch(blocks, interval_ticks, acc_window), np.zeros(blocks, dtype=np.int64))
+
+
+def step_batch_balanced(
+    act, W, RING, CMD, active, flags, scratch, lane_min: int = LANE_MIN, parallel_min=None
+) -> int:
+    """:func:`step_batch` with one block per work chunk, handed out as threads free up (an
+    env whose episode ends runs the rest of its move in the same call, so the work is
+    uneven). The chunk size is set from Python: set inside the compiled function it would
+    stop numba from caching it."""
     old = numba.set_parallel_chunksize(1)
     try:
-        return step_batch(act, W, RING, CMD, active, flags)
+        par = PARALLEL_MIN_ENVS if parallel_min is None else parallel_min
+        return step_batch(act, W, RING, CMD, active, flags, *scratch, lane_min, par)
     finally:
         numba.set_parallel_chunksize(old)
 
@@ -351,32 +516,5 @@ def ring_size(prm: np.ndarray) -> int:
     return int(K.ring_size(prm))
 
 
-def _guard_cache() -> None:
-    """Drop this module's numba cache when the kernel's source has changed.
-
-    numba keys a cached function on its own file only, yet the functions here compile
-    :mod:`vfgym._kernel` into themselves; without this guard an edit of the kernel would
-    leave stale machine code here. The kernel's hash is kept next to the cache files."""
-    try:
-        cache_dir = Path(step_one._cache._cache_path)
-    except AttributeError:  # a numba without this layout: nothing to guard
-        return
-    digest = hashlib.sha256()
-    for mod in (K, L):
-        digest.update(Path(mod.__file__).read_bytes())
-    stamp = cache_dir / "_batch.kernel-sha256"
-    try:
-        if stamp.read_text() == digest.hexdigest():
-            return
-    except OSError:
-        pass
-    for f in cache_dir.glob("_batch.*.nb[ic]"):
-        f.unlink(missing_ok=True)
-    try:
-        cache_dir.mkdir(parents=True, exist_ok=True)
-        stamp.write_text(digest.hexdigest())
-    except OSError:
-        pass
-
-
-_guard_cache()
+# The functions here compile the kernel and the lane kernel into themselves.
+K.guard_cache(step_one, (K, L, LN))

@@ -133,7 +133,9 @@ class ServoCore:
         self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
         self.n_obs = len(SERVO_FEATURES)
         self.width = B.width(self.n_obs)
-        self.ring_len = B.ring_size(pack(PAPER_SETTINGS, plant, measures, 1.0, 1))
+        prm = pack(PAPER_SETTINGS, plant, measures, 1.0, 1)
+        self.ring_len = B.ring_size(prm)
+        self.acc_window = int(prm[L.P_ACC_W])
         self._dims = _space_table()
         self._set0 = to_action(self.initial_settings).astype(np.float64)
 

@@ -333,7 +333,8 @@ class VFTuneVectorEnv(_BatchVectorEnv):
 
 class VFServoVectorEnv(_BatchVectorEnv):
     """N VFServo-v0 envs; each ``step`` advances all N by one control interval in one
-    compiled call, numba threads over the envs (:func:`vfgym.envs._batch.step_batch`).
+    compiled call: the envs' plants tick together in SIMD lanes, blocks of lanes on numba
+    threads (:func:`vfgym.envs._batch.step_batch`).
 
     Made by ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)``; takes VFServo-v0's
     arguments plus ``autoreset_mode``. Its numbers equal those of N single envs reset with
@@ -385,6 +386,7 @@ class VFServoVectorEnv(_BatchVectorEnv):
         self._RING = np.zeros((n, self.core.ring_len), dtype=np.int64)
         self._CMD = np.zeros((n, 1), dtype=np.float64)
         self._flags = np.zeros(n, dtype=np.int64)
+        self._lanes = B.lane_scratch(n, self.core.interval_ticks, self.core.acc_window)
         self._eps: list[Episode | None] = [None] * n
         self._obs = slice(B.W_OBS, B.W_OBS + self.core.n_obs)
 
@@ -416,7 +418,9 @@ class VFServoVectorEnv(_BatchVectorEnv):
     def _simulate(
         self, actions: np.ndarray, active: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[int, Infos]]:
-        bad = B.step_batch_balanced(actions, self._W, self._RING, self._CMD, active, self._flags)
+        bad = B.step_batch_balanced(
+            actions, self._W, self._RING, self._CMD, active, self._flags, self._lanes
+        )
         if bad >= 0:
             raise_bad_action(actions[bad], self.core.accel_law, bad)
         flags = self._flags

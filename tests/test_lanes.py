@@ -1,0 +1,107 @@
+"""The SIMD lane kernel (vfgym._lanes) against the kernel it restates (run_segment): the same
+loop state and pulse-count history, bit for bit, for random plants (friction, loads), random
+settings of both laws, envs at different ticks, and lanes left unused."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from vfgym import DEFAULT_MEASURES, _lanes
+from vfgym import _kernel as K
+from vfgym import _layout as L
+from vfgym.params import Settings
+from vfgym.scenarios import get_scenario, random_scenario
+from vfgym.simulate import pack, simulate
+
+NAMED = ("paper-step", "friction", "heavy-load", "reversal", "short-move", "paper-sine")
+
+
+def _moves(seed: int, count: int):
+    rng = np.random.default_rng(seed)
+    prms, cmds = [], []
+    for j in range(count):
+        sc = random_scenario(seed * 100 + j, "train") if j % 2 else get_scenario(NAMED[j % 6])
+        plant = sc.plant()
+        cmd = sc.command(plant)
+        s = Settings(
+            value_rad=float(rng.uniform(0.05, 3.0)),
+            error_limit_rad=float(rng.uniform(0.05, 3.0)),
+            k=float(np.exp(rng.uniform(np.log(20.0), np.log(20000.0)))),
+            ts_over_tf=float(rng.uniform(0.02, 1.0)),
+            accel_law=("rise", "slew")[int(rng.integers(2))],
+        )
+        prms.append(pack(s, plant, DEFAULT_MEASURES, float(cmd[-1]), cmd.size))
+        cmds.append(cmd)
+    return prms, cmds
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    count=st.integers(1, _lanes.LANES),
+    m=st.integers(1, 300),
+    steps=st.integers(1, 6),
+)
+def test_lanes_end_where_the_kernel_ends(seed, count, m, steps):
+    prms, cmds = _moves(seed, count)
+    size = max(int(K.ring_size(p)) for p in prms)
+    w = int(prms[0][L.P_ACC_W])
+    PRM = np.stack(prms)
+    CMD = np.zeros((count, max(c.size for c in cmds)))
+    for j, c in enumerate(cmds):
+        CMD[j, : c.size] = c
+    ST = np.zeros((count, L.N_STATE))
+    RING = np.zeros((count, size), dtype=np.int64)
+    ext = np.zeros(0, dtype=np.int8)
+    rec = np.zeros((L.N_ROWS, 0))
+    rng = np.random.default_rng(seed)
+    for j in range(count):  # start each move somewhere else, by the kernel
+        K.init_state(PRM[j], ST[j], RING[j])
+        start = int(rng.integers(0, max(1, cmds[j].size - m * steps)))
+        K.run_segment(CMD[j, : cmds[j].size], ext, PRM[j], ST[j], RING[j], start, rec, 1)
+    ST2, RING2 = ST.copy(), RING.copy()
+    Z, CB, H = (a[0] for a in _lanes.scratch(1, m, w))
+    ids = np.zeros(_lanes.LANES, dtype=np.int64)
+    ids[:count] = np.arange(count)
+    for _ in range(steps):
+        if any(ST[j, L.S_TICK] + m > cmds[j].size for j in range(count)):
+            break
+        _lanes.advance(ids, count, PRM, ST, RING, CMD, m, Z, CB, H)
+        for j in range(count):
+            i1 = int(ST2[j, L.S_TICK]) + m
+            K.run_segment(CMD[j, : cmds[j].size], ext, PRM[j], ST2[j], RING2[j], i1, rec, 1)
+    np.testing.assert_array_equal(ST, ST2)
+    for j in range(count):  # the counts run_segment reads back from the ring
+        i = int(ST[j, L.S_TICK])
+        slots = (i - 1 - np.arange(2 * w)) & (size - 1)
+        np.testing.assert_array_equal(RING[j, slots], RING2[j, slots])
+
+
+def test_a_tick_in_which_friction_stops_the_motor_takes_the_scalar_step():
+    """The friction scenario stops and restarts the motor inside ticks; the lanes flag
+    those ticks and take the kernel's own stop_within_tick for them."""
+    sc = get_scenario("friction")
+    plant = sc.plant()
+    cmd = sc.command(plant)
+    prm = pack(Settings(), plant, DEFAULT_MEASURES, float(cmd[-1]), cmd.size)
+    w = int(prm[L.P_ACC_W])
+    PRM, CMD = prm[None, :].copy(), cmd[None, :].copy()
+    ST = np.zeros((1, L.N_STATE))
+    RING = np.zeros((1, int(K.ring_size(prm))), dtype=np.int64)
+    K.init_state(prm, ST[0], RING[0])
+    ST2, RING2 = ST.copy(), RING.copy()
+    m = 500
+    Z, CB, H = (a[0] for a in _lanes.scratch(1, m, w))
+    ids = np.zeros(_lanes.LANES, dtype=np.int64)
+    rec = np.zeros((L.N_ROWS, 0))
+    while ST[0, L.S_TICK] + m <= cmd.size:
+        _lanes.advance(ids, 1, PRM, ST, RING, CMD, m, Z, CB, H)
+        K.run_segment(cmd, np.zeros(0, np.int8), prm, ST2[0], RING2[0], int(ST[0, L.S_TICK]),
+                      rec, 1)  # fmt: skip
+        np.testing.assert_array_equal(ST, ST2)
+    # ticks in which the moving motor stopped (speed to zero, or through it) were covered
+    speed = simulate(cmd[: int(ST[0, L.S_TICK])], Settings(), plant).speed_rad_s
+    stops = (speed[:-1] != 0.0) & ((speed[1:] == 0.0) | (np.sign(speed[1:]) != np.sign(speed[:-1])))
+    assert stops.sum() >= 3
