@@ -22,7 +22,7 @@ def _moves(seed: int, count: int):
     rng = np.random.default_rng(seed)
     prms, cmds = [], []
     for j in range(count):
-        sc = random_scenario(seed * 100 + j, "train") if j % 2 else get_scenario(NAMED[j % 6])
+        sc = random_scenario(seed * 100 + j, "train") if j % 2 else get_scenario(NAMED[j // 2 % 6])
         plant = sc.plant()
         cmd = sc.command(plant)
         s = Settings(
@@ -43,9 +43,16 @@ def _moves(seed: int, count: int):
     count=st.integers(1, _lanes.LANES),
     m=st.integers(1, 300),
     steps=st.integers(1, 6),
+    aligned=st.booleans(),
+    frictionless=st.booleans(),
 )
-def test_lanes_end_where_the_kernel_ends(seed, count, m, steps):
+def test_lanes_end_where_the_kernel_ends(seed, count, m, steps, aligned, frictionless):
+    """aligned: every move starts at the same tick, so the lanes' sample periods are in
+    step (one latch for all); frictionless: no Coulomb friction (one fused pass a tick)."""
     prms, cmds = _moves(seed, count)
+    if frictionless:
+        for p in prms:
+            p[L.P_TC] = 0.0
     size = max(int(K.ring_size(p)) for p in prms)
     w = int(prms[0][L.P_ACC_W])
     PRM = np.stack(prms)
@@ -57,9 +64,11 @@ def test_lanes_end_where_the_kernel_ends(seed, count, m, steps):
     ext = np.zeros(0, dtype=np.int8)
     rec = np.zeros((L.N_ROWS, 0))
     rng = np.random.default_rng(seed)
-    for j in range(count):  # start each move somewhere else, by the kernel
+    shortest = min(c.size for c in cmds)
+    common = int(rng.integers(0, max(1, shortest - m * steps)))
+    for j in range(count):  # start each move somewhere else (or all at one tick), by the kernel
         K.init_state(PRM[j], ST[j], RING[j])
-        start = int(rng.integers(0, max(1, cmds[j].size - m * steps)))
+        start = common if aligned else int(rng.integers(0, max(1, cmds[j].size - m * steps)))
         K.run_segment(CMD[j, : cmds[j].size], ext, PRM[j], ST[j], RING[j], start, rec, 1)
     ST2, RING2 = ST.copy(), RING.copy()
     Z, CB, H = (a[0] for a in _lanes.scratch(1, m, w))

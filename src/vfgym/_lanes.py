@@ -64,9 +64,14 @@ def _r(row, lane):
 
 
 @numba.njit(inline="always", error_model="numpy")
-def _source_servo_motor(Z, e):
+def _source_servo_motor(Z, e, sampling, friction):
     """Steps 1-4 of the tick (pulse source, servo, torque, motor) in lane ``e``; returns
-    1 if the lane needs the friction stop (left unmoved, flagged in ``Z_SLOW``), else 0."""
+    1 if the lane needs the friction stop (left unmoved, flagged in ``Z_SLOW``), else 0.
+
+    ``sampling`` and ``friction`` are constants of each caller, so that the compiler drops
+    what cannot happen: sampling 0 / 1: no lane / every lane latches its speed counter
+    this tick (the lanes' sample periods are in step), 2: each lane as its counter says;
+    friction False: no lane has Coulomb friction."""
     if True:
         P = Z[_u(_r(Z_CMD, e))]
         # 1. V-F controller (vfgym._kernel.vf_tick as selects)
@@ -105,7 +110,7 @@ def _source_servo_motor(Z, e):
         Z[_u(_r(Z_ST + L.S_PC, e))] = pc
         sc = Z[_u(_r(Z_ST + L.S_SC, e))] + dc
         ns_left = Z[_u(_r(Z_ST + L.S_NSLEFT, e))] - 1.0
-        latch = ns_left == 0.0
+        latch = (ns_left == 0.0) if sampling == 2 else (sampling == 1)
         ns = Z[_u(_r(Z_PRM + L.P_NS, e))]
         y = Z[_u(_r(Z_ST + L.S_Y, e))]
         x_new = Z[_u(_r(Z_PRM + L.P_B, e))] * sc
@@ -158,7 +163,7 @@ def _source_servo_motor(Z, e):
         cwf = Z[_u(_r(Z_PRM + L.P_CWF, e))]
         ctw = Z[_u(_r(Z_PRM + L.P_CTW, e))]
         ctf = Z[_u(_r(Z_PRM + L.P_CTF, e))]
-        free = tc == 0.0
+        free = (tc == 0.0) if friction else True
         stuck = (not free) and omega == 0.0
         th_free = theta + (ctw * omega + ctf * net)
         w_free = cww * omega + cwf * net
@@ -288,7 +293,7 @@ def _tick_source_servo_motor(Z) -> int:
     """Steps 1-4 of the tick in every lane; returns how many lanes need the friction stop."""
     nslow = 0
     for e in range(LANES):
-        nslow += _source_servo_motor(Z, e)
+        nslow += _source_servo_motor(Z, e, 2, True)
     return nslow
 
 
@@ -300,12 +305,22 @@ def _tick_encoder_measures(Z, k: int) -> None:
 
 
 @_jit
-def _tick_fused(Z, k: int) -> None:
+def _tick_fused(Z, k: int, sampling: int) -> None:
     """Tick ``k`` in every lane in one pass, when no lane has Coulomb friction (so none
-    can need the friction stop between the motor and the encoder)."""
-    for e in range(LANES):
-        _source_servo_motor(Z, e)
-        _encoder_measures(Z, e, k)
+    can need the friction stop between the motor and the encoder); ``sampling`` as in
+    :func:`_source_servo_motor`, one loop compiled for each."""
+    if sampling == 0:
+        for e in range(LANES):
+            _source_servo_motor(Z, e, 0, False)
+            _encoder_measures(Z, e, k)
+    elif sampling == 1:
+        for e in range(LANES):
+            _source_servo_motor(Z, e, 1, False)
+            _encoder_measures(Z, e, k)
+    else:
+        for e in range(LANES):
+            _source_servo_motor(Z, e, 2, False)
+            _encoder_measures(Z, e, k)
 
 
 @_jit
@@ -331,8 +346,14 @@ def run_block(Z, CB, H, g: int, m: int, w: int) -> None:
     pulse-count history, row t mod len(H) for block tick t (w: the acceleration window)."""
     R = H.shape[0]
     friction = False
+    # the lanes' sample periods in step (same length, same phase): one latch for all
+    ns = Z[_r(Z_PRM + L.P_NS, 0)]
+    ns_left = Z[_r(Z_ST + L.S_NSLEFT, 0)]
+    in_step = True
     for e in range(LANES):
         friction = friction or Z[_r(Z_PRM + L.P_TC, e)] != 0.0
+        in_step = in_step and Z[_r(Z_PRM + L.P_NS, e)] == ns
+        in_step = in_step and Z[_r(Z_ST + L.S_NSLEFT, e)] == ns_left
     for k in range(m):
         for e in range(LANES):
             Z[_u(_r(Z_CMD, e))] = CB[k, e]
@@ -340,8 +361,15 @@ def run_block(Z, CB, H, g: int, m: int, w: int) -> None:
             if _tick_source_servo_motor(Z) > 0:
                 _friction_stops(Z)
             _tick_encoder_measures(Z, k)
+        elif in_step:
+            ns_left -= 1.0
+            if ns_left == 0.0:
+                ns_left = ns
+                _tick_fused(Z, k, 1)
+            else:
+                _tick_fused(Z, k, 0)
         else:
-            _tick_fused(Z, k)
+            _tick_fused(Z, k, 2)
         row = (g + k) % R
         for e in range(LANES):
             H[row, e] = Z[_u(_r(Z_NOUT, e))]
