@@ -292,8 +292,8 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
       acceleration, command against motor) as an (480, 640, 3) uint8 array.
 
     ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)`` gives
-    :class:`vfgym.envs.vector.VFServoVectorEnv`, which steps all N envs in one compiled,
-    multi-threaded call.
+    :class:`vfgym.envs.vector.VFServoVectorEnv`, which steps all N envs in one compiled
+    call, their plants ticking together in SIMD lanes.
 
     ## Version History
 

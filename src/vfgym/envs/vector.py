@@ -334,7 +334,7 @@ class VFTuneVectorEnv(_BatchVectorEnv):
 class VFServoVectorEnv(_BatchVectorEnv):
     """N VFServo-v0 envs; each ``step`` advances all N by one control interval in one
     compiled call: the envs' plants tick together in SIMD lanes, blocks of lanes on numba
-    threads (:func:`vfgym.envs._batch.step_batch`).
+    threads from 512 envs (:func:`vfgym.envs._batch.step_batch`).
 
     Made by ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)``; takes VFServo-v0's
     arguments plus ``autoreset_mode``. Its numbers equal those of N single envs reset with
