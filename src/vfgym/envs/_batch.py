@@ -382,6 +382,15 @@ def _lane_ready(w, m: int, acc_w: int) -> bool:
 
 
 @_jit
+def _leave_lanes(w, ring, H, e: int, g: int, acc_w: int) -> None:
+    """If the env in lane ``e`` has its last counts in the block's history ``H`` (block
+    tick ``g``), write them back into its ring, where the single-env kernel reads them."""
+    if w[X_LANE] != 0.0:
+        LN.flush_history(H, e, ring, int(w[W_ST + L.S_TICK]), g, acc_w)
+        w[X_LANE] = 0.0
+
+
+@_jit
 def _step_block(b: int, W, RING, CMD, active, Z, CB, H, G, lane_min: int) -> None:
     """Advance the active envs of lane block ``b`` (envs b·LANES …) by one interval: in
     SIMD lanes (:mod:`vfgym._lanes`) when enough of them can, else one by one."""
@@ -405,9 +414,8 @@ def _step_block(b: int, W, RING, CMD, active, Z, CB, H, G, lane_min: int) -> Non
         e = r - first
         # the block's history is about to be overwritten: give the envs that leave it
         # their counts back
-        if W[r, X_LANE] != 0.0 and not (lanes and ready[e]):
-            LN.flush_history(H, e, RING[r], int(W[r, W_ST + L.S_TICK]), g, acc_w)
-            W[r, X_LANE] = 0.0
+        if not (lanes and ready[e]):
+            _leave_lanes(W[r], RING[r], H, e, g, acc_w)
     if lanes:
         for e in range(LN.LANES):
             r = first + e if first + e < last and ready[e] else lead
@@ -443,10 +451,7 @@ def _end_block(b: int, W, RING, CMD, active, flags, I0, H, G, m: int) -> None:
             cmd = CMD[r, : int(w[C_N])]
             f = interval_flags(w, cmd, I0[r])
             if f != 0:
-                if w[X_LANE] != 0.0:
-                    e = r % LN.LANES
-                    LN.flush_history(H, e, RING[r], int(w[W_ST + L.S_TICK]), G[b], acc_w)
-                    w[X_LANE] = 0.0
+                _leave_lanes(w, RING[r], H, r % LN.LANES, G[b], acc_w)
                 run_out(w, RING[r], cmd)
             set_reward(w)
             flags[r] = f
