@@ -15,6 +15,7 @@ from gymnasium.vector import AutoresetMode
 import vfgym.envs
 import vfgym.envs._batch
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, evaluate
+from vfgym import _layout as L
 from vfgym.envs._common import ScenarioSource
 from vfgym.envs.tune import evaluate_pairs
 from vfgym.envs.vector import VFServoVectorEnv, VFTuneVectorEnv
@@ -107,11 +108,27 @@ def test_servo_lanes_with_friction_and_envs_leaving_the_lanes():
     assert ended >= 20 and seen["lanes"] > 1000 and seen["friction"] > 200
 
 
-def test_servo_vector_env_equals_single_envs_with_violation_endings():
+@pytest.mark.parametrize("n", [3, 17])
+def test_servo_vector_env_equals_single_envs_with_violation_endings(n):
     ended = compare_runs(
-        SERVO, 3, 40, AutoresetMode.NEXT_STEP, terminate_on_violation=True, tracking_weight=0.5
+        SERVO, n, 40, AutoresetMode.NEXT_STEP, terminate_on_violation=True, tracking_weight=0.5
     )
-    assert ended >= 3
+    assert ended >= n
+
+
+def test_servo_lanes_out_of_step_with_the_servo_sample_period():
+    # 0.2 ms intervals (28 ticks) against 70-tick servo samples: the lanes' sample periods
+    # drift apart as envs reset, so each lane latches on its own (a move without friction:
+    # the single-pass tick)
+    phases = []
+
+    def probe(native) -> None:
+        W = native.unwrapped._W[:16]
+        phases.append(len(set(W[:, vfgym.envs._batch.W_ST + L.S_NSLEFT])))
+
+    ended = compare_runs(SERVO, 17, 400, AutoresetMode.NEXT_STEP, probe=probe, interval_s=0.0002,
+                         scenario="short-move", settle_time_s=0.001)  # fmt: skip
+    assert ended >= 8 and max(phases) >= 3
 
 
 def test_disabled_autoreset_needs_a_reset_mask():
