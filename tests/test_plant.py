@@ -369,3 +369,24 @@ def test_segments_with_the_same_parameters_equal_one_run():
     K.finish(st, acc, cmd.size, prm[L.P_TICK_S], prm[L.P_ACC_SCALE])
     np.testing.assert_array_equal(acc, whole.acc)
     np.testing.assert_array_equal(rec[L.R_THETA], whole.motor_rad)
+
+
+def test_encoder_count_is_the_exact_quotient_where_the_reciprocal_rounds_across_a_count():
+    """The kernel guesses floor(θ/q) as floor(θ·(1/q)) and checks it with the quotient:
+    at θ = 0.3, q = 0.1 the product rounds up to 3.0 while θ/q is 2.9999999999999996.
+    A motor held by Coulomb friction at θ = 0.3 must read count 2, every tick."""
+    theta, q = 0.3, 0.1
+    assert math.floor(theta * (1.0 / q)) == 3 and math.floor(theta / q) == 2
+    pl = PAPER_PLANT.with_motor(coulomb_nm=1e3)
+    cmd = np.zeros(5)
+    prm = pack(PAPER_SETTINGS, pl, DEFAULT_MEASURES, 0.0, cmd.size)
+    prm[L.P_COUNT_RAD] = q
+    st = np.empty(L.N_STATE)
+    ring = np.empty(K.ring_size(prm), dtype=np.int64)
+    K.init_state(prm, st, ring)
+    st[L.S_THETA] = theta
+    rec = np.empty((L.N_ROWS, cmd.size))
+    for i in range(cmd.size):  # tick by tick: the count after each one
+        K.run_segment(cmd, np.zeros(0, np.int8), prm, st, ring, i + 1, rec[:, i : i + 1], 1)
+        assert st[L.S_THETA] == theta
+        assert st[L.S_C] == 2
