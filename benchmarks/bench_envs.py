@@ -14,17 +14,20 @@ Ratios are taken within this one run. Figures:
    ``VectorEnv.step`` as the library runs it (targets: >= 1 M env-steps/s, >= 1.5x per
    tick on one core, near-linear gain from the second core). Measured on a fixed scenario
    (the command is built once) and on the random train distribution (a new scenario,
-   built in Python, per episode).
+   built in Python, per episode); then the threads' gain again in a child process whose
+   numba workers spin between calls (opt-in; vfgym's default makes them sleep).
 3. The stable-baselines3 adapter's throughput against the raw vector env (target ≥ 50 %).
 4. VFTune-v0 episodes/s on ``paper-step``: single env (reset + step) and vector env.
 
-    python benchmarks/bench_envs.py [--envs N] [--seconds S] [--rounds R]
+    python benchmarks/bench_envs.py [--envs N] [--seconds S] [--rounds R] [--threads-only]
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import subprocess
+import sys
 import time
 from functools import partial
 
@@ -188,13 +191,55 @@ def with_threads(n: int, fn):
     return run
 
 
+def threads_gain(n: int, seconds: float, rounds: int) -> str:
+    """One line: the compiled batch on all numba threads against one thread (fixed
+    scenario, SIMD lanes) and VectorEnv.step, under this process's wait policy."""
+    venv = VFServoVectorEnv(num_envs=n, scenario="long-move")
+    threads = numba.config.NUMBA_NUM_THREADS
+    r = best_of(
+        rounds,
+        {
+            "one": with_threads(1, partial(raw_batch_rate, venv, seconds)),
+            "all": with_threads(threads, partial(raw_batch_rate, venv, seconds, B.LANE_MIN, 1)),
+            "env": partial(vector_rate, venv, seconds),
+        },
+    )
+    one, par, env = r["one"], r["all"], r["env"]
+    return (
+        f"{threads} threads {par[0] / 1e6:.3f} M env-steps/s ({par[2] / 1e6:.3f} M without "
+        f"ends) = {par[0] / one[0]:.2f}x one thread ({one[0] / 1e6:.3f} M); VectorEnv.step "
+        f"{env[0] / 1e6:.3f} M env-steps/s"
+    )
+
+
+def spinning_child(n: int, seconds: float, rounds: int) -> str:
+    """:func:`threads_gain` in a fresh process whose numba workers spin between calls
+    (GOMP_SPINCOUNT=300000, libgomp's own default; vfgym's default makes them sleep)."""
+    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
+    env["GOMP_SPINCOUNT"] = "300000"
+    args = ["--threads-only", "--envs", str(n), "--seconds", str(seconds), "--rounds", str(rounds)]
+    out = subprocess.run(
+        [sys.executable, __file__, *args], env=env, check=True, capture_output=True, text=True
+    )
+    return out.stdout.strip()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--envs", type=int, default=64, help="vector env size")
     ap.add_argument("--seconds", type=float, default=0.5, help="time per measurement")
     ap.add_argument("--rounds", type=int, default=5, help="best of this many measurements")
+    ap.add_argument(
+        "--threads-only",
+        action="store_true",
+        help="print only the gain from numba's threads (fixed scenario), under this "
+        "process's OMP_WAIT_POLICY / GOMP_SPINCOUNT",
+    )
     args = ap.parse_args()
     s, rounds = args.seconds, args.rounds
+    if args.threads_only:
+        print(threads_gain(args.envs, s, rounds))
+        return
     fixed = "long-move"
     threads = numba.config.NUMBA_NUM_THREADS
     load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
@@ -286,6 +331,10 @@ def main() -> None:
                 f"{sb3 / 1e6:.3f} M env-steps/s = {sb3 / env[0]:.0%} of the raw "
                 "VectorEnv.step   (target >= 50%)"
             )
+    print(
+        "  with spinning numba workers (opt-in: GOMP_SPINCOUNT=300000), fixed scenario: "
+        + spinning_child(n, s, rounds)
+    )
     print(
         "  targets: >= 1 M env-steps/s; >= 1.5x the kernel per tick on one core; "
         "near-linear gain from the second core"

@@ -5,6 +5,9 @@ scoring equal to ``evaluate`` pair by pair; thread count not changing any number
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
 
 import gymnasium as gym
 import numba
@@ -15,6 +18,7 @@ from gymnasium.vector import AutoresetMode
 import vfgym.envs
 import vfgym.envs._batch
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, evaluate
+from vfgym import _kernel as K
 from vfgym import _layout as L
 from vfgym.envs._common import ScenarioSource
 from vfgym.envs.tune import evaluate_pairs
@@ -277,3 +281,37 @@ def test_a_bad_action_leaves_pending_autoresets_pending():
     with pytest.raises(ValueError, match=r"actions\[1\]"):
         venv.step(bad)
     assert_same(venv.step(acts), ref.step(acts))
+
+
+@pytest.mark.parametrize(
+    ("environ", "spin"),
+    [
+        ({}, True),  # libgomp's own default: spin a while, then sleep
+        ({"OMP_WAIT_POLICY": "PASSIVE"}, False),
+        ({"OMP_WAIT_POLICY": "passive "}, False),
+        ({"OMP_WAIT_POLICY": "ACTIVE"}, True),
+        ({"GOMP_SPINCOUNT": "300000"}, True),
+        ({"GOMP_SPINCOUNT": "0"}, False),
+        ({"GOMP_SPINCOUNT": "300000", "OMP_WAIT_POLICY": "PASSIVE"}, False),
+    ],
+)
+def test_wait_policy_read_as_libgomp_reads_it(environ, spin):
+    assert K.workers_spin(environ) is spin
+
+
+def test_threads_start_where_the_wait_policy_makes_them_pay():
+    """vfgym makes numba's workers sleep unless the user opted in to spinning, and the
+    vector envs go parallel from 512 envs with sleeping workers, from 32 with spinning."""
+    code = (
+        "import vfgym.envs._batch as B, vfgym._kernel as K, os;"
+        "print(os.environ.get('OMP_WAIT_POLICY'), K.SPINNING_WORKERS, B.PARALLEL_MIN_ENVS)"
+    )
+    base = {k: v for k, v in os.environ.items() if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
+    runs = [base, {**base, "GOMP_SPINCOUNT": "300000"}, {**base, "OMP_WAIT_POLICY": "ACTIVE"}]
+    out = [
+        subprocess.run(
+            [sys.executable, "-c", code], env=e, check=True, capture_output=True, text=True
+        ).stdout.split()
+        for e in runs
+    ]
+    assert out == [["PASSIVE", "False", "512"], ["None", "True", "32"], ["ACTIVE", "True", "32"]]

@@ -26,9 +26,14 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-# numba's OpenMP workers spin while waiting by default; on a busy machine that makes every
-# parallel call (evaluate's batch, the vector envs) 20-40x slower. A user's own choice wins.
-os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+# numba's OpenMP workers spin a while after each parallel call by default. With several
+# processes on the cores (sweep workers, a busy machine) spinning workers take the cores
+# from working ones (measured 2.3x slower: two processes stepping vector envs), so vfgym
+# makes them sleep (PASSIVE). Waking them costs ~55 us a call on this VM, though, so a
+# user who has the machine to themselves may opt in to spinning: setting OMP_WAIT_POLICY
+# or GOMP_SPINCOUNT (libgomp's default is 300000) keeps the user's choice.
+if "GOMP_SPINCOUNT" not in os.environ:
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 import numba
 import numpy as np
@@ -152,6 +157,18 @@ from vfgym._layout import (
     S_X,
     S_Y,
 )
+
+
+def workers_spin(environ: Any) -> bool:
+    """Whether numba's OpenMP workers spin between parallel calls under these environment
+    variables (libgomp: they spin unless OMP_WAIT_POLICY is PASSIVE or GOMP_SPINCOUNT 0)."""
+    if environ.get("OMP_WAIT_POLICY", "").strip().upper() == "PASSIVE":
+        return False
+    return environ.get("GOMP_SPINCOUNT", "").strip() not in ("0",)
+
+
+SPINNING_WORKERS = workers_spin(os.environ)
+"""Whether this process's numba workers spin between parallel calls (see above)."""
 
 
 def _probe() -> None:  # a function of this file, for the cache check below

@@ -362,11 +362,12 @@ def step_one(act, w, ring, cmd, obs):
 
 LANE_MIN = LN.LANES // 2
 """A block runs in SIMD lanes when at least this many of its envs can; else env by env."""
-PARALLEL_MIN_ENVS = 512
-"""From this many envs a step spreads its blocks over numba's threads. Below, it stays on
-the calling thread: a step of 64 envs takes ~150 us on one core, and waking numba's
-sleeping workers costs ~55 us per call (OMP_WAIT_POLICY=PASSIVE), so on the 2-core
-machine measured (benchmarks/bench_envs.py) a second thread only paid from ~512 envs."""
+PARALLEL_MIN_ENVS = 32 if K.SPINNING_WORKERS else 512
+"""From this many envs a step spreads its blocks over numba's threads; below, it stays on
+the calling thread. A step of 64 envs takes ~150 us on one core. Waking numba's sleeping
+workers (vfgym's default, OMP_WAIT_POLICY=PASSIVE) costs ~55 us a call, so on the 2-core
+VM measured (benchmarks/bench_envs.py) the second thread only paid from ~512 envs; with
+spinning workers (opt-in, :data:`vfgym._kernel.SPINNING_WORKERS`) it paid from 32."""
 
 
 @_jit
