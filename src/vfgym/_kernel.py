@@ -28,7 +28,7 @@ from typing import Any
 
 # numba's OpenMP workers spin a while after each parallel call by default. With several
 # processes on the cores (sweep workers, a busy machine) spinning workers take the cores
-# from working ones (measured 2.3x slower: two processes stepping vector envs), so vfgym
+# from working ones (measured ~3x slower: two processes stepping vector envs), so vfgym
 # makes them sleep (PASSIVE). Waking them costs ~55 us a call on this VM, though, so a
 # user who has the machine to themselves may opt in to spinning: setting OMP_WAIT_POLICY
 # or GOMP_SPINCOUNT (libgomp's default is 300000) keeps the user's choice.
