@@ -315,3 +315,21 @@ def test_threads_start_where_the_wait_policy_makes_them_pay():
         for e in runs
     ]
     assert out == [["PASSIVE", "False", "512"], ["None", "True", "32"], ["ACTIVE", "True", "32"]]
+
+
+def test_info_batching_equals_gymnasiums():
+    """The vector envs batch infos with their own _add_info; it must build what
+    Gymnasium's does: the same arrays, dtypes and masks, nested dicts and final_obs."""
+    env = VFServoVectorEnv(num_envs=3, scenario="short-move")
+    infos = [
+        (0, {"a": 1.5, "b": True, "c": 3, "d": np.float32(2.0), "s": "x", "v": np.arange(2.0)}),
+        (2, {"a": 2.5, "final_obs": np.ones(2), "final_info": {"m": 1, "n": {"o": False}}}),
+        (1, {"c": 7, "final_info": {"m": 4}, "e": None}),
+        (2, {"s": "y", "v": np.arange(2.0) + 1, "final_obs": np.zeros(2)}),
+    ]
+    ours: dict = {}
+    theirs: dict = {}
+    for i, info in infos:
+        ours = env._add_info(ours, info, i)
+        theirs = gym.vector.VectorEnv._add_info(env, theirs, info, i)
+    assert_same(ours, theirs)

@@ -87,6 +87,36 @@ class _BatchVectorEnv(VectorEnv):
         self._started = False
         self._all = np.ones(self.num_envs, dtype=np.bool_)
 
+    def _add_info(self, vector_infos: Infos, env_info: Infos, env_num: int) -> Infos:
+        """Gymnasium's ``VectorEnv._add_info`` (the same arrays, dtypes and ``_key`` masks),
+        without the mask it allocates for every key of every call only to throw it away:
+        an ending episode's info has ~40 keys, and batching them took ~60 us a step."""
+        n = self.num_envs
+        for key, value in env_info.items():
+            if key == "final_obs":
+                array = vector_infos.get(key)
+                if array is None:
+                    array = np.full(n, fill_value=None, dtype=object)
+                array[env_num] = value
+            elif isinstance(value, dict):
+                array = self._add_info(vector_infos.get(key, {}), value, env_num)
+            else:
+                if key in vector_infos:
+                    array = vector_infos[key]
+                elif type(value) in (int, float, bool) or issubclass(type(value), np.number):
+                    array = np.zeros(n, dtype=type(value))
+                elif isinstance(value, np.ndarray):
+                    array = np.zeros((n, *value.shape), dtype=value.dtype)
+                else:
+                    array = np.full(n, fill_value=None, dtype=object)
+                array[env_num] = value
+            mask = vector_infos.get(f"_{key}")
+            if mask is None:
+                mask = np.zeros(n, dtype=np.bool_)
+            mask[env_num] = True
+            vector_infos[key], vector_infos[f"_{key}"] = array, mask
+        return vector_infos
+
     # --- subclass hooks -------------------------------------------------------------------
     def _reset_one(self, i: int, options: dict[str, Any] | None) -> Infos:
         """Start a new episode in sub-env i (its rng is ready); return its reset info."""
