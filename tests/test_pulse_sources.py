@@ -585,3 +585,19 @@ def test_bad_fixed_frequency_input_names_the_parameter(change, name):
     kw = dict({"total_pulses": 100, "frequency_hz": 10_000.0, "tick_hz": F}, **change)
     with pytest.raises(ValueError, match=name):
         fixed_frequency_pulses(**kw)
+
+
+@PROPERTY
+@given(scurve_settings(), st.one_of(st.none(), st.floats(0.0, 1.2)))
+def test_property_position_on_rising_times_is_position(kw, frac):
+    """scurve_pulses reads positions through position_rising (phases as slices of rising
+    times); it must equal position (masks over any times) bit for bit, also at the phase
+    boundaries themselves and when a stop cuts the move short."""
+    if frac is not None:
+        kw = {**kw, "stop_tick": max(1, math.ceil(frac * scurve_profile(**kw).n_ticks))}
+    prof = scurve_profile(**kw)
+    assume(prof.n_ticks < 60_000)
+    edges = [prof.t_acc_increase, prof.t_acc_end, prof.t_dec_start, prof.t_end]
+    ticks = np.arange(prof.n_ticks + 9, dtype=np.float64) / prof.tick_hz
+    t = np.sort(np.concatenate([ticks, np.array(edges), [s[0] for s in prof.segments]]))
+    np.testing.assert_array_equal(prof.position_rising(t), prof.position(t))

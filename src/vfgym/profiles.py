@@ -76,8 +76,30 @@ def trapezoid(
     d = check_real("distance_rad", distance_rad)
     v = check_real("speed_rad_s", speed_rad_s, 0.0, lo_open=True)
     a = check_real("accel_rad_s2", accel_rad_s2, 0.0, lo_open=True)
-    t = _time(_ticks(duration_s, tick_hz), tick_hz)
-    return math.copysign(1.0, d) * trapezoid_position(t, abs(d), v, a)
+    return math.copysign(1.0, d) * _trapezoid_ticks(
+        _ticks(duration_s, tick_hz), tick_hz, abs(d), v, a
+    )
+
+
+def _trapezoid_ticks(n: int, tick_hz: float, distance: float, v: float, a: float) -> np.ndarray:
+    """:func:`trapezoid_position` at the ticks ``i / tick_hz``, i < n, value for value: the
+    times rise, so each phase is a run of ticks and is computed on its slice alone (the
+    hold at ``distance``, most of a command, costs nothing)."""
+    if distance * a >= v * v:
+        ta = v / a
+        tc = distance / v - ta
+    else:
+        ta = math.sqrt(distance / a)
+        tc = 0.0
+        v = a * ta
+    t_end = 2 * ta + tc
+    t = _time(min(n, math.ceil(t_end * tick_hz) + 2), tick_hz)  # every t < t_end
+    i1, i2, i3 = np.searchsorted(t, [ta, ta + tc, t_end], side="left")
+    p = np.full(n, distance)
+    p[:i1] = 0.5 * a * t[:i1] ** 2
+    p[i1:i2] = 0.5 * a * ta**2 + v * (t[i1:i2] - ta)
+    p[i2:i3] = distance - 0.5 * a * np.clip(t_end - t[i2:i3], 0.0, None) ** 2
+    return p
 
 
 def scurve(

@@ -166,6 +166,27 @@ class ScurveProfile:
         """Exact position at times ``t`` (s), in pulses (not rounded to whole pulses)."""
         return self._evaluate(t)[0]
 
+    def position_rising(self, t: np.ndarray) -> np.ndarray:
+        """:meth:`position` at rising times ``t >= 0`` (1-D), value for value: each phase
+        is then a run of ``t`` and is computed on its slice, without masks and without
+        speed and acceleration (the pulse train needs positions only)."""
+        seg = np.asarray(self.segments, dtype=np.float64)
+
+        def acc_position(s: np.ndarray) -> np.ndarray:
+            k = np.clip(np.searchsorted(seg[:, 0], s, side="right") - 1, 0, len(seg) - 1)
+            t0, p0, v0, a0, jk = seg[k].T
+            d = s - t0
+            return p0 + d * (v0 + d * (a0 / 2.0 + d * (jk / 6.0)))
+
+        i_a, i_d, i_e = np.searchsorted(t, [self.t_acc_end, self.t_dec_start, self.t_end])
+        pos = np.empty_like(t)
+        # in _evaluate's order, so that where phases overlap the later one wins as there
+        pos[:i_a] = acc_position(t[:i_a])
+        pos[i_a:i_d] = self.accel_pulses + self.peak_speed_pps * (t[i_a:i_d] - self.t_acc_end)
+        pos[i_d:i_e] = self.end_position - acc_position(np.maximum(self.t_end - t[i_d:i_e], 0.0))
+        pos[i_e:] = self.end_position
+        return pos
+
     def speed(self, t: np.ndarray | float) -> np.ndarray:
         """Speed at times ``t`` (s), pps; 0 before the start and after the end."""
         return self._evaluate(t)[1]
@@ -453,7 +474,7 @@ def scurve_pulses(
     n = prof.n_ticks
     pad = 8
     t = np.arange(n + 1 + pad, dtype=np.float64) / prof.tick_hz
-    pos = prof.position(t)
+    pos = prof.position_rising(t)
     guard = _FLOOR_GUARD_ABS + _FLOOR_GUARD_REL * prof.total_pulses
     counts = np.floor(pos + 0.5 + guard).astype(np.int64)
     counts[n:] = prof.output_pulses  # the move has ended at t_n >= t_end (up to rounding)

@@ -248,8 +248,11 @@ def random_scenario(seed: int, split: str = "train") -> Scenario:
     check_choice("split", split, SPLITS)
     seed = check_int("seed", seed, 0, 2**63 - 1)
     rng = np.random.default_rng([SPLITS.index(split), seed])
-    dist = float(np.exp(rng.uniform(math.log(0.2), math.log(50.0)))) * rng.choice([-1.0, 1.0])
-    profile = str(rng.choice(["step", "step", "trapezoid", "scurve"]))
+    # rng.integers(0, k) draws what rng.choice from k items would (and 10x faster)
+    dist = (
+        float(np.exp(rng.uniform(math.log(0.2), math.log(50.0)))) * (-1.0, 1.0)[rng.integers(0, 2)]
+    )
+    profile = ("step", "step", "trapezoid", "scurve")[rng.integers(0, 4)]
     ratio = float(rng.uniform(0.0, 5.0))
     coulomb = float(rng.uniform(0.0, 0.004)) if rng.random() < 0.5 else 0.0
     viscous = float(rng.uniform(0.0, 3e-4))
