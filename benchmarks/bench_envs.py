@@ -14,8 +14,9 @@ Ratios are taken within this one run. Figures:
    ``VectorEnv.step`` as the library runs it (targets: >= 1 M env-steps/s, >= 1.5x per
    tick on one core, near-linear gain from the second core). Measured on a fixed scenario
    (the command is built once) and on the random train distribution (a new scenario,
-   built in Python, per episode); then the threads' gain again in a child process whose
-   numba workers spin between calls (opt-in; vfgym's default makes them sleep).
+   built in Python, per episode: the cost of a reset is printed too); then the threads'
+   gain again in a child process whose numba workers spin between calls (opt-in;
+   vfgym's default makes them sleep).
 3. The stable-baselines3 adapter's throughput against the raw vector env (target ≥ 50 %).
 4. VFTune-v0 episodes/s on ``paper-step``: single env (reset + step) and vector env.
 
@@ -145,6 +146,15 @@ def raw_batch_rate(
             venv._W[i] = w0[i]
             B.reset_row(venv._W[i], venv._RING[i], venv._CMD[i, : int(w0[i, B.C_N])])
     return steps / spent, ticks / spent, steady_steps / max(steady_spent, 1e-12)
+
+
+def reset_time(venv: VFServoVectorEnv, count: int = 128) -> float:
+    """Seconds per sub-env reset (a new scenario drawn and built in Python), over
+    ``count`` resets."""
+    t = time.perf_counter()
+    for i in range(count):
+        venv._reset_one(i % venv.num_envs, None)
+    return (time.perf_counter() - t) / count
 
 
 def sb3_rate(venv, seconds: float) -> float:
@@ -286,12 +296,8 @@ def main() -> None:
     # 2. vector env, and 3. the SB3 adapter on the fixed scenario
     from vfgym.envs.sb3 import make_sb3_vec_env
 
-    kern = max(kernel_rate(fixed) for _ in range(rounds))
     n = args.envs
-    print(
-        f"VFServo-v0 vector env, N = {n}, 140 ticks a step "
-        f"(single-env kernel run_one: {kern / 1e6:.1f} M ticks/s on one core)"
-    )
+    kern = 0.0
     for scen, label in ((fixed, f"fixed scenario {fixed}"), (None, "random train scenarios")):
         venv = VFServoVectorEnv(num_envs=n, scenario=scen)
         measures = {
@@ -300,11 +306,21 @@ def main() -> None:
             "threads": with_threads(threads, partial(raw_batch_rate, venv, s, B.LANE_MIN, 1)),
             "env": partial(vector_rate, venv, s),
         }
+        if scen is None:
+            measures["t_reset"] = partial(reset_time, venv)
         if scen == fixed:
+            # the single-env kernel, interleaved with the rest like every measure
+            measures["kernel"] = partial(kernel_rate, fixed)
             sb3 = make_sb3_vec_env("vfgym/VFServo-v0", n, seed=0, scenario=fixed)
             measures["sb3"] = partial(sb3_rate, sb3, s)
         r = best_of(rounds, measures)
         lanes, alone, par, env = r["lanes"], r["alone"], r["threads"], r["env"]
+        if scen == fixed:
+            kern = r["kernel"]
+            print(
+                f"VFServo-v0 vector env, N = {n}, 140 ticks a step "
+                f"(single-env kernel run_one: {kern / 1e6:.1f} M ticks/s on one core)"
+            )
         print(f"  {label}:")
         print(
             f"    compiled batch, 1 thread, SIMD lanes : {lanes[0] / 1e6:6.3f} M env-steps/s "
@@ -324,6 +340,9 @@ def main() -> None:
             f"    VectorEnv.step (library default)    : {env[0] / 1e6:6.3f} M env-steps/s, "
             f"{env[1] / 1e6:6.1f} M ticks/s = {env[1] / kern:.2f}x the kernel per tick"
         )
+        if scen is None:
+            reset_us = r["t_reset"] * 1e6
+            print(f"    a sub-env reset (scenario drawn and built in Python): {reset_us:.0f} us")
         if scen == fixed:
             sb3 = r["sb3"]
             sb3_line = (
