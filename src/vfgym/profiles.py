@@ -47,8 +47,9 @@ def ramp(distance_rad: float, speed_rad_s: float, duration_s: float, tick_hz: fl
     return math.copysign(1.0, d) * np.minimum(v * t, abs(d))
 
 
-def trapezoid_position(t: np.ndarray, distance: float, v: float, a: float) -> np.ndarray:
-    """Position of a symmetric trapezoidal (or triangular) speed profile over |distance|."""
+def _trapezoid_phases(distance: float, v: float, a: float) -> tuple[float, float, float, float]:
+    """(acceleration time, cruise time, end time, top speed) of a symmetric trapezoidal
+    speed profile over ``distance``: triangular, below ``v``, when the move is short."""
     if distance * a >= v * v:  # reaches v
         ta = v / a
         tc = distance / v - ta
@@ -56,7 +57,12 @@ def trapezoid_position(t: np.ndarray, distance: float, v: float, a: float) -> np
         ta = math.sqrt(distance / a)
         tc = 0.0
         v = a * ta
-    t_end = 2 * ta + tc
+    return ta, tc, 2 * ta + tc, v
+
+
+def trapezoid_position(t: np.ndarray, distance: float, v: float, a: float) -> np.ndarray:
+    """Position of a symmetric trapezoidal (or triangular) speed profile over |distance|."""
+    ta, tc, t_end, v = _trapezoid_phases(distance, v, a)
     p = np.where(
         t < ta,
         0.5 * a * t**2,
@@ -85,14 +91,7 @@ def _trapezoid_ticks(n: int, tick_hz: float, distance: float, v: float, a: float
     """:func:`trapezoid_position` at the ticks ``i / tick_hz``, i < n, value for value: the
     times rise, so each phase is a run of ticks and is computed on its slice alone (the
     hold at ``distance``, most of a command, costs nothing)."""
-    if distance * a >= v * v:
-        ta = v / a
-        tc = distance / v - ta
-    else:
-        ta = math.sqrt(distance / a)
-        tc = 0.0
-        v = a * ta
-    t_end = 2 * ta + tc
+    ta, tc, t_end, v = _trapezoid_phases(distance, v, a)
     t = _time(min(n, math.ceil(t_end * tick_hz) + 2), tick_hz)  # every t < t_end
     i1, i2, i3 = np.searchsorted(t, [ta, ta + tc, t_end], side="left")
     p = np.full(n, distance)
