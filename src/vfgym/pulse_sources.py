@@ -126,13 +126,25 @@ class ScurveProfile:
         """Tick boundaries ``t_i = i / tick_hz`` for ``i = 0 .. n_ticks``, s."""
         return np.arange(self.n_ticks + 1, dtype=np.float64) / self.tick_hz
 
-    def _acc_phase(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Position, speed and acceleration at times ``s`` inside the acceleration phase."""
+    def _at_segments(self, s: np.ndarray) -> tuple[np.ndarray, ...]:
+        """For times ``s`` inside the acceleration phase: the time into each one's segment
+        and that segment's starting position, speed, acceleration and jerk."""
         seg = np.asarray(self.segments, dtype=np.float64)
         k = np.clip(np.searchsorted(seg[:, 0], s, side="right") - 1, 0, len(seg) - 1)
         t0, p0, v0, a0, jk = seg[k].T
-        d = s - t0
-        pos = p0 + d * (v0 + d * (a0 / 2.0 + d * (jk / 6.0)))
+        return s - t0, p0, v0, a0, jk
+
+    @staticmethod
+    def _segment_position(
+        d: np.ndarray, p0: np.ndarray, v0: np.ndarray, a0: np.ndarray, jk: np.ndarray
+    ) -> np.ndarray:
+        """Position ``d`` seconds into segments starting at p0, v0, a0 with jerk jk."""
+        return p0 + d * (v0 + d * (a0 / 2.0 + d * (jk / 6.0)))
+
+    def _acc_phase(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Position, speed and acceleration at times ``s`` inside the acceleration phase."""
+        d, p0, v0, a0, jk = self._at_segments(s)
+        pos = self._segment_position(d, p0, v0, a0, jk)
         vel = v0 + d * (a0 + d * (jk / 2.0))
         acc = a0 + d * jk
         return pos, vel, acc
@@ -170,13 +182,9 @@ class ScurveProfile:
         """:meth:`position` at rising times ``t >= 0`` (1-D), value for value: each phase
         is then a run of ``t`` and is computed on its slice, without masks and without
         speed and acceleration (the pulse train needs positions only)."""
-        seg = np.asarray(self.segments, dtype=np.float64)
 
         def acc_position(s: np.ndarray) -> np.ndarray:
-            k = np.clip(np.searchsorted(seg[:, 0], s, side="right") - 1, 0, len(seg) - 1)
-            t0, p0, v0, a0, jk = seg[k].T
-            d = s - t0
-            return p0 + d * (v0 + d * (a0 / 2.0 + d * (jk / 6.0)))
+            return self._segment_position(*self._at_segments(s))
 
         i_a, i_d, i_e = np.searchsorted(t, [self.t_acc_end, self.t_dec_start, self.t_end])
         pos = np.empty_like(t)
