@@ -6,7 +6,7 @@ Ratios are taken within this one run. Figures:
    both made by ``gymnasium.make`` (same wrapper stack) and both unwrapped (target ≤ 0.5×).
    Resets are outside the timing.
 2. The native VFServo-v0 vector env at N envs (default 64), 140 ticks a step: the compiled
-   batch step on one thread with the envs in SIMD lanes (vfgym._lanes) and env by env
+   batch step on one thread with the envs in SIMD lanes (vfgym.plant._lanes) and env by env
    (the single-env kernel), and with the blocks forced onto all numba threads; env-steps/s
    (also counting only the steps in which no episode ended: the run-out of an ending
    episode's move is simulated env by env), plant ticks/s (run-outs included) and the
@@ -38,13 +38,13 @@ import numpy as np
 
 import vfgym.envs  # noqa: F401  (registers the ids)
 from vfgym import DEFAULT_MEASURES, PAPER_SETTINGS
-from vfgym import _kernel as K
-from vfgym import _lanes as LN
-from vfgym import _layout as L
 from vfgym.envs import _batch as B
 from vfgym.envs.vector import VFServoVectorEnv, VFTuneVectorEnv
-from vfgym.scenarios import get_scenario
-from vfgym.simulate import pack
+from vfgym.moves.scenarios import get_scenario
+from vfgym.plant import _kernel as K
+from vfgym.plant import _lanes as LN
+from vfgym.plant import _layout as L
+from vfgym.plant import pack
 from vfgym.space import to_action
 
 ACTION = to_action(PAPER_SETTINGS)

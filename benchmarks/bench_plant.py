@@ -20,10 +20,10 @@ import time
 import numpy as np
 
 from vfgym import DEFAULT_MEASURES, PAPER_PLANT, PAPER_SETTINGS, step_command
-from vfgym import _kernel as K
-from vfgym import _layout as L
-from vfgym.reference import reference_run
-from vfgym.simulate import pack
+from vfgym.plant import _kernel as K
+from vfgym.plant import _layout as L
+from vfgym.plant import pack
+from vfgym.plant.reference import reference_run
 
 COLD = (
     "import time; t=time.perf_counter(); import vfgym; "

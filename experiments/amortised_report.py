@@ -20,7 +20,7 @@ import optuna
 
 from vfgym import PAPER_SETTINGS, evaluate, scenario_set
 from vfgym.agents import policy_settings
-from vfgym.runs import write_yaml
+from vfgym.io.runs import write_yaml
 from vfgym.space import NAMES, suggest
 
 

@@ -32,8 +32,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def tuned_candidate(sweep: str | None):
     """(Candidate, description) of the tuned settings."""
-    from vfgym.baselines import Baseline
     from vfgym.commands._common import load_settings
+    from vfgym.moves.baselines import Baseline
     from vfgym.report import Candidate
     from vfgym.space import settings_from_dict
 
@@ -83,8 +83,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--dpi", type=int, default=110)
     args = p.parse_args(argv)
 
-    from vfgym import PAPER_SETTINGS, __version__, plots
-    from vfgym.baselines import BASELINE_NAMES, controller_label
+    from vfgym import PAPER_SETTINGS, __version__
+    from vfgym.moves.baselines import BASELINE_NAMES, controller_label
+    from vfgym.moves.scenarios import get_scenario
     from vfgym.report import (
         baseline_candidates,
         compare,
@@ -92,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
         markdown_costs,
         markdown_table,
     )
-    from vfgym.scenarios import get_scenario
+    from vfgym.report import figures as plots
     from vfgym.scoring import evaluate
 
     t0 = time.perf_counter()
@@ -199,7 +200,7 @@ def main(argv: list[str] | None = None) -> int:
         *[f"- `{p.relative_to(out)}`" for p in written],
         "",
     ]
-    from vfgym.runs import write_text
+    from vfgym.io.runs import write_text
 
     write_text(out / "results.md", "\n".join(md))
     write_text(out / "results_named.txt", format_table(named))

@@ -29,14 +29,14 @@ from vfgym import (
     evaluate,
     get_scenario,
 )
-from vfgym import _layout as L
 from vfgym.envs import _batch as B
 from vfgym.envs._common import SCENARIO_FEATURES
 from vfgym.envs.servo import SERVO_FEATURES, VFServoEnv
 from vfgym.envs.tune import VFTuneEnv
-from vfgym.metrics import NAMES as METRIC_NAMES
+from vfgym.plant import _layout as L
+from vfgym.plant import pack
+from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.scoring import CONSTRAINTS
-from vfgym.simulate import pack
 from vfgym.space import NAMES, from_action, settings_from_dict, to_action
 
 TUNE, SERVO = vfgym.envs.ENV_IDS

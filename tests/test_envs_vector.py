@@ -18,12 +18,12 @@ from gymnasium.vector import AutoresetMode
 import vfgym.envs
 import vfgym.envs._batch
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, evaluate
-from vfgym import _kernel as K
-from vfgym import _layout as L
 from vfgym.envs._common import ScenarioSource
 from vfgym.envs.tune import evaluate_pairs
 from vfgym.envs.vector import VFServoVectorEnv, VFTuneVectorEnv
 from vfgym.params import DEFAULT_MEASURES
+from vfgym.plant import _kernel as K
+from vfgym.plant import _layout as L
 from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS
 from vfgym.space import from_action, to_action
 
@@ -303,7 +303,7 @@ def test_threads_start_where_the_wait_policy_makes_them_pay():
     """vfgym makes numba's workers sleep unless the user opted in to spinning, and the
     vector envs go parallel from 512 envs with sleeping workers, from 32 with spinning."""
     code = (
-        "import vfgym.envs._batch as B, vfgym._kernel as K, os;"
+        "import vfgym.envs._batch as B, vfgym.plant._kernel as K, os;"
         "print(os.environ.get('OMP_WAIT_POLICY'), K.SPINNING_WORKERS, B.PARALLEL_MIN_ENVS)"
     )
     base = {k: v for k, v in os.environ.items() if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}

@@ -13,7 +13,7 @@ import pytest
 import vfgym
 
 SCRIPT = (
-    "import vfgym, vfgym._kernel as K; "
+    "import vfgym, vfgym.plant._kernel as K; "
     "tr = vfgym.simulate(vfgym.step_command(10.0, 14000)); "
     "print(K.CACHE, tr.metrics['pulse_count'], tr.metrics['move_time_s'])"
 )

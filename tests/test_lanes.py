@@ -1,4 +1,4 @@
-"""The SIMD lane kernel (vfgym._lanes) against the kernel it restates (run_segment): the same
+"""The SIMD lane kernel (vfgym.plant._lanes) against the kernel it restates (run_segment): the same
 loop state and pulse-count history, bit for bit, for random plants (friction, loads), random
 settings of both laws, envs at different ticks, and lanes left unused."""
 
@@ -8,12 +8,12 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from vfgym import DEFAULT_MEASURES, _lanes
-from vfgym import _kernel as K
-from vfgym import _layout as L
+from vfgym import DEFAULT_MEASURES
+from vfgym.moves.scenarios import get_scenario, random_scenario
 from vfgym.params import Settings
-from vfgym.scenarios import get_scenario, random_scenario
-from vfgym.simulate import pack, simulate
+from vfgym.plant import _kernel as K
+from vfgym.plant import _lanes, pack, simulate
+from vfgym.plant import _layout as L
 
 NAMED = ("paper-step", "friction", "heavy-load", "reversal", "short-move", "paper-sine")
 

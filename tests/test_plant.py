@@ -25,10 +25,10 @@ from vfgym import (
     simulate,
     step_command,
 )
-from vfgym import _kernel as K
-from vfgym import _layout as L
-from vfgym.reference import DigitalServo, MotorLoad, reference_run
-from vfgym.simulate import pack
+from vfgym.plant import _kernel as K
+from vfgym.plant import _layout as L
+from vfgym.plant import pack
+from vfgym.plant.reference import DigitalServo, MotorLoad, reference_run
 
 F = PAPER_TICK_HZ
 T = 1.0 / F

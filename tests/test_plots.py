@@ -9,10 +9,10 @@ import pytest
 import yaml
 
 from vfgym import Settings, evaluate
-from vfgym.baselines import scurve
 from vfgym.cli import main
+from vfgym.moves.baselines import scurve
 from vfgym.params import PAPER_PLANT
-from vfgym.plots import (
+from vfgym.report.figures import (
     compare_figure,
     frequency_figure,
     history_figure,
@@ -258,7 +258,7 @@ def test_plot_cli_bad_input(tmp_path, capsys, argv, needle):
 
 
 def test_objectives_from_user_attributes():
-    from vfgym.plots import _attr_objectives
+    from vfgym.report.figures import _attr_objectives
 
     names = list(OBJECTIVES)
     forms = [

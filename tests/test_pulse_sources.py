@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from vfgym.pulse_sources import (
+from vfgym.moves.pulse_sources import (
     ScurveProfile,
     fixed_frequency_pulses,
     scurve_profile,
@@ -255,7 +255,7 @@ def test_rule_of_one_twelfth_only_for_moves_that_cannot_reach_drive_speed():
 def test_train_builder_caps_rounding_to_one_pulse_per_tick():
     # Rounding at DV = tick_hz could in principle step the count by two in one tick; the
     # builder delays the extra pulse by a tick and extends the train if need be.
-    from vfgym.pulse_sources import _train_from_counts
+    from vfgym.moves.pulse_sources import _train_from_counts
 
     train = _train_from_counts(np.array([0, 1, 3, 4, 5, 5, 5, 5]), 5, 5)
     np.testing.assert_array_equal(train, [1, 1, 1, 1, 1])

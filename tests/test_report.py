@@ -14,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vfgym import Settings, evaluate
-from vfgym.baselines import rule_of_thumb
+from vfgym.moves.baselines import rule_of_thumb
 from vfgym.report import (
     Candidate,
     compare,

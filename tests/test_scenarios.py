@@ -10,8 +10,9 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from vfgym import PAPER_PLANT, profiles
-from vfgym.scenarios import (
+from vfgym import PAPER_PLANT
+from vfgym.moves import profiles
+from vfgym.moves.scenarios import (
     PAPER_SINE_AMPLITUDE_RAD,
     PAPER_SINE_FREQ_HZ,
     SCENARIOS,

@@ -8,12 +8,13 @@ import math
 import numpy as np
 import pytest
 from helpers import linear_plant
+from oracles import measures_from_trace as from_trace
 
 import vfgym
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, Measures, Settings, evaluate, simulate
-from vfgym import baselines as B
-from vfgym.metrics import NAMES, from_trace
-from vfgym.scenarios import SCENARIOS, scenario_set
+from vfgym.moves import baselines as B
+from vfgym.moves.scenarios import SCENARIOS, scenario_set
+from vfgym.plant.measures import NAMES
 
 INTS = {"settled", "pulse_count", "pulse_reversals"}
 

@@ -117,7 +117,7 @@ def test_a_retried_trial_is_claimed_under_its_new_worker_before_the_lock_is_rele
     seen = []
     obj.on_enter = lambda: seen.append(study.trials[-1].user_attrs[tuning.WORKER_ATTR])
     study.optimize(obj, n_trials=1)
-    assert seen == [tuning._worker_id()] != ["h/1/x"]
+    assert seen == [tuning._recovery._worker_id()] != ["h/1/x"]
 
 
 def _trial_list(tmp_path: Path, study: str) -> list[tuple]:

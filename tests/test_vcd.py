@@ -11,7 +11,7 @@ import pytest
 
 from vfgym import PAPER_PLANT, Scenario, evaluate
 from vfgym.cli import main
-from vfgym.vcd import edge_counts, parse_timescale, vcd_text
+from vfgym.io.vcd import edge_counts, parse_timescale, vcd_text
 
 F = PAPER_PLANT.tick_hz
 
@@ -21,7 +21,7 @@ ZIGZAG = Scenario("zigzag", "multi", 0.0, 0.05, moves=((0.4, 0.012), (-0.8, 0.01
 
 def parse_vcd(text: str) -> tuple[float, dict[str, list[tuple[int, int]]], dict[str, int]]:
     """Timescale (s), per signal name the (time, value) changes after the dump, and the
-    initial values. Written from the VCD grammar, not from vfgym.vcd."""
+    initial values. Written from the VCD grammar, not from vfgym.io.vcd."""
     scale = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "ps": 1e-12, "fs": 1e-15}
     tokens = text.split()
     names: dict[str, str] = {}

@@ -1,10 +1,19 @@
 """vfgym: exact simulation and tuning of a V-F transformation pulse-train position controller.
 
-The plant (MODEL.md): V-F controller (paper) → digital servo with a filtered speed loop
-(patent) → motor, load and quadrature encoder; MCX514-style S-curve pulse source.
+The plant (``docs/model.md``): V-F controller (paper) → digital servo with a filtered speed
+loop (patent) → motor, load and quadrature encoder; MCX514-style S-curve pulse source.
+
+The package reads like its block diagram, ``params → simulate → trace → metrics → cost``:
+:mod:`vfgym.params` and :mod:`vfgym.space` (the vocabulary), :mod:`vfgym.plant` (the
+simulator), :mod:`vfgym.moves` (what the plant is asked to do), :mod:`vfgym.scoring` (the
+one scoring path), then :mod:`vfgym.tuning`, :mod:`vfgym.report` and :mod:`vfgym.envs`
+on top, and :mod:`vfgym.agents` and :mod:`vfgym.commands` above those.
 """
 
-from vfgym import baselines, envs  # importing envs registers vfgym/VFTune-v0, VFServo-v0
+from vfgym import envs  # importing envs registers vfgym/VFTune-v0, VFServo-v0
+from vfgym.moves import baselines
+from vfgym.moves.pulse_sources import fixed_frequency_pulses, scurve_pulses
+from vfgym.moves.scenarios import SCENARIOS, Scenario, get_scenario, random_scenario, scenario_set
 from vfgym.params import (
     DEFAULT_MEASURES,
     PAPER_ACCEL_LIMIT_RAD_S2,
@@ -22,10 +31,8 @@ from vfgym.params import (
     Settings,
     paper_k,
 )
-from vfgym.pulse_sources import fixed_frequency_pulses, scurve_pulses
-from vfgym.scenarios import SCENARIOS, Scenario, get_scenario, random_scenario, scenario_set
+from vfgym.plant import Trace, simulate, step_command, vf_pulses
 from vfgym.scoring import Bounds, CostWeights, Evaluation, evaluate
-from vfgym.simulate import Trace, simulate, step_command, vf_pulses
 
 __version__ = "0.1.0"
 

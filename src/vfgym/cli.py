@@ -33,7 +33,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``vfgym`` console script."""
-    from vfgym.runs import set_command_line
+    from vfgym.io.runs import set_command_line
 
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -262,7 +262,7 @@ def paper_k(plant: Plant = PAPER_PLANT, accel_limit_rad_s2: float | None = None)
 
 @dataclass(frozen=True)
 class Measures:
-    """Windows and bands of the measures of a move (MODEL.md §5); see :mod:`vfgym.metrics`.
+    """Windows and bands of the measures of a move (MODEL.md §5); see :mod:`vfgym.plant.measures`.
 
     in_position_counts: half-width of the in-position window around the final command,
         in encoder counts (a servo drive's "positioning completed width").

@@ -13,9 +13,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from vfgym.io.runs import read_yaml
+from vfgym.moves.scenarios import Scenario, get_scenario
 from vfgym.params import Settings
-from vfgym.runs import read_yaml
-from vfgym.scenarios import Scenario, get_scenario
 
 
 def _config(model_path: Path) -> dict[str, Any]:

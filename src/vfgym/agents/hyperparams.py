@@ -14,7 +14,7 @@ from typing import Any
 
 import yaml
 
-from vfgym.runs import read_yaml
+from vfgym.io.runs import read_yaml
 
 ALGOS = ("ppo", "sac", "td3")
 ENV_IDS = ("vfgym/VFTune-v0", "vfgym/VFServo-v0")

@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 
 from vfgym.agents.hyperparams import algo_class
-from vfgym.runs import read_yaml, write_text, write_yaml
-from vfgym.scenarios import Scenario, random_scenario
+from vfgym.io.runs import read_yaml, write_text, write_yaml
+from vfgym.moves.scenarios import Scenario, random_scenario
 
 VALIDATION_SEED0 = 2**40
 """First train-split seed of the held-out validation scenarios."""

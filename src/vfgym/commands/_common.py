@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from vfgym.baselines import Baseline
+from vfgym.io.runs import read_yaml
+from vfgym.moves.baselines import Baseline
 from vfgym.params import Settings
-from vfgym.runs import read_yaml
 from vfgym.space import settings_from_dict
 
 

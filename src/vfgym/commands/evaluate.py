@@ -115,10 +115,10 @@ def load_policy(model_path: str) -> Any:
 def run(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
-    from vfgym.baselines import BASELINE_NAMES
+    from vfgym.io.runs import new_run_dir, record_command, write_yaml
+    from vfgym.moves.baselines import BASELINE_NAMES
+    from vfgym.moves.scenarios import scenario_set
     from vfgym.report import Candidate, baseline_candidates, compare, format_table, write_report
-    from vfgym.runs import new_run_dir, record_command, write_yaml
-    from vfgym.scenarios import scenario_set
     from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS
     from vfgym.space import settings_to_dict
 

@@ -1,8 +1,8 @@
 """``vfgym export``: a simulated move's signals as a file.
 
 ``--format vcd`` writes the pulse and direction signals and the encoder's A/B channels as a
-Value Change Dump (GTKWave, PulseView; see :mod:`vfgym.vcd`); ``--format csv`` writes the
-per-tick trace (every ``--decimation``-th tick; see :data:`vfgym.report.TRACE_FIELDS`).
+Value Change Dump (GTKWave, PulseView; see :mod:`vfgym.io.vcd`); ``--format csv`` writes the
+per-tick trace (every ``--decimation``-th tick; see :data:`vfgym.io.trace_csv.TRACE_FIELDS`).
 """
 
 from __future__ import annotations
@@ -41,10 +41,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from vfgym.commands.plot import _controller
-    from vfgym.report import write_trace_csv
-    from vfgym.scenarios import get_scenario
+    from vfgym.io.trace_csv import write_trace_csv
+    from vfgym.io.vcd import parse_timescale, write_vcd
+    from vfgym.moves.scenarios import get_scenario
     from vfgym.scoring import evaluate
-    from vfgym.vcd import parse_timescale, write_vcd
 
     scenario = get_scenario(args.scenario)
     if args.format == "vcd":

@@ -50,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from vfgym import tuning
-    from vfgym.runs import read_yaml, record_command, write_text, write_yaml
+    from vfgym.io.runs import read_yaml, record_command, write_text, write_yaml
 
     keys = [f.lstrip("-").replace("-", "_") for f, _ in OPTIONS] + ["progress"]
     file_data = read_yaml(args.config) if args.config else None

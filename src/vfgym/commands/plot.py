@@ -67,7 +67,7 @@ def load_study(run_dir: str, storage: str | None = None) -> Any:
     password was masked in the file needs ``storage`` given again."""
     import optuna
 
-    from vfgym.runs import read_yaml
+    from vfgym.io.runs import read_yaml
 
     d = Path(run_dir)
     if not d.is_dir():
@@ -105,8 +105,8 @@ def load_study(run_dir: str, storage: str | None = None) -> Any:
 
 
 def _controller(args: argparse.Namespace) -> tuple[Any, str]:
-    from vfgym.baselines import Baseline
     from vfgym.commands.evaluate import load_settings_file
+    from vfgym.moves.baselines import Baseline
 
     if args.settings:
         return load_settings_file(args.settings), Path(args.settings).stem
@@ -123,8 +123,8 @@ def _against(args: argparse.Namespace, default: str, own: str) -> list[Any]:
 
 def build_figure(args: argparse.Namespace) -> Any:
     """The figure the arguments ask for."""
-    from vfgym import plots
-    from vfgym.scenarios import get_scenario
+    from vfgym.moves.scenarios import get_scenario
+    from vfgym.report import figures as plots
     from vfgym.scoring import evaluate
 
     if args.kind in ("history", "pareto"):

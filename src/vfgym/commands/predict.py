@@ -21,7 +21,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import yaml
 
-    from vfgym.scenarios import get_scenario
+    from vfgym.moves.scenarios import get_scenario
     from vfgym.space import settings_to_dict
 
     scenario = get_scenario(args.scenario)
@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     text = yaml.safe_dump(doc, sort_keys=False)
     print(text, end="")
     if args.out:
-        from vfgym.runs import write_text
+        from vfgym.io.runs import write_text
 
         write_text(args.out, text)
     return 0

@@ -23,7 +23,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from vfgym.commands._common import controller_from_args
-    from vfgym.scenarios import SCENARIOS, get_scenario
+    from vfgym.moves.scenarios import SCENARIOS, get_scenario
     from vfgym.scoring import evaluate
 
     if args.list:

@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from vfgym import tuning
-    from vfgym.runs import read_yaml
+    from vfgym.io.runs import read_yaml
 
     file_data = read_yaml(args.config) if args.config else None
     cfg = tuning.SweepConfig.resolve(file_data, _cli_values(args), source=str(args.config))
@@ -153,7 +153,7 @@ def _record(run_dir, args, cfg, name, spec) -> None:
     import shlex
     import sys
 
-    from vfgym.runs import write_text, write_yaml
+    from vfgym.io.runs import write_text, write_yaml
     from vfgym.tuning import mask_url
 
     conf = cfg.to_dict() | {"study": name, "storage": spec.display}
@@ -252,7 +252,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     """Trials CSV, best.yaml, plots, the tuned-vs-paper table (printed and in report.txt)
     and summary.yaml. Returns the exit status."""
     from vfgym import tuning
-    from vfgym.runs import write_text, write_yaml
+    from vfgym.io.runs import write_text, write_yaml
 
     tuning.write_trials_csv(study, run_dir / "trials.csv")
     n = tuning.counts(study)

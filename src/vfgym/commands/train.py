@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
         file = args.hyperparams_file
     params = hp.load(args.algo, args.env, file, hp.parse_overrides(args.hyperparams))
     from vfgym.agents.training import train
-    from vfgym.runs import new_run_dir, record_command
+    from vfgym.io.runs import new_run_dir, record_command
 
     name = args.name or f"{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}"
     run_dir = new_run_dir(args.runs_dir, "train", name)

@@ -1,10 +1,10 @@
 """Compiled stepping of VFServo-v0: one control interval of one env, or of a batch of envs.
 
 Each env keeps everything it needs in one float64 *workspace* row (layout below): the
-kernel's parameter row and loop state (:mod:`vfgym._layout`), the episode's constants, the
+kernel's parameter row and loop state (:mod:`vfgym.plant._layout`), the episode's constants, the
 running cost, the final accumulators and the observation. :func:`env_step` maps the action
 onto the four settings (the search space's own scaling, read from the row), advances the
-stateful kernel (:func:`vfgym._kernel.run_segment`) by one interval, and writes the reward
+stateful kernel (:func:`vfgym.plant._kernel.run_segment`) by one interval, and writes the reward
 terms, the end-of-episode flags and the observation. :func:`step_one` (one env, no threads)
 and :func:`step_batch` (numba ``prange`` over envs) call the same :func:`env_step`, so a
 single env and a batched one produce the same numbers bit for bit.
@@ -24,9 +24,9 @@ import math
 import numba
 import numpy as np
 
-from vfgym import _kernel as K
-from vfgym import _lanes as LN
-from vfgym import _layout as L
+from vfgym.plant import _kernel as K
+from vfgym.plant import _lanes as LN
+from vfgym.plant import _layout as L
 
 _jit = numba.njit(cache=True, fastmath=False, nogil=True)
 
@@ -367,7 +367,7 @@ PARALLEL_MIN_ENVS = 32 if K.SPINNING_WORKERS else 512
 the calling thread. A step of 64 envs takes ~150 us on one core. Waking numba's sleeping
 workers (vfgym's default, OMP_WAIT_POLICY=PASSIVE) costs ~55 us a call, so on the 2-core
 VM measured (benchmarks/bench_envs.py) the second thread only paid from ~512 envs; with
-spinning workers (opt-in, :data:`vfgym._kernel.SPINNING_WORKERS`) it paid from 32."""
+spinning workers (opt-in, :data:`vfgym.plant._kernel.SPINNING_WORKERS`) it paid from 32."""
 
 
 @_jit
@@ -394,7 +394,7 @@ def _leave_lanes(w, ring, H, e: int, g: int, acc_w: int) -> None:
 @_jit
 def _step_block(b: int, W, RING, CMD, active, Z, CB, H, G, lane_min: int) -> None:
     """Advance the active envs of lane block ``b`` (envs b·LANES …) by one interval: in
-    SIMD lanes (:mod:`vfgym._lanes`) when enough of them can, else one by one."""
+    SIMD lanes (:mod:`vfgym.plant._lanes`) when enough of them can, else one by one."""
     N = W.shape[0]
     m = CB.shape[0]
     acc_w = (H.shape[0] - m) // 2
@@ -466,11 +466,11 @@ def step_batch(
     (0 for inactive envs). Returns −1, or the first env whose action is bad, in which case
     no env has been stepped.
 
-    Envs are simulated in lane blocks of :data:`vfgym._lanes.LANES` (env r in block
+    Envs are simulated in lane blocks of :data:`vfgym.plant._lanes.LANES` (env r in block
     r // LANES, lane r % LANES), numba threads over the blocks from ``parallel_min``
     envs (:data:`PARALLEL_MIN_ENVS`); a block with fewer than
     ``lane_min`` envs that can tick in lanes runs them one by one. ``Z``, ``CB``, ``H``:
-    one block scratch each per block (:func:`vfgym._lanes.scratch`); ``G``: each block's
+    one block scratch each per block (:func:`vfgym.plant._lanes.scratch`); ``G``: each block's
     tick counter. While an env's last counts live in its block's history (``X_LANE``),
     its ring is out of date; they are written back whenever it leaves the lanes."""
     N = W.shape[0]

@@ -9,10 +9,10 @@ from typing import Any
 
 import numpy as np
 
-from vfgym import profiles
 from vfgym._validate import check_choice, check_int
+from vfgym.moves import profiles
+from vfgym.moves.scenarios import SPLITS, Scenario, get_scenario, random_scenario
 from vfgym.params import Measures, Plant, in_position_rad
-from vfgym.scenarios import SPLITS, Scenario, get_scenario, random_scenario
 from vfgym.scoring import CONSTRAINTS, Bounds, CostWeights
 
 SEED_LIMIT = 2**63 - 1
@@ -30,7 +30,7 @@ SERVO_VIOLATION_PENALTY = 5.0
 """Subtracted at a constraint violation when ``terminate_on_violation`` is on."""
 RESET_OPTIONS = ("scenario", "scenario_seed")
 
-# scales of the scenario features: the random distribution's ranges (vfgym.scenarios)
+# scales of the scenario features: the random distribution's ranges (vfgym.moves.scenarios)
 INERTIA_RATIO_SCALE = 5.0
 COULOMB_SCALE_NM = 0.004
 VISCOUS_SCALE_NM_S_RAD = 3e-4

@@ -9,10 +9,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from vfgym import _kernel as K
-from vfgym import _layout as L
 from vfgym._validate import check_choice, check_real
-from vfgym.metrics import from_acc
+from vfgym.moves.scenarios import Scenario
 from vfgym.params import (
     ACCEL_LAWS,
     DEFAULT_MEASURES,
@@ -22,9 +20,11 @@ from vfgym.params import (
     Plant,
     Settings,
 )
-from vfgym.scenarios import Scenario
+from vfgym.plant import _kernel as K
+from vfgym.plant import _layout as L
+from vfgym.plant import pack
+from vfgym.plant.measures import from_acc
 from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights, score
-from vfgym.simulate import pack
 from vfgym.space import SPACE, from_action, to_action
 
 from . import _batch as B
@@ -206,7 +206,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     One episode is one move of the plant of MODEL.md (V-F controller → digital servo →
     motor). Each step is one control interval (default 1 ms = 140 ticks): the action sets
     the four settings for that interval, and the compiled, stateful kernel
-    (:func:`vfgym._kernel.run_segment`) advances the plant through it; its state (the V-F
+    (:func:`vfgym.plant._kernel.run_segment`) advances the plant through it; its state (the V-F
     accumulator, the servo's counters and filter, the motor) carries over from one interval
     to the next. At the episode's end ``info`` holds the scoring path's measures and cost of
     the whole move, so online tuning compares like for like with fixed settings from

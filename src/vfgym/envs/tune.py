@@ -10,8 +10,9 @@ import numpy as np
 from gymnasium import spaces
 
 from vfgym._validate import check_choice
+from vfgym.moves.scenarios import Scenario
 from vfgym.params import ACCEL_LAWS, DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
-from vfgym.scenarios import Scenario
+from vfgym.plant import simulate
 from vfgym.scoring import (
     DEFAULT_BOUNDS,
     DEFAULT_WEIGHTS,
@@ -20,7 +21,6 @@ from vfgym.scoring import (
     evaluate,
     score_pairs,
 )
-from vfgym.simulate import simulate
 from vfgym.space import SPACE, from_action, settings_to_dict
 
 from ._common import (
@@ -95,7 +95,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     point-to-point move costs about 1): move time / ideal time (or RMS tracking error for a
     moving reference) plus weighted overshoot, acceleration over the limit, time at the
     torque limit and not settling (:class:`vfgym.CostWeights`). ``info`` carries every
-    measure of :mod:`vfgym.metrics`, ``ideal_time_s``, ``time_ratio``, ``window_rad``,
+    measure of :mod:`vfgym.plant.measures`, ``ideal_time_s``, ``time_ratio``, ``window_rad``,
     ``cost``, the constraint values ``constraint_accel``, ``constraint_torque``,
     ``constraint_overshoot`` (feasible when ≤ 0), ``feasible``, ``scenario`` and the
     settings used.

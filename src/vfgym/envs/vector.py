@@ -19,8 +19,8 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from vfgym import _layout as L
 from vfgym._validate import check_choice, check_int
+from vfgym.moves.scenarios import Scenario
 from vfgym.params import (
     ACCEL_LAWS,
     DEFAULT_MEASURES,
@@ -30,7 +30,7 @@ from vfgym.params import (
     Plant,
     Settings,
 )
-from vfgym.scenarios import Scenario
+from vfgym.plant import _layout as L
 from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights
 from vfgym.space import settings_to_dict
 

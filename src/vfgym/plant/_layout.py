@@ -38,7 +38,7 @@ P_ACC_SCALE = 28  # δ/(w·T)²: converts a second difference of counts to rad/s
 P_USE_EXT = 29  # 1: pulses come from the external source array, 0: V-F controller
 N_PARAMS = 30
 
-# --- accumulator row (streamed measures; see vfgym.metrics for the definitions) -----------
+# --- accumulator row (streamed measures; see vfgym.plant.measures for the definitions) -----------
 A_OV_MOTOR = 0  # max over at-rest ticks of dir·(θ − P) (rad), ≥ 0
 A_OV_PULSE = 1  # the same for the pulse position n·δ
 A_LAST_OUT_MOTOR = 2  # last tick with |θ − target| > window (−1: never)

@@ -1,9 +1,9 @@
 """The measures of a move (MODEL.md §5), each with one written definition.
 
-The kernel streams raw accumulators over every tick (:mod:`vfgym._layout`);
-:func:`from_acc` turns them into the named measures below. :func:`from_trace` computes
-the same measures from a full per-tick trace with numpy, independently, and serves as
-the tests' oracle for the streamed values.
+The kernel streams raw accumulators over every tick (:mod:`vfgym.plant._layout`);
+:func:`from_acc` turns them into the named measures below. The tests recompute the same
+measures from a full per-tick trace with numpy, independently (``tests/oracles.py``), as
+the oracle for the streamed values.
 
 Conventions: the plant starts at rest at 0 rad; the *target* is the command's final value;
 the in-position window is ``Measures.in_position_counts`` encoder counts around the target
@@ -59,9 +59,8 @@ from typing import Any
 
 import numpy as np
 
-from vfgym import _layout as L
-from vfgym.params import Measures, Plant, in_position_rad
-from vfgym.simulate import command_end_s
+from vfgym.params import Measures, Plant
+from vfgym.plant import _layout as L
 
 NAMES = (
     "overshoot_rad",
@@ -161,112 +160,9 @@ def from_acc(
     }
 
 
-def from_trace(trace: Any) -> dict[str, Any]:
-    """The same measures from a full (undecimated) :class:`vfgym.Trace`, with numpy.
-
-    Written from the definitions above without the kernel's streaming state; the tests
-    compare it with :func:`from_acc`.
-    """
-    if trace.decimation != 1:
-        raise ValueError("from_trace needs a trace with decimation=1")
-    plant, measures = trace.plant, trace.measures
-    f, T = plant.tick_hz, plant.tick_s
-    P = trace.command_rad
-    theta = trace.motor_rad
-    n_pulses = trace.pulse_count
-    pos = n_pulses * plant.pulse_rad
-    n = P.size
-    target = float(P[-1])
-    win = in_position_rad(measures, plant, target)
-    q = plant.motor.count_rad
-    limit = plant.motor.accel_limit_rad_s2
-
-    prev = np.concatenate([[0.0], P[:-1]])
-    change = prev != P
-    idx_change = np.flatnonzero(change)
-    last_change = np.full(n, -1)
-    last_change[idx_change] = idx_change
-    last_change = np.maximum.accumulate(last_change)
-    direction = np.where(last_change >= 0, np.sign(P[last_change] - prev[last_change]), 0.0)
-    at_rest = (~change) & (direction != 0)
-
-    def overshoot(x: np.ndarray) -> float:
-        v = direction[at_rest] * (x[at_rest] - P[at_rest])
-        return float(max(0.0, v.max())) if v.size else 0.0
-
-    def last_out(x: np.ndarray) -> int:
-        out = np.flatnonzero(np.abs(x - target) > win)
-        return int(out[-1]) if out.size else -1
-
-    ss_start = max(0, n - round(measures.steady_window_s * f))
-    w = accel_window_ticks(measures, plant)
-    padded = np.concatenate([np.zeros(2 * w, dtype=np.int64), n_pulses])
-    d2 = np.abs(padded[2 * w :] - 2 * padded[w:-w] + padded[: -2 * w])
-    speed = trace.speed_rad_s
-    dw = np.abs(np.diff(np.concatenate([[0.0], speed])))
-
-    # torque clipped: the command K3·u beyond what the curve allowed at last tick's speed
-    m = plant.motor
-    tau_cmd = plant.servo.torque_per_count_nm * trace.servo_error_counts
-    w_prev = np.concatenate([[0.0], speed[:-1]])
-    aw = np.abs(w_prev)
-    slope = (m.torque_at_max_speed_nm - m.peak_torque_nm) / (m.max_speed_rad_s - m.knee_speed_rad_s)
-    curve = np.where(
-        aw <= m.knee_speed_rad_s,
-        m.peak_torque_nm,
-        np.where(aw < m.max_speed_rad_s, m.peak_torque_nm + slope * (aw - m.knee_speed_rad_s), 0.0),
-    )
-    lim = np.where(tau_cmd * w_prev > 0.0, curve, m.peak_torque_nm)
-    sat = int(np.count_nonzero(np.abs(tau_cmd) > lim))
-
-    ns = plant.servo.sample_ticks
-    theta_start = np.concatenate([[0.0], theta[:-1]])  # θ at the start of each tick
-    theta_samples = np.concatenate([[0.0], theta_start[ns - 1 :: ns]])
-    vbar = np.diff(theta_samples) / (ns * T)
-    d2v = vbar[2:] - 2 * vbar[1:-1] + vbar[:-2]
-
-    ticks = np.flatnonzero(trace.pulses)
-    signs = trace.pulses[ticks]
-    lo = last_out(theta)
-    move = (lo + 1) * T
-    trk = P - theta
-    trk_p = P - pos
-    return {
-        "overshoot_rad": overshoot(theta),
-        "overshoot_pct": 100.0 * overshoot(theta) / abs(target) if target != 0 else math.nan,
-        "overshoot_counts": overshoot(theta) / q,
-        "pulse_overshoot_rad": overshoot(pos),
-        "move_time_s": move,
-        "settling_time_s": max(0.0, move - command_end_s(P, f)),
-        "settled": lo < n - 1,
-        "pulse_move_time_s": (last_out(pos) + 1) * T,
-        "steady_state_error_rad": float(np.mean(theta[ss_start:] - target)),
-        "pulse_steady_state_error_rad": float(np.mean(pos[ss_start:] - target)),
-        "peak_accel_pulse_rad_s2": float(d2.max()) * plant.pulse_rad / (w * T) ** 2,
-        "peak_accel_motor_rad_s2": float(dw.max()) / T,
-        "accel_ratio_pulse": float(d2.max()) * plant.pulse_rad / (w * T) ** 2 / limit,
-        "accel_ratio_motor": float(dw.max()) / T / limit,
-        "accel_quantum_rad_s2": 2.0 * plant.pulse_rad / (w * T) ** 2,
-        "torque_limit_time_s": sat * T,
-        "tracking_rms_rad": float(np.sqrt(np.mean(trk**2))),
-        "tracking_max_rad": float(np.abs(trk).max()),
-        "pulse_tracking_rms_rad": float(np.sqrt(np.mean(trk_p**2))),
-        "pulse_tracking_max_rad": float(np.abs(trk_p).max()),
-        "velocity_ripple_rad_s": float(np.sqrt(np.mean(d2v**2) / 6.0)) if d2v.size else 0.0,
-        "pulse_count": int(ticks.size),
-        "pulse_reversals": int(np.count_nonzero(np.diff(signs))),
-        "pulse_freq_max_hz": f / int(np.diff(ticks).min()) if ticks.size >= 2 else 0.0,
-        "pulse_freq_mean_hz": (ticks.size - 1) * f / (ticks[-1] - ticks[0])
-        if ticks.size >= 2
-        else 0.0,
-        "peak_torque_nm": float(np.abs(trace.torque_nm).max()),
-        "peak_following_error_counts": float(np.abs(trace.position_counter).max()),
-        "peak_speed_rad_s": float(np.abs(speed).max()),
-        "final_error_rad": float(theta[-1]) - target,
-        "pulse_final_error_rad": float(pos[-1]) - target,
-    }
-
-
-def of_trace(trace: Any) -> dict[str, Any]:
-    """The streamed measures of a simulated :class:`vfgym.Trace` (any decimation)."""
-    return from_acc(trace.acc, trace.plant, trace.measures, trace.target_rad, trace.command_end_s)
+def command_end_s(command: np.ndarray, tick_hz: float) -> float:
+    """Time at which the command reached its final value: tick of its last change × T
+    (the plant starts at rest at 0, so a step at tick 0 ends at 0)."""
+    c = np.concatenate([[0.0], np.asarray(command, dtype=np.float64)])
+    changes = np.flatnonzero(c[1:] != c[:-1])
+    return float(changes[-1]) / tick_hz if changes.size else 0.0

@@ -10,11 +10,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-from vfgym import _kernel as K
-from vfgym import _layout as L
 from vfgym._validate import check_finite_array, check_int, check_real
 from vfgym.params import (
     ACCEL_LAWS,
@@ -27,6 +26,9 @@ from vfgym.params import (
     Settings,
     in_position_rad,
 )
+from vfgym.plant import _kernel as K
+from vfgym.plant import _layout as L
+from vfgym.plant.measures import command_end_s, from_acc
 
 
 def vf_pulses(
@@ -81,7 +83,7 @@ def pack(
     n_ticks: int,
     use_ext: bool = False,
 ) -> np.ndarray:
-    """The kernel's parameter row for one run (see :mod:`vfgym._layout`)."""
+    """The kernel's parameter row for one run (see :mod:`vfgym.plant._layout`)."""
     m, sv = plant.motor, plant.servo
     prm = np.zeros(L.N_PARAMS, dtype=np.float64)
     T = plant.tick_s
@@ -156,7 +158,7 @@ class Trace:
     """What the plant did, tick by tick (every ``decimation``-th tick).
 
     Sample j is the state at the end of tick i = (j+1)·decimation − 1, time (i+1)·T.
-    ``acc`` holds the measures streamed over every tick (see :mod:`vfgym.metrics`).
+    ``acc`` holds the measures streamed over every tick (see :mod:`vfgym.plant.measures`).
     """
 
     time_s: np.ndarray
@@ -184,11 +186,9 @@ class Trace:
     """Time at which the command reached its final value."""
 
     @property
-    def metrics(self) -> dict:
-        """The measures of this move (streamed over every tick; see :mod:`vfgym.metrics`)."""
-        from vfgym.metrics import of_trace
-
-        return of_trace(self)
+    def metrics(self) -> dict[str, Any]:
+        """The measures of this move (streamed over every tick; see :mod:`vfgym.plant.measures`)."""
+        return from_acc(self.acc, self.plant, self.measures, self.target_rad, self.command_end_s)
 
     @property
     def pulse_count(self) -> np.ndarray:
@@ -220,7 +220,7 @@ def simulate(
     """Simulate the plant for a position command given per tick (rad).
 
     pulses: an external pulse train (int8 per tick) that replaces the V-F controller,
-        e.g. :func:`vfgym.pulse_sources.scurve_pulses`; the command is then only the
+        e.g. :func:`vfgym.moves.pulse_sources.scurve_pulses`; the command is then only the
         reference the measures compare against.
     decimation: keep every ``decimation``-th tick in the trace (measures always see all).
     """
@@ -257,19 +257,8 @@ def simulate(
     )
 
 
-def command_end_s(command: np.ndarray, tick_hz: float) -> float:
-    """Time at which the command reached its final value: tick of its last change × T
-    (the plant starts at rest at 0, so a step at tick 0 ends at 0)."""
-    c = np.concatenate([[0.0], np.asarray(command, dtype=np.float64)])
-    changes = np.flatnonzero(c[1:] != c[:-1])
-    return float(changes[-1]) / tick_hz if changes.size else 0.0
-
-
 def step_command(distance_rad: float, n_ticks: int) -> np.ndarray:
     """A step of ``distance_rad`` at tick 0, held for ``n_ticks`` ticks."""
     d = check_real("distance_rad", distance_rad)
     n = check_int("n_ticks", n_ticks, 1)
     return np.full(n, d, dtype=np.float64)
-
-
-__all__ = ["Trace", "pack", "simulate", "step_command", "vf_pulses"]

@@ -1,6 +1,6 @@
 """The kernel's tick over a block of envs in SIMD lanes: the vector envs' fast path.
 
-:func:`vfgym._kernel.run_segment` advances one move; it is bound by the latency of one
+:func:`vfgym.plant._kernel.run_segment` advances one move; it is bound by the latency of one
 tick's chain (encoder → servo → torque → motor → encoder), so one core does far less than
 it could. Here :data:`LANES` moves advance together, tick by tick: every quantity of the
 loop state is a row of ``LANES`` numbers (structure of arrays), and each step of the tick
@@ -17,7 +17,7 @@ What makes the loops vectorise, and must stay so:
   negative-index wrap-around, no symbolic row);
 * ``error_model="numpy"`` (no zero-division branch; every divisor is validated > 0);
 * no calls and no reductions across lanes in the vectorised loops; the rare tick in which
-  Coulomb friction stops the motor (:func:`vfgym._kernel.stop_within_tick`, which calls
+  Coulomb friction stops the motor (:func:`vfgym.plant._kernel.stop_within_tick`, which calls
   ``log1p``/``expm1``) is flagged and done per lane in a scalar pass between them;
 * the pulse-count history for the acceleration measure is kept per block (``H``) and
   its maximum taken after the ticks (a maximum does not depend on the order).
@@ -33,8 +33,8 @@ import math
 import numba
 import numpy as np
 
-from vfgym import _kernel as K
-from vfgym import _layout as L
+from vfgym.plant import _kernel as K
+from vfgym.plant import _layout as L
 
 LANES = 16
 """Moves per block: two AVX-512 vectors (four AVX2 ones) of float64."""
@@ -74,7 +74,7 @@ def _source_servo_motor(Z, e, sampling, friction):
     friction False: no lane has Coulomb friction."""
     if True:
         P = Z[_u(_r(Z_CMD, e))]
-        # 1. V-F controller (vfgym._kernel.vf_tick as selects)
+        # 1. V-F controller (vfgym.plant._kernel.vf_tick as selects)
         delta = Z[_u(_r(Z_PRM + L.P_DELTA, e))]
         limit = Z[_u(_r(Z_PRM + L.P_LIMIT, e))]
         step = Z[_u(_r(Z_PRM + L.P_STEP, e))]
@@ -410,7 +410,7 @@ def load_history(H, e: int, ring, i: int, g: int, w: int) -> None:
 @_jit
 def flush_history(H, e: int, ring, i: int, g: int, w: int) -> None:
     """The inverse of :func:`load_history`: the 2w counts before block tick ``g`` into the
-    move's ring, where :func:`vfgym._kernel.run_segment` from tick ``i`` reads them."""
+    move's ring, where :func:`vfgym.plant._kernel.run_segment` from tick ``i`` reads them."""
     R = H.shape[0]
     mask = ring.shape[0] - 1
     for j in range(1, 2 * w + 1):
@@ -420,7 +420,7 @@ def flush_history(H, e: int, ring, i: int, g: int, w: int) -> None:
 @_jit
 def advance(ids, count: int, PRM, ST, RING, CMD, m: int, Z, CB, H) -> None:
     """Advance moves ``ids[:count]`` (at most LANES; rows of ``PRM``, ``ST``, ``RING``,
-    ``CMD``) by ``m`` ticks each through one block, as :func:`vfgym._kernel.run_segment`
+    ``CMD``) by ``m`` ticks each through one block, as :func:`vfgym.plant._kernel.run_segment`
     would: the moves must share the acceleration window w, use the V-F controller and
     have ``m`` ticks of command left. Unused lanes repeat the first move (discarded).
     ``Z``, ``CB``, ``H``: the block's scratch (:func:`scratch`)."""

@@ -1,33 +1,5 @@
-"""The one scoring path: controller settings → simulate → measures → constraints → cost.
-
-:func:`evaluate` is what every part of vfgym asks "how good is this setting on this move":
-the Gymnasium envs' reward, the Optuna objective and constraints, and the evaluation
-reports. It takes a batch of controllers (V-F :class:`~vfgym.Settings` or a baseline pulse
-source) and a list of scenarios, runs every pair in one compiled, multi-threaded call
-that keeps only the streamed measures, and returns them with the constraint values, the
-objectives and the scalar cost.
-
-Cost of one run (lower is better; weights in :class:`CostWeights`)::
-
-    cost = time · move_time / ideal_time          (point-to-point moves)
-         | tracking · rms_tracking / (10 % of |amplitude|)  (a moving reference)
-         + overshoot · overshoot / in-position window
-         + accel · max(0, accel constraint)
-         + torque · time at the torque limit / ideal_time
-         + unsettled · [not settled at the end]
-
-ideal_time is the bang–coast–bang time at δ·f and the motor's acceleration limit, so a
-perfect move costs about 1 whatever its length, and scenarios average fairly.
-
-Constraints (feasible when ≤ 0; :class:`Bounds`):
-
-- ``accel``: peak pulse-train acceleration / limit − 1 − its one-pulse quantisation / limit
-- ``torque``: time at the torque limit − ``Bounds.torque_limit_time_s``
-- ``overshoot``: overshoot − ``Bounds.overshoot_windows`` in-position windows
-
-Objectives (all minimised): overshoot in in-position windows, move time / ideal time
-(tracking ratio for a moving reference), acceleration violation max(0, accel constraint).
-"""
+"""Every (controller, scenario) pair in one compiled, multi-threaded call, scored by
+:func:`vfgym.scoring.score`: what the envs, the sweeps and the reports all call."""
 
 from __future__ import annotations
 
@@ -38,8 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from vfgym import _kernel as K
-from vfgym.baselines import (
+from vfgym.moves.baselines import (
     Baseline,
     Controller,
     FixedFrequency,
@@ -47,52 +18,34 @@ from vfgym.baselines import (
     controller_label,
     resolve,
 )
-from vfgym.metrics import NAMES as METRIC_NAMES
-from vfgym.metrics import from_acc
+from vfgym.moves.scenarios import Scenario, scenario_set
 from vfgym.params import (
     DEFAULT_MEASURES,
     PAPER_PLANT,
     Measures,
     Plant,
     Settings,
-    in_position_rad,
 )
-from vfgym.scenarios import Scenario, scenario_set
-from vfgym.simulate import Trace, command_end_s, pack, simulate
-
-CONSTRAINTS = ("accel", "torque", "overshoot")
-OBJECTIVES = ("overshoot_windows", "time_ratio", "accel_violation")
-
-
-@dataclass(frozen=True)
-class CostWeights:
-    """Weights of the scalar cost (see the module docstring)."""
-
-    time: float = 1.0
-    tracking: float = 1.0
-    overshoot: float = 0.1
-    accel: float = 5.0
-    torque: float = 1.0
-    unsettled: float = 5.0
-
-
-@dataclass(frozen=True)
-class Bounds:
-    """Constraint bounds: overshoot in in-position windows, time at the torque limit (s)."""
-
-    overshoot_windows: float = 1.0
-    torque_limit_time_s: float = 0.0
-
-
-DEFAULT_WEIGHTS = CostWeights()
-DEFAULT_BOUNDS = Bounds()
+from vfgym.plant import Trace, command_end_s, pack, simulate
+from vfgym.plant import _kernel as K
+from vfgym.plant.measures import NAMES as METRIC_NAMES
+from vfgym.plant.measures import from_acc
+from vfgym.scoring._cost import (
+    CONSTRAINTS,
+    DEFAULT_BOUNDS,
+    DEFAULT_WEIGHTS,
+    OBJECTIVES,
+    Bounds,
+    CostWeights,
+    score,
+)
 
 
 @dataclass
 class Evaluation:
     """Measures, constraints, objectives and cost of each (controller, scenario) pair.
 
-    ``metrics[c][s]`` is a dict of the named measures (:mod:`vfgym.metrics`) plus
+    ``metrics[c][s]`` is a dict of the named measures (:mod:`vfgym.plant.measures`) plus
     ``ideal_time_s``, ``time_ratio`` and ``window_rad``; arrays are shaped
     (controllers, scenarios[, 3]). A pulse source on a moving reference is not applicable:
     its entries are NaN.
@@ -138,38 +91,6 @@ def _check_controllers(controllers: Any) -> list[Controller]:
     if not out:
         raise ValueError("settings=[] is not allowed: give at least one")
     return out
-
-
-def score(
-    m: dict[str, Any],
-    scenario: Scenario,
-    plant: Plant,
-    measures: Measures,
-    weights: CostWeights = DEFAULT_WEIGHTS,
-    bounds: Bounds = DEFAULT_BOUNDS,
-) -> tuple[float, np.ndarray, np.ndarray, dict[str, float]]:
-    """Cost, constraints and objectives of one run's measures."""
-    ideal = scenario.ideal_time_s(plant)
-    window = in_position_rad(measures, plant, scenario.command(plant)[-1])
-    limit = plant.motor.accel_limit_rad_s2
-    c_acc = m["accel_ratio_pulse"] - 1.0 - m["accel_quantum_rad_s2"] / limit
-    c_tq = m["torque_limit_time_s"] - bounds.torque_limit_time_s
-    ov_w = m["overshoot_rad"] / window if window > 0 else 0.0
-    c_ov = ov_w - bounds.overshoot_windows
-    if scenario.tracking:
-        ratio = m["tracking_rms_rad"] / (0.1 * abs(scenario.distance_rad))
-        main = weights.tracking * ratio
-    else:
-        ratio = m["move_time_s"] / ideal
-        main = weights.time * ratio + (0.0 if m["settled"] else weights.unsettled)
-    cost = (
-        main
-        + weights.overshoot * ov_w
-        + weights.accel * max(0.0, c_acc)
-        + weights.torque * m["torque_limit_time_s"] / ideal
-    )
-    extra = {"ideal_time_s": ideal, "time_ratio": ratio, "window_rad": window}
-    return cost, np.array([c_acc, c_tq, c_ov]), np.array([ov_w, ratio, max(0.0, c_acc)]), extra
 
 
 @dataclass(frozen=True)
@@ -269,7 +190,7 @@ def evaluate(
     """Score every controller on every scenario through one batched kernel call.
 
     settings: V-F :class:`Settings`, a baseline pulse source, a baseline name or
-        :class:`~vfgym.baselines.Baseline` (derived per scenario plant), or a sequence.
+        :class:`~vfgym.moves.baselines.Baseline` (derived per scenario plant), or a sequence.
     scenarios: names, :class:`Scenario` objects, or a set spec (``named``, ``train``, ...).
     plant: the base plant; each scenario applies its load to it.
     keep_traces: also return per-tick traces (simulated one by one; the measures are the

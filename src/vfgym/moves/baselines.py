@@ -12,9 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from vfgym._validate import check_real
+from vfgym.moves.profiles import scurve_source_args
+from vfgym.moves.pulse_sources import fixed_frequency_pulses, scurve_pulses
 from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings, paper_k
-from vfgym.profiles import scurve_source_args
-from vfgym.pulse_sources import fixed_frequency_pulses, scurve_pulses
 
 BASELINE_NAMES = ("paper", "rule-of-thumb", "fixed-frequency", "scurve")
 
@@ -46,7 +46,7 @@ class FixedFrequency:
 @dataclass(frozen=True)
 class SCurveSource:
     """MCX514 S-curve fixed-pulse driving: top speed (rad/s) and peak acceleration (rad/s²)
-    mapped to DV, SV = 1 % of DV and jerk by :func:`vfgym.profiles.scurve_source_args`."""
+    mapped to DV, SV = 1 % of DV and jerk by :func:`vfgym.moves.profiles.scurve_source_args`."""
 
     speed_rad_s: float
     accel_rad_s2: float

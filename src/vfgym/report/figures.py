@@ -10,7 +10,7 @@ Derived signals (what the panels draw):
 - pulse-train speed: (n_i − n_(i−w))·δ/(w·T), pulses counted over a window of w ticks,
   drawn at the window's centre;
 - pulse-train acceleration: (n_i − 2·n_(i−w) + n_(i−2w))·δ/(w·T)², the signed version of
-  :mod:`vfgym.metrics`' peak_accel_pulse (same window by default, so the drawn peak is the
+  :mod:`vfgym.plant.measures`' peak_accel_pulse (same window by default, so the drawn peak is the
   measured one), drawn at the centre i − w;
 - pulse frequency: pulses of either sign per window, over the window (Hz);
 - motor acceleration: the mean over each drawn interval, Δω/Δt from the trace's speed.
@@ -28,9 +28,9 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullLocator
 
-from vfgym.baselines import usable_accel
-from vfgym.metrics import accel_window_ticks
+from vfgym.moves.baselines import usable_accel
 from vfgym.params import PAPER_PLANT, Plant, in_position_rad
+from vfgym.plant.measures import accel_window_ticks
 
 MAX_POINTS = 4000
 """Points drawn per curve at most (longer curves are thinned by a stride)."""
@@ -245,13 +245,13 @@ def scurve_figure(
     """S-curve speed and acceleration of a short move with and without triangle form
     prevention (rule of 1/12), and of a long move that reaches the drive speed.
 
-    Smooth lines are the exact profile (:func:`vfgym.pulse_sources.scurve_profile`); thin
-    lines are the pulse train (:func:`~vfgym.pulse_sources.scurve_pulses`) over a window.
-    Default drive: the :func:`vfgym.baselines.scurve` baseline for ``plant``.
+    Smooth lines are the exact profile (:func:`vfgym.moves.pulse_sources.scurve_profile`); thin
+    lines are the pulse train (:func:`~vfgym.moves.pulse_sources.scurve_pulses`) over a window.
+    Default drive: the :func:`vfgym.moves.baselines.scurve` baseline for ``plant``.
     """
-    from vfgym.baselines import scurve as scurve_baseline
-    from vfgym.profiles import scurve_source_args
-    from vfgym.pulse_sources import scurve_profile, scurve_pulses
+    from vfgym.moves.baselines import scurve as scurve_baseline
+    from vfgym.moves.profiles import scurve_source_args
+    from vfgym.moves.pulse_sources import scurve_profile, scurve_pulses
 
     base = scurve_baseline(plant)
     v = base.speed_rad_s if speed_rad_s is None else speed_rad_s

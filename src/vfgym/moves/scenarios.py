@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from vfgym import profiles
 from vfgym._validate import check_choice, check_int, check_real
+from vfgym.moves import profiles
 from vfgym.params import PAPER_PLANT, PAPER_STEP_RAD, Plant
 
 PAPER_SINE_AMPLITUDE_RAD = 5.0
@@ -32,7 +32,7 @@ SPLITS = ("train", "test")
 class Scenario:
     """One move: a command profile and the plant it drives.
 
-    profile: one of :data:`vfgym.profiles.PROFILES`.
+    profile: one of :data:`vfgym.moves.profiles.PROFILES`.
     distance_rad: the move (the amplitude for ``sine``); negative moves go backwards.
     duration_s: how long to simulate, including time to settle.
     speed_rad_s, accel_rad_s2: cruise speed and acceleration of ramp / trapezoid / scurve

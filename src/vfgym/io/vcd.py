@@ -180,7 +180,7 @@ def vcd_text(
 
 def write_vcd(trace: Any, path: str | Path, *, timescale: str = "1 ns", comment: str = "") -> Path:
     """Write :func:`vcd_text` to ``path`` atomically."""
-    from vfgym.runs import write_text
+    from vfgym.io.runs import write_text
 
     return write_text(path, vcd_text(trace, timescale=timescale, comment=comment))
 

@@ -2,7 +2,7 @@
 
 One kernel (:func:`run_segment`) over plain arrays and scalars, compiled by numba with
 ``cache=True`` (where it can write one) and no fastmath, so its floating-point operations
-are IEEE double in the written order and agree bit for bit with :mod:`vfgym.reference`.
+are IEEE double in the written order and agree bit for bit with :mod:`vfgym.plant.reference`.
 The equations are those of ``MODEL.md`` §1–§3; their order within a tick is:
 
 1. pulse source: V-F controller on the command ``cmd[i]`` (or an external pulse array);
@@ -38,7 +38,7 @@ if "GOMP_SPINCOUNT" not in os.environ:
 import numba
 import numpy as np
 
-from vfgym._layout import (
+from vfgym.plant._layout import (
     A_ACC_MOTOR,
     A_ACC_PULSE,
     A_FIRST_PULSE,
@@ -639,7 +639,7 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
 
 @_jit
 def finish(st, acc, n_ticks, T, acc_scale):
-    """The accumulator row of a move from its loop state (see :mod:`vfgym._layout`)."""
+    """The accumulator row of a move from its loop state (see :mod:`vfgym.plant._layout`)."""
     acc[A_OV_MOTOR] = st[S_OVM]
     acc[A_OV_PULSE] = st[S_OVP]
     acc[A_LAST_OUT_MOTOR] = st[S_LOM]

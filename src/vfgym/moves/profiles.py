@@ -112,7 +112,7 @@ def scurve(
     """The MCX514 S-curve fixed-pulse drive used as a position command: jerk chosen so the
     peak acceleration when reaching ``speed_rad_s`` is ``accel_rad_s2`` (see
     :func:`scurve_source_args`); triangle form prevention on."""
-    from vfgym.pulse_sources import scurve_pulses
+    from vfgym.moves.pulse_sources import scurve_pulses
 
     d = check_real("distance_rad", distance_rad)
     n = _ticks(duration_s, tick_hz)

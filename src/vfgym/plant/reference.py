@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from vfgym import _layout as L
+from vfgym.plant import _layout as L
 
 
 def _h(x: float) -> float:

@@ -1,0 +1,72 @@
+"""Per-tick traces as CSV, one row per kept tick."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+TRACE_FIELDS = (
+    "tick",
+    "time_s",
+    "command_rad",
+    "pulse",
+    "pulse_count",
+    "pulse_rad",
+    "motor_rad",
+    "encoder_count",
+    "speed_rad_s",
+    "torque_nm",
+    "servo_error_counts",
+    "position_counter",
+    "feedback_counts",
+    "speed_count",
+)
+"""Columns of a trace CSV: sample j is the state at the end of tick ``tick`` (time
+(tick+1)·T); ``pulse`` is that tick's pulse (−1, 0, +1; empty when decimated),
+``encoder_count`` = floor(θ / count angle), the count the servo sees."""
+
+
+def trace_columns(trace: Any) -> dict[str, np.ndarray]:
+    """A :class:`vfgym.Trace` as named per-sample columns (see :data:`TRACE_FIELDS`)."""
+    n = trace.time_s.size
+    dec = trace.decimation
+    q = trace.plant.motor.count_rad
+    cols: dict[str, np.ndarray] = {
+        "tick": (np.arange(n, dtype=np.int64) + 1) * dec - 1,
+        "time_s": trace.time_s,
+        "command_rad": trace.command_rad,
+        "pulse": trace.pulses if dec == 1 else np.zeros(0),
+        "pulse_count": trace.pulse_count,
+        "pulse_rad": trace.pulse_rad,
+        "motor_rad": trace.motor_rad,
+        "encoder_count": np.floor(trace.motor_rad / q).astype(np.int64),
+        "speed_rad_s": trace.speed_rad_s,
+        "torque_nm": trace.torque_nm,
+        "servo_error_counts": trace.servo_error_counts,
+        "position_counter": trace.position_counter,
+        "feedback_counts": trace.feedback_counts,
+        "speed_count": trace.speed_count,
+    }
+    return cols
+
+
+def write_trace_csv(trace: Any, path: str | Path) -> Path:
+    """Write a trace's per-sample columns as CSV (floats with 17 significant digits, so
+    the file reads back bit for bit)."""
+    from vfgym.io.runs import write_text
+
+    cols = trace_columns(trace)
+    n = trace.time_s.size
+    parts = []
+    for name in TRACE_FIELDS:
+        c = cols[name]
+        if c.size == 0:
+            parts.append(np.full(n, "", dtype=object))
+        elif np.issubdtype(c.dtype, np.integer):
+            parts.append(c.astype(str))
+        else:
+            parts.append(np.char.mod("%.17g", c))
+    body = "\n".join(",".join(row) for row in zip(*parts, strict=True))
+    return write_text(path, ",".join(TRACE_FIELDS) + "\n" + body + "\n")

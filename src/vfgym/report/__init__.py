@@ -1,0 +1,77 @@
+"""Comparing controllers: tuned settings against baselines, through the one scoring path.
+
+Every number here comes from :func:`vfgym.evaluate`; this package only arranges and
+summarises what it returns.
+
+Modules
+-------
+_comparison
+    Candidates (settings, baselines, per-scenario policies) run on a scenario set into a
+    :class:`Report`.
+_stats
+    Spreads (median, IQR, bootstrap interval) and win / loss / tie.
+_tables
+    Text and Markdown tables.
+_files
+    CSV and JSON files of a report in a run folder.
+figures
+    The paper's figures, S-curve and frequency plots, overlays, sweep history and Pareto
+    front (matplotlib, imported only when a figure is drawn).
+"""
+
+from vfgym.report._comparison import (
+    EXTRA_METRICS,
+    Candidate,
+    Column,
+    Policy,
+    Report,
+    baseline_candidates,
+    compare,
+    evaluate_policy,
+)
+from vfgym.report._files import (
+    result_rows,
+    results_csv,
+    results_json,
+    summary_csv,
+    summary_rows,
+    win_loss_rows,
+    write_report,
+)
+from vfgym.report._stats import DEFAULT_RESAMPLES, TIE_RTOL, Spread, WinLoss, outcome, spread
+from vfgym.report._tables import (
+    TABLE_COLUMNS,
+    TableColumn,
+    format_table,
+    markdown_costs,
+    markdown_table,
+)
+
+__all__ = [
+    "DEFAULT_RESAMPLES",
+    "EXTRA_METRICS",
+    "TABLE_COLUMNS",
+    "TIE_RTOL",
+    "Candidate",
+    "Column",
+    "Policy",
+    "Report",
+    "Spread",
+    "TableColumn",
+    "WinLoss",
+    "baseline_candidates",
+    "compare",
+    "evaluate_policy",
+    "format_table",
+    "markdown_costs",
+    "markdown_table",
+    "outcome",
+    "result_rows",
+    "results_csv",
+    "results_json",
+    "spread",
+    "summary_csv",
+    "summary_rows",
+    "win_loss_rows",
+    "write_report",
+]

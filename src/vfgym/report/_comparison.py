@@ -1,0 +1,274 @@
+"""Candidates (settings, baselines, per-scenario policies) run through the one scoring path
+on a scenario set, gathered into a :class:`Report`.
+
+Candidates are V-F :class:`~vfgym.Settings`, a baseline name, or a *policy*: a callable
+``scenario -> Settings`` (an agent that picks settings per scenario); a policy's settings
+are evaluated scenario by scenario, grouped so that identical settings share one batched
+call.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from vfgym._validate import check_int
+from vfgym.moves.baselines import BASELINE_NAMES, Baseline, Controller, resolve
+from vfgym.moves.scenarios import Scenario, scenario_set
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.report._stats import DEFAULT_RESAMPLES, Spread, WinLoss, outcome, spread
+from vfgym.scoring import (
+    CONSTRAINTS,
+    DEFAULT_BOUNDS,
+    DEFAULT_WEIGHTS,
+    Bounds,
+    CostWeights,
+    evaluate,
+)
+
+Policy = Callable[[Scenario], Settings]
+"""A per-scenario controller: the settings an agent picks for a scenario."""
+EXTRA_METRICS = ("ideal_time_s", "time_ratio", "window_rad")
+"""Measures :func:`vfgym.evaluate` adds to :data:`vfgym.plant.measures.NAMES`."""
+
+
+@dataclass
+class Column:
+    """One candidate's results on every scenario (arrays indexed by scenario)."""
+
+    label: str
+    role: str
+    """``tuned`` or ``baseline``."""
+    source: str
+    """Where it came from: a settings file, a baseline name, a model file."""
+    controllers: list[Controller | None]
+    """The controller as it ran on each scenario (baselines resolved per plant)."""
+    cost: np.ndarray
+    constraints: np.ndarray
+    metrics: list[dict[str, Any]]
+
+    @property
+    def feasible(self) -> np.ndarray:
+        """All constraints ≤ 0 (NaN where the candidate does not apply)."""
+        ok = np.all(self.constraints <= 0.0, axis=-1).astype(float)
+        ok[np.isnan(self.cost)] = np.nan
+        return ok
+
+    def values(self, key: str) -> np.ndarray:
+        """One measure per scenario as floats: ``cost``, ``feasible``, a constraint
+        (``constraint_<name>``) or any measure :func:`vfgym.evaluate` returns."""
+        if key == "cost":
+            return self.cost.astype(float)
+        if key == "feasible":
+            return self.feasible
+        if key.startswith("constraint_"):
+            return self.constraints[:, CONSTRAINTS.index(key.removeprefix("constraint_"))]
+        return np.array([float(m.get(key, math.nan)) for m in self.metrics])
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A controller to report on: fixed settings, a baseline, or a per-scenario policy."""
+
+    label: str
+    controller: Settings | Baseline | None = None
+    policy: Policy | None = field(default=None, compare=False)
+    source: str = ""
+    role: str = "tuned"
+
+    def __post_init__(self) -> None:
+        if (self.controller is None) == (self.policy is None):
+            raise ValueError(f"candidate {self.label!r}: give exactly one of controller, policy")
+        if self.role not in ("tuned", "baseline"):
+            raise ValueError(f"role={self.role!r} is not allowed: choose one of tuned, baseline")
+
+
+def baseline_candidates(names: str | Sequence[str]) -> list[Candidate]:
+    """Baselines by name (a comma-separated string or a list); unknown names raise."""
+    if isinstance(names, str):
+        names = [n.strip() for n in names.split(",") if n.strip()]
+    out = []
+    for name in names:
+        if name not in BASELINE_NAMES:
+            raise ValueError(
+                f"baseline={name!r} is not known: choose one of {', '.join(BASELINE_NAMES)}"
+            )
+        out.append(Candidate(name, Baseline(name), source=name, role="baseline"))
+    return out
+
+
+@dataclass
+class Report:
+    """Candidates' results on a scenario set, with spreads and win/loss."""
+
+    scenarios: list[Scenario]
+    columns: list[Column]
+    resamples: int = DEFAULT_RESAMPLES
+    seed: int = 0
+    scenario_spec: str = ""
+
+    @property
+    def tuned(self) -> list[Column]:
+        return [c for c in self.columns if c.role == "tuned"]
+
+    @property
+    def baselines(self) -> list[Column]:
+        return [c for c in self.columns if c.role == "baseline"]
+
+    def column(self, label: str) -> Column:
+        for c in self.columns:
+            if c.label == label:
+                return c
+        raise ValueError(f"controller={label!r} is not in this report")
+
+    def spread(self, label: str, key: str) -> Spread:
+        """Spread of one measure of one candidate over the scenarios."""
+        return spread(self.column(label).values(key), resamples=self.resamples, seed=self.seed)
+
+    def win_loss(self, tuned: str, baseline: str) -> WinLoss:
+        """Per-scenario outcomes and the paired cost difference."""
+        a, b = self.column(tuned).cost, self.column(baseline).cost
+        outs = tuple(outcome(float(x), float(y)) for x, y in zip(a, b, strict=True))
+        diff = spread(a - b, resamples=self.resamples, seed=self.seed)
+        return WinLoss(tuned, baseline, outs, diff)
+
+    def win_losses(self) -> list[WinLoss]:
+        """Every tuned candidate against every baseline."""
+        return [self.win_loss(t.label, b.label) for t in self.tuned for b in self.baselines]
+
+
+def _column_from_rows(
+    cand: Candidate,
+    scenarios: list[Scenario],
+    plant: Plant,
+    results: list[tuple[Controller | Baseline, float, np.ndarray, dict[str, Any]]],
+) -> Column:
+    ctrls = [resolve(c, sc.plant(plant)) for (c, *_), sc in zip(results, scenarios, strict=True)]
+    return Column(
+        label=cand.label,
+        role=cand.role,
+        source=cand.source,
+        controllers=ctrls,
+        cost=np.array([r[1] for r in results], dtype=float),
+        constraints=np.array([r[2] for r in results], dtype=float).reshape(
+            len(scenarios), len(CONSTRAINTS)
+        ),
+        metrics=[r[3] for r in results],
+    )
+
+
+def evaluate_policy(
+    policy: Policy,
+    scenarios: str | Scenario | Sequence[str | Scenario],
+    *,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+    weights: CostWeights = DEFAULT_WEIGHTS,
+    bounds: Bounds = DEFAULT_BOUNDS,
+) -> tuple[list[Settings], np.ndarray, np.ndarray, list[dict[str, Any]]]:
+    """Each scenario scored with the settings ``policy`` picks for it, through
+    :func:`vfgym.evaluate` (scenarios that get identical settings share one call).
+
+    Returns the settings, costs (S,), constraints (S, 3) and measures per scenario.
+    """
+    scens = scenario_set(scenarios)
+    chosen: list[Settings] = []
+    for sc in scens:
+        s = policy(sc)
+        if not isinstance(s, Settings):
+            raise ValueError(
+                f"policy returned {s!r} for scenario {sc.name!r}: expected vfgym.Settings"
+            )
+        chosen.append(s)
+    groups: dict[Settings, list[int]] = {}
+    for i, s in enumerate(chosen):
+        groups.setdefault(s, []).append(i)
+    cost = np.full(len(scens), np.nan)
+    cons = np.full((len(scens), len(CONSTRAINTS)), np.nan)
+    metrics: list[dict[str, Any]] = [{} for _ in scens]
+    for s, idx in groups.items():
+        ev = evaluate(
+            s,
+            [scens[i] for i in idx],
+            plant=plant,
+            measures=measures,
+            weights=weights,
+            bounds=bounds,
+        )
+        for j, i in enumerate(idx):
+            cost[i] = ev.cost[0, j]
+            cons[i] = ev.constraints[0, j]
+            metrics[i] = ev.metrics[0][j]
+    return chosen, cost, cons, metrics
+
+
+def compare(
+    candidates: Sequence[Candidate],
+    baselines: str | Sequence[str] | Sequence[Candidate] = BASELINE_NAMES,
+    scenarios: str | Scenario | Sequence[str | Scenario] = "test",
+    *,
+    count: int = 16,
+    first_seed: int = 0,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+    weights: CostWeights = DEFAULT_WEIGHTS,
+    bounds: Bounds = DEFAULT_BOUNDS,
+    resamples: int = DEFAULT_RESAMPLES,
+    seed: int = 0,
+) -> Report:
+    """Score tuned candidates and baselines on the same scenarios (one batched
+    :func:`vfgym.evaluate` call for every fixed controller, one per settings group for
+    each policy) and return the :class:`Report`."""
+    resamples = check_int("resamples", resamples, 1, 1_000_000)
+    seed = check_int("seed", seed, 0)
+    if isinstance(baselines, str) or (
+        isinstance(baselines, Sequence) and all(isinstance(b, str) for b in baselines)
+    ):
+        base = baseline_candidates(baselines)  # type: ignore[arg-type]
+    else:
+        base = list(baselines)  # type: ignore[arg-type]
+    cands = [*candidates, *base]
+    if not cands:
+        raise ValueError("candidates=[] is not allowed: give settings, a policy or baselines")
+    labels = [c.label for c in cands]
+    dup = sorted({x for x in labels if labels.count(x) > 1})
+    if dup:
+        raise ValueError(f"controller labels must differ: {', '.join(dup)} given twice")
+    spec = scenarios if isinstance(scenarios, str) else ""
+    scens = scenario_set(scenarios, count, first_seed)
+    fixed = [c for c in cands if c.controller is not None]
+    columns: dict[str, Column] = {}
+    if fixed:
+        ev = evaluate(
+            [c.controller for c in fixed],  # type: ignore[misc]
+            scens,
+            plant=plant,
+            measures=measures,
+            weights=weights,
+            bounds=bounds,
+        )
+        for ci, cand in enumerate(fixed):
+            rows = [
+                (cand.controller, ev.cost[ci, si], ev.constraints[ci, si], ev.metrics[ci][si])
+                for si in range(len(scens))
+            ]
+            columns[cand.label] = _column_from_rows(cand, scens, plant, rows)  # type: ignore[arg-type]
+    for cand in cands:
+        if cand.policy is None:
+            continue
+        chosen, cost, cons, mets = evaluate_policy(
+            cand.policy, scens, plant=plant, measures=measures, weights=weights, bounds=bounds
+        )
+        rows = [(chosen[i], cost[i], cons[i], mets[i]) for i in range(len(scens))]
+        columns[cand.label] = _column_from_rows(cand, scens, plant, rows)  # type: ignore[arg-type]
+    return Report(
+        scenarios=scens,
+        columns=[columns[c.label] for c in cands],
+        resamples=resamples,
+        seed=seed,
+        scenario_spec=spec,
+    )

@@ -1,0 +1,111 @@
+"""The sweep's objective: a trial's settings scored by the one scoring path, with its
+constraints set on the trial for the samplers that learn them.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from contextlib import nullcontext
+from typing import Any
+
+import numpy as np
+
+from vfgym import space
+from vfgym.moves.scenarios import Scenario
+from vfgym.params import Settings
+from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
+from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
+
+
+def aggregate(ev: Evaluation) -> dict[str, np.ndarray]:
+    """Per controller: mean cost, worst (max) constraint over the scenarios, feasibility
+    (every constraint ≤ 0 on every scenario) and the objectives' means."""
+    cons = np.nanmax(ev.constraints, axis=1)
+    return {
+        "cost": ev.mean_cost,
+        "constraints": cons,
+        "feasible": np.all(cons <= 0.0, axis=1),
+        "objectives": np.nanmean(ev.objectives, axis=1),
+    }
+
+
+def settings_key(s: Settings) -> tuple:
+    return (s.value_rad, s.error_limit_rad, s.k, s.ts_over_tf, s.accel_law)
+
+
+class Objective:
+    """Settings from the trial → :func:`vfgym.evaluate` on the scenarios → cost (or the
+    three objectives), with the worst constraints and the settings as user attributes.
+
+    A setting already scored (in this process, or by a completed trial of the study) is
+    not simulated again: the trial copies that result and records ``cached_from``.
+    """
+
+    def __init__(self, scenarios: list[Scenario], laws: tuple[str, ...], form: str) -> None:
+        self.scenarios = scenarios
+        self.laws = laws
+        self.form = form
+        self.cache: dict[tuple, tuple[Any, dict[str, Any]]] = {}
+        self.simulated = 0
+        self.on_enter: Callable[[], None] | None = None
+        self.guard: Callable[[], Any] = nullcontext
+        self.current: int | None = None
+
+    def __call__(self, trial: Any) -> float | list[float]:
+        self.current = trial.number
+        # Before the claim lock goes: a retried trial inherits its dead worker's attribute,
+        # and another worker's recovery must not see this one running under that name.
+        trial.set_user_attr(WORKER_ATTR, _worker_id())
+        if self.on_enter:
+            self.on_enter()
+        return self._run(trial)
+
+    def _run(self, trial: Any) -> float | list[float]:
+        settings = space.suggest(trial, self.laws)
+        key = settings_key(settings)
+        hit = self.cache.get(key) or self._lookup(trial.study, settings)
+        if hit is None:
+            with self.guard():  # the only place a trial may be interrupted
+                values, attrs = self.score(settings)
+            self.simulated += 1
+            self.cache[key] = (values, attrs | {"cached_from": trial.number})
+        else:
+            values, attrs = hit
+        for k, v in attrs.items():
+            trial.set_user_attr(k, v)
+        # Optuna 5 reads constraints from the trial (its constraints_func is deprecated).
+        # A retried trial carries its first run's (identical) constraints: those stay.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for name, v in zip(CONSTRAINTS, attrs["constraints"], strict=True):
+                trial.set_constraint(name, v)
+        return values
+
+    def score(self, settings: Settings) -> tuple[Any, dict[str, Any]]:
+        """Values and user attributes of one setting (one batched evaluation)."""
+        agg = aggregate(evaluate(settings, self.scenarios))
+        attrs = {
+            "settings": space.settings_to_dict(settings),
+            "cost": float(agg["cost"][0]),
+            "constraints": [float(x) for x in agg["constraints"][0]],
+            "feasible": bool(agg["feasible"][0]),
+            "objectives": [float(x) for x in agg["objectives"][0]],
+        }
+        values = attrs["cost"] if self.form == "cost" else list(attrs["objectives"])
+        return values, attrs
+
+    def _lookup(self, study: Any, settings: Settings) -> Any:
+        import optuna
+
+        want = space.settings_to_dict(settings)
+        for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,)):
+            if t.user_attrs.get("settings") == want and "cost" in t.user_attrs:
+                attrs = {k: t.user_attrs[k] for k in _RESULT_ATTRS if k in t.user_attrs}
+                attrs["cached_from"] = t.user_attrs.get("cached_from", t.number)
+                values = t.value if self.form == "cost" else list(t.values)
+                return values, attrs
+        return None
+
+
+_RESULT_ATTRS = ("settings", "cost", "constraints", "feasible", "objectives")

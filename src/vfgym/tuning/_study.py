@@ -1,0 +1,131 @@
+"""Samplers and studies: which sampler a sweep uses, its search space and trial budget, and
+the study created or resumed with the paper's settings enqueued first.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+from vfgym import space
+from vfgym.moves.scenarios import Scenario
+from vfgym.params import PAPER_SETTINGS
+from vfgym.scoring import OBJECTIVES
+from vfgym.tuning._config import SweepConfig
+
+META_KEY = "vfgym"
+"""Study user attribute recording what the study optimises (checked when resumed)."""
+
+SAMPLER_NEEDS = {"cmaes": ("cmaes",), "gp": ("torch", "scipy")}
+"""Packages a sampler needs beyond Optuna."""
+
+
+def check_sampler(cfg: SweepConfig) -> None:
+    """Raise ``ValueError`` naming ``sampler`` when a package it needs is missing."""
+    import importlib.util
+
+    missing = [m for m in SAMPLER_NEEDS.get(cfg.sampler, ()) if not importlib.util.find_spec(m)]
+    if missing:
+        raise ValueError(
+            f"sampler={cfg.sampler!r} needs {', '.join(missing)}: pip install {' '.join(missing)}"
+        )
+
+
+def make_sampler(cfg: SweepConfig, seed: int | None) -> Any:
+    """The Optuna sampler named by ``cfg.sampler``, seeded; constrained where it can be."""
+    import optuna
+
+    s = optuna.samplers
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        if cfg.sampler == "tpe":
+            return s.TPESampler(seed=seed, multivariate=True)
+        if cfg.sampler == "cmaes":
+            return s.CmaEsSampler(seed=seed, warn_independent_sampling=False)
+        if cfg.sampler == "gp":
+            return s.GPSampler(
+                seed=seed, deterministic_objective=True, warn_independent_sampling=False
+            )
+        if cfg.sampler == "nsga2":
+            return s.NSGAIISampler(seed=seed)
+        if cfg.sampler == "grid":
+            return s.GridSampler(grid_space(cfg), seed=seed)
+        return s.RandomSampler(seed=seed)
+
+
+def grid_space(cfg: SweepConfig) -> dict[str, list[Any]]:
+    """The grid sampler's values per parameter, from :func:`vfgym.space.grid`."""
+    pts = space.grid(cfg.grid_points, cfg.laws[:1])
+    # Clipped to the distributions: exp(log(high)) may round one ulp above ``high``.
+    out: dict[str, list[Any]] = {
+        d.name: sorted({min(max(getattr(p, d.name), d.low), d.high) for p in pts})
+        for d in space.SPACE
+    }
+    if len(cfg.laws) > 1:
+        out["accel_law"] = list(cfg.laws)
+    return out
+
+
+def trial_budget(cfg: SweepConfig) -> int:
+    """Trials the study ends with: ``trials``, but at most the grid (plus the baseline)."""
+    if cfg.sampler == "grid":
+        return min(cfg.trials, cfg.grid_points ** len(space.SPACE) * len(cfg.laws) + 1)
+    return cfg.trials
+
+
+def baseline_params(laws: tuple[str, ...]) -> dict[str, Any]:
+    """The paper's settings as trial parameters (its law if searched, else the fixed one)."""
+    d = space.settings_to_dict(PAPER_SETTINGS)
+    law = d.pop("accel_law")
+    if len(laws) > 1:
+        d["accel_law"] = law if law in laws else laws[0]
+    return d
+
+
+def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> dict[str, Any]:
+    return {
+        "scenarios": [s.name for s in scenarios],
+        "laws": list(cfg.laws),
+        "objective": cfg.objective,
+    }
+
+
+def create_or_load(
+    storage: Any, name: str, cfg: SweepConfig, scenarios: list[Scenario], sampler: Any = None
+) -> tuple[Any, bool]:
+    """The study ``name``: created with the baseline enqueued first, or loaded (and
+    checked to optimise the same thing). Returns (study, created)."""
+    import optuna
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    directions = ["minimize"] if cfg.objective == "cost" else ["minimize"] * len(OBJECTIVES)
+    meta = study_meta(cfg, scenarios)
+    try:
+        study = optuna.create_study(
+            storage=storage, study_name=name, directions=directions, sampler=sampler
+        )
+        created = True
+    except optuna.exceptions.DuplicatedStudyError:
+        study = optuna.load_study(study_name=name, storage=storage, sampler=sampler)
+        created = False
+    if created:
+        study.set_user_attr(META_KEY, meta)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+            study.set_metric_names(["cost"] if cfg.objective == "cost" else list(OBJECTIVES))
+        study.enqueue_trial(baseline_params(cfg.laws), user_attrs={"baseline": "paper"})
+        return study, True
+    old = study.user_attrs.get(META_KEY)
+    if old is not None:
+        for key in ("scenarios", "laws", "objective"):
+            if old.get(key) != meta[key]:
+                raise ValueError(
+                    f"study={name!r} already optimises {key}={old.get(key)!r}, not "
+                    f"{meta[key]!r}: give another --study, or the same {key}"
+                )
+    if len(study.directions) != len(directions):
+        raise ValueError(
+            f"study={name!r} has {len(study.directions)} objective(s), not "
+            f"{len(directions)}: give another --study"
+        )
+    return study, False

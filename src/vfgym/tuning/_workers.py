@@ -1,0 +1,201 @@
+"""Workers that share a study: claiming trials, recovering those of dead workers, and a
+Ctrl-C that never cuts a storage write in half.
+
+A worker that dies mid-trial leaves a running trial behind: on RDB storages Optuna's
+heartbeat marks it failed after the grace period, on the journal the other workers see
+that its process is gone; either way it is marked failed and enqueued again with the
+settings it had drawn. Ctrl-C is only acted on inside a trial's evaluation or while
+waiting, so the interrupted trial is marked failed and enqueued again, and running the
+same command with the same ``--study`` continues where it stopped.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import signal
+import subprocess
+import sys
+import threading
+import time
+import warnings
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from vfgym.params import PAPER_SETTINGS
+from vfgym.scoring import evaluate
+from vfgym.tuning._config import SweepConfig
+from vfgym.tuning._objective import Objective
+from vfgym.tuning._recovery import RetryStale, _fail_and_retry, _retry, counts, recover
+from vfgym.tuning._storage import StorageSpec, _claim_lock, open_storage
+from vfgym.tuning._study import make_sampler, trial_budget
+
+
+class DeferredInterrupt:
+    """SIGINT raises KeyboardInterrupt only inside :meth:`allowed` blocks (a trial's
+    simulation, a wait); anywhere else it is held until the next such block or the end of
+    the ``with``, so a storage write or a lock is never cut in half.
+
+    The decision is taken by the Python-level handler, which runs in the main thread
+    between bytecodes, so there is no window between "the signal arrived" and "the block
+    closed" in which an interrupt can escape into Optuna's bookkeeping. Off the main thread
+    (where handlers cannot be installed) the process's handler is left as it is."""
+
+    def __init__(self) -> None:
+        self.open = False
+        self.pending = False
+        self._old: Any = None
+        self._installed = False
+
+    def __enter__(self) -> DeferredInterrupt:
+        if threading.current_thread() is threading.main_thread():
+            self._old = signal.signal(signal.SIGINT, self._handle)
+            self._installed = True
+        return self
+
+    def __exit__(self, kind: Any, exc: Any, tb: Any) -> None:
+        if self._installed:
+            signal.signal(signal.SIGINT, self._old)
+            self._installed = False
+        if self.pending and kind is None:
+            self.pending = False
+            raise KeyboardInterrupt
+
+    def _handle(self, signum: int, frame: Any) -> None:
+        if self.open:
+            self.open = False
+            raise KeyboardInterrupt
+        self.pending = True
+
+    def check(self) -> None:
+        """Raise an interrupt that was held back."""
+        if self.pending:
+            self.pending = False
+            raise KeyboardInterrupt
+
+    @contextmanager
+    def allowed(self) -> Iterator[None]:
+        """Let an interrupt through here (raising at once one that was held back)."""
+        self.check()
+        self.open = True
+        try:
+            yield
+        finally:
+            self.open = False
+
+
+@dataclass
+class WorkerReport:
+    """What one worker did: trials it ran, simulations, dead trials it recovered."""
+
+    trials: list[int] = field(default_factory=list)
+    simulated: int = 0
+    recovered: list[int] = field(default_factory=list)
+    stopped: str = ""
+
+
+def run_worker(
+    cfg: SweepConfig,
+    spec: StorageSpec,
+    study_name: str,
+    index: int = 0,
+    on_trial: Callable[[Any], None] | None = None,
+    poll_s: float = 0.25,
+) -> WorkerReport:
+    """Run trials of ``study_name`` until it holds the trials asked for (or the timeout).
+
+    SIGINT is held back (:class:`DeferredInterrupt`) except inside a trial's evaluation
+    and while waiting; an interrupted trial is marked failed and enqueued again before
+    KeyboardInterrupt propagates."""
+    import optuna
+
+    # ERROR: an interrupted trial is reported by the sweep, not as Optuna's warning with a
+    # traceback; a failing objective still raises.
+    optuna.logging.set_verbosity(optuna.logging.ERROR)
+    warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
+    warnings.filterwarnings("ignore", message="Constraints have been set, but CmaEsSampler")
+    rep = WorkerReport()
+    scenarios = cfg.scenario_list()
+    budget = trial_budget(cfg)
+    grace = cfg.grace or 2 * cfg.heartbeat
+    orphan_s = max(30.0, 3.0 * grace)
+    seed = None if cfg.seed is None else cfg.seed + index
+    deadline = math.inf if cfg.timeout is None else time.monotonic() + cfg.timeout
+    with DeferredInterrupt() as interrupts:
+        storage = open_storage(spec, cfg.heartbeat, cfg.grace)
+        study = optuna.load_study(
+            study_name=study_name, storage=storage, sampler=make_sampler(cfg, seed)
+        )
+        objective = Objective(scenarios, cfg.laws, cfg.objective)
+        # First call compiles/loads the kernel before any trial is claimed.
+        evaluate(PAPER_SETTINGS, scenarios[:1])
+        lock = _claim_lock(spec, study_name)
+
+        objective.on_enter = lock.release
+        objective.guard = interrupts.allowed
+        try:
+            while True:
+                interrupts.check()
+                busy = False
+                lock.acquire()
+                try:
+                    rep.recovered += recover(study, storage, spec, orphan_s)
+                    n = counts(study)
+                    if n["complete"] >= budget:
+                        rep.stopped = "done"
+                        break
+                    if time.monotonic() >= deadline:
+                        rep.stopped = "timeout"
+                        break
+                    busy = n["complete"] + n["running"] >= budget and n["waiting"] == 0
+                    if not busy:
+                        objective.current = None
+                        study.optimize(objective, n_trials=1, gc_after_trial=False)
+                finally:
+                    lock.release()
+                if busy:
+                    with interrupts.allowed():
+                        time.sleep(poll_s)
+                    continue
+                if objective.current is not None:
+                    rep.trials.append(objective.current)
+                    if on_trial is not None:
+                        on_trial(study)
+        except KeyboardInterrupt:
+            rep.stopped = "interrupted"
+            if objective.current is not None:
+                t = copy.deepcopy(study.get_trials(deepcopy=False)[objective.current])
+                if t.state == optuna.trial.TrialState.FAIL:
+                    _retry(study, t)
+                elif t.state == optuna.trial.TrialState.RUNNING:
+                    _fail_and_retry(study, t)
+            raise
+        finally:
+            rep.simulated = objective.simulated
+            cb = getattr(storage, "heartbeat_stale_trial_callback", None)
+            if isinstance(cb, RetryStale):  # also those failed inside study.optimize
+                rep.recovered = sorted(set(rep.recovered) | set(cb.failed))
+            lock.close()
+    return rep
+
+
+def spawn_workers(cfg: SweepConfig, spec: StorageSpec, study: str, n: int) -> list[Any]:
+    """Start ``n`` worker processes on the study (their job goes through stdin, so the
+    storage password never shows on a command line)."""
+    procs = []
+    for i in range(n):
+        p = subprocess.Popen(
+            [sys.executable, "-m", "vfgym.tuning"],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        job = {"config": cfg.to_dict(), "storage": asdict(spec), "study": study, "index": i}
+        assert p.stdin is not None
+        p.stdin.write(json.dumps(job))
+        p.stdin.close()
+        procs.append(p)
+    return procs
