@@ -41,7 +41,7 @@ from vfgym.space import NAMES, from_action, settings_from_dict, to_action
 
 TUNE, SERVO = vfgym.envs.ENV_IDS
 PAPER_ACTION = to_action(PAPER_SETTINGS)
-SRC = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "src")
+SRC = str(Path(__file__).resolve().parents[2] / "src")
 
 
 def run_episode(env: gym.Env, action, seed: int | None = None, **reset_kw):

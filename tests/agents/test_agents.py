@@ -17,7 +17,7 @@ from vfgym.agents.training import train
 from vfgym.cli import main
 from vfgym.commands._common import load_settings
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 TINY = {
     "ppo": {"n_envs": 4, "n_steps": 16, "batch_size": 32, "n_epochs": 1},
     "sac": {"n_envs": 2, "learning_starts": 16, "batch_size": 16, "buffer_size": 1000},

@@ -22,7 +22,7 @@ import yaml
 
 from vfgym import tuning
 
-SRC = Path(__file__).resolve().parents[1] / "src"
+SRC = Path(__file__).resolve().parents[2] / "src"
 PG_URL = os.environ.get("VFGYM_TEST_POSTGRES_URL")
 needs_pg = pytest.mark.skipif(
     not PG_URL, reason="VFGYM_TEST_POSTGRES_URL is not set (source .ci/postgres.sh to start one)"
