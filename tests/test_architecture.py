@@ -20,8 +20,10 @@ from pathlib import Path
 
 import pytest
 
-SRC = Path(__file__).resolve().parents[1] / "src"
+REPO = Path(__file__).resolve().parents[1]
+SRC = REPO / "src"
 PACKAGE = SRC / "vfgym"
+ARCHITECTURE_DOC = REPO / "docs" / "architecture.md"
 
 # Lowest first. The reasons are in docs/architecture.md ("Dependency direction").
 LAYERS: tuple[tuple[str, ...], ...] = (
@@ -168,6 +170,34 @@ def test_imports_run_downward() -> None:
 def test_no_circle_between_parts() -> None:
     cycles = part_cycles(GRAPH)
     assert not cycles, "import circles: " + "; ".join(" -> ".join(c) for c in cycles)
+
+
+def documented_files(text: str) -> set[str]:
+    """The files of the tree in docs/architecture.md (the block that opens ``src/vfgym/``),
+    as paths relative to ``src/vfgym``; a line ending in ``/`` is a folder."""
+    lines = text.split("\nsrc/vfgym/\n", 1)[1].split("```", 1)[0].splitlines()
+    folders: list[str] = []
+    files: set[str] = set()
+    for line in lines:
+        if not line.strip():
+            continue
+        depth = (len(line) - len(line.lstrip(" "))) // 2 - 1
+        name = line.split()[0]
+        del folders[depth:]
+        if name.endswith("/"):
+            folders.append(name.rstrip("/"))
+        else:
+            files.add("/".join([*folders, name]))
+    return files
+
+
+def test_the_architecture_doc_lists_every_module() -> None:
+    """docs/architecture.md's file tree names each module once it exists, and no other."""
+    listed = documented_files(ARCHITECTURE_DOC.read_text(encoding="utf-8"))
+    actual = {p.relative_to(PACKAGE).as_posix() for p in PACKAGE.rglob("*.py")}
+    actual.add("py.typed")
+    assert not actual - listed, f"not in docs/architecture.md's tree: {sorted(actual - listed)}"
+    assert not listed - actual, f"in docs/architecture.md but absent: {sorted(listed - actual)}"
 
 
 def test_the_graph_is_read_from_the_source() -> None:

@@ -37,7 +37,7 @@ PAPER_STEP_RAD = 10.0
 
 ACCEL_LAWS = ("rise", "slew")
 """``rise``: the error may grow away from zero by at most value/k a tick (the paper's
-reading, default); ``slew``: |e_i − e_prev| ≤ value/k both ways (see MODEL.md §1)."""
+reading, default); ``slew``: |e_i − e_prev| ≤ value/k both ways (see docs/model.md §1)."""
 
 
 @dataclass(frozen=True)
@@ -262,7 +262,7 @@ def paper_k(plant: Plant = PAPER_PLANT, accel_limit_rad_s2: float | None = None)
 
 @dataclass(frozen=True)
 class Measures:
-    """Windows and bands of the measures of a move (MODEL.md §5); see :mod:`vfgym.plant.measures`.
+    """Windows and bands of the measures of a move (docs/model.md §5); see :mod:`vfgym.plant.measures`.
 
     in_position_counts: half-width of the in-position window around the final command,
         in encoder counts (a servo drive's "positioning completed width").

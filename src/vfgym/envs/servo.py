@@ -203,7 +203,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Description
 
-    One episode is one move of the plant of MODEL.md (V-F controller → digital servo →
+    One episode is one move of the plant of docs/model.md (V-F controller → digital servo →
     motor). Each step is one control interval (default 1 ms = 140 ticks): the action sets
     the four settings for that interval, and the compiled, stateful kernel
     (:func:`vfgym.plant._kernel.run_segment`) advances the plant through it; its state (the V-F

@@ -54,7 +54,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Description
 
-    Each episode is one move of the plant of MODEL.md (V-F controller → digital servo →
+    Each episode is one move of the plant of docs/model.md (V-F controller → digital servo →
     motor): ``reset`` picks a scenario (a command profile and the load on the motor), the
     agent answers with the four settings, and ``step`` simulates the whole move tick by tick
     and scores it through :func:`vfgym.evaluate`, the one scoring path, so the reward is

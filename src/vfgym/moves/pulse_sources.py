@@ -7,7 +7,7 @@ movement command, exactly as it takes the V-F controller's output.
 
 - :func:`scurve_pulses`: what a motion-control IC such as the NOVA MCX514 outputs in
   *S-curve fixed-pulse driving* with acceleration and deceleration symmetric (MCX514
-  manual p.26, MODEL.md section 4). The speed starts at the initial speed ``SV``, rises
+  manual p.26, docs/model.md §4). The speed starts at the initial speed ``SV``, rises
   along an S-curve at constant jerk to the drive speed ``DV``, cruises, falls back along
   the mirror image and stops exactly on the requested pulse count. With *triangle form
   prevention* (the "rule of 1/12") a move too short to reach ``DV``, or a decelerating

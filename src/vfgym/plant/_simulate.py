@@ -43,7 +43,7 @@ def vf_pulses(
     """The V-F controller's pulse train for a position command given per tick.
 
     Returns an int8 array, one entry per tick: +1, −1 or 0 (at most one pulse a tick).
-    The controller's position feedback is its own pulse counter (MODEL.md §1).
+    The controller's position feedback is its own pulse counter (docs/model.md §1).
     """
     cmd = check_finite_array("command_rad", command_rad)
     s = Settings(value_rad=value_rad, error_limit_rad=error_limit_rad, k=k, accel_law=accel_law)

@@ -1,4 +1,4 @@
-"""The measures of a move (MODEL.md §5), each with one written definition.
+"""The measures of a move (docs/model.md §5), each with one written definition.
 
 The kernel streams raw accumulators over every tick (:mod:`vfgym.plant._layout`);
 :func:`from_acc` turns them into the named measures below. The tests recompute the same
