@@ -161,8 +161,21 @@ def from_acc(
 
 
 def command_end_s(command: np.ndarray, tick_hz: float) -> float:
-    """Time at which the command reached its final value: tick of its last change × T
-    (the plant starts at rest at 0, so a step at tick 0 ends at 0)."""
+    """Time at which the command reached its final value.
+
+    Parameters
+    ----------
+    command : numpy.ndarray
+        Position command per tick (rad).
+    tick_hz : float
+        Controller tick rate f (Hz).
+
+    Returns
+    -------
+    float
+        The tick of the command's last change times T (s). The plant starts at rest at
+        0, so a step at tick 0 ends at 0, and a command that is 0 throughout at 0.
+    """
     c = np.concatenate([[0.0], np.asarray(command, dtype=np.float64)])
     changes = np.flatnonzero(c[1:] != c[:-1])
     return float(changes[-1]) / tick_hz if changes.size else 0.0
