@@ -32,14 +32,34 @@ SPLITS = ("train", "test")
 class Scenario:
     """One move: a command profile and the plant it drives.
 
-    profile: one of :data:`vfgym.moves.profiles.PROFILES`.
-    distance_rad: the move (the amplitude for ``sine``); negative moves go backwards.
-    duration_s: how long to simulate, including time to settle.
-    speed_rad_s, accel_rad_s2: cruise speed and acceleration of ramp / trapezoid / scurve
-        profiles (default: the pulse train's top speed δ·f and the motor's limit).
-    freq_hz: sine frequency.
-    moves: for ``multi``: (relative distance rad, dwell s) pairs.
-    inertia_ratio, coulomb_nm, viscous_nm_s_rad, load_torque_nm: the plant's load.
+    Parameters
+    ----------
+    name : str
+        The scenario's name (``paper-step``, ``train-3`` …).
+    profile : str
+        One of :data:`vfgym.moves.profiles.PROFILES`.
+    distance_rad : float
+        The move (the amplitude for ``sine``), nonzero except for ``multi``; negative moves
+        go backwards.
+    duration_s : float
+        How long to simulate (s), including time to settle; in (0, 60].
+    speed_rad_s, accel_rad_s2 : float or None
+        Cruise speed and acceleration of ramp / trapezoid / scurve profiles (default: the
+        pulse train's top speed δ·f and the motor's limit).
+    freq_hz : float
+        Sine frequency (Hz).
+    moves : tuple of (float, float)
+        For ``multi``: (relative distance rad, dwell s) pairs.
+    inertia_ratio, coulomb_nm, viscous_nm_s_rad, load_torque_nm : float
+        The plant's load, as in :class:`vfgym.Motor`.
+    description : str
+        One line for listings (not compared).
+
+    Raises
+    ------
+    ValueError
+        If the profile is unknown, the distance is zero for a single move, the duration
+        is out of range, or ``multi`` has no moves.
     """
 
     name: str
@@ -75,7 +95,18 @@ class Scenario:
         return self.profile == "sine"
 
     def plant(self, base: Plant = PAPER_PLANT) -> Plant:
-        """The base plant with this scenario's load."""
+        """The base plant with this scenario's load.
+
+        Parameters
+        ----------
+        base : Plant
+            The plant before the load.
+
+        Returns
+        -------
+        Plant
+            ``base`` with this scenario's inertia ratio, friction and load torque.
+        """
         return base.with_motor(
             inertia_ratio=self.inertia_ratio,
             coulomb_nm=self.coulomb_nm,
@@ -84,20 +115,65 @@ class Scenario:
         )
 
     def command(self, plant: Plant = PAPER_PLANT) -> np.ndarray:
-        """The position command per tick (rad), read-only and cached."""
+        """The position command per tick (rad), read-only and cached.
+
+        Parameters
+        ----------
+        plant : Plant
+            Gives the tick rate, pulse equivalent and default speed and acceleration.
+
+        Returns
+        -------
+        numpy.ndarray
+            float64, read-only: every caller simulates the same array.
+        """
         return _command(self, plant)
 
     def speed(self, plant: Plant) -> float:
+        """The profile's cruise speed (rad/s).
+
+        Parameters
+        ----------
+        plant : Plant
+            Gives the default, the pulse train's top speed δ·f.
+
+        Returns
+        -------
+        float
+            ``speed_rad_s`` if set, else δ·f.
+        """
         return self.speed_rad_s if self.speed_rad_s is not None else plant.pulse_top_speed_rad_s
 
     def accel(self, plant: Plant) -> float:
+        """The profile's acceleration (rad/s²).
+
+        Parameters
+        ----------
+        plant : Plant
+            Gives the default, the motor's acceleration limit.
+
+        Returns
+        -------
+        float
+            ``accel_rad_s2`` if set, else the motor's ``accel_limit_rad_s2``.
+        """
         return (
             self.accel_rad_s2 if self.accel_rad_s2 is not None else plant.motor.accel_limit_rad_s2
         )
 
     def move_list(self, plant: Plant = PAPER_PLANT) -> list[tuple[int, float]]:
-        """Point-to-point moves as (start tick, relative distance rad), for pulse sources
-        that replace the V-F controller; empty for a moving reference."""
+        """Point-to-point moves, for pulse sources that replace the V-F controller.
+
+        Parameters
+        ----------
+        plant : Plant
+            Gives the tick rate (dwells in ticks).
+
+        Returns
+        -------
+        list of (int, float)
+            (start tick, relative distance rad) per move; empty for a moving reference.
+        """
         if self.tracking:
             return []
         if self.profile != "multi":
@@ -109,9 +185,19 @@ class Scenario:
         return out
 
     def ideal_time_s(self, plant: Plant = PAPER_PLANT) -> float:
-        """Shortest time for the moves at the pulse train's top speed and the motor's
-        acceleration limit (bang–coast–bang); the yardstick for move times. For ``multi``
-        the last move's start plus its ideal time."""
+        """Shortest time for the moves: the yardstick for move times (docs/model.md §6).
+
+        Parameters
+        ----------
+        plant : Plant
+            Gives the pulse train's top speed δ·f and the motor's acceleration limit.
+
+        Returns
+        -------
+        float
+            The bang–coast–bang time (s) at δ·f and the limit; for ``multi`` the last
+            move's start plus its ideal time; for a moving reference the duration.
+        """
         v = plant.pulse_top_speed_rad_s
         a = plant.motor.accel_limit_rad_s2
 
@@ -126,7 +212,18 @@ class Scenario:
         return start / plant.tick_hz + one(dist)
 
     def with_(self, **changes: Any) -> Scenario:
-        """A copy with some fields changed."""
+        """A copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            Fields of :class:`Scenario` and their new values.
+
+        Returns
+        -------
+        Scenario
+            The new scenario.
+        """
         return replace(self, **changes)
 
 
@@ -219,7 +316,24 @@ SCENARIOS: dict[str, Scenario] = {
 
 
 def get_scenario(name: str | Scenario) -> Scenario:
-    """A named scenario (or a random one named ``train-<seed>`` / ``test-<seed>``)."""
+    """A scenario by name.
+
+    Parameters
+    ----------
+    name : str or Scenario
+        A name of :data:`SCENARIOS`, or ``train-<seed>`` / ``test-<seed>`` for a random
+        draw; a :class:`Scenario` is returned as it is.
+
+    Returns
+    -------
+    Scenario
+        The scenario.
+
+    Raises
+    ------
+    ValueError
+        If the name is not known.
+    """
     if isinstance(name, Scenario):
         return name
     if name in SCENARIOS:
@@ -244,6 +358,18 @@ def random_scenario(seed: int, split: str = "train") -> Scenario:
     the in-position window); viscous friction uniform in [0, 3e-4] N·m·s/rad; load torque
     uniform in [−4, 4] mN·m (a quarter of the draws, else none). Duration: the ideal
     move time (for the loaded motor's own limit) times 2, plus 80 ms to settle.
+
+    Parameters
+    ----------
+    seed : int
+        The draw's seed, ≥ 0.
+    split : str
+        ``"train"`` or ``"test"``.
+
+    Returns
+    -------
+    Scenario
+        Named ``<split>-<seed>``; the same for the same arguments, in every version.
     """
     check_choice("split", split, SPLITS)
     seed = check_int("seed", seed, 0, 2**63 - 1)
@@ -282,8 +408,23 @@ def random_scenario(seed: int, split: str = "train") -> Scenario:
 def scenario_set(
     spec: str | Scenario | list | tuple, count: int = 16, first_seed: int = 0
 ) -> list[Scenario]:
-    """Scenarios from a spec: a name, ``named`` (all eight), ``train`` / ``test`` (``count``
-    random draws from ``first_seed``), a comma-separated list, or a list of these."""
+    """Scenarios from a spec.
+
+    Parameters
+    ----------
+    spec : str, Scenario, list or tuple
+        A scenario name, ``named`` (all eight), ``train`` / ``test`` (random draws), a
+        comma-separated list of these, a :class:`Scenario`, or a list of any of them.
+    count : int
+        How many random draws ``train`` / ``test`` give, ≥ 1.
+    first_seed : int
+        The first draw's seed; the draws use ``first_seed``, ``first_seed + 1`` …
+
+    Returns
+    -------
+    list of Scenario
+        In the order of the spec.
+    """
     if isinstance(spec, Scenario):
         return [spec]
     if isinstance(spec, (list, tuple)):
