@@ -67,7 +67,28 @@ class _Options:
 
     @classmethod
     def resolve(cls, file_data: Any = None, cli: dict[str, Any] | None = None, source: str = ""):
-        """Defaults, then a config file's values, then the command line's (not None)."""
+        """A configuration from its defaults, then a config file's values, then the
+        command line's.
+
+        Parameters
+        ----------
+        file_data : dict or None
+            A config file's mapping (``-`` in keys read as ``_``); unknown keys raise.
+        cli : dict or None
+            Command-line options; those that are ``None`` (not given) are skipped.
+        source : str
+            Names the file in error messages.
+
+        Returns
+        -------
+        SweepConfig or GridConfig
+            The validated configuration.
+
+        Raises
+        ------
+        ValueError
+            If the file is not a mapping, has an unknown key, or a value is out of range.
+        """
         data: dict[str, Any] = {}
         if file_data is not None:
             if not isinstance(file_data, dict):
@@ -77,11 +98,25 @@ class _Options:
         return cls(**data)
 
     def to_dict(self) -> dict[str, Any]:
+        """The configuration as plain data (for ``config.yaml``).
+
+        Returns
+        -------
+        dict
+            Field name to value, ``laws`` as a list.
+        """
         d = asdict(self)  # type: ignore[call-overload]
         d["laws"] = list(self.laws)
         return d
 
     def scenario_list(self) -> list[Scenario]:
+        """The scenarios the configuration names.
+
+        Returns
+        -------
+        list of Scenario
+            :func:`vfgym.scenario_set` of ``scenarios``, ``scenario_count``, ``first_seed``.
+        """
         return scenario_set(self.scenarios, self.scenario_count, self.first_seed)
 
 
@@ -89,15 +124,52 @@ class _Options:
 class SweepConfig(_Options):
     """What ``vfgym sweep`` does; every field is a command-line option and a config key.
 
-    scenarios: a scenario set spec (:func:`vfgym.scenario_set`); scenario_count and
-    first_seed size the ``train`` / ``test`` sets. laws: the acceleration laws searched
-    (one law: fixed). objective: ``cost`` or ``pareto`` (default: pareto for nsga2).
-    trials: completed trials the study ends with (all workers together). timeout: seconds
-    after which a worker starts no new trial. storage: see :data:`STORAGE_HELP`.
-    study: the study's name, also the run folder's (default: config name + time).
-    heartbeat, grace: seconds between a running trial's heartbeats, and without one
-    before it is taken as dead (RDB storages). grid_points: values per dimension for the
-    grid sampler.
+    Parameters
+    ----------
+    scenarios : str
+        A scenario set spec (:func:`vfgym.scenario_set`; a list is joined with commas).
+    scenario_count : int
+        Random draws of a ``train`` / ``test`` set, ≥ 1.
+    first_seed : int
+        Seed of the first draw, ≥ 0.
+    laws : tuple of str
+        The acceleration laws searched (one law: fixed), from
+        :data:`vfgym.params.ACCEL_LAWS`; a comma-separated string is split.
+    sampler : str
+        One of :data:`SAMPLERS`.
+    objective : str or None
+        ``cost`` or ``pareto`` (:data:`FORMS`); default: pareto for nsga2, else cost.
+    trials : int
+        Completed trials the study ends with (all workers together), ≥ 1.
+    timeout : float or None
+        Seconds after which a worker starts no new trial.
+    workers : int
+        Worker processes sharing the study, 1 to 256.
+    seed : int or None
+        The sampler's seed (``None``: unseeded).
+    storage : str
+        ``sqlite``, ``journal`` or a ``postgresql://`` URL (see :data:`STORAGE_HELP`).
+    study : str or None
+        The study's name, also the run folder's (default: config name + time).
+    runs_dir : str
+        Folder under which the run folder is made.
+    reference : str or None
+        A grid run (or its ``reference.yaml``) to report the gap to.
+    grid_points : int
+        Values per dimension for the grid sampler, 1 to 64.
+    plots : bool
+        Draw the history and Pareto plots.
+    progress : bool
+        Show a progress bar.
+    heartbeat : int
+        Seconds between a running trial's heartbeats (RDB storages), ≥ 1.
+    grace : int or None
+        Seconds without a heartbeat before a trial is taken as dead.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range or the objective does not suit the sampler.
     """
 
     scenarios: str = "paper-step"
@@ -161,7 +233,26 @@ def _keys(data: dict, cls: type, source: str) -> dict[str, Any]:
 
 
 def check_name(option: str, name: Any) -> str:
-    """A study or run name: it names a folder, so letters, digits, '.', '_', '-'."""
+    """Check a study or run name: it names a folder.
+
+    Parameters
+    ----------
+    option : str
+        The option's name, for the error message.
+    name : str
+        The name: letters, digits, '.', '_' and '-', starting with a letter or digit, at
+        most 100 characters.
+
+    Returns
+    -------
+    str
+        ``name``.
+
+    Raises
+    ------
+    ValueError
+        If the name is not allowed.
+    """
     if not isinstance(name, str) or not NAME_RE.match(name):
         raise ValueError(
             f"{option}={name!r} is not allowed: letters, digits, '.', '_' and '-' "

@@ -25,10 +25,43 @@ from vfgym.tuning._objective import aggregate, settings_key
 
 @dataclass(frozen=True)
 class GridConfig(_Options):
-    """What ``vfgym grid`` does: ``points`` values per dimension over the whole space, then
-    ``refine`` rounds that re-grid (``points`` per dimension) the neighbourhood of the
-    ``keep`` best distinct points, one grid step either side; ``batch`` settings per
-    compiled call."""
+    """What ``vfgym grid`` does; every field is a command-line option and a config key.
+
+    ``points`` values per dimension over the whole space, then ``refine`` rounds that
+    re-grid (``points`` per dimension) the neighbourhood of the ``keep`` best distinct
+    points, one grid step either side.
+
+    Parameters
+    ----------
+    scenarios : str
+        A scenario set spec (:func:`vfgym.scenario_set`; a list is joined with commas).
+    scenario_count : int
+        Random draws of a ``train`` / ``test`` set, ≥ 1.
+    first_seed : int
+        Seed of the first draw, ≥ 0.
+    laws : tuple of str
+        The acceleration laws searched (one law: fixed), from
+        :data:`vfgym.params.ACCEL_LAWS`; a comma-separated string is split.
+    points : int
+        Values per dimension, 2 to 64.
+    refine : int
+        Refinement rounds, 0 to 10.
+    keep : int
+        Best distinct points refined around each round, 1 to 64.
+    batch : int
+        Settings per compiled call.
+    name : str or None
+        The run's name (default: config name + time).
+    runs_dir : str
+        Folder under which the run folder is made.
+    progress : bool
+        Show a progress bar.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range.
+    """
 
     scenarios: str = "paper-step"
     scenario_count: int = 16
@@ -62,9 +95,24 @@ def _unit_axes(center: np.ndarray, step: float, points: int) -> list[np.ndarray]
 def run_grid(
     cfg: GridConfig, progress: Callable[[int, int, float], None] | None = None
 ) -> dict[str, Any]:
-    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`, one
-    compiled call per batch. Returns the rows (unit coordinates, law, level, cost,
-    worst constraints, feasible) and the best."""
+    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`.
+
+    One compiled call per batch.
+
+    Parameters
+    ----------
+    cfg : GridConfig
+        The grid.
+    progress : callable or None
+        Called after each batch with (settings done, settings in all, best feasible cost).
+
+    Returns
+    -------
+    dict
+        ``rows``: one dict per setting (level, settings, accel_law, unit coordinates
+        ``u``, mean cost, worst constraints, feasible); ``best``: the feasible row of
+        least cost (or of least cost, if none is feasible); ``scenarios``.
+    """
     scenarios = cfg.scenario_list()
     evaluate(PAPER_SETTINGS, scenarios)  # compile/load once before timing batches
     levels: list[tuple[int, list[Settings]]] = [(0, space.grid(cfg.points, cfg.laws))]
@@ -121,6 +169,20 @@ def run_grid(
 
 
 def write_grid_csv(rows: list[dict[str, Any]], path: Path) -> Path:
+    """Write the grid's rows as CSV (``grid.csv``), floats in full precision.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The rows of :func:`run_grid`.
+    path : pathlib.Path
+        The file, written atomically.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(
@@ -142,7 +204,20 @@ def write_grid_csv(rows: list[dict[str, Any]], path: Path) -> Path:
 
 
 def grid_reference(cfg: GridConfig, result: dict[str, Any]) -> dict[str, Any]:
-    """``reference.yaml``: the grid's best, in the Settings-YAML format."""
+    """``reference.yaml``: the grid's best, in the Settings-YAML format.
+
+    Parameters
+    ----------
+    cfg : GridConfig
+        The grid that ran.
+    result : dict
+        What :func:`run_grid` returned.
+
+    Returns
+    -------
+    dict
+        The best settings, its cost, constraints and feasibility, and how the grid ran.
+    """
     b = result["best"]
     return {
         "settings": space.settings_to_dict(b["settings"]),
