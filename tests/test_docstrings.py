@@ -83,7 +83,11 @@ def entries(lines: list[str]) -> list[str]:
 
 
 def raised_names(func: Callable[..., Any]) -> set[str]:
-    """Exceptions the function raises itself: ``raise Name(...)`` outside nested functions."""
+    """Exceptions the function raises itself: ``raise Name(...)`` in its own body.
+
+    Raises inside nested functions are not its own, nor are those a surrounding ``try``
+    catches (by name, or as ``Exception``).
+    """
     try:
         source = textwrap.dedent(inspect.getsource(func))
     except (OSError, TypeError):
@@ -91,19 +95,46 @@ def raised_names(func: Callable[..., Any]) -> set[str]:
     tree = ast.parse(source).body[0]
     found: set[str] = set()
 
-    def walk(node: ast.AST) -> None:
+    def caught_by(handlers: list[ast.ExceptHandler]) -> set[str]:
+        names: set[str] = set()
+        for h in handlers:
+            types = h.type.elts if isinstance(h.type, ast.Tuple) else [h.type]
+            for t in types:
+                if t is None:
+                    names.add("*")
+                elif isinstance(t, ast.Name | ast.Attribute):
+                    name = t.id if isinstance(t, ast.Name) else t.attr
+                    names.add("*" if name in ("Exception", "BaseException") else name)
+        return names
+
+    def walk(node: ast.AST, caught: frozenset[str]) -> None:
         for child in ast.iter_child_nodes(node):
             if isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda):
                 continue
-            if isinstance(child, ast.Raise) and child.exc is not None:
-                exc = child.exc.func if isinstance(child.exc, ast.Call) else child.exc
-                if isinstance(exc, ast.Name) and exc.id[:1].isupper():
-                    found.add(exc.id)
-                elif isinstance(exc, ast.Attribute):
-                    found.add(exc.attr)
-            walk(child)
+            if isinstance(child, ast.Try):
+                inner = caught | caught_by(child.handlers)
+                for stmt in child.body:
+                    walk_one(stmt, inner)
+                for part in (*child.handlers, *child.orelse, *child.finalbody):
+                    walk_one(part, caught)
+                continue
+            walk_one(child, caught)
 
-    walk(tree)
+    def walk_one(node: ast.AST, caught: frozenset[str]) -> None:
+        if isinstance(node, ast.Raise) and node.exc is not None:
+            exc = node.exc.func if isinstance(node.exc, ast.Call) else node.exc
+            name = None
+            if isinstance(exc, ast.Name) and exc.id[:1].isupper():
+                name = exc.id
+            elif isinstance(exc, ast.Attribute):
+                name = exc.attr
+            if name is not None and name not in caught and "*" not in caught:
+                found.add(name)
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda):
+            return
+        walk(node, caught)
+
+    walk(tree, frozenset())
     return found
 
 
@@ -243,6 +274,28 @@ def test_a_missing_entry_is_caught() -> None:
         "f: returns a value but has no Returns section",
         "f: raises ValueError but its Raises section does not say so",
     ]
+
+
+def test_raises_caught_in_the_function_are_not_its_own() -> None:
+    def h(x: int) -> None:
+        """Nothing escapes."""
+        try:
+            if x:
+                raise ValueError("x")
+        except ValueError:
+            pass
+        try:
+            raise KeyError("k")
+        except Exception:
+            pass
+
+        def inner() -> None:
+            raise TypeError("not h's")
+
+        if x < 0:
+            raise OverflowError("escapes")
+
+    assert raised_names(h) == {"OverflowError"}
 
 
 def test_a_complete_docstring_passes() -> None:

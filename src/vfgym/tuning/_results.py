@@ -27,7 +27,19 @@ from vfgym.tuning._storage import StorageSpec
 
 
 def best_trial(study: Any) -> Any:
-    """The completed trial with the lowest cost among the feasible ones (any, if none is)."""
+    """The sweep's best trial.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+
+    Returns
+    -------
+    optuna.trial.FrozenTrial or None
+        The completed trial with the lowest cost among the feasible ones (among all, if
+        none is feasible; ties to the earlier trial); ``None`` before any completes.
+    """
     import optuna
 
     done = [
@@ -42,12 +54,37 @@ def best_trial(study: Any) -> Any:
 
 
 def trial_settings(trial: Any) -> Settings:
+    """The settings a trial scored.
+
+    Parameters
+    ----------
+    trial : optuna.trial.FrozenTrial
+        A trial with the ``settings`` user attribute :class:`Objective` sets.
+
+    Returns
+    -------
+    Settings
+        Its settings.
+    """
     return space.settings_from_dict(trial.user_attrs["settings"], source=f"trial {trial.number}")
 
 
 def write_trials_csv(study: Any, path: Path) -> Path:
-    """The trials as CSV, one row each, with the columns ``study.trials_dataframe()`` names
-    (number, value(s), times, params_*, user_attrs_*, state), written atomically."""
+    """The trials as CSV (``trials.csv``), one row each, written atomically.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+    path : pathlib.Path
+        The file.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``. Its columns are those ``study.trials_dataframe()`` names (number,
+        value(s), times, params_*, user_attrs_*, state); lists and dicts as JSON.
+    """
     trials = study.get_trials(deepcopy=False)
     names = study.metric_names or (
         ["value"] if len(study.directions) == 1 else [str(i) for i in range(len(study.directions))]
@@ -80,8 +117,23 @@ def _cell(v: Any) -> Any:
 
 
 def write_plots(study: Any, run_dir: Path, form: str) -> dict[str, str]:
-    """Optimisation history, parameter importances and (Pareto form) the Pareto front as
-    PNG; a plot Optuna cannot draw (too few trials, ...) is skipped with its reason."""
+    """Optimisation history, parameter importances and (Pareto form) the Pareto front as PNG.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+    run_dir : pathlib.Path
+        The run folder the PNG files go to.
+    form : str
+        ``cost`` or ``pareto``.
+
+    Returns
+    -------
+    dict of str to str
+        Per plot, its file name, or ``skipped: <reason>`` for a plot Optuna cannot draw
+        (too few trials …).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -128,8 +180,25 @@ ROW_KEYS = ("settle_ms", "overshoot_mrad", "overshoot_win", "accel_krad_s2", "ac
 
 
 def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> dict[str, Any]:
-    """The tuned settings against the paper's on each scenario and over the set: settling
-    time, overshoot, peak pulse-train acceleration against the motor's limit, cost."""
+    """The tuned settings against the paper's on each scenario and over the set.
+
+    Parameters
+    ----------
+    best : Settings
+        The tuned settings.
+    scenarios : list of Scenario
+        The sweep's scenarios.
+    label : str
+        The tuned settings' name in the table.
+
+    Returns
+    -------
+    dict
+        ``rows``: per scenario and settings, the settling time, overshoot, peak
+        pulse-train acceleration against the motor's limit, cost and feasibility;
+        ``set``: the same over the set (mean settling, worst overshoot and acceleration,
+        mean cost).
+    """
     ev = evaluate([PAPER_SETTINGS, best], scenarios)
     agg = aggregate(ev)
     rows: list[dict[str, Any]] = []
@@ -174,8 +243,19 @@ def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> 
 
 
 def format_comparison(cmp: dict[str, Any]) -> str:
-    """The comparison as a text table (set rows: mean settling, worst overshoot and
-    acceleration, mean cost)."""
+    """The comparison as a text table.
+
+    Parameters
+    ----------
+    cmp : dict
+        What :func:`compare` returned.
+
+    Returns
+    -------
+    str
+        One line per scenario and settings, then the set's rows (mean settling, worst
+        overshoot and acceleration, mean cost) when there are several scenarios.
+    """
     head = (
         f"{'scenario':14s} {'settings':8s} {'settle ms':>10s} {'overshoot mrad':>15s} "
         f"{'(windows)':>9s} {'peak accel krad/s2':>19s} {'/limit':>7s} {'cost':>7s} feasible"
@@ -208,9 +288,31 @@ def format_comparison(cmp: dict[str, Any]) -> str:
 def find_reference(
     cfg_reference: str | None, runs_dir: str, scenarios: list[Scenario], laws: tuple[str, ...]
 ) -> tuple[dict[str, Any], Path] | None:
-    """A grid reference for these scenarios and laws: ``--reference PATH`` (a
-    ``reference.yaml`` or a grid run folder), else the best of ``RUNS/grid/*/reference.yaml``
-    that matches."""
+    """A grid reference for these scenarios and laws.
+
+    Parameters
+    ----------
+    cfg_reference : str or None
+        ``--reference PATH``: a ``reference.yaml`` or a grid run folder; ``None`` searches
+        ``runs_dir``.
+    runs_dir : str
+        The runs folder whose ``grid/*/reference.yaml`` are searched.
+    scenarios : list of Scenario
+        The sweep's scenarios; a reference must be for the same.
+    laws : tuple of str
+        The sweep's laws; a reference must be for the same.
+
+    Returns
+    -------
+    tuple of (dict, pathlib.Path) or None
+        The reference's data and file (the best matching one when searching), or ``None``
+        when none matches.
+
+    Raises
+    ------
+    ValueError
+        If the given reference is not a grid reference, or is for other scenarios or laws.
+    """
     names = [s.name for s in scenarios]
     if cfg_reference:
         p = Path(cfg_reference)
@@ -244,15 +346,47 @@ def find_reference(
 
 
 def gap_pct(cost: float, ref_cost: float) -> float:
-    """How far a cost is above the reference's, in % (negative: below it)."""
+    """How far a cost is above the reference's.
+
+    Parameters
+    ----------
+    cost : float
+        The sweep's best cost.
+    ref_cost : float
+        The grid reference's cost.
+
+    Returns
+    -------
+    float
+        100·(cost − ref)/ref, in % (negative: below the reference).
+    """
     return 100.0 * (cost - ref_cost) / ref_cost
 
 
 def best_record(
     study: Any, trial: Any, cfg: SweepConfig, spec: StorageSpec, scenarios: list[Scenario]
 ) -> dict[str, Any]:
-    """``best.yaml``: the settings (what ``vfgym evaluate --settings`` reads) and where
-    they come from."""
+    """``best.yaml``: the settings (what ``vfgym evaluate --settings`` reads) and their origin.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+    trial : optuna.trial.FrozenTrial
+        Its best trial (:func:`best_trial`).
+    cfg : SweepConfig
+        The sweep's configuration.
+    spec : StorageSpec
+        Where the study lives (shown without a password).
+    scenarios : list of Scenario
+        The sweep's scenarios.
+
+    Returns
+    -------
+    dict
+        The settings, cost, feasibility, constraints, objectives, and the study, storage,
+        trial, sampler, objective, scenarios and laws they come from.
+    """
     return {
         "settings": trial.user_attrs["settings"],
         "cost": trial.user_attrs["cost"],
