@@ -280,16 +280,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     violation_penalty=5.0, plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
     weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``
 
-    * ``scenario``, ``split``, ``seed_range``, ``accel_law``, ``plant``, ``measures``,
-      ``weights``, ``bounds``: as VFTune-v0.
-    * ``interval_s``: the control interval, a whole number of ticks.
-    * ``settle_time_s``: how long the motor must stay in position to end the episode.
-    * ``initial_settings``: the settings in force before the first action.
-    * ``tracking_weight``: weight of the tracking-error shaping term (0: none).
-    * ``terminate_on_violation``, ``violation_penalty``: end on a constraint violation,
-      with this extra negative reward.
-    * ``render_mode``: ``"rgb_array"`` draws the episode's move so far (position, speed,
-      acceleration, command against motor) as an (480, 640, 3) uint8 array.
+    See Parameters.
 
     ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)`` gives
     :class:`vfgym.envs.vector.VFServoVectorEnv`, which steps all N envs in one compiled
@@ -298,6 +289,33 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     ## Version History
 
     * v0: Initial version.
+
+    Parameters
+    ----------
+    scenario, split, seed_range, accel_law
+        As :class:`vfgym.envs.tune.VFTuneEnv`.
+    interval_s : float
+        The control interval (s), a whole number of ticks.
+    settle_time_s : float
+        How long the motor must stay in position to end the episode (s).
+    initial_settings : Settings
+        The settings in force before the first action.
+    tracking_weight : float
+        Weight of the tracking-error shaping term (0: none).
+    terminate_on_violation : bool
+        End the episode on a constraint violation.
+    violation_penalty : float
+        The extra negative reward of such an end.
+    plant, measures, weights, bounds
+        The scoring path's inputs (:func:`vfgym.evaluate`).
+    render_mode : str or None
+        ``"rgb_array"`` draws the episode's move so far (position, speed, acceleration,
+        command against motor) as an (480, 640, 3) uint8 array.
+
+    Raises
+    ------
+    ValueError
+        If an argument is out of its range or of the wrong type.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 30}
@@ -364,6 +382,22 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode: draw (or take) the scenario of the move.
+
+        Parameters
+        ----------
+        seed : int or None
+            Seeds the env's ``np_random`` (the scenario draws), as Gymnasium does.
+        options : dict or None
+            ``{"scenario": name or Scenario}`` for a given scenario, or
+            ``{"scenario_seed": s}`` for a seed of the env's split.
+
+        Returns
+        -------
+        tuple
+            ``(observation, info)``: the move's features (float32) and
+            ``{"scenario": name}``.
+        """
         super().reset(seed=seed)
         ep = self.core.source.draw(self.np_random, options)
         self._ep = ep
@@ -376,6 +410,26 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._w[self._obs].astype(np.float32), {"scenario": ep.scenario.name}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Hold the settings the action maps to for one control interval of the move.
+
+        Parameters
+        ----------
+        action : numpy.ndarray
+            A point of ``[-1, 1]⁴``: value, L, k, Ts/Tf on the search space.
+
+        Returns
+        -------
+        tuple
+            ``(observation, reward, terminated, truncated, info)``; ``info`` is empty until
+            the episode ends, then holds the scored move's info.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            After the episode has ended (or before ``reset()``).
+        ValueError
+            If the action is not finite or outside the box.
+        """
         if self._ended or self._cmd is None:
             raise gym.error.ResetNeeded(
                 "call reset() before step(): "
@@ -399,7 +453,18 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         return obs, reward, bool(flags & B.TERMINATED), bool(flags & B.TRUNCATED), info
 
     def render(self) -> np.ndarray | None:
-        """The episode's move so far (the whole move once it has ended) as an RGB array."""
+        """The episode's move so far (the whole move once it has ended) as an RGB array.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            (480, 640, 3) uint8, or ``None`` (with a warning) without a render mode.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            Before the first ``reset()``.
+        """
         if self.render_mode is None:
             gym.logger.warn(
                 "VFServo-v0.render() without a render_mode: make the env with "
