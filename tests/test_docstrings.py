@@ -23,6 +23,7 @@ import re
 import textwrap
 import types
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -243,6 +244,37 @@ def test_the_api_is_found() -> None:
 def test_public_docstring(qualname: str, obj: Any) -> None:
     found = check(qualname, obj)
     assert not found, "\n".join(found)
+
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def model_citations(text: str) -> list[str]:
+    """The section numbers cited as ``docs/model.md §n`` or ``§n–§m`` in a text."""
+    out: list[str] = []
+    for match in re.finditer(r"docs/model\.md(?:``)? (§\d+(?:\s*[–-]\s*§\d+)?)", text):
+        bounds = [int(n) for n in re.findall(r"\d+", match[1])]
+        out += [f"§{n}" for n in range(bounds[0], bounds[-1] + 1)]
+    return out
+
+
+def test_docstrings_cite_sections_of_docs_model_md() -> None:
+    """Every ``docs/model.md §n`` in the source and README names a section of that page,
+    and nothing cites the spec outside the repository (``MODEL.md``) any more."""
+    sections_ = set(
+        re.findall(r"^## (§\d+)", (REPO / "docs" / "model.md").read_text("utf-8"), re.M)
+    )
+    assert {"§1", "§2", "§3", "§4", "§5"} <= sections_
+    files = [*sorted((REPO / "src" / "vfgym").rglob("*.py")), REPO / "README.md"]
+    cited: set[str] = set()
+    for path in files:
+        text = path.read_text(encoding="utf-8")
+        assert "MODEL.md" not in text, f"{path} cites MODEL.md, outside the repository"
+        for section in model_citations(text):
+            assert section in sections_, f"{path} cites docs/model.md {section}, which is absent"
+            cited.add(section)
+    assert {"§1", "§3", "§5"} <= cited  # the check reads the citations it should
+    assert model_citations("see ``docs/model.md`` §1–§3") == ["§1", "§2", "§3"]
 
 
 def test_a_missing_entry_is_caught() -> None:
