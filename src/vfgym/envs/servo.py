@@ -382,21 +382,17 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        """Start an episode: draw (or take) the scenario of the move.
+        """Start an episode at rest, before the move's first control interval.
 
         Parameters
         ----------
-        seed : int or None
-            Seeds the env's ``np_random`` (the scenario draws), as Gymnasium does.
-        options : dict or None
-            ``{"scenario": name or Scenario}`` for a given scenario, or
-            ``{"scenario_seed": s}`` for a seed of the env's split.
+        seed, options
+            As :meth:`vfgym.envs.tune.VFTuneEnv.reset`.
 
         Returns
         -------
         tuple
-            ``(observation, info)``: the move's features (float32) and
-            ``{"scenario": name}``.
+            ``(observation, info)``: the interval's observation and ``{"scenario": name}``.
         """
         super().reset(seed=seed)
         ep = self.core.source.draw(self.np_random, options)

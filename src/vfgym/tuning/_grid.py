@@ -33,15 +33,8 @@ class GridConfig(_Options):
 
     Parameters
     ----------
-    scenarios : str
-        A scenario set spec (:func:`vfgym.scenario_set`; a list is joined with commas).
-    scenario_count : int
-        Random draws of a ``train`` / ``test`` set, ≥ 1.
-    first_seed : int
-        Seed of the first draw, ≥ 0.
-    laws : tuple of str
-        The acceleration laws searched (one law: fixed), from
-        :data:`vfgym.params.ACCEL_LAWS`; a comma-separated string is split.
+    scenarios, scenario_count, first_seed, laws
+        The scenario set and the acceleration laws searched, as in :class:`SweepConfig`.
     points : int
         Values per dimension, 2 to 64.
     refine : int
