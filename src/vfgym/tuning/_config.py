@@ -9,6 +9,7 @@ from dataclasses import asdict, dataclass, fields
 from typing import Any
 
 from vfgym._validate import check_choice, check_int, check_real
+from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.scenarios import Scenario, scenario_set
 from vfgym.params import ACCEL_LAWS
 
@@ -38,6 +39,11 @@ def _laws(v: Any) -> tuple[str, ...]:
 def _check_scenario_fields(cfg: Any) -> None:
     """Normalise and check the scenario-set and law fields a sweep and a grid share."""
     s = object.__setattr__
+    if cfg.axis is not None:
+        s(cfg, "axis", str(cfg.axis))
+        load_axis(cfg.axis)  # a bad axis file fails here, naming itself
+    if cfg.scenarios is None:  # an axis is tuned on its train moves
+        s(cfg, "scenarios", "paper-step" if cfg.axis is None else "train")
     if isinstance(cfg.scenarios, (list, tuple)):
         s(cfg, "scenarios", ",".join(str(x) for x in cfg.scenarios))
     s(cfg, "scenarios", str(cfg.scenarios))
@@ -64,6 +70,7 @@ class _Options:
     scenario_count: int
     first_seed: int
     laws: tuple[str, ...]
+    axis: str | None
 
     @classmethod
     def resolve(cls, file_data: Any = None, cli: dict[str, Any] | None = None, source: str = ""):
@@ -81,7 +88,16 @@ class _Options:
         d["laws"] = list(self.laws)
         return d
 
+    def load_axis(self) -> Axis | None:
+        """The axis file's :class:`~vfgym.moves.axis.Axis`, or ``None`` (the paper's)."""
+        return None if self.axis is None else load_axis(self.axis)
+
     def scenario_list(self) -> list[Scenario]:
+        """The scenarios: on an axis, ``train`` / ``test`` are its move sets (and
+        ``scenario_count`` / ``first_seed`` do not apply)."""
+        axis = self.load_axis()
+        if axis is not None:
+            return axis.scenario_set(self.scenarios)
         return scenario_set(self.scenarios, self.scenario_count, self.first_seed)
 
 
@@ -90,20 +106,23 @@ class SweepConfig(_Options):
     """What ``vfgym sweep`` does; every field is a command-line option and a config key.
 
     scenarios: a scenario set spec (:func:`vfgym.scenario_set`); scenario_count and
-    first_seed size the ``train`` / ``test`` sets. laws: the acceleration laws searched
-    (one law: fixed). objective: ``cost`` or ``pareto`` (default: pareto for nsga2).
-    trials: completed trials the study ends with (all workers together). timeout: seconds
-    after which a worker starts no new trial. storage: see :data:`STORAGE_HELP`.
+    first_seed size the ``train`` / ``test`` sets. axis: an axis file
+    (:mod:`vfgym.moves.axis`): its plant and measures, and ``train`` / ``test`` its move
+    sets (scenarios default to ``train`` on an axis, else ``paper-step``). laws: the
+    acceleration laws searched (one law: fixed). objective: ``cost`` or ``pareto``
+    (default: pareto for nsga2). trials: completed trials the study ends with (all
+    workers together). timeout: seconds after which a worker starts no new trial. storage: see :data:`STORAGE_HELP`.
     study: the study's name, also the run folder's (default: config name + time).
     heartbeat, grace: seconds between a running trial's heartbeats, and without one
     before it is taken as dead (RDB storages). grid_points: values per dimension for the
     grid sampler.
     """
 
-    scenarios: str = "paper-step"
+    scenarios: str | None = None
     scenario_count: int = 16
     first_seed: int = 0
     laws: tuple[str, ...] = ("rise",)
+    axis: str | None = None
     sampler: str = "tpe"
     objective: str | None = None
     trials: int = 100

@@ -19,7 +19,7 @@ import numpy as np
 from vfgym import space
 from vfgym.io.runs import read_yaml, write_text
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_SETTINGS, Settings
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, PAPER_SETTINGS, Measures, Plant, Settings
 from vfgym.scoring import CONSTRAINTS, OBJECTIVES, evaluate
 from vfgym.tuning._config import SweepConfig
 from vfgym.tuning._objective import aggregate
@@ -127,16 +127,24 @@ def write_plots(study: Any, run_dir: Path, form: str) -> dict[str, str]:
 ROW_KEYS = ("settle_ms", "overshoot_mrad", "overshoot_win", "accel_krad_s2", "accel_ratio", "cost")
 
 
-def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> dict[str, Any]:
+def compare(
+    best: Settings,
+    scenarios: list[Scenario],
+    label: str = "tuned",
+    *,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+) -> dict[str, Any]:
     """The tuned settings against the paper's on each scenario and over the set: settling
-    time, overshoot, peak pulse-train acceleration against the motor's limit, cost."""
-    ev = evaluate([PAPER_SETTINGS, best], scenarios)
+    time, overshoot, peak pulse-train acceleration against the loaded motor's usable
+    acceleration, cost; on ``plant`` with ``measures`` (an axis's)."""
+    ev = evaluate([PAPER_SETTINGS, best], scenarios, plant=plant, measures=measures)
     agg = aggregate(ev)
     rows: list[dict[str, Any]] = []
     for si, sc in enumerate(scenarios):
         for ci, name in enumerate(("paper", label)):
             m = ev.metrics[ci][si]
-            limit = sc.plant().motor.accel_limit_rad_s2
+            limit = sc.plant(plant).motor.usable_accel_rad_s2
             rows.append(
                 {
                     "scenario": sc.name,
@@ -206,11 +214,15 @@ def format_comparison(cmp: dict[str, Any]) -> str:
 
 
 def find_reference(
-    cfg_reference: str | None, runs_dir: str, scenarios: list[Scenario], laws: tuple[str, ...]
+    cfg_reference: str | None,
+    runs_dir: str,
+    scenarios: list[Scenario],
+    laws: tuple[str, ...],
+    axis: str | None = None,
 ) -> tuple[dict[str, Any], Path] | None:
-    """A grid reference for these scenarios and laws: ``--reference PATH`` (a
-    ``reference.yaml`` or a grid run folder), else the best of ``RUNS/grid/*/reference.yaml``
-    that matches."""
+    """A grid reference for these scenarios and laws (and ``axis``, an axis's
+    :func:`~vfgym.moves.axis.axis_digest`): ``--reference PATH`` (a ``reference.yaml`` or
+    a grid run folder), else the best of ``RUNS/grid/*/reference.yaml`` that matches."""
     names = [s.name for s in scenarios]
     if cfg_reference:
         p = Path(cfg_reference)
@@ -223,6 +235,11 @@ def find_reference(
                 f"reference={str(p)!r} is for scenarios {data.get('scenarios')} and laws "
                 f"{data.get('laws')}, not {names} and {list(laws)}"
             )
+        if data.get("axis") != axis:
+            raise ValueError(
+                f"reference={str(p)!r} is for axis {data.get('axis')}, not {axis}: give a "
+                "grid reference made with the same --axis"
+            )
         return data, p
     found = []
     for p in sorted(Path(runs_dir).glob("grid/*/reference.yaml")):
@@ -234,6 +251,7 @@ def find_reference(
             isinstance(data, dict)
             and data.get("scenarios") == names
             and list(data.get("laws", [])) == list(laws)
+            and data.get("axis") == axis
             and isinstance(data.get("cost"), (int, float))
         ):
             found.append((float(data["cost"]), str(p), data))
@@ -266,4 +284,5 @@ def best_record(
         "objective": cfg.objective,
         "scenarios": [s.name for s in scenarios],
         "laws": list(cfg.laws),
+        "axis": cfg.axis,
     }
