@@ -111,11 +111,11 @@ class SweepConfig(_Options):
     sets (scenarios default to ``train`` on an axis, else ``paper-step``). laws: the
     acceleration laws searched (one law: fixed). objective: ``cost`` or ``pareto``
     (default: pareto for nsga2). trials: completed trials the study ends with (all
-    workers together). timeout: seconds after which a worker starts no new trial. storage: see :data:`STORAGE_HELP`.
-    study: the study's name, also the run folder's (default: config name + time).
-    heartbeat, grace: seconds between a running trial's heartbeats, and without one
-    before it is taken as dead (RDB storages). grid_points: values per dimension for the
-    grid sampler.
+    workers together). timeout: seconds after which a worker starts no new trial.
+    storage: see :data:`STORAGE_HELP`. study: the study's name, also the run folder's
+    (default: config name + time). heartbeat, grace: seconds between a running trial's
+    heartbeats, and without one before it is taken as dead (RDB storages). grid_points:
+    values per dimension for the grid sampler.
     """
 
     scenarios: str | None = None
