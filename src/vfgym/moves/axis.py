@@ -49,6 +49,7 @@ from vfgym.params import (
     Plant,
     Servo,
 )
+from vfgym.plant.measures import command_end_s
 
 AXIS_FILE = "axis.yaml"
 """The axis's copy in a run folder."""
@@ -208,12 +209,20 @@ def _check_arrives(sc: Scenario, base: Plant, key: str) -> None:
             f"arrive: allowed more than its ideal move time on this axis, {ideal:.4g} s"
         )
     target = sum(d for d, _ in sc.moves) if sc.profile == "multi" else sc.distance_rad
-    reached = float(sc.command(plant)[-1])
-    if abs(reached - target) > plant.pulse_rad:
+
+    def short(s: Scenario) -> bool:
+        return abs(float(s.command(plant)[-1]) - target) > plant.pulse_rad
+
+    if short(sc):
+        longer = sc
+        while short(longer) and longer.duration_s < 30.0:  # when the command ends
+            longer = replace(longer, duration_s=min(60.0, 2.0 * longer.duration_s))
+        end = command_end_s(longer.command(plant), plant.tick_hz)
         raise ValueError(
             f"{key}.duration_s={sc.duration_s!r} is too short for move {sc.name!r} to "
-            f"arrive: its {sc.profile} command reaches {reached:.6g} of {target:.6g} rad "
-            "by then; allowed a duration its command ends in"
+            f"arrive: its {sc.profile} command reaches "
+            f"{float(sc.command(plant)[-1]):.4g} of {target:.4g} rad by then; allowed "
+            f"more than the {end:.4g} s the command takes"
         )
 
 
