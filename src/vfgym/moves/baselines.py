@@ -93,10 +93,10 @@ def _train(source: PulseSource, scenario, plant: Plant) -> np.ndarray | None:
 
 
 def usable_accel(plant: Plant) -> float:
-    """The acceleration a move may ask of the loaded motor: the smaller of its stated limit
-    and peak torque over total inertia (rad/s²)."""
-    m = plant.motor
-    return min(m.accel_limit_rad_s2, m.peak_torque_nm / m.inertia_kgm2)
+    """The acceleration a move may ask of the loaded motor (rad/s²):
+    :attr:`vfgym.Motor.usable_accel_rad_s2`, peak torque over total inertia capped by the
+    stated limit; the paper's method applied to the axis uses it."""
+    return plant.motor.usable_accel_rad_s2
 
 
 def paper(plant: Plant = PAPER_PLANT) -> Settings:
@@ -131,7 +131,7 @@ def fixed_frequency(plant: Plant = PAPER_PLANT) -> FixedFrequency:
 
 
 def scurve(plant: Plant = PAPER_PLANT) -> SCurveSource:
-    """The S-curve source set to the motor's limits: top speed δ·f, peak acceleration
+    """The S-curve source set to the loaded motor's limits: top speed δ·f, peak acceleration
     :func:`usable_accel`."""
     return SCurveSource(speed_rad_s=plant.pulse_top_speed_rad_s, accel_rad_s2=usable_accel(plant))
 

@@ -208,7 +208,8 @@ def format_comparison(cmp: dict[str, Any]) -> str:
         )
     lines.append(
         "settle: settling time into the in-position window (* not settled; - a moving "
-        "reference); accel: the pulse train's peak over 1 ms against the motor's limit"
+        "reference); accel: the pulse train's peak over 1 ms against the limit (the loaded "
+        "motor's usable acceleration)"
     )
     return "\n".join(lines)
 
