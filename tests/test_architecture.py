@@ -27,11 +27,11 @@ ARCHITECTURE_DOC = REPO / "docs" / "architecture.md"
 
 # Lowest first. The reasons are in docs/architecture.md ("Dependency direction").
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("_validate", "params", "space"),  # the shared vocabulary
+    ("_validate", "params", "space", "io"),  # the shared vocabulary; io: files in and out
     ("plant",),  # params -> Trace
     ("moves",),  # what the plant is asked to do
     ("scoring",),  # measures -> constraints -> cost
-    ("tuning", "report", "envs", "io"),  # built on the scoring path; io: files in and out
+    ("tuning", "report", "envs"),  # built on the scoring path
     ("vfgym",),  # the public API (vfgym/__init__.py): re-exports of the layers below
     ("agents",),  # stable-baselines3 on the envs
     ("commands", "cli"),  # the command line

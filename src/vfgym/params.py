@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from vfgym._validate import check_choice, check_int, check_real
+from vfgym._validate import check_bool, check_choice, check_int, check_real
 
 
 def _set(obj: object, name: str, value: Any) -> None:
@@ -137,7 +137,9 @@ class Motor:
     encoder_lines : int
         Encoder lines per revolution (counts after ×4 decoding: 4 × lines), ≥ 1.
     accel_limit_rad_s2 : float
-        The acceleration the move must respect (rad/s²; the paper's 140 krad/s²), > 0.
+        The stated acceleration limit (rad/s²; the paper's 140 krad/s²), > 0. It caps
+        :attr:`usable_accel_rad_s2`, the limit every move is held to; an axis sets its
+        own limit here.
 
     Raises
     ------
@@ -193,6 +195,18 @@ class Motor:
         return self.rotor_inertia_kgm2 * (1.0 + self.inertia_ratio)
 
     @property
+    def usable_accel_rad_s2(self) -> float:
+        """The acceleration a move may ask of the loaded motor (rad/s²): peak torque over
+        total inertia, capped by the stated limit ``accel_limit_rad_s2``.
+
+        The one definition of "the limit": the acceleration constraint, the measures'
+        ``accel_ratio_*``, the ideal move time, the profiles' default acceleration and the
+        rule of thumb all use it. The bare SGME-02A can give 180 krad/s², so its limit
+        is the paper's 140 krad/s²; with 3x its rotor inertia as load, 45 krad/s².
+        """
+        return min(self.accel_limit_rad_s2, self.peak_torque_nm / self.inertia_kgm2)
+
+    @property
     def counts_per_rev(self) -> int:
         """Encoder counts per revolution after ×4 quadrature decoding."""
         return 4 * self.encoder_lines
@@ -215,6 +229,9 @@ class Motor:
 #   No friction or load by default (a bare shaft); scenarios add them.
 SGME_02A = Motor()
 
+MOTOR_PRESETS: dict[str, Motor] = {SGME_02A.name: SGME_02A}
+"""Motors by name: an axis file's ``motor: {preset: NAME, ...}`` starts from one of these."""
+
 
 @dataclass(frozen=True)
 class Servo:
@@ -230,7 +247,15 @@ class Servo:
         B, the speed counter's output multiplier (x = B·count), > 0; K2 = B·Ts, so the
         servo's position gain is Kv = 1/(B·Ts).
     torque_per_count_nm : float
-        K3, the PWM + power amplifier gain (N·m per count of error), > 0.
+        K3, the PWM + power amplifier gain (N·m per count of error), > 0, tuned for the
+        bare motor (see README, "Motor preset and servo defaults").
+    follows_load : bool
+        True (default): the drive scales K3 with the total inertia, K3·(1 + inertia_ratio),
+        as a drive does once its inertia ratio is set, so a loaded loop keeps the bare
+        loop's natural frequency ωn = sqrt(K3·K4) and damping ζ = K2·ωn/2
+        (K4 = counts per rad / J). False: K3 stays as tuned for the bare motor, so load
+        lowers ωn by sqrt(1 + ratio) and ζ with it (a mis-tuned drive, to study
+        mis-tuning). :attr:`Plant.torque_per_count_nm` is the K3 in force.
 
     Raises
     ------
@@ -242,6 +267,7 @@ class Servo:
     sample_ticks: int = 70
     speed_gain_b: float = 12.5
     torque_per_count_nm: float = 5.3e-4
+    follows_load: bool = True
 
     def __post_init__(self) -> None:
         _set(self, "gear", check_int("gear", self.gear, 1))
@@ -252,6 +278,7 @@ class Servo:
             "torque_per_count_nm",
             check_real("torque_per_count_nm", self.torque_per_count_nm, 0.0, lo_open=True),
         )
+        _set(self, "follows_load", check_bool("follows_load", self.follows_load))
 
 
 @dataclass(frozen=True)
@@ -303,6 +330,15 @@ class Plant:
     def pulse_top_speed_rad_s(self) -> float:
         """v_max = δ·f: one pulse per tick."""
         return self.pulse_rad * self.tick_hz
+
+    @property
+    def torque_per_count_nm(self) -> float:
+        """K3 in force on this plant (N·m per count): the servo's K3 times
+        (1 + inertia_ratio) when it follows its load (:class:`Servo`), else as tuned."""
+        sv = self.servo
+        if not sv.follows_load:
+            return sv.torque_per_count_nm
+        return sv.torque_per_count_nm * (1.0 + self.motor.inertia_ratio)
 
     @property
     def servo_kv(self) -> float:

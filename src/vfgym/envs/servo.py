@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from vfgym._validate import check_choice, check_real
+from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import (
     ACCEL_LAWS,
@@ -38,6 +39,7 @@ from ._common import (
     ScenarioSource,
     as_action,
     check_scoring,
+    resolve_axis,
 )
 from ._common import scored_info as _scored_info
 
@@ -106,6 +108,7 @@ class ServoCore:
         measures: Measures,
         weights: CostWeights,
         bounds: Bounds,
+        axis: Axis | None = None,
     ) -> None:
         check_scoring(weights, bounds, measures, plant)
         self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
@@ -130,7 +133,8 @@ class ServoCore:
         self.measures = measures
         self.weights = weights
         self.bounds = bounds
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.axis = axis
+        self.source = ScenarioSource(scenario, split, seed_range, plant, measures, axis)
         self.n_obs = len(SERVO_FEATURES)
         self.width = B.width(self.n_obs)
         prm = pack(PAPER_SETTINGS, plant, measures, 1.0, 1)
@@ -156,7 +160,7 @@ class ServoCore:
             B.C_IDEAL: ep.ideal_time_s,
             B.C_WIN: ep.window_rad,
             B.C_SCALE: ep.scale_rad,
-            B.C_LIMIT: ep.plant.motor.accel_limit_rad_s2,
+            B.C_LIMIT: ep.plant.motor.usable_accel_rad_s2,
             B.C_VMAX: ep.plant.pulse_top_speed_rad_s,
             B.C_TRACKING: 1.0 if sc.tracking else 0.0,
             B.C_TRK_SCALE: 0.1 * abs(sc.distance_rad),
@@ -278,7 +282,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     accel_law="rise", interval_s=1e-3, settle_time_s=5e-3,
     initial_settings=PAPER_SETTINGS, tracking_weight=0.0, terminate_on_violation=False,
     violation_penalty=5.0, plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
-    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``
+    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None, axis=None)``
 
     See Parameters.
 
@@ -292,7 +296,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
 
     Parameters
     ----------
-    scenario, split, seed_range, accel_law
+    scenario, split, seed_range, accel_law, axis
         As :class:`vfgym.envs.tune.VFTuneEnv`.
     interval_s : float
         The control interval (s), a whole number of ticks.
@@ -338,7 +342,9 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         weights: CostWeights = DEFAULT_WEIGHTS,
         bounds: Bounds = DEFAULT_BOUNDS,
         render_mode: str | None = None,
+        axis: Axis | str | None = None,
     ) -> None:
+        axis, plant, measures = resolve_axis(axis, plant, measures)
         self.core = ServoCore(
             scenario,
             split,
@@ -354,6 +360,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
             measures,
             weights,
             bounds,
+            axis,
         )
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])

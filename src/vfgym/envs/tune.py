@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from vfgym._validate import check_choice
+from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import ACCEL_LAWS, DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.plant import simulate
@@ -29,6 +30,7 @@ from ._common import (
     ScenarioSource,
     as_action,
     check_scoring,
+    resolve_axis,
     scored_info,
 )
 
@@ -115,7 +117,8 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ``gymnasium.make("vfgym/VFTune-v0", scenario=None, split="train", seed_range=None,
     accel_law="rise", plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
-    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``; see Parameters.
+    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None, axis=None)``; see
+    Parameters.
 
     ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)`` gives
     :class:`vfgym.envs.vector.VFTuneVectorEnv`, which scores all N moves in one compiled
@@ -138,6 +141,10 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         ``"rise"`` (the paper's reading) or ``"slew"``.
     plant, measures, weights, bounds
         The scoring path's inputs (:func:`vfgym.evaluate`).
+    axis : str, Axis or None
+        An axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant and measures,
+        and the moves of each split come from its move sets (a random set's draws, or a
+        listed set's move ``seed mod len``); names resolve on the axis.
     render_mode : str or None
         ``"rgb_array"`` draws the last move (position, speed, acceleration, command
         against motor) as an (480, 640, 3) uint8 array.
@@ -162,7 +169,9 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         weights: CostWeights = DEFAULT_WEIGHTS,
         bounds: Bounds = DEFAULT_BOUNDS,
         render_mode: str | None = None,
+        axis: Axis | str | None = None,
     ) -> None:
+        axis, plant, measures = resolve_axis(axis, plant, measures)
         check_scoring(weights, bounds, measures, plant)
         self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
         if render_mode is not None:
@@ -172,7 +181,8 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         self.measures = measures
         self.weights = weights
         self.bounds = bounds
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.axis = axis
+        self.source = ScenarioSource(scenario, split, seed_range, plant, measures, axis)
         self.observation_space, self.action_space = tune_spaces()
         self._ep: Episode | None = None
         self._settings: Settings | None = None

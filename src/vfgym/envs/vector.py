@@ -20,6 +20,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from vfgym._validate import check_choice, check_int
+from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import (
     ACCEL_LAWS,
@@ -43,6 +44,7 @@ from ._common import (
     Episode,
     ScenarioSource,
     check_scoring,
+    resolve_axis,
     scored_info,
 )
 from .servo import ServoCore, raise_bad_action, servo_spaces
@@ -322,14 +324,17 @@ class VFTuneVectorEnv(_BatchVectorEnv):
         bounds: Bounds = DEFAULT_BOUNDS,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         render_mode: str | None = None,
+        axis: Axis | str | None = None,
     ) -> None:
         super().__init__(num_envs, autoreset_mode, render_mode)
+        axis, plant, measures = resolve_axis(axis, plant, measures)
         check_scoring(weights, bounds, measures, plant)
         self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
         self.measures = measures
         self.weights = weights
         self.bounds = bounds
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.axis = axis
+        self.source = ScenarioSource(scenario, split, seed_range, plant, measures, axis)
         self.single_observation_space, self.single_action_space = tune_spaces()
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -416,8 +421,10 @@ class VFServoVectorEnv(_BatchVectorEnv):
         bounds: Bounds = DEFAULT_BOUNDS,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         render_mode: str | None = None,
+        axis: Axis | str | None = None,
     ) -> None:
         super().__init__(num_envs, autoreset_mode, render_mode)
+        axis, plant, measures = resolve_axis(axis, plant, measures)
         self.core = ServoCore(
             scenario,
             split,
@@ -433,6 +440,7 @@ class VFServoVectorEnv(_BatchVectorEnv):
             measures,
             weights,
             bounds,
+            axis,
         )
         n = self.num_envs
         self.single_observation_space, self.single_action_space = servo_spaces()

@@ -192,11 +192,10 @@ def usable_accel(plant: Plant) -> float:
     Returns
     -------
     float
-        The smaller of the motor's stated limit and peak torque over total inertia
-        (rad/s²).
+        :attr:`vfgym.Motor.usable_accel_rad_s2`: peak torque over total inertia, capped
+        by the stated limit (rad/s²); the paper's method applied to the axis uses it.
     """
-    m = plant.motor
-    return min(m.accel_limit_rad_s2, m.peak_torque_nm / m.inertia_kgm2)
+    return plant.motor.usable_accel_rad_s2
 
 
 def paper(plant: Plant = PAPER_PLANT) -> Settings:
@@ -265,7 +264,7 @@ def fixed_frequency(plant: Plant = PAPER_PLANT) -> FixedFrequency:
 
 
 def scurve(plant: Plant = PAPER_PLANT) -> SCurveSource:
-    """The S-curve source set to the motor's limits.
+    """The S-curve source set to the loaded motor's limits.
 
     Parameters
     ----------

@@ -148,7 +148,7 @@ def pack(
     prm[L.P_NS] = sv.sample_ticks
     prm[L.P_B] = sv.speed_gain_b
     prm[L.P_A] = settings.ts_over_tf
-    prm[L.P_K3] = sv.torque_per_count_nm
+    prm[L.P_K3] = plant.torque_per_count_nm  # K3 in force (follows the load by default)
     prm[L.P_COUNT_RAD] = m.count_rad
     prm[L.P_INV_J] = 1.0 / m.inertia_kgm2
     prm[L.P_DAMP] = m.viscous_nm_s_rad / m.inertia_kgm2

@@ -113,7 +113,7 @@ def from_acc(
     T = plant.tick_s
     n = int(acc[L.A_TICKS])
     q = plant.motor.count_rad
-    limit = plant.motor.accel_limit_rad_s2
+    limit = plant.motor.usable_accel_rad_s2
     w = accel_window_ticks(measures, plant)
     ov = float(acc[L.A_OV_MOTOR])
     last_out = int(acc[L.A_LAST_OUT_MOTOR])

@@ -130,7 +130,7 @@ def score(
     """
     ideal = scenario.ideal_time_s(plant)
     window = in_position_rad(measures, plant, scenario.command(plant)[-1])
-    limit = plant.motor.accel_limit_rad_s2
+    limit = plant.motor.usable_accel_rad_s2
     c_acc = m["accel_ratio_pulse"] - 1.0 - m["accel_quantum_rad_s2"] / limit
     c_tq = m["torque_limit_time_s"] - bounds.torque_limit_time_s
     ov_w = m["overshoot_rad"] / window if window > 0 else 0.0

@@ -9,6 +9,7 @@ from dataclasses import asdict, dataclass, fields
 from typing import Any
 
 from vfgym._validate import check_choice, check_int, check_real
+from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.scenarios import Scenario, scenario_set
 from vfgym.params import ACCEL_LAWS
 
@@ -38,6 +39,11 @@ def _laws(v: Any) -> tuple[str, ...]:
 def _check_scenario_fields(cfg: Any) -> None:
     """Normalise and check the scenario-set and law fields a sweep and a grid share."""
     s = object.__setattr__
+    if cfg.axis is not None:
+        s(cfg, "axis", str(cfg.axis))
+        load_axis(cfg.axis)  # a bad axis file fails here, naming itself
+    if cfg.scenarios is None:  # an axis is tuned on its train moves
+        s(cfg, "scenarios", "paper-step" if cfg.axis is None else "train")
     if isinstance(cfg.scenarios, (list, tuple)):
         s(cfg, "scenarios", ",".join(str(x) for x in cfg.scenarios))
     s(cfg, "scenarios", str(cfg.scenarios))
@@ -64,6 +70,7 @@ class _Options:
     scenario_count: int
     first_seed: int
     laws: tuple[str, ...]
+    axis: str | None
 
     @classmethod
     def resolve(cls, file_data: Any = None, cli: dict[str, Any] | None = None, source: str = ""):
@@ -109,14 +116,23 @@ class _Options:
         d["laws"] = list(self.laws)
         return d
 
+    def load_axis(self) -> Axis | None:
+        """The axis file's :class:`~vfgym.moves.axis.Axis`, or ``None`` (the paper's)."""
+        return None if self.axis is None else load_axis(self.axis)
+
     def scenario_list(self) -> list[Scenario]:
         """The scenarios the configuration names.
 
         Returns
         -------
         list of Scenario
-            :func:`vfgym.scenario_set` of ``scenarios``, ``scenario_count``, ``first_seed``.
+            On an axis, ``train`` / ``test`` are its move sets (``scenario_count`` and
+            ``first_seed`` do not apply); else :func:`vfgym.scenario_set` of
+            ``scenarios``, ``scenario_count``, ``first_seed``.
         """
+        axis = self.load_axis()
+        if axis is not None:
+            return axis.scenario_set(self.scenarios)
         return scenario_set(self.scenarios, self.scenario_count, self.first_seed)
 
 
@@ -127,11 +143,15 @@ class SweepConfig(_Options):
     Parameters
     ----------
     scenarios : str
-        A scenario set spec (:func:`vfgym.scenario_set`; a list is joined with commas).
+        A scenario set spec (:func:`vfgym.scenario_set`; a list is joined with commas);
+        default ``train`` on an axis, else ``paper-step``.
     scenario_count : int
         Random draws of a ``train`` / ``test`` set, ≥ 1.
     first_seed : int
         Seed of the first draw, ≥ 0.
+    axis : str or None
+        An axis file (:mod:`vfgym.moves.axis`): its plant and measures, and ``train`` /
+        ``test`` its move sets.
     laws : tuple of str
         The acceleration laws searched (one law: fixed), from
         :data:`vfgym.params.ACCEL_LAWS`; a comma-separated string is split.
@@ -172,10 +192,11 @@ class SweepConfig(_Options):
         If a value is out of its range or the objective does not suit the sampler.
     """
 
-    scenarios: str = "paper-step"
+    scenarios: str | None = None
     scenario_count: int = 16
     first_seed: int = 0
     laws: tuple[str, ...] = ("rise",)
+    axis: str | None = None
     sampler: str = "tpe"
     objective: str | None = None
     trials: int = 100

@@ -17,6 +17,7 @@ import numpy as np
 from vfgym import space
 from vfgym._validate import check_int
 from vfgym.io.runs import write_text
+from vfgym.moves.axis import axis_digest, axis_kwargs
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.scoring import CONSTRAINTS, evaluate
 from vfgym.tuning._config import _bool, _check_scenario_fields, _Options, check_name
@@ -56,10 +57,11 @@ class GridConfig(_Options):
         If a value is out of its range.
     """
 
-    scenarios: str = "paper-step"
+    scenarios: str | None = None
     scenario_count: int = 16
     first_seed: int = 0
     laws: tuple[str, ...] = ("rise",)
+    axis: str | None = None
     points: int = 12
     refine: int = 2
     keep: int = 4
@@ -107,7 +109,8 @@ def run_grid(
         least cost (or of least cost, if none is feasible); ``scenarios``.
     """
     scenarios = cfg.scenario_list()
-    evaluate(PAPER_SETTINGS, scenarios)  # compile/load once before timing batches
+    on_axis = axis_kwargs(cfg.load_axis())
+    evaluate(PAPER_SETTINGS, scenarios, **on_axis)  # compile/load once before timing batches
     levels: list[tuple[int, list[Settings]]] = [(0, space.grid(cfg.points, cfg.laws))]
     total = len(levels[0][1]) * (1 + cfg.refine * cfg.keep)
     rows: dict[tuple, dict[str, Any]] = {}
@@ -140,7 +143,7 @@ def run_grid(
         todo = [s for s in levels[-1][1] if settings_key(s) not in rows]
         for i in range(0, len(todo), cfg.batch):
             chunk = todo[i : i + cfg.batch]
-            agg = aggregate(evaluate(chunk, scenarios))
+            agg = aggregate(evaluate(chunk, scenarios, **on_axis))
             for j, s in enumerate(chunk):
                 rows[settings_key(s)] = {
                     "level": level,
@@ -219,6 +222,7 @@ def grid_reference(cfg: GridConfig, result: dict[str, Any]) -> dict[str, Any]:
         "constraints": dict(zip(CONSTRAINTS, [float(x) for x in b["constraints"]], strict=True)),
         "scenarios": [s.name for s in result["scenarios"]],
         "laws": list(cfg.laws),
+        "axis": axis_digest(cfg.load_axis()),
         "points": cfg.points,
         "refine": cfg.refine,
         "keep": cfg.keep,

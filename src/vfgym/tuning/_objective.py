@@ -13,7 +13,7 @@ import numpy as np
 
 from vfgym import space
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import Settings
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
 
@@ -59,8 +59,9 @@ def settings_key(s: Settings) -> tuple:
 
 
 class Objective:
-    """Settings from the trial → :func:`vfgym.evaluate` on the scenarios → cost (or the
-    three objectives), with the worst constraints and the settings as user attributes.
+    """Settings from the trial → :func:`vfgym.evaluate` on the scenarios (on ``plant``
+    with ``measures``: an axis's) → cost (or the three objectives), with the worst
+    constraints and the settings as user attributes.
 
     A setting already scored (in this process, or by a completed trial of the study) is
     not simulated again: the trial copies that result and records ``cached_from``.
@@ -75,8 +76,18 @@ class Objective:
         ``cost`` (one objective) or ``pareto`` (the three objectives).
     """
 
-    def __init__(self, scenarios: list[Scenario], laws: tuple[str, ...], form: str) -> None:
+    def __init__(
+        self,
+        scenarios: list[Scenario],
+        laws: tuple[str, ...],
+        form: str,
+        *,
+        plant: Plant = PAPER_PLANT,
+        measures: Measures = DEFAULT_MEASURES,
+    ) -> None:
         self.scenarios = scenarios
+        self.plant = plant
+        self.measures = measures
         self.laws = laws
         self.form = form
         self.cache: dict[tuple, tuple[Any, dict[str, Any]]] = {}
@@ -130,7 +141,9 @@ class Objective:
             means, and the trial's user attributes (settings, cost, constraints,
             feasible, objectives).
         """
-        agg = aggregate(evaluate(settings, self.scenarios))
+        agg = aggregate(
+            evaluate(settings, self.scenarios, plant=self.plant, measures=self.measures)
+        )
         attrs = {
             "settings": space.settings_to_dict(settings),
             "cost": float(agg["cost"][0]),

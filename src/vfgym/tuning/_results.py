@@ -19,7 +19,7 @@ import numpy as np
 from vfgym import space
 from vfgym.io.runs import read_yaml, write_text
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_SETTINGS, Settings
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, PAPER_SETTINGS, Measures, Plant, Settings
 from vfgym.scoring import CONSTRAINTS, OBJECTIVES, evaluate
 from vfgym.tuning._config import SweepConfig
 from vfgym.tuning._objective import aggregate
@@ -179,7 +179,14 @@ def write_plots(study: Any, run_dir: Path, form: str) -> dict[str, str]:
 ROW_KEYS = ("settle_ms", "overshoot_mrad", "overshoot_win", "accel_krad_s2", "accel_ratio", "cost")
 
 
-def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> dict[str, Any]:
+def compare(
+    best: Settings,
+    scenarios: list[Scenario],
+    label: str = "tuned",
+    *,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+) -> dict[str, Any]:
     """The tuned settings against the paper's on each scenario and over the set.
 
     Parameters
@@ -190,22 +197,24 @@ def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> 
         The sweep's scenarios.
     label : str
         The tuned settings' name in the table.
+    plant, measures
+        The plant and measures the scenarios run on (an axis's).
 
     Returns
     -------
     dict
         ``rows``: per scenario and settings, the settling time, overshoot, peak
-        pulse-train acceleration against the motor's limit, cost and feasibility;
-        ``set``: the same over the set (mean settling, worst overshoot and acceleration,
-        mean cost).
+        pulse-train acceleration against the loaded motor's usable acceleration, cost and
+        feasibility; ``set``: the same over the set (mean settling, worst overshoot and
+        acceleration, mean cost).
     """
-    ev = evaluate([PAPER_SETTINGS, best], scenarios)
+    ev = evaluate([PAPER_SETTINGS, best], scenarios, plant=plant, measures=measures)
     agg = aggregate(ev)
     rows: list[dict[str, Any]] = []
     for si, sc in enumerate(scenarios):
         for ci, name in enumerate(("paper", label)):
             m = ev.metrics[ci][si]
-            limit = sc.plant().motor.accel_limit_rad_s2
+            limit = sc.plant(plant).motor.usable_accel_rad_s2
             rows.append(
                 {
                     "scenario": sc.name,
@@ -280,13 +289,18 @@ def format_comparison(cmp: dict[str, Any]) -> str:
         )
     lines.append(
         "settle: settling time into the in-position window (* not settled; - a moving "
-        "reference); accel: the pulse train's peak over 1 ms against the motor's limit"
+        "reference); accel: the pulse train's peak over 1 ms against the limit (the loaded "
+        "motor's usable acceleration)"
     )
     return "\n".join(lines)
 
 
 def find_reference(
-    cfg_reference: str | None, runs_dir: str, scenarios: list[Scenario], laws: tuple[str, ...]
+    cfg_reference: str | None,
+    runs_dir: str,
+    scenarios: list[Scenario],
+    laws: tuple[str, ...],
+    axis: str | None = None,
 ) -> tuple[dict[str, Any], Path] | None:
     """A grid reference for these scenarios and laws.
 
@@ -301,6 +315,8 @@ def find_reference(
         The sweep's scenarios; a reference must be for the same.
     laws : tuple of str
         The sweep's laws; a reference must be for the same.
+    axis : str or None
+        The axis's :func:`~vfgym.moves.axis.axis_digest`; a reference must be for the same.
 
     Returns
     -------
@@ -325,6 +341,11 @@ def find_reference(
                 f"reference={str(p)!r} is for scenarios {data.get('scenarios')} and laws "
                 f"{data.get('laws')}, not {names} and {list(laws)}"
             )
+        if data.get("axis") != axis:
+            raise ValueError(
+                f"reference={str(p)!r} is for axis {data.get('axis')}, not {axis}: give a "
+                "grid reference made with the same --axis"
+            )
         return data, p
     found = []
     for p in sorted(Path(runs_dir).glob("grid/*/reference.yaml")):
@@ -336,6 +357,7 @@ def find_reference(
             isinstance(data, dict)
             and data.get("scenarios") == names
             and list(data.get("laws", [])) == list(laws)
+            and data.get("axis") == axis
             and isinstance(data.get("cost"), (int, float))
         ):
             found.append((float(data["cost"]), str(p), data))
@@ -400,4 +422,5 @@ def best_record(
         "objective": cfg.objective,
         "scenarios": [s.name for s in scenarios],
         "laws": list(cfg.laws),
+        "axis": cfg.axis,
     }

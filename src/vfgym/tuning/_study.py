@@ -8,6 +8,7 @@ import warnings
 from typing import Any
 
 from vfgym import space
+from vfgym.moves.axis import axis_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import OBJECTIVES
@@ -134,6 +135,7 @@ def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> dict[str, Any]:
         "scenarios": [s.name for s in scenarios],
         "laws": list(cfg.laws),
         "objective": cfg.objective,
+        "axis": axis_digest(cfg.load_axis()),
     }
 
 
@@ -187,7 +189,7 @@ def create_or_load(
         return study, True
     old = study.user_attrs.get(META_KEY)
     if old is not None:
-        for key in ("scenarios", "laws", "objective"):
+        for key in ("scenarios", "laws", "objective", "axis"):
             if old.get(key) != meta[key]:
                 raise ValueError(
                     f"study={name!r} already optimises {key}={old.get(key)!r}, not "

@@ -25,6 +25,7 @@ from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from vfgym.moves.axis import axis_kwargs
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
@@ -180,9 +181,10 @@ def run_worker(
         study = optuna.load_study(
             study_name=study_name, storage=storage, sampler=make_sampler(cfg, seed)
         )
-        objective = Objective(scenarios, cfg.laws, cfg.objective)
+        on_axis = axis_kwargs(cfg.load_axis())
+        objective = Objective(scenarios, cfg.laws, cfg.objective, **on_axis)
         # First call compiles/loads the kernel before any trial is claimed.
-        evaluate(PAPER_SETTINGS, scenarios[:1])
+        evaluate(PAPER_SETTINGS, scenarios[:1], **on_axis)
         lock = _claim_lock(spec, study_name)
 
         objective.on_enter = lock.release
