@@ -27,6 +27,7 @@ import numpy as np
 from vfgym.plant import _kernel as K
 from vfgym.plant import _lanes as LN
 from vfgym.plant import _layout as L
+from vfgym.plant._threads import keeps_torch_threads
 
 _jit = numba.njit(cache=True, fastmath=False, nogil=True)
 
@@ -502,6 +503,7 @@ def lane_scratch(num_envs: int, interval_ticks: int, acc_window: int) -> tuple[n
     return (*LN.scratch(blocks, interval_ticks, acc_window), np.zeros(blocks, dtype=np.int64))
 
 
+@keeps_torch_threads
 def step_batch_balanced(
     act, W, RING, CMD, active, flags, scratch, lane_min: int = LANE_MIN, parallel_min=None
 ) -> int:
