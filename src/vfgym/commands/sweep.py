@@ -23,6 +23,10 @@ OPTIONS = (
     ("--laws", "acceleration laws searched: rise, slew or rise,slew (default rise)"),
     ("--sampler", "tpe (default), cmaes, gp, nsga2, grid or random"),
     ("--objective", "cost (default) or pareto (overshoot, move time, accel violation)"),
+    ("--aggregate", "the cost minimised over the scenarios: mean (default), cvar (mean of the "
+     "costliest --cvar-alpha share) or worst"),
+    ("--cvar-alpha", "the share of the costliest scenarios cvar averages, in (0, 1] "
+     "(default 0.25)"),
     ("--trials", "completed trials the study ends with, all workers together (default 100)"),
     ("--timeout", "seconds after which workers start no new trial"),
     ("--workers", "worker processes on the study (default 1: this process)"),
@@ -85,9 +89,11 @@ def run(args: argparse.Namespace) -> int:
     run_dir = Path(cfg.runs_dir) / "sweep" / name
     spec = tuning.resolve_storage(cfg.storage, run_dir)
     axis = cfg.load_axis()
-    reference = tuning.find_reference(
-        cfg.reference, cfg.runs_dir, scenarios, cfg.laws, axis_digest(axis)
-    )
+    reference = (
+        tuning.find_reference(cfg.reference, cfg.runs_dir, scenarios, cfg.laws, axis_digest(axis))
+        if cfg.aggregate == "mean"
+        else None
+    )  # a grid's reference is a mean cost
     storage = None
     if spec.kind == "postgresql":  # reach the server before making a run folder
         storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
@@ -267,6 +273,8 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     from vfgym import tuning
     from vfgym.io.runs import write_text, write_yaml
     from vfgym.moves.axis import axis_kwargs
+    from vfgym.params import PAPER_SETTINGS
+    from vfgym.report import axis_verdict, format_verdict
 
     tuning.write_trials_csv(study, run_dir / "trials.csv")
     n = tuning.counts(study)
@@ -303,10 +311,10 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         settings = tuning.trial_settings(best)
         rec = tuning.best_record(study, best, cfg, spec, scenarios)
         cmp = tuning.compare(settings, scenarios, **axis_kwargs(cfg.load_axis()))
-        paper_cost = cmp["set"][0]["cost"]
+        paper_cost = tuning.set_cost(PAPER_SETTINGS, scenarios, cfg)  # as the sweep scores
         rec["paper_cost"] = paper_cost
         lines.append(
-            f"best: trial {best.number}, cost {rec['cost']:.4f} "
+            f"best: trial {best.number}, {tuning.describe(cfg)} cost {rec['cost']:.4f} "
             f"({'feasible' if rec['feasible'] else 'INFEASIBLE'}) against the paper's "
             f"{paper_cost:.4f} ({tuning.gap_pct(rec['cost'], paper_cost):+.1f} %)"
         )
@@ -337,6 +345,10 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
             f"({', '.join(stops) or 'no report'}); run the same command again to continue"
         )
         code = 1
+    if best is not None and not interrupted:  # the report ends with the held-out verdict
+        v = axis_verdict(tuning.trial_settings(best), cfg.load_axis(), tuned_on=scenarios)
+        summary["verdict"] = v.to_dict()
+        lines += ["", format_verdict(v)]
     text = "\n".join(lines)
     write_text(run_dir / "report.txt", text + "\n")
     write_yaml(run_dir / "summary.yaml", summary)

@@ -14,6 +14,9 @@ _tables
     Text and Markdown tables.
 _files
     CSV and JSON files of a report in a run folder.
+_verdict
+    The held-out verdict a sweep ends with: the tuned setting against the baselines on
+    the test moves, read off a :class:`Report`.
 figures
     The paper's figures, S-curve and frequency plots, overlays, sweep history and Pareto
     front (matplotlib, imported only when a figure is drawn).
@@ -46,23 +49,38 @@ from vfgym.report._tables import (
     markdown_costs,
     markdown_table,
 )
+from vfgym.report._verdict import (
+    VERDICT_BASELINES,
+    Verdict,
+    VerdictRow,
+    axis_verdict,
+    format_verdict,
+    held_out_verdict,
+    verdict,
+)
 
 __all__ = [
     "DEFAULT_RESAMPLES",
     "EXTRA_METRICS",
     "TABLE_COLUMNS",
     "TIE_RTOL",
+    "VERDICT_BASELINES",
     "Candidate",
     "Column",
     "Policy",
     "Report",
     "Spread",
     "TableColumn",
+    "Verdict",
+    "VerdictRow",
     "WinLoss",
+    "axis_verdict",
     "baseline_candidates",
     "compare",
     "evaluate_policy",
     "format_table",
+    "format_verdict",
+    "held_out_verdict",
     "markdown_costs",
     "markdown_table",
     "outcome",
@@ -72,6 +90,7 @@ __all__ = [
     "spread",
     "summary_csv",
     "summary_rows",
+    "verdict",
     "win_loss_rows",
     "write_report",
 ]

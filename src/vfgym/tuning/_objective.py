@@ -15,27 +15,35 @@ from vfgym import space
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
+from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, aggregate_costs
 from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
 
 
-def aggregate(ev: Evaluation) -> dict[str, np.ndarray]:
+def aggregate(
+    ev: Evaluation, how: str = DEFAULT_AGGREGATE, cvar_alpha: float = DEFAULT_CVAR_ALPHA
+) -> dict[str, np.ndarray]:
     """One controller's results over the scenarios, as a sweep scores a setting.
 
     Parameters
     ----------
     ev : Evaluation
         What :func:`vfgym.evaluate` returned.
+    how : str
+        The cost's aggregate over the scenarios: ``mean``, ``cvar`` or ``worst``
+        (:mod:`vfgym.tuning._aggregate`).
+    cvar_alpha : float
+        The share of the costliest scenarios ``cvar`` averages.
 
     Returns
     -------
     dict of str to numpy.ndarray
-        Per controller: ``cost`` (mean over the scenarios), ``constraints`` (worst, max,
-        over the scenarios), ``feasible`` (every constraint ≤ 0 on every scenario) and
-        ``objectives`` (means).
+        Per controller: ``cost`` (the aggregate over the scenarios), ``constraints``
+        (worst, max, over the scenarios), ``feasible`` (every constraint ≤ 0 on every
+        scenario) and ``objectives`` (means).
     """
     cons = np.nanmax(ev.constraints, axis=1)
     return {
-        "cost": ev.mean_cost,
+        "cost": aggregate_costs(ev.cost, how, cvar_alpha),
         "constraints": cons,
         "feasible": np.all(cons <= 0.0, axis=1),
         "objectives": np.nanmean(ev.objectives, axis=1),
@@ -74,6 +82,8 @@ class Objective:
         The acceleration laws searched.
     form : str
         ``cost`` (one objective) or ``pareto`` (the three objectives).
+    aggregate, cvar_alpha : str, float
+        The cost's aggregate over the scenarios (:func:`aggregate`).
     """
 
     def __init__(
@@ -84,8 +94,11 @@ class Objective:
         *,
         plant: Plant = PAPER_PLANT,
         measures: Measures = DEFAULT_MEASURES,
+        aggregate: str = DEFAULT_AGGREGATE,
+        cvar_alpha: float = DEFAULT_CVAR_ALPHA,
     ) -> None:
         self.scenarios = scenarios
+        self.how = (aggregate, cvar_alpha)
         self.plant = plant
         self.measures = measures
         self.laws = laws
@@ -137,12 +150,13 @@ class Objective:
         Returns
         -------
         tuple
-            ``(values, attrs)``: the mean cost (``cost`` form) or the three objectives'
-            means, and the trial's user attributes (settings, cost, constraints,
+            ``(values, attrs)``: the aggregate cost (``cost`` form) or the three
+            objectives' means, and the trial's user attributes (settings, cost, constraints,
             feasible, objectives).
         """
         agg = aggregate(
-            evaluate(settings, self.scenarios, plant=self.plant, measures=self.measures)
+            evaluate(settings, self.scenarios, plant=self.plant, measures=self.measures),
+            *self.how,
         )
         attrs = {
             "settings": space.settings_to_dict(settings),

@@ -12,6 +12,7 @@ from vfgym.moves.axis import axis_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import OBJECTIVES
+from vfgym.tuning._aggregate import describe
 from vfgym.tuning._config import SweepConfig
 
 META_KEY = "vfgym"
@@ -136,6 +137,7 @@ def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> dict[str, Any]:
         "laws": list(cfg.laws),
         "objective": cfg.objective,
         "axis": axis_digest(cfg.load_axis()),
+        "aggregate": describe(cfg),
     }
 
 
@@ -189,7 +191,8 @@ def create_or_load(
         return study, True
     old = study.user_attrs.get(META_KEY)
     if old is not None:
-        for key in ("scenarios", "laws", "objective", "axis"):
+        old = {"aggregate": "mean"} | old  # a study made before the aggregate was recorded
+        for key in ("scenarios", "laws", "objective", "axis", "aggregate"):
             if old.get(key) != meta[key]:
                 raise ValueError(
                     f"study={name!r} already optimises {key}={old.get(key)!r}, not "
