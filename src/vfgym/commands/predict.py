@@ -21,10 +21,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import yaml
 
+    from vfgym._validate import check_output_path
     from vfgym.moves.scenarios import get_scenario
     from vfgym.space import settings_to_dict
 
     scenario = get_scenario(args.scenario)
+    if args.out is not None:
+        check_output_path("--out", args.out)
     try:
         from vfgym.agents import policy_settings
     except ImportError as exc:  # pragma: no cover - depends on the install
