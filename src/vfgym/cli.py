@@ -48,7 +48,16 @@ ISSUES_HINT = (
 
 
 class Parser(argparse.ArgumentParser):
-    """argparse's parser with one-line usage errors (exit status 2)."""
+    """argparse's parser with one-line usage errors (exit status 2), reported by the
+    sub-command they concern."""
+
+    def parse_args(self, args: Any = None, namespace: Any = None) -> argparse.Namespace:
+        ns, extras = self.parse_known_args(args, namespace)
+        if extras:
+            sub = self._subparsers._group_actions[0].choices if self._subparsers else {}
+            owner = sub.get(getattr(ns, "command", None), self)
+            owner.error(f"unrecognized arguments: {' '.join(extras)}")
+        return ns
 
     def error(self, message: str) -> NoReturn:
         # a value refused by a vfgym check reads as everywhere else: --opt='v' is ...
@@ -216,7 +225,8 @@ def _os_message(exc: OSError, args: argparse.Namespace) -> str:
 
 
 def _option_for_path(values: dict[str, Any], filename: Any) -> str | None:
-    """The option whose path value is, contains or lies in ``filename`` (the longest)."""
+    """The option whose path value is, contains or lies in ``filename`` (the longest), or
+    names the file a temporary file beside it stands for (``.NAME.tmp``)."""
     if filename is None:
         return None
     target = os.path.abspath(os.fsdecode(filename))
@@ -227,7 +237,15 @@ def _option_for_path(values: dict[str, Any], filename: Any) -> str | None:
             if not isinstance(item, str) or not item or dest in ("command", "kind"):
                 continue
             v = os.path.abspath(item)
-            related = target == v or target.startswith(v + os.sep) or v.startswith(target + os.sep)
+            related = (
+                target == v
+                or target.startswith(v + os.sep)
+                or v.startswith(target + os.sep)
+                or (
+                    os.path.dirname(target) == os.path.dirname(v)
+                    and os.path.basename(target).startswith(f".{os.path.basename(v)}.")
+                )
+            )
             if related and (best is None or len(v) > best[0]):
                 best = (len(v), "--" + dest.replace("_", "-"))
     return best[1] if best else None

@@ -151,12 +151,12 @@ def _check_storage_file(text: str, spec) -> None:
     if spec.path is None or str(text).strip() in ("sqlite", "journal"):
         return
     folder = Path(spec.path).parent
+    check_output_path("storage", spec.path, shown=text)  # a file in the way, read-only, ...
     if not folder.is_dir():
         raise ValueError(
             f"storage={text!r} is not allowed: folder {folder} does not exist; create it "
             "first, or give storage 'sqlite' to keep the study in the run folder"
         )
-    check_output_path("storage", spec.path)
 
 
 def _open_study(cfg, spec, name, run_dir, scenarios):
