@@ -58,8 +58,8 @@ def run(args: argparse.Namespace) -> int:
         if args.decimation != 1:
             raise ValueError(f"--decimation={args.decimation} is not allowed for vcd: every tick")
     ctrl, label = _controller(args)
-    out = Path(args.out or f"{scenario.name}-{Path(label).stem}.{args.format}")
-    check_output_path("--out", out)
+    out = args.out if args.out is not None else f"{scenario.name}-{Path(label).stem}.{args.format}"
+    out = check_output_path("--out", out)
     dec = args.decimation if args.format == "csv" else 1
     ev = evaluate(ctrl, [scenario], keep_traces=True, decimation=dec)
     trace = own_trace(ev, scenario)

@@ -243,7 +243,7 @@ def run(args: argparse.Namespace) -> int:
     from vfgym._validate import check_output_path
 
     out = args.out
-    if not out:
+    if out is None:
         tail = "" if args.kind in ("scurve", "history", "pareto") else f"-{args.scenario}"
         out = f"{args.kind}{tail}.png"
     out_path = Path(out)

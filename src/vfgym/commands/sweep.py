@@ -162,6 +162,7 @@ def _check_storage_file(text: str, spec) -> None:
 def _open_study(cfg, spec, name, run_dir, scenarios):
     """Open the storage and create or load the study; a run folder made here is removed
     again if that fails (a refused sweep leaves nothing behind)."""
+    import json
     import shutil
 
     from vfgym import tuning
@@ -174,7 +175,10 @@ def _open_study(cfg, spec, name, run_dir, scenarios):
     try:
         if storage is None:
             storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
-        return tuning.create_or_load(storage, name, cfg, scenarios)
+        try:
+            return tuning.create_or_load(storage, name, cfg, scenarios)
+        except (UnicodeDecodeError, json.JSONDecodeError) as exc:  # a file, not a journal
+            raise ValueError(f"storage={spec.display!r} cannot be opened: {exc}") from None
     except BaseException:
         if made:
             shutil.rmtree(run_dir, ignore_errors=True)

@@ -60,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.io.runs import new_run_dir, record_command
 
     check_same_run(Path(args.runs_dir) / "train" / name, args.algo, args.env, args.seed)
+    _check_env_kwargs(args.env, params.get("env_kwargs") or {})
     run_dir = new_run_dir(args.runs_dir, "train", name)
     record_command(run_dir)
     print(f"run folder: {run_dir}")
@@ -72,3 +73,16 @@ def run(args: argparse.Namespace) -> int:
         ) from None
     print(f"best model: {run_dir / 'best_model.zip'}")
     return 0
+
+
+def _check_env_kwargs(env_id: str, env_kwargs: dict) -> None:
+    """Make the environment once with ``env_kwargs``, so that a value it refuses stops the
+    command before a run folder is made (the env's own checks say what is allowed)."""
+    from vfgym.agents.training import make_env
+
+    if not env_kwargs:
+        return
+    try:
+        make_env(env_id, env_kwargs).close()
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"env_kwargs={env_kwargs!r} is not allowed for {env_id}: {exc}") from None

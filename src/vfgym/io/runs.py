@@ -95,7 +95,9 @@ def read_yaml(path: str | Path) -> Any:
     if p.is_dir():
         raise ValueError(f"{p}: is a folder; give a YAML file")
     if not p.is_file():
-        raise ValueError(f"{p}: no such file")
+        raise ValueError(
+            f"{p}: not a regular file; give a YAML file" if p.exists() else f"{p}: no such file"
+        )
     try:
         raw = p.read_bytes()
     except OSError as exc:
