@@ -36,6 +36,8 @@ def ws(tmp_path, monkeypatch):
     (tmp_path / "list.yaml").write_text("settings: [1, 2, 3]\n")
     (tmp_path / "good.yaml").write_text(yaml.safe_dump({"settings": GOOD}))
     (tmp_path / "nan.yaml").write_text("value_rad: .nan\n")
+    for algo, tiny in TINY.items():  # if a check let a case through, it trains 64 steps
+        (tmp_path / f"{algo}.yml").write_text(yaml.safe_dump({"vfgym/VFTune-v0": tiny}))
     sweep = tmp_path / "runs" / "sweep" / "s"
     sweep.mkdir(parents=True)
     (sweep / "config.yaml").write_text("command: sweep\nstudy: s\nstorage: sqlite\n")
@@ -43,8 +45,13 @@ def ws(tmp_path, monkeypatch):
     return tmp_path
 
 
-TRAIN = ["train", "--hyperparams-file", str(REPO / "agents/hyperparams/ppo.yml")]
-SAC = ["train", "--algo", "sac", "--hyperparams-file", str(REPO / "agents/hyperparams/sac.yml")]
+RUN = {"n_envs": 2, "n_timesteps": 64, "eval_freq": 64, "n_eval_scenarios": 1}
+TINY = {
+    "ppo": {**RUN, "n_steps": 32, "batch_size": 32, "n_epochs": 1},
+    "sac": {**RUN, "learning_starts": 16, "batch_size": 16, "buffer_size": 1000},
+}
+TRAIN = ["train", "--hyperparams-file", "ppo.yml"]
+SAC = ["train", "--algo", "sac", "--hyperparams-file", "sac.yml"]
 SWEEP = ["sweep", "--scenarios", "short-move", "--trials", "2", "--no-progress"]
 
 # (argv, a piece of the one line that must name the problem); paths are relative to `ws`
@@ -139,7 +146,12 @@ CASES = [
 
 
 def _id(case) -> str:
-    return " ".join(a for a in case[0] if "/" not in a or len(a) < 20)[:70]
+    """The case's arguments without the shared prefixes (TRAIN, SAC, SWEEP)."""
+    argv = case[0]
+    for prefix in (TRAIN, SAC, SWEEP):
+        if argv[: len(prefix)] == prefix:
+            argv = [prefix[0], *argv[len(prefix) :]]
+    return " ".join(argv)
 
 
 @pytest.mark.parametrize(("argv", "needle"), CASES, ids=[_id(c) for c in CASES])
@@ -184,6 +196,28 @@ def test_yaml_numbers_in_any_notation(ws):
         params = hp.load("ppo", "vfgym/VFTune-v0", REPO / "agents/hyperparams/ppo.yml", over)
         assert params["n_timesteps"] == 1000 and isinstance(params["n_timesteps"], int)
         assert params["learning_rate"] == 3e-4
+
+
+@pytest.mark.parametrize(
+    ("argv", "drawn"),
+    [
+        (["compare"], {"paper", "rule-of-thumb"}),
+        (["compare", "--settings", "paper.yaml"], {"paper.yaml", "paper"}),
+        (["frequency"], {"paper", "fixed-frequency"}),
+        (["frequency", "--baseline", "fixed-frequency"], {"fixed-frequency", "paper"}),
+    ],
+)
+def test_plot_defaults_draw_two_distinct_controllers(ws, argv, drawn):
+    """``plot compare`` on its defaults drew the paper against itself (issue 15): the
+    default --against is the first of the kind's defaults that is not the controller, and
+    a settings file named like a baseline keeps its path as its label."""
+    from vfgym.cli import build_parser
+    from vfgym.commands.plot import build_figure
+
+    (ws / "paper.yaml").write_text(yaml.safe_dump({"settings": GOOD}))
+    fig = build_figure(build_parser().parse_args(["plot", *argv]))
+    labels = {lab for ax in fig.axes for lab in ax.get_legend_handles_labels()[1]}
+    assert {lab.split(" (cost ")[0] for lab in labels if " (cost " in lab} == drawn
 
 
 def test_an_unwritable_output_found_late_is_still_one_line(ws, capsys, monkeypatch):
