@@ -109,7 +109,20 @@ def check_finite_array(name: str, values: Any, dtype: Any = np.float64) -> np.nd
 
 def check_name(option: str, name: Any) -> str:
     """A name that becomes a folder or file name (a study, a run): letters, digits, '.',
-    '_' and '-', so that it cannot leave the folder it is made in (no ``/``, no ``..``)."""
+    '_' and '-', so that it cannot leave the folder it is made in (no ``/``, no ``..``).
+
+    Parameters
+    ----------
+    option
+        The option or key the name came from, for the message (``--name``, ``study``).
+    name
+        The name given.
+
+    Returns
+    -------
+    str
+        ``name``, if allowed; else ``ValueError``.
+    """
     if not isinstance(name, str) or not NAME_RE.match(name):
         raise ValueError(
             f"{option}={name!r} is not allowed: letters, digits, '.', '_' and '-' "
@@ -127,7 +140,24 @@ def check_output_path(
     Refused with a ``ValueError`` naming ``option`` and ``shown`` (the value given, if the
     path is made from it; default ``path``): an empty path, a folder where a file is wanted
     (or the reverse), a file where a folder must be made, a folder without write permission
-    or on a read-only file system. Nothing is created."""
+    or on a read-only file system. Nothing is created.
+
+    Parameters
+    ----------
+    option
+        The option the path came from, for the message (``--out``, ``runs_dir``).
+    path
+        The file or folder to be written.
+    folder
+        True if ``path`` is a folder to be made (or reused), False for a file.
+    shown
+        The value to quote in the message, when ``path`` was made from it.
+
+    Returns
+    -------
+    Path
+        ``path``, if it can be written; else ``ValueError``.
+    """
     text = os.fspath(path)
     want = "folder" if folder else "file"
     head = f"{option}={str(text if shown is None else shown)!r} is not allowed"
@@ -155,7 +185,18 @@ def check_output_path(
 
 
 def describe_os_error(exc: OSError) -> str:
-    """One line for a failed file operation: the path and what went wrong, in words."""
+    """One line for a failed file operation: the path(s) and what went wrong, in words.
+
+    Parameters
+    ----------
+    exc
+        The error (its ``errno``, ``filename`` and ``filename2``).
+
+    Returns
+    -------
+    str
+        ``PATH: reason`` (``reason`` alone if no path is known).
+    """
     reasons = {
         errno.ENOENT: "no such file or folder",
         errno.ENOTDIR: "a part of the path is a file, not a folder",

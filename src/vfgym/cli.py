@@ -11,7 +11,8 @@ is allowed, and exit status 2:
   (:mod:`vfgym._validate`, the config dataclasses, settings files, ...);
 - a file that cannot be read or written (``OSError``: a missing folder, a file in the way,
   no permission, a read-only file system, a full disk);
-- a closed output pipe (``vfgym ... | head -1``);
+- a closed output pipe (``vfgym ... | head -1``): the command still finishes its work,
+  the output printed after the reader left is dropped;
 - an optional package that is not installed (the agents or postgres extra).
 
 An interrupt (Ctrl-C) exits with 130 after the command has saved what it finished. Any

@@ -75,7 +75,20 @@ YamlLoader.add_implicit_resolver(
 
 def parse_yaml(text: str, source: str = "<text>") -> Any:
     """YAML text as Python data (numbers in any notation); bad YAML raises ``ValueError``
-    naming ``source`` and the line."""
+    naming ``source`` and the line.
+
+    Parameters
+    ----------
+    text
+        The YAML document.
+    source
+        Names the text in messages (a file, ``--hyperparams 'k=v'``).
+
+    Returns
+    -------
+    Any
+        The data (``None`` for an empty document).
+    """
     try:
         return yaml.load(text, Loader=YamlLoader)  # YamlLoader is a SafeLoader
     except yaml.YAMLError as exc:
