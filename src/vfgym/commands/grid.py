@@ -53,6 +53,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from vfgym import tuning
+    from vfgym._validate import check_output_path
     from vfgym.io.runs import read_yaml, record_command, write_text, write_yaml
     from vfgym.moves.axis import AXIS_FILE, axis_kwargs, write_axis
 
@@ -64,6 +65,7 @@ def run(args: argparse.Namespace) -> int:
     scenarios = cfg.scenario_list()
     name = cfg.name or _default_name(cfg)
     run_dir = Path(cfg.runs_dir) / "grid" / name
+    check_output_path("runs_dir", run_dir, folder=True, shown=cfg.runs_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
     write_yaml(run_dir / "config.yaml", {"command": "grid", **cfg.to_dict(), "name": name})
     axis = cfg.load_axis()
