@@ -253,7 +253,7 @@ def run(args: argparse.Namespace) -> int:
         out = f"{args.kind}{tail}.png"
     out_path = Path(out)
     if out_path.suffix.lower() != ".png":
-        raise ValueError(f"--out={out}: give a .png file")
+        raise ValueError(f"--out={out!r} is not allowed: give a .png file")
     check_output_path("--out", out_path)
     fig = build_figure(args)
     out_path.parent.mkdir(parents=True, exist_ok=True)
