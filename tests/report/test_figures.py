@@ -258,7 +258,7 @@ def test_plot_cli_bad_input(tmp_path, capsys, argv, needle):
 
 
 def test_objectives_from_user_attributes():
-    from vfgym.report.figures import _attr_objectives
+    from vfgym.report._sweep_figures import _attr_objectives
 
     names = list(OBJECTIVES)
     forms = [

@@ -20,7 +20,10 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from optuna import Study
 
 KINDS = ("response", "scurve", "frequency", "compare", "history", "pareto")
 
@@ -60,14 +63,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def load_study(run_dir: str, storage: str | None = None) -> Any:
+def load_study(run_dir: str, storage: str | None = None) -> Study:
     """The Optuna study of a sweep run folder. ``config.yaml`` names the study
-    (``study_name`` or ``study``) and its ``storage``: ``sqlite:///FILE`` (if the file has
-    moved, the folder's own ``study.db``), a journal file, or a database URL. A URL whose
-    password was masked in the file needs ``storage`` given again."""
+    (``study_name`` or ``study``) and its ``storage``, found by
+    :func:`vfgym.tuning.find_storage` (a file moved with the folder is found in it); a URL
+    whose password was masked in the file needs ``storage`` given again."""
     import optuna
 
     from vfgym.io.runs import read_yaml
+    from vfgym.tuning import find_storage, open_storage
 
     d = Path(run_dir)
     if not d.is_dir():
@@ -76,30 +80,10 @@ def load_study(run_dir: str, storage: str | None = None) -> Any:
     name = cfg.get("study_name") or cfg.get("study") if isinstance(cfg, dict) else None
     if not name:
         raise ValueError(f"{d / 'config.yaml'}: no study name (is this a sweep folder?)")
-    url = str(storage or cfg.get("storage") or f"sqlite:///{d / 'study.db'}")
-    if "***" in url:
-        raise ValueError(f"--sweep {run_dir}: the storage password is masked; give --storage URL")
-    if url.startswith("sqlite:///"):
-        path = Path(url.removeprefix("sqlite:///"))
-        if not path.is_file() and (d / "study.db").is_file():
-            path = d / "study.db"
-        if not path.is_file():
-            raise ValueError(f"--sweep {run_dir}: study storage {path} not found")
-        store: Any = f"sqlite:///{path}"
-    elif "://" in url:
-        store = url
-    else:  # a journal file
-        path = Path(url)
-        if not path.is_file() and (d / path.name).is_file():
-            path = d / path.name
-        if not path.is_file():
-            raise ValueError(f"--sweep {run_dir}: study journal {path} not found")
-        from optuna.storages.journal import JournalFileBackend, JournalStorage
-
-        store = JournalStorage(JournalFileBackend(str(path)))
+    spec = find_storage(storage or cfg.get("storage") or "sqlite", d)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     try:
-        return optuna.load_study(study_name=str(name), storage=store)
+        return optuna.load_study(study_name=str(name), storage=open_storage(spec))
     except KeyError:
         raise ValueError(f"--sweep {run_dir}: no study named {name!r} in its storage") from None
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -57,6 +57,12 @@ class Column:
         ok = np.all(self.constraints <= 0.0, axis=-1).astype(float)
         ok[np.isnan(self.cost)] = np.nan
         return ok
+
+    @property
+    def mean_cost(self) -> float:
+        """The set's cost: the mean over the scenarios where the candidate applies (as
+        :attr:`vfgym.Evaluation.mean_cost`)."""
+        return float(np.nanmean(self.cost))
 
     def values(self, key: str) -> np.ndarray:
         """One measure per scenario as floats: ``cost``, ``feasible``, a constraint
@@ -161,6 +167,18 @@ def _column_from_rows(
     )
 
 
+class PolicyRun(NamedTuple):
+    """A policy's settings and scores on each scenario (arrays indexed by scenario)."""
+
+    settings: list[Settings]
+    cost: np.ndarray
+    """(S,)"""
+    constraints: np.ndarray
+    """(S, 3)"""
+    metrics: list[dict[str, Any]]
+    """The measures :func:`vfgym.evaluate` returned, per scenario."""
+
+
 def evaluate_policy(
     policy: Policy,
     scenarios: str | Scenario | Sequence[str | Scenario],
@@ -169,12 +187,9 @@ def evaluate_policy(
     measures: Measures = DEFAULT_MEASURES,
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
-) -> tuple[list[Settings], np.ndarray, np.ndarray, list[dict[str, Any]]]:
+) -> PolicyRun:
     """Each scenario scored with the settings ``policy`` picks for it, through
-    :func:`vfgym.evaluate` (scenarios that get identical settings share one call).
-
-    Returns the settings, costs (S,), constraints (S, 3) and measures per scenario.
-    """
+    :func:`vfgym.evaluate` (scenarios that get identical settings share one call)."""
     scens = scenario_set(scenarios)
     chosen: list[Settings] = []
     for sc in scens:
@@ -203,7 +218,7 @@ def evaluate_policy(
             cost[i] = ev.cost[0, j]
             cons[i] = ev.constraints[0, j]
             metrics[i] = ev.metrics[0][j]
-    return chosen, cost, cons, metrics
+    return PolicyRun(chosen, cost, cons, metrics)
 
 
 def compare(

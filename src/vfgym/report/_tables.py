@@ -1,10 +1,13 @@
-"""A report as text and Markdown tables: per scenario and in aggregate, with win / loss."""
+"""A report as text and Markdown tables: per scenario and in aggregate, with win / loss;
+and the compact table a sweep or the grid prints (each controller's settling, overshoot,
+acceleration and cost per scenario and over the set)."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -220,3 +223,134 @@ def markdown_costs(report: Report) -> str:
             cells.append("n/a" if not math.isfinite(x) else f"{x:.3g}{star}")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+# --- the compact table (sweeps and the grid: tuned settings against the paper's) ----------
+
+
+@dataclass(frozen=True)
+class CompactRow:
+    """One line of the compact table: a controller on one scenario, or over the set.
+
+    Over the set: the mean settling time of the point-to-point scenarios, the worst
+    overshoot and acceleration, the mean cost, and ``feasible`` when it is on every
+    scenario where it applies (``feasible_count`` of them)."""
+
+    scenario: str
+    settings: str
+    """The controller's label."""
+    settle_ms: float
+    """Settling time into the in-position window (ms); NaN on a moving reference."""
+    settled: bool
+    overshoot_mrad: float
+    overshoot_win: float
+    """Overshoot in in-position windows."""
+    accel_krad_s2: float
+    """The pulse train's peak acceleration (krad/s²)."""
+    accel_ratio: float
+    """That peak against the motor's limit."""
+    cost: float
+    feasible: bool
+    feasible_count: int | None = None
+    """Set rows: on how many scenarios the controller is feasible."""
+
+    def as_dict(self) -> dict[str, str | float | bool | int]:
+        """The row as a mapping (per-scenario rows without ``feasible_count``)."""
+        d = asdict(self)
+        if self.feasible_count is None:
+            del d["feasible_count"]
+        return d
+
+
+class CompactTable(NamedTuple):
+    """The compact table's rows: each controller on each scenario, then over the set."""
+
+    rows: list[CompactRow]
+    set: list[CompactRow]
+    scenario_count: int
+
+    def as_dict(self) -> dict[str, list[dict[str, str | float | bool | int]]]:
+        """``{"rows": [...], "set": [...]}`` as a sweep's ``summary.yaml`` holds it."""
+        return {"rows": [r.as_dict() for r in self.rows], "set": [r.as_dict() for r in self.set]}
+
+
+def compact_rows(report: Report) -> CompactTable:
+    """The report's controllers in the compact layout, scenario by scenario and over the
+    set (see :class:`CompactRow`)."""
+    rows: list[CompactRow] = []
+    for si, sc in enumerate(report.scenarios):
+        for col in report.columns:
+            m = col.metrics[si]
+            rows.append(
+                CompactRow(
+                    scenario=sc.name,
+                    settings=col.label,
+                    settle_ms=math.nan if sc.tracking else 1e3 * m["settling_time_s"],
+                    settled=bool(m["settled"]) or sc.tracking,
+                    overshoot_mrad=1e3 * m["overshoot_rad"],
+                    overshoot_win=m["overshoot_rad"] / m["window_rad"],
+                    accel_krad_s2=m["peak_accel_pulse_rad_s2"] / 1e3,
+                    accel_ratio=m["accel_ratio_pulse"],
+                    cost=float(col.cost[si]),
+                    feasible=bool(col.feasible[si] > 0.5),
+                )
+            )
+    n = len(report.scenarios)
+    sets = []
+    for col in report.columns:
+        mine = [r for r in rows if r.settings == col.label]
+        settle = [r.settle_ms for r in mine if not math.isnan(r.settle_ms)]
+        count = sum(r.feasible for r in mine)
+        applies = int(np.isfinite(col.feasible).sum())
+        sets.append(
+            CompactRow(
+                scenario=f"set ({n})",
+                settings=col.label,
+                settle_ms=float(np.mean(settle)) if settle else math.nan,
+                settled=all(r.settled for r in mine),
+                overshoot_mrad=max(r.overshoot_mrad for r in mine),
+                overshoot_win=max(r.overshoot_win for r in mine),
+                accel_krad_s2=max(r.accel_krad_s2 for r in mine),
+                accel_ratio=max(r.accel_ratio for r in mine),
+                cost=col.mean_cost,
+                feasible=applies > 0 and count == applies,
+                feasible_count=count,
+            )
+        )
+    return CompactTable(rows, sets, n)
+
+
+def format_compact(report: Report) -> str:
+    """The compact table as text: each controller on each scenario (a blank line between
+    scenarios) and, for several scenarios, over the set; settling times not reached are
+    starred, those of a moving reference are ``-``."""
+    table = compact_rows(report)
+    head = (
+        f"{'scenario':14s} {'settings':8s} {'settle ms':>10s} {'overshoot mrad':>15s} "
+        f"{'(windows)':>9s} {'peak accel krad/s2':>19s} {'/limit':>7s} {'cost':>7s} feasible"
+    )
+    lines = [head, "-" * len(head)]
+    k = len(report.columns)
+    groups = [table.rows[i : i + k] for i in range(0, len(table.rows), k)]
+    if table.scenario_count > 1:
+        groups.append(table.set)
+    for g, group in enumerate(groups):
+        if g > 0:
+            lines.append("")
+        for r in group:
+            settle = "-" if math.isnan(r.settle_ms) else f"{r.settle_ms:.2f}"
+            if not r.settled:
+                settle += "*"
+            feas = "yes" if r.feasible else "no"
+            if r.feasible_count is not None:
+                feas = f"{r.feasible_count}/{table.scenario_count}"
+            lines.append(
+                f"{r.scenario:14s} {r.settings:8s} {settle:>10s} {r.overshoot_mrad:15.3f} "
+                f"{r.overshoot_win:9.2f} {r.accel_krad_s2:19.1f} {r.accel_ratio:7.3f} "
+                f"{r.cost:7.4f} {feas}"
+            )
+    lines.append(
+        "settle: settling time into the in-position window (* not settled; - a moving "
+        "reference); accel: the pulse train's peak over 1 ms against the motor's limit"
+    )
+    return "\n".join(lines)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 from contextlib import nullcontext
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -18,16 +18,29 @@ from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
 
 
-def aggregate(ev: Evaluation) -> dict[str, np.ndarray]:
+class Aggregate(NamedTuple):
+    """Each controller's scores over a scenario set (arrays indexed by controller)."""
+
+    cost: np.ndarray
+    """Mean cost over the scenarios, (C,)."""
+    constraints: np.ndarray
+    """Worst (max) of each constraint over the scenarios, (C, 3)."""
+    feasible: np.ndarray
+    """Every constraint ≤ 0 on every scenario, (C,) bool."""
+    objectives: np.ndarray
+    """The objectives' means over the scenarios, (C, 3)."""
+
+
+def aggregate(ev: Evaluation) -> Aggregate:
     """Per controller: mean cost, worst (max) constraint over the scenarios, feasibility
     (every constraint ≤ 0 on every scenario) and the objectives' means."""
     cons = np.nanmax(ev.constraints, axis=1)
-    return {
-        "cost": ev.mean_cost,
-        "constraints": cons,
-        "feasible": np.all(cons <= 0.0, axis=1),
-        "objectives": np.nanmean(ev.objectives, axis=1),
-    }
+    return Aggregate(
+        cost=ev.mean_cost,
+        constraints=cons,
+        feasible=np.all(cons <= 0.0, axis=1),
+        objectives=np.nanmean(ev.objectives, axis=1),
+    )
 
 
 def settings_key(s: Settings) -> tuple:
@@ -87,10 +100,10 @@ class Objective:
         agg = aggregate(evaluate(settings, self.scenarios))
         attrs = {
             "settings": space.settings_to_dict(settings),
-            "cost": float(agg["cost"][0]),
-            "constraints": [float(x) for x in agg["constraints"][0]],
-            "feasible": bool(agg["feasible"][0]),
-            "objectives": [float(x) for x in agg["objectives"][0]],
+            "cost": float(agg.cost[0]),
+            "constraints": [float(x) for x in agg.constraints[0]],
+            "feasible": bool(agg.feasible[0]),
+            "objectives": [float(x) for x in agg.objectives[0]],
         }
         values = attrs["cost"] if self.form == "cost" else list(attrs["objectives"])
         return values, attrs

@@ -42,26 +42,28 @@ def mask_url(url: str) -> str:
     return re.sub(r"^([a-z0-9+]+://[^:/@]*):[^@/]*@", r"\1:***@", url)
 
 
+def _file_spec(kind: str, path: Path) -> StorageSpec:
+    """A SQLite or journal storage on the file ``path`` (made absolute)."""
+    p = path.resolve()
+    return StorageSpec(kind, f"sqlite:///{p}" if kind == "sqlite" else str(p), str(p))
+
+
 def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
     """The storage named by ``--storage`` (see :data:`STORAGE_HELP`); bad input raises."""
     t = str(text).strip()
     if t == "sqlite":
-        p = (run_dir / "study.db").resolve()
-        return StorageSpec("sqlite", f"sqlite:///{p}", str(p))
+        return _file_spec("sqlite", run_dir / "study.db")
     if t == "journal":
-        p = (run_dir / "journal.log").resolve()
-        return StorageSpec("journal", str(p), str(p))
+        return _file_spec("journal", run_dir / "journal.log")
     if t.startswith("journal:"):
         rest = t[len("journal:") :]
         rest = rest[2:] if rest.startswith("//") else rest
         if not rest or rest.endswith("/"):
             raise ValueError(f"storage={text!r} is not allowed: give journal:FILE")
-        p = Path(rest).expanduser().resolve()
-        return StorageSpec("journal", str(p), str(p))
+        return _file_spec("journal", Path(rest).expanduser())
     m = re.match(r"^sqlite:///(.+)$", t)
     if m:
-        p = Path(m.group(1)).expanduser().resolve()
-        return StorageSpec("sqlite", f"sqlite:///{p}", str(p))
+        return _file_spec("sqlite", Path(m.group(1)).expanduser())
     m = re.match(
         r"^postgres(?:ql)?(\+[a-z0-9]+)?://([^:@/\s]+)(:[^@/\s]*)?@([^:/\s]+)(:\d{1,5})?/(\w[\w.-]*)$",
         t,
@@ -77,6 +79,25 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
             "postgresql", f"postgresql{driver or ''}://{user}{pw or ''}@{host}{port or ''}/{db}"
         )
     raise ValueError(f"storage={mask_url(t)!r} is not allowed: give {STORAGE_HELP}")
+
+
+def find_storage(text: str, run_dir: Path) -> StorageSpec:
+    """The storage a sweep's run folder recorded (its ``config.yaml``'s ``storage``, a
+    :attr:`StorageSpec.display`) or ``--storage`` names, parsed by :func:`resolve_storage`
+    and found again: a SQLite or journal file no longer where it was is looked for in
+    ``run_dir`` (the folder was moved). A masked password, an unknown URL or a missing
+    file raises ``ValueError`` naming ``storage``."""
+    t = str(text).strip()
+    if "***" in t:
+        raise ValueError(f"storage={t!r}: the password is masked; give the storage URL again")
+    known = t in ("sqlite", "journal") or t.startswith(("journal:", "sqlite:")) or "://" in t
+    spec = resolve_storage(t if known else f"journal:{t}", run_dir)  # a journal shows as its path
+    if spec.path is None or Path(spec.path).is_file():
+        return spec
+    moved = run_dir / ("study.db" if spec.kind == "sqlite" else Path(spec.path).name)
+    if not moved.is_file():
+        raise ValueError(f"storage={t!r}: no {spec.kind} file {spec.path} (nor {moved})")
+    return _file_spec(spec.kind, moved)
 
 
 def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = None) -> Any:

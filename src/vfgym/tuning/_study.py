@@ -5,6 +5,7 @@ the study created or resumed with the paper's settings enqueued first.
 from __future__ import annotations
 
 import warnings
+from dataclasses import asdict, dataclass
 from typing import Any
 
 from vfgym import space
@@ -82,12 +83,19 @@ def baseline_params(laws: tuple[str, ...]) -> dict[str, Any]:
     return d
 
 
-def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> dict[str, Any]:
-    return {
-        "scenarios": [s.name for s in scenarios],
-        "laws": list(cfg.laws),
-        "objective": cfg.objective,
-    }
+@dataclass(frozen=True)
+class StudyMeta:
+    """What a study optimises, stored as its ``vfgym`` user attribute and checked when it
+    is resumed."""
+
+    scenarios: list[str]
+    laws: list[str]
+    objective: str
+
+
+def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> StudyMeta:
+    """What a sweep with ``cfg`` on ``scenarios`` optimises."""
+    return StudyMeta([s.name for s in scenarios], list(cfg.laws), cfg.objective)
 
 
 def create_or_load(
@@ -109,7 +117,7 @@ def create_or_load(
         study = optuna.load_study(study_name=name, storage=storage, sampler=sampler)
         created = False
     if created:
-        study.set_user_attr(META_KEY, meta)
+        study.set_user_attr(META_KEY, asdict(meta))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             study.set_metric_names(["cost"] if cfg.objective == "cost" else list(OBJECTIVES))
@@ -117,11 +125,11 @@ def create_or_load(
         return study, True
     old = study.user_attrs.get(META_KEY)
     if old is not None:
-        for key in ("scenarios", "laws", "objective"):
-            if old.get(key) != meta[key]:
+        for key, want in asdict(meta).items():
+            if old.get(key) != want:
                 raise ValueError(
                     f"study={name!r} already optimises {key}={old.get(key)!r}, not "
-                    f"{meta[key]!r}: give another --study, or the same {key}"
+                    f"{want!r}: give another --study, or the same {key}"
                 )
     if len(study.directions) != len(directions):
         raise ValueError(
