@@ -177,6 +177,8 @@ def test_nsga2_pareto_form(tmp_path):
     assert float(t["values_time_ratio"]) == pytest.approx(float(ev.objectives[0, 0, 1]))
     assert (run / "pareto_front.png").stat().st_size > 1000
     assert yaml.safe_load((run / "best.yaml").read_text())["objective"] == "pareto"
+    plots = yaml.safe_load((run / "summary.yaml").read_text())["plots"]
+    assert plots == {n: f"{n}.png" for n in ("history", "importances", "pareto_front")}
 
 
 def test_config_file_then_command_line(tmp_path):
