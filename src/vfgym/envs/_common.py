@@ -12,8 +12,15 @@ import numpy as np
 from vfgym._validate import check_choice, check_int
 from vfgym.moves import profiles
 from vfgym.moves.scenarios import SPLITS, Scenario, get_scenario, random_scenario
-from vfgym.params import Measures, Plant, in_position_rad
-from vfgym.scoring import CONSTRAINTS, Bounds, CostWeights
+from vfgym.params import (
+    ACCEL_LAWS,
+    DEFAULT_MEASURES,
+    PAPER_PLANT,
+    Measures,
+    Plant,
+    in_position_rad,
+)
+from vfgym.scoring import CONSTRAINTS, DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights
 
 SEED_LIMIT = 2**63 - 1
 """Scenario seeds are whole numbers in [0, SEED_LIMIT) (as :func:`vfgym.random_scenario`)."""
@@ -55,8 +62,19 @@ SCENARIO_FEATURES = (
 """The features describing a move and its plant (definitions in :func:`scenario_features`)."""
 
 
-def _clip(x: float, bound: float = 10.0) -> float:
-    return min(max(float(x), -bound), bound)
+OBS_BOUND = 10.0
+"""Every observation feature of both envs is clipped to [-OBS_BOUND, OBS_BOUND]."""
+
+
+def clip_feature(x: float) -> float:
+    """``x`` clipped to [-OBS_BOUND, OBS_BOUND] (NaN passes through). Plain comparisons,
+    so that the envs' compiled step (``_batch._clip``, this function compiled by numba)
+    computes the same numbers."""
+    if x > OBS_BOUND:
+        return OBS_BOUND
+    if x < -OBS_BOUND:
+        return -OBS_BOUND
+    return x
 
 
 def main_move(sc: Scenario, plant: Plant) -> float:
@@ -69,7 +87,7 @@ def main_move(sc: Scenario, plant: Plant) -> float:
 
 
 def scenario_features(sc: Scenario, base: Plant, plant: Plant | None = None) -> np.ndarray:
-    """The move and its plant, normalised (float64, each clipped to [-10, 10]).
+    """The move and its plant, normalised (float64, each clipped by :func:`clip_feature`).
 
     direction: sign of :func:`main_move`; log_distance: log10(|move| / 1 rad) / 2;
     log_ideal_time: log10(ideal time / 1 ms) / 2; time_budget: duration / ideal time / 10;
@@ -100,7 +118,7 @@ def scenario_features(sc: Scenario, base: Plant, plant: Plant | None = None) -> 
         m.load_torque_nm / LOAD_SCALE_NM,
         m.peak_torque_nm / (m.inertia_kgm2 * m.accel_limit_rad_s2),
     ]
-    return np.array([_clip(x) for x in out], dtype=np.float64)
+    return np.array([clip_feature(x) for x in out], dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -192,6 +210,39 @@ class ScenarioSource:
             return self.episode(self.fixed)
         seed = int(rng.integers(self.seed_range[0], self.seed_range[1]))
         return self.episode(random_scenario(seed, self.split))
+
+
+@dataclass(frozen=True)
+class EnvConfig:
+    """The arguments both envs take (VFTune-v0's all of them), every default here;
+    validated on construction, except the scenario and its draws, which
+    :meth:`scenario_source` checks.
+
+    scenario: a fixed scenario (a name such as ``"paper-step"`` or ``"test-7"``, or a
+        :class:`vfgym.Scenario`); None draws one per episode.
+    split: ``"train"`` or ``"test"``, the random distribution's split to draw from.
+    seed_range: (low, high), scenario seeds drawn in [low, high) (default [0, 2³¹)).
+    accel_law: ``"rise"`` (the paper's reading) or ``"slew"``.
+    plant, measures, weights, bounds: the scoring path's inputs.
+    """
+
+    scenario: str | Scenario | None = None
+    split: str = "train"
+    seed_range: tuple[int, int] | None = None
+    accel_law: str = "rise"
+    plant: Plant = PAPER_PLANT
+    measures: Measures = DEFAULT_MEASURES
+    weights: CostWeights = DEFAULT_WEIGHTS
+    bounds: Bounds = DEFAULT_BOUNDS
+
+    def __post_init__(self) -> None:
+        check_scoring(self.weights, self.bounds, self.measures, self.plant)
+        object.__setattr__(self, "accel_law", check_choice("accel_law", self.accel_law, ACCEL_LAWS))
+
+    def scenario_source(self) -> ScenarioSource:
+        """Where the episodes' scenarios come from (a bad scenario, split or seed range
+        raises ``ValueError`` here)."""
+        return ScenarioSource(self.scenario, self.split, self.seed_range, self.plant, self.measures)
 
 
 def _check_scenario(sc: Any) -> str | Scenario:

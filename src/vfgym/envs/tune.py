@@ -11,11 +11,9 @@ from gymnasium import spaces
 
 from vfgym._validate import check_choice
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import ACCEL_LAWS, DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.params import Measures, Settings
 from vfgym.plant import simulate
 from vfgym.scoring import (
-    DEFAULT_BOUNDS,
-    DEFAULT_WEIGHTS,
     Bounds,
     CostWeights,
     evaluate,
@@ -24,15 +22,13 @@ from vfgym.scoring import (
 from vfgym.space import SPACE, from_action, settings_to_dict
 
 from ._common import (
+    OBS_BOUND,
     SCENARIO_FEATURES,
+    EnvConfig,
     Episode,
-    ScenarioSource,
     as_action,
-    check_scoring,
     scored_info,
 )
-
-OBS_BOUND = 10.0
 
 
 def tune_spaces() -> tuple[spaces.Box, spaces.Box]:
@@ -117,12 +113,14 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     accel_law="rise", plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
     weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``
 
-    * ``scenario``: a fixed scenario (name such as ``"paper-step"`` or ``"test-7"``, or a
-      :class:`vfgym.Scenario`); None draws one per episode.
-    * ``split``: ``"train"`` or ``"test"``, the random distribution's split to draw from.
-    * ``seed_range``: (low, high), scenario seeds drawn in [low, high) (default [0, 2³¹)).
-    * ``accel_law``: ``"rise"`` (the paper's reading) or ``"slew"``.
-    * ``plant``, ``measures``, ``weights``, ``bounds``: the scoring path's inputs.
+    * ``scenario``, ``split``, ``seed_range``, ``accel_law``, ``plant``, ``measures``,
+      ``weights``, ``bounds``: :class:`vfgym.envs._common.EnvConfig` (the defaults above).
+      ``scenario``: a fixed scenario (name such as ``"paper-step"`` or ``"test-7"``, or a
+      :class:`vfgym.Scenario`); None draws one per episode. ``split``: ``"train"`` or
+      ``"test"``, the random distribution's split to draw from. ``seed_range``: (low,
+      high), scenario seeds drawn in [low, high) (default [0, 2³¹)). ``accel_law``:
+      ``"rise"`` (the paper's reading) or ``"slew"``. ``plant``, ``measures``, ``weights``,
+      ``bounds``: the scoring path's inputs.
     * ``render_mode``: ``"rgb_array"`` draws the last move (position, speed, acceleration,
       command against motor) as an (480, 640, 3) uint8 array.
 
@@ -141,25 +139,19 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         self,
         scenario: str | Scenario | None = None,
         *,
-        split: str = "train",
-        seed_range: tuple[int, int] | None = None,
-        accel_law: str = "rise",
-        plant: Plant = PAPER_PLANT,
-        measures: Measures = DEFAULT_MEASURES,
-        weights: CostWeights = DEFAULT_WEIGHTS,
-        bounds: Bounds = DEFAULT_BOUNDS,
         render_mode: str | None = None,
+        **options: Any,
     ) -> None:
-        check_scoring(weights, bounds, measures, plant)
-        self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
+        self.config = EnvConfig(scenario, **options)
+        self.accel_law = self.config.accel_law
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
         self.render_mode = render_mode
-        self.plant = plant
-        self.measures = measures
-        self.weights = weights
-        self.bounds = bounds
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.plant = self.config.plant
+        self.measures = self.config.measures
+        self.weights = self.config.weights
+        self.bounds = self.config.bounds
+        self.source = self.config.scenario_source()
         self.observation_space, self.action_space = tune_spaces()
         self._ep: Episode | None = None
         self._settings: Settings | None = None

@@ -19,33 +19,14 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from vfgym._validate import check_choice, check_int
+from vfgym._validate import check_int
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import (
-    ACCEL_LAWS,
-    DEFAULT_MEASURES,
-    PAPER_PLANT,
-    PAPER_SETTINGS,
-    Measures,
-    Plant,
-    Settings,
-)
 from vfgym.plant import _layout as L
-from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights
 from vfgym.space import settings_to_dict
 
 from . import _batch as B
-from ._common import (
-    SERVO_INTERVAL_S,
-    SERVO_SETTLE_TIME_S,
-    SERVO_TRACKING_WEIGHT,
-    SERVO_VIOLATION_PENALTY,
-    Episode,
-    ScenarioSource,
-    check_scoring,
-    scored_info,
-)
-from .servo import ServoCore, raise_bad_action, servo_spaces
+from ._common import EnvConfig, Episode, scored_info
+from .servo import ServoConfig, ServoCore, raise_bad_action, servo_spaces
 from .tune import action_settings, evaluate_pairs, tune_spaces
 
 Infos = dict[str, Any]
@@ -302,23 +283,17 @@ class VFTuneVectorEnv(_BatchVectorEnv):
         num_envs: int = 1,
         scenario: str | Scenario | None = None,
         *,
-        split: str = "train",
-        seed_range: tuple[int, int] | None = None,
-        accel_law: str = "rise",
-        plant: Plant = PAPER_PLANT,
-        measures: Measures = DEFAULT_MEASURES,
-        weights: CostWeights = DEFAULT_WEIGHTS,
-        bounds: Bounds = DEFAULT_BOUNDS,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         render_mode: str | None = None,
+        **options: Any,
     ) -> None:
         super().__init__(num_envs, autoreset_mode, render_mode)
-        check_scoring(weights, bounds, measures, plant)
-        self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
-        self.measures = measures
-        self.weights = weights
-        self.bounds = bounds
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.config = EnvConfig(scenario, **options)
+        self.accel_law = self.config.accel_law
+        self.measures = self.config.measures
+        self.weights = self.config.weights
+        self.bounds = self.config.bounds
+        self.source = self.config.scenario_source()
         self.single_observation_space, self.single_action_space = tune_spaces()
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -375,39 +350,12 @@ class VFServoVectorEnv(_BatchVectorEnv):
         num_envs: int = 1,
         scenario: str | Scenario | None = None,
         *,
-        split: str = "train",
-        seed_range: tuple[int, int] | None = None,
-        accel_law: str = "rise",
-        interval_s: float = SERVO_INTERVAL_S,
-        settle_time_s: float = SERVO_SETTLE_TIME_S,
-        initial_settings: Settings = PAPER_SETTINGS,
-        tracking_weight: float = SERVO_TRACKING_WEIGHT,
-        terminate_on_violation: bool = False,
-        violation_penalty: float = SERVO_VIOLATION_PENALTY,
-        plant: Plant = PAPER_PLANT,
-        measures: Measures = DEFAULT_MEASURES,
-        weights: CostWeights = DEFAULT_WEIGHTS,
-        bounds: Bounds = DEFAULT_BOUNDS,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         render_mode: str | None = None,
+        **options: Any,
     ) -> None:
         super().__init__(num_envs, autoreset_mode, render_mode)
-        self.core = ServoCore(
-            scenario,
-            split,
-            seed_range,
-            accel_law,
-            interval_s,
-            settle_time_s,
-            initial_settings,
-            tracking_weight,
-            terminate_on_violation,
-            violation_penalty,
-            plant,
-            measures,
-            weights,
-            bounds,
-        )
+        self.core = ServoCore(ServoConfig(scenario, **options))
         n = self.num_envs
         self.single_observation_space, self.single_action_space = servo_spaces()
         self.observation_space = batch_space(self.single_observation_space, n)
