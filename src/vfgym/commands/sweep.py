@@ -290,25 +290,26 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         settings = tuning.trial_settings(best)
         cmp = tuning.compare(settings, scenarios)
         paper_cost = cmp.column("paper").mean_cost
-        rec = tuning.best_record(study, best, cfg, spec, scenarios, paper_cost)
+        record = tuning.best_record(study, best, cfg, spec, scenarios, paper_cost)
         lines.append(
-            f"best: trial {best.number}, cost {rec.cost:.4f} "
-            f"({'feasible' if rec.feasible else 'INFEASIBLE'}) against the paper's "
-            f"{paper_cost:.4f} ({tuning.gap_pct(rec.cost, paper_cost):+.1f} %)"
+            f"best: trial {best.number}, cost {record.cost:.4f} "
+            f"({'feasible' if record.feasible else 'INFEASIBLE'}) against the paper's "
+            f"{paper_cost:.4f} ({tuning.gap_pct(record.cost, paper_cost):+.1f} %)"
         )
         if reference is not None:
-            rec = rec.with_reference(reference)
+            gap = tuning.ReferenceGap.between(record.cost, reference)
+            record = record.with_reference(gap)
             lines.append(
                 f"gap to the grid reference {reference.path} (cost {reference.cost:.4f}): "
-                f"{rec.reference.gap_pct:+.2f} %"
+                f"{gap.gap_pct:+.2f} %"
             )
-        s = rec.settings
+        s = record.settings
         lines.append(
             f"settings: value {s['value_rad']:.6g} rad, error limit {s['error_limit_rad']:.6g} "
             f"rad, k {s['k']:.6g}, Ts/Tf {s['ts_over_tf']:.4g}, law {s['accel_law']}"
         )
-        write_yaml(run_dir / "best.yaml", rec.as_dict())
-        summary["best"] = rec.as_dict()
+        write_yaml(run_dir / "best.yaml", record.as_dict())
+        summary["best"] = record.as_dict()
         summary["comparison"] = compact_rows(cmp).as_dict()
         lines += ["", format_compact(cmp)]
     if cfg.plots and not interrupted and best is not None:

@@ -147,10 +147,6 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
         self.render_mode = render_mode
-        self.plant = self.config.plant
-        self.measures = self.config.measures
-        self.weights = self.config.weights
-        self.bounds = self.config.bounds
         self.source = self.config.scenario_source()
         self.observation_space, self.action_space = tune_spaces()
         self._ep: Episode | None = None
@@ -178,13 +174,14 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
             )
         ep = self._ep
         settings = action_settings(action, self.accel_law)
+        c = self.config
         ev = evaluate(
             settings,
             ep.scenario,
-            plant=self.plant,
-            measures=self.measures,
-            weights=self.weights,
-            bounds=self.bounds,
+            plant=c.plant,
+            measures=c.measures,
+            weights=c.weights,
+            bounds=c.bounds,
         )
         cost = float(ev.cost[0, 0])
         info = scored_info(ep, ev.metrics[0][0], cost, ev.constraints[0, 0])
@@ -209,9 +206,9 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         title = f"VFTune-v0, {ep.scenario.name}"
         if self._settings is None:
             return move_picture(
-                ep.plant, ep.command, None, None, None, self.measures.accel_window_s, title
+                ep.plant, ep.command, None, None, None, self.config.measures.accel_window_s, title
             )
-        tr = simulate(ep.command, self._settings, ep.plant, measures=self.measures)
+        tr = simulate(ep.command, self._settings, ep.plant, measures=self.config.measures)
         s = self._settings
         title += f": value {s.value_rad:.3g}, L {s.error_limit_rad:.3g}, k {s.k:.3g}, "
         title += f"Ts/Tf {s.ts_over_tf:.3g}"
@@ -221,7 +218,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
             tr.pulse_rad,
             tr.motor_rad,
             tr.speed_rad_s,
-            self.measures.accel_window_s,
+            self.config.measures.accel_window_s,
             title,
         )
 

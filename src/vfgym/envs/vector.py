@@ -290,9 +290,6 @@ class VFTuneVectorEnv(_BatchVectorEnv):
         super().__init__(num_envs, autoreset_mode, render_mode)
         self.config = EnvConfig(scenario, **options)
         self.accel_law = self.config.accel_law
-        self.measures = self.config.measures
-        self.weights = self.config.weights
-        self.bounds = self.config.bounds
         self.source = self.config.scenario_source()
         self.single_observation_space, self.single_action_space = tune_spaces()
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
@@ -325,7 +322,11 @@ class VFTuneVectorEnv(_BatchVectorEnv):
         ends: dict[int, Infos] = {}
         if idx.size:
             results = evaluate_pairs(
-                settings, eps, measures=self.measures, weights=self.weights, bounds=self.bounds
+                settings,
+                eps,
+                measures=self.config.measures,
+                weights=self.config.weights,
+                bounds=self.config.bounds,
             )
             for i, s, ep, (cost, metrics, cons) in zip(idx, settings, eps, results, strict=True):
                 rew[i] = -cost

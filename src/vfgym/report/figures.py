@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -40,6 +40,11 @@ from vfgym.report._sweep_figures import (
     pareto_mask,
 )
 
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from vfgym.plant import Trace
+
 MAX_POINTS = 4000
 """Points drawn per curve at most (longer curves are thinned by a stride)."""
 
@@ -47,17 +52,17 @@ MAX_POINTS = 4000
 # --- derived signals --------------------------------------------------------------------
 
 
-def _window_samples(trace: Any, window_s: float) -> int:
+def _window_samples(trace: Trace, window_s: float) -> int:
     """The window in trace samples (at least one): w ticks rounded to the decimation."""
     w_ticks = max(1, round(window_s * trace.plant.tick_hz))
     return max(1, round(w_ticks / trace.decimation))
 
 
-def _padded_counts(trace: Any, pad: int) -> np.ndarray:
+def _padded_counts(trace: Trace, pad: int) -> np.ndarray:
     return np.concatenate([np.zeros(pad, dtype=np.int64), trace.pulse_count])
 
 
-def pulse_speed(trace: Any, window_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+def pulse_speed(trace: Trace, window_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Pulse-train speed (rad/s) over a window, at the window's centre time (s)."""
     window_s = trace.measures.accel_window_s if window_s is None else window_s
     ws = _window_samples(trace, window_s)
@@ -67,7 +72,7 @@ def pulse_speed(trace: Any, window_s: float | None = None) -> tuple[np.ndarray, 
     return trace.time_s - 0.5 * ws * dt, v
 
 
-def pulse_accel(trace: Any, window_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+def pulse_accel(trace: Trace, window_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Pulse-train acceleration (rad/s²): windowed second difference at the centre time.
 
     With the default window (the measures' ``accel_window_s``) and an undecimated trace,
@@ -83,7 +88,7 @@ def pulse_accel(trace: Any, window_s: float | None = None) -> tuple[np.ndarray, 
     return trace.time_s - ws * dt, d2 * trace.plant.pulse_rad / (ws * dt) ** 2
 
 
-def pulse_frequency(trace: Any, window_s: float = 0.5e-3) -> tuple[np.ndarray, np.ndarray]:
+def pulse_frequency(trace: Trace, window_s: float = 0.5e-3) -> tuple[np.ndarray, np.ndarray]:
     """Pulse frequency (Hz, pulses of either sign) over a window, at its centre time (s).
 
     Undecimated traces count every pulse; a decimated one counts |Δn| per window (a
@@ -100,7 +105,7 @@ def pulse_frequency(trace: Any, window_s: float = 0.5e-3) -> tuple[np.ndarray, n
     return trace.time_s - 0.5 * ws * dt, k / (ws * dt)
 
 
-def motor_accel(trace: Any, stride: int = 1) -> tuple[np.ndarray, np.ndarray]:
+def motor_accel(trace: Trace, stride: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Motor acceleration (rad/s²): Δω/Δt over every ``stride`` samples (the exact mean
     acceleration over each interval), at the interval's centre; ω = 0 before tick 0."""
     stride = max(1, int(stride))
@@ -131,7 +136,7 @@ def _fmt_metrics(m: Mapping[str, Any] | None, tracking: bool) -> str:
     )
 
 
-def _symlog(ax: Any, lin: float, data: Sequence[np.ndarray]) -> None:
+def _symlog(ax: Axes, lin: float, data: Sequence[np.ndarray]) -> None:
     """Symmetric log y axis, linear inside ±lin (the in-position window), ticked at 0 and
     at the decades beyond the window (matplotlib's own ticks crowd the linear part)."""
     lin = max(float(lin), 1e-12)
@@ -145,7 +150,7 @@ def _symlog(ax: Any, lin: float, data: Sequence[np.ndarray]) -> None:
     ax.yaxis.set_minor_locator(NullLocator())
 
 
-def _limit_lines(ax: Any, plant: Plant, scale: float) -> None:
+def _limit_lines(ax: Axes, plant: Plant, scale: float) -> None:
     lim = plant.motor.accel_limit_rad_s2
     for sgn in (1, -1):
         ax.axhline(
@@ -171,7 +176,7 @@ def _limit_lines(ax: Any, plant: Plant, scale: float) -> None:
 
 
 def response_figure(
-    trace: Any,
+    trace: Trace,
     *,
     title: str = "",
     metrics: Mapping[str, Any] | None = None,
@@ -334,7 +339,7 @@ def scurve_figure(
 
 
 def frequency_figure(
-    traces: Mapping[str, Any],
+    traces: Mapping[str, Trace],
     *,
     window_s: float = 0.5e-3,
     title: str = "",
@@ -366,7 +371,7 @@ def frequency_figure(
 
 
 def compare_figure(
-    traces: Mapping[str, Any],
+    traces: Mapping[str, Trace],
     *,
     title: str = "",
     tracking: bool = False,

@@ -7,7 +7,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 from contextlib import nullcontext
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -16,6 +16,9 @@ from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
+
+if TYPE_CHECKING:
+    from optuna import Study, Trial
 
 
 class Aggregate(NamedTuple):
@@ -65,7 +68,7 @@ class Objective:
         self.guard: Callable[[], Any] = nullcontext
         self.current: int | None = None
 
-    def __call__(self, trial: Any) -> float | list[float]:
+    def __call__(self, trial: Trial) -> float | list[float]:
         self.current = trial.number
         # Before the claim lock goes: a retried trial inherits its dead worker's attribute,
         # and another worker's recovery must not see this one running under that name.
@@ -74,7 +77,7 @@ class Objective:
             self.on_enter()
         return self._run(trial)
 
-    def _run(self, trial: Any) -> float | list[float]:
+    def _run(self, trial: Trial) -> float | list[float]:
         settings = space.suggest(trial, self.laws)
         key = settings_key(settings)
         hit = self.cache.get(key) or self._lookup(trial.study, settings)
@@ -108,7 +111,7 @@ class Objective:
         values = attrs["cost"] if self.form == "cost" else list(attrs["objectives"])
         return values, attrs
 
-    def _lookup(self, study: Any, settings: Settings) -> Any:
+    def _lookup(self, study: Study, settings: Settings) -> tuple[Any, dict[str, Any]] | None:
         import optuna
 
         want = space.settings_to_dict(settings)

@@ -204,6 +204,11 @@ class ReferenceGap:
     gap_pct: float
     """:func:`gap_pct` of the sweep's best cost to it."""
 
+    @classmethod
+    def between(cls, cost: float, found: FoundReference) -> ReferenceGap:
+        """The gap of ``cost`` to the reference ``found``."""
+        return cls(str(found.path), found.record["cost"], gap_pct(cost, found.cost))
+
 
 @dataclass(frozen=True)
 class BestRecord:
@@ -221,16 +226,15 @@ class BestRecord:
     """The storage URL, password masked."""
     trial: int
     sampler: str
-    objective: str
+    objective: str | None
     scenarios: list[str]
     laws: list[str]
     paper_cost: float | None = None
     """The paper's settings' cost on the same scenarios."""
     reference: ReferenceGap | None = None
 
-    def with_reference(self, found: FoundReference) -> BestRecord:
+    def with_reference(self, gap: ReferenceGap) -> BestRecord:
         """This record with its gap to a grid reference."""
-        gap = ReferenceGap(str(found.path), found.record["cost"], gap_pct(self.cost, found.cost))
         return replace(self, reference=gap)
 
     def as_dict(self) -> dict[str, Any]:

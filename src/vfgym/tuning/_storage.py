@@ -15,9 +15,12 @@ import re
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from vfgym.tuning._recovery import RetryStale
+
+if TYPE_CHECKING:
+    from optuna.storages import BaseStorage, RDBStorage
 
 STORAGE_HELP = "sqlite, journal, sqlite:///FILE, journal:FILE or postgresql://USER:PASS@HOST/DB"
 
@@ -100,7 +103,7 @@ def find_storage(text: str, run_dir: Path) -> StorageSpec:
     return _file_spec(spec.kind, moved)
 
 
-def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = None) -> Any:
+def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = None) -> BaseStorage:
     """The Optuna storage for ``spec``: RDB (with heartbeat and retry of stale trials) for
     SQLite and PostgreSQL, JournalStorage on a file. Unreachable storages raise
     ``ValueError`` naming ``storage``."""
@@ -171,7 +174,7 @@ class _JournalFlock:
             self._fd = None
 
 
-def _sqlite_wal(storage: Any) -> None:
+def _sqlite_wal(storage: RDBStorage) -> None:
     """Put the SQLite file in write-ahead-log mode (it stays so) with ``synchronous=NORMAL``
     on every connection: readers never wait for a writer, a worker frozen or killed
     mid-write blocks no reader, and a commit needs no fsync (a crash of the process loses

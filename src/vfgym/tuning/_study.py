@@ -6,13 +6,18 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from vfgym import space
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import OBJECTIVES
 from vfgym.tuning._config import SweepConfig
+
+if TYPE_CHECKING:
+    from optuna import Study
+    from optuna.samplers import BaseSampler
+    from optuna.storages import BaseStorage
 
 META_KEY = "vfgym"
 """Study user attribute recording what the study optimises (checked when resumed)."""
@@ -32,7 +37,7 @@ def check_sampler(cfg: SweepConfig) -> None:
         )
 
 
-def make_sampler(cfg: SweepConfig, seed: int | None) -> Any:
+def make_sampler(cfg: SweepConfig, seed: int | None) -> BaseSampler:
     """The Optuna sampler named by ``cfg.sampler``, seeded; constrained where it can be."""
     import optuna
 
@@ -90,7 +95,7 @@ class StudyMeta:
 
     scenarios: list[str]
     laws: list[str]
-    objective: str
+    objective: str | None
 
 
 def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> StudyMeta:
@@ -99,8 +104,12 @@ def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> StudyMeta:
 
 
 def create_or_load(
-    storage: Any, name: str, cfg: SweepConfig, scenarios: list[Scenario], sampler: Any = None
-) -> tuple[Any, bool]:
+    storage: BaseStorage,
+    name: str,
+    cfg: SweepConfig,
+    scenarios: list[Scenario],
+    sampler: BaseSampler | None = None,
+) -> tuple[Study, bool]:
     """The study ``name``: created with the baseline enqueued first, or loaded (and
     checked to optimise the same thing). Returns (study, created)."""
     import optuna
