@@ -67,9 +67,19 @@ OBS_BOUND = 10.0
 
 
 def clip_feature(x: float) -> float:
-    """``x`` clipped to [-OBS_BOUND, OBS_BOUND] (NaN passes through). Plain comparisons,
-    so that the envs' compiled step (``_batch._clip``, this function compiled by numba)
-    computes the same numbers."""
+    """An observation feature clipped to [-OBS_BOUND, OBS_BOUND] (NaN passes through).
+
+    Plain comparisons, so that the envs' compiled step (``_batch._clip``, this function
+    compiled by numba) computes the same numbers.
+
+    Parameters
+    ----------
+    x : float
+
+    Returns
+    -------
+    float
+    """
     if x > OBS_BOUND:
         return OBS_BOUND
     if x < -OBS_BOUND:

@@ -227,9 +227,25 @@ def importances_figure(
     target_name: str = "objective",
     title: str = "",
 ) -> Figure:
-    """Each parameter's importance for ``target`` (default: the study's one objective) by
-    Optuna's default evaluator (:func:`optuna.importance.get_param_importances`), as
-    horizontal bars, the most important on top."""
+    """Each parameter's importance, by Optuna's default evaluator
+    (:func:`optuna.importance.get_param_importances`), as horizontal bars, the most
+    important on top.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        At least two complete trials.
+    target : callable, optional
+        The value ranked (a multi-objective study needs one); default: the objective.
+    target_name : str
+        What ``target`` is, for the axis label.
+    title : str
+        The figure's title (default: the study's name and trial count).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     import optuna
 
     n = len(_complete(study))

@@ -276,7 +276,18 @@ class CompactTable(NamedTuple):
 
 def compact_rows(report: Report) -> CompactTable:
     """The report's controllers in the compact layout, scenario by scenario and over the
-    set (see :class:`CompactRow`)."""
+    set.
+
+    Parameters
+    ----------
+    report : Report
+        Any report (its columns in order; a sweep's: the paper's settings, then the tuned).
+
+    Returns
+    -------
+    CompactTable
+        Each column on each scenario, then over the set (see :class:`CompactRow`).
+    """
     rows: list[CompactRow] = []
     for si, sc in enumerate(report.scenarios):
         for col in report.columns:
@@ -321,9 +332,20 @@ def compact_rows(report: Report) -> CompactTable:
 
 
 def format_compact(report: Report) -> str:
-    """The compact table as text: each controller on each scenario (a blank line between
-    scenarios) and, for several scenarios, over the set; settling times not reached are
-    starred, those of a moving reference are ``-``."""
+    """The compact table as text, as ``vfgym sweep`` and ``vfgym grid`` print it.
+
+    Parameters
+    ----------
+    report : Report
+        The controllers to show, in column order.
+
+    Returns
+    -------
+    str
+        Each controller on each scenario (a blank line between scenarios) and, for
+        several scenarios, over the set; a settling time not reached is starred, that of
+        a moving reference is ``-``; a footnote line explains the columns.
+    """
     table = compact_rows(report)
     head = (
         f"{'scenario':14s} {'settings':8s} {'settle ms':>10s} {'overshoot mrad':>15s} "

@@ -87,10 +87,23 @@ def _cell(v: object) -> object:
 
 def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
     """The study's figures as PNG in the run folder, drawn by :mod:`vfgym.report.figures`
-    (as ``vfgym plot history|pareto`` draws them): the optimisation history, the
-    parameters' importances for the cost and (Pareto form) the Pareto front. Returns each
-    figure's file name, or ``skipped: REASON`` for one that cannot be drawn (too few
-    trials, no spread to rank, ...)."""
+    (as ``vfgym plot history|pareto`` draws them).
+
+    Parameters
+    ----------
+    study : optuna.Study
+    run_dir : Path
+        Where ``history.png``, ``importances.png`` (for the cost) and, in the Pareto
+        form, ``pareto_front.png`` are written (atomically).
+    form : str
+        The sweep's objective, ``cost`` or ``pareto``.
+
+    Returns
+    -------
+    dict of str to str
+        Each figure's file name, or ``skipped: REASON`` for one that cannot be drawn (too
+        few trials, no spread to rank, ...).
+    """
     import optuna
 
     from vfgym.report import figures
@@ -126,9 +139,24 @@ def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
 
 
 def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> Report:
-    """The paper's settings (first) and ``best`` on each scenario, through
-    :func:`vfgym.report.compare`; :func:`vfgym.report.format_compact` prints it as the
-    sweep's table, :func:`vfgym.report.compact_rows` gives its rows."""
+    """The paper's settings against ``best`` on each scenario, through
+    :func:`vfgym.report.compare`.
+
+    Parameters
+    ----------
+    best : Settings
+        The tuned settings.
+    scenarios : list of Scenario
+        The sweep's (or grid's) scenario set.
+    label : str
+        ``best``'s column label (``tuned``; the grid: ``grid``).
+
+    Returns
+    -------
+    vfgym.report.Report
+        Columns ``paper`` (role baseline) then ``label``; :func:`vfgym.report.format_compact`
+        prints it as the sweep's table, :func:`vfgym.report.compact_rows` gives its rows.
+    """
     return report.compare(
         [
             Candidate("paper", PAPER_SETTINGS, source="paper", role="baseline"),
@@ -254,7 +282,23 @@ def best_record(
     scenarios: list[Scenario],
     paper_cost: float | None = None,
 ) -> BestRecord:
-    """A sweep's best trial and where it comes from, as ``best.yaml`` holds it."""
+    """A sweep's best trial and where it comes from, as ``best.yaml`` holds it.
+
+    Parameters
+    ----------
+    study : optuna.Study
+    trial : optuna.trial.FrozenTrial
+        The best trial (:func:`best_trial`), scored by the sweep's objective.
+    cfg : SweepConfig
+    spec : StorageSpec
+    scenarios : list of Scenario
+    paper_cost : float, optional
+        The paper's settings' cost on the same scenarios.
+
+    Returns
+    -------
+    BestRecord
+    """
     ua = trial.user_attrs
     return BestRecord(
         settings=ua["settings"],

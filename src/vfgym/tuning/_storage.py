@@ -85,11 +85,24 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
 
 
 def find_storage(text: str, run_dir: Path) -> StorageSpec:
-    """The storage a sweep's run folder recorded (its ``config.yaml``'s ``storage``, a
-    :attr:`StorageSpec.display`) or ``--storage`` names, parsed by :func:`resolve_storage`
-    and found again: a SQLite or journal file no longer where it was is looked for in
-    ``run_dir`` (the folder was moved). A masked password, an unknown URL or a missing
-    file raises ``ValueError`` naming ``storage``."""
+    """The storage a sweep's run folder recorded, parsed by :func:`resolve_storage` (the
+    one parser) and found again.
+
+    Parameters
+    ----------
+    text : str
+        The folder's ``config.yaml`` ``storage`` (a :attr:`StorageSpec.display`: a
+        journal shows as its bare path) or what ``--storage`` names.
+    run_dir : Path
+        The run folder; a SQLite or journal file no longer where it was recorded is
+        looked for in it (the folder was moved).
+
+    Returns
+    -------
+    StorageSpec
+        A masked password, an unknown URL or a missing file raises ``ValueError`` naming
+        ``storage``.
+    """
     t = str(text).strip()
     if "***" in t:
         raise ValueError(f"storage={t!r}: the password is masked; give the storage URL again")
