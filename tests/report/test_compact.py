@@ -35,7 +35,7 @@ long-move      tuned        314.73           0.402      0.07               144.2
 set (3)        paper        122.60           1.024      0.17               144.2   1.030  3.9458 3/3
 set (3)        tuned        131.02           0.472      0.08               144.2   1.030  3.1899 3/3
 settle: settling time into the in-position window (* not settled; - a moving reference); \
-accel: the pulse train's peak over 1 ms against the motor's limit"""
+accel: the pulse train's peak over 1 ms against the limit (the loaded motor's usable acceleration)"""
 QUICK = ["paper-step", "short-move", "long-move"]
 
 

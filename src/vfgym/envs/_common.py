@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from os import PathLike, fspath
 from typing import Any
 
 import numpy as np
 
 from vfgym._validate import check_choice, check_int
 from vfgym.moves import profiles
+from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.scenarios import SPLITS, Scenario, get_scenario, random_scenario
 from vfgym.params import (
     ACCEL_LAWS,
@@ -75,10 +77,12 @@ def clip_feature(x: float) -> float:
     Parameters
     ----------
     x : float
+        The feature.
 
     Returns
     -------
     float
+        ``x`` clipped.
     """
     if x > OBS_BOUND:
         return OBS_BOUND
@@ -176,9 +180,58 @@ class Episode:
         )
 
 
+def resolve_axis(
+    axis: Axis | str | PathLike[str] | None, plant: Plant, measures: Measures
+) -> tuple[Axis | None, Plant, Measures]:
+    """An env's ``axis`` argument with its ``plant`` and ``measures``.
+
+    An axis brings its own plant and measures, so giving other ones beside it is an error
+    (the paper's defaults, or the axis's own, are no conflict).
+
+    Parameters
+    ----------
+    axis : Axis, str, os.PathLike or None
+        An :class:`~vfgym.moves.axis.Axis` or an axis file's path; ``None`` for none.
+    plant : Plant
+        The plant given beside it.
+    measures : Measures
+        The measures given beside it.
+
+    Returns
+    -------
+    tuple of (Axis or None, Plant, Measures)
+        The axis (loaded from its file), and the plant and measures to use: the axis's,
+        or the ones given when there is no axis.
+
+    Raises
+    ------
+    ValueError
+        If ``axis`` is neither, its file is bad, or ``plant`` / ``measures`` differ from
+        the axis's.
+    """
+    if axis is None:
+        return None, plant, measures
+    if isinstance(axis, (str, PathLike)):
+        axis = load_axis(fspath(axis))
+    if not isinstance(axis, Axis):
+        raise ValueError(f"axis={axis!r} is not allowed: give an axis file's path or a vfgym Axis")
+    for name, value, default in (
+        ("plant", plant, PAPER_PLANT),
+        ("measures", measures, DEFAULT_MEASURES),
+    ):
+        if value != default and value != getattr(axis, name):
+            raise ValueError(
+                f"{name}={value!r} is not allowed with axis={axis.name!r}: the axis gives "
+                f"its own {name}; give one or the other"
+            )
+    return axis, axis.plant, axis.measures
+
+
 class ScenarioSource:
     """Where each episode's scenario comes from: a fixed one, or seeded draws from one
-    split (train or test) of the random distribution, seeds in ``seed_range`` = [lo, hi)."""
+    split (train or test) of the random distribution, seeds in ``seed_range`` = [lo, hi);
+    on an ``axis``, from that split's move set (:meth:`vfgym.moves.axis.MoveSet.pick`)
+    and names resolved by :meth:`vfgym.moves.axis.Axis.scenario`."""
 
     def __init__(
         self,
@@ -187,6 +240,7 @@ class ScenarioSource:
         seed_range: tuple[int, int] | None,
         base: Plant,
         measures: Measures,
+        axis: Axis | None = None,
     ) -> None:
         check_choice("split", split, SPLITS)
         lo, hi = DEFAULT_SEED_RANGE if seed_range is None else _check_range(seed_range)
@@ -194,7 +248,8 @@ class ScenarioSource:
         self.seed_range = (lo, hi)
         self.base = base
         self.measures = measures
-        self.fixed = None if scenario is None else get_scenario(_check_scenario(scenario))
+        self.axis = axis
+        self.fixed = None if scenario is None else self._named(scenario)
         self._cache: dict[Scenario, Episode] = {}
         if self.fixed is not None:
             self.episode(self.fixed)  # a bad scenario fails here, not at reset
@@ -212,47 +267,102 @@ class ScenarioSource:
         """The next episode: from ``options`` if they name one, else fixed, else drawn."""
         opts = check_options(options)
         if "scenario" in opts:
-            return self.episode(get_scenario(_check_scenario(opts["scenario"])))
+            return self.episode(self._named(opts["scenario"]))
         if "scenario_seed" in opts:
             seed = check_int("scenario_seed", opts["scenario_seed"], 0, SEED_LIMIT - 1)
-            return self.episode(random_scenario(seed, self.split))
+            return self.episode(self._seeded(seed))
         if self.fixed is not None:
             return self.episode(self.fixed)
         seed = int(rng.integers(self.seed_range[0], self.seed_range[1]))
-        return self.episode(random_scenario(seed, self.split))
+        return self.episode(self._seeded(seed))
+
+    def _named(self, scenario: Any) -> Scenario:
+        sc = _check_scenario(scenario)
+        return get_scenario(sc) if self.axis is None else self.axis.scenario(sc)
+
+    def _seeded(self, seed: int) -> Scenario:
+        if self.axis is None:
+            return random_scenario(seed, self.split)
+        return self.axis.moves.of(self.split).pick(seed, self.split, self.base)
 
 
 @dataclass(frozen=True)
 class EnvConfig:
-    """The arguments both envs take (VFTune-v0's all of them), every default here;
-    validated on construction, except the scenario and its draws, which
-    :meth:`scenario_source` checks.
+    """The arguments both envs take (VFTune-v0's all of them), every default here.
 
-    scenario: a fixed scenario (a name such as ``"paper-step"`` or ``"test-7"``, or a
-        :class:`vfgym.Scenario`); None draws one per episode.
-    split: ``"train"`` or ``"test"``, the random distribution's split to draw from.
-    seed_range: (low, high), scenario seeds drawn in [low, high) (default [0, 2³¹)).
-    accel_law: ``"rise"`` (the paper's reading) or ``"slew"``.
-    plant, measures, weights, bounds: the scoring path's inputs.
+    Validated on construction, except the scenario and its draws, which
+    :meth:`scenario_source` checks. An ``axis`` is resolved here, once, by
+    :func:`resolve_axis`: afterwards ``axis`` is the loaded
+    :class:`~vfgym.moves.axis.Axis` and ``plant`` and ``measures`` are its own.
+
+    Parameters
+    ----------
+    scenario : str, Scenario or None
+        A fixed scenario (a name such as ``"paper-step"`` or ``"test-7"``, or a
+        :class:`vfgym.Scenario`); ``None`` draws one per episode.
+    split : str
+        ``"train"`` or ``"test"``, the random distribution's split (on an axis, its move
+        set) to draw from.
+    seed_range : tuple of (int, int) or None
+        (low, high): scenario seeds drawn in [low, high) (default [0, 2³¹)).
+    accel_law : str
+        ``"rise"`` (the paper's reading) or ``"slew"``.
+    axis : Axis, str, os.PathLike or None
+        An axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant and measures,
+        and the moves of each split come from its move sets (a random set's draws, or a
+        listed set's move ``seed mod len``); names resolve on the axis.
+    plant : Plant
+        The base plant (each scenario applies its load); with an axis, the axis's.
+    measures : Measures
+        Windows and bands of the measures; with an axis, the axis's.
+    weights : CostWeights
+        Weights of the cost.
+    bounds : Bounds
+        Bounds of the constraints.
+
+    Raises
+    ------
+    ValueError
+        If an argument is of the wrong type or out of its range, or an axis is given
+        with another plant or measures.
     """
 
     scenario: str | Scenario | None = None
     split: str = "train"
     seed_range: tuple[int, int] | None = None
     accel_law: str = "rise"
+    axis: Axis | str | PathLike[str] | None = None
     plant: Plant = PAPER_PLANT
     measures: Measures = DEFAULT_MEASURES
     weights: CostWeights = DEFAULT_WEIGHTS
     bounds: Bounds = DEFAULT_BOUNDS
 
     def __post_init__(self) -> None:
+        s = object.__setattr__
+        axis, plant, measures = resolve_axis(self.axis, self.plant, self.measures)
+        s(self, "axis", axis)
+        s(self, "plant", plant)
+        s(self, "measures", measures)
         check_scoring(self.weights, self.bounds, self.measures, self.plant)
-        object.__setattr__(self, "accel_law", check_choice("accel_law", self.accel_law, ACCEL_LAWS))
+        s(self, "accel_law", check_choice("accel_law", self.accel_law, ACCEL_LAWS))
 
     def scenario_source(self) -> ScenarioSource:
-        """Where the episodes' scenarios come from (a bad scenario, split or seed range
-        raises ``ValueError`` here)."""
-        return ScenarioSource(self.scenario, self.split, self.seed_range, self.plant, self.measures)
+        """Where the episodes' scenarios come from.
+
+        Returns
+        -------
+        ScenarioSource
+            On the axis's move sets if there is one.
+
+        Raises
+        ------
+        ValueError
+            If the scenario, split or seed range is bad (raised by :class:`ScenarioSource`).
+        """
+        axis = self.axis if isinstance(self.axis, Axis) else None  # resolved on construction
+        return ScenarioSource(
+            self.scenario, self.split, self.seed_range, self.plant, self.measures, axis
+        )
 
 
 def _check_scenario(sc: Any) -> str | Scenario:

@@ -86,13 +86,28 @@ class ServoConfig(EnvConfig):
     """VFServo-v0's arguments, every default here: :class:`EnvConfig`'s and the online
     tuning's own; validated on construction.
 
-    interval_s: the control interval, a whole number of ticks.
-    settle_time_s: how long the motor must stay in position to end the episode.
-    initial_settings: the settings in force before the first action (its law is replaced
-        by ``accel_law``).
-    tracking_weight: weight of the tracking-error shaping term (0: none).
-    terminate_on_violation, violation_penalty: end on a constraint violation, with this
-        extra negative reward.
+    Parameters
+    ----------
+    scenario, split, seed_range, accel_law, axis, plant, measures, weights, bounds
+        As :class:`vfgym.envs._common.EnvConfig` (an axis resolved there).
+    interval_s : float
+        The control interval (s), a whole number of ticks (:meth:`vfgym.Plant.whole_ticks`).
+    settle_time_s : float
+        How long the motor must stay in position to end the episode (s), 0 to 1.
+    initial_settings : Settings
+        The settings in force before the first action (its law is replaced by
+        ``accel_law``).
+    tracking_weight : float
+        Weight of the tracking-error shaping term (0: none), ≥ 0.
+    terminate_on_violation : bool
+        End the episode on a constraint violation.
+    violation_penalty : float
+        The extra negative reward of such an end, ≥ 0.
+
+    Raises
+    ------
+    ValueError
+        If an argument is of the wrong type or out of its range.
     """
 
     interval_s: float = SERVO_INTERVAL_S
@@ -171,7 +186,7 @@ class ServoCore:
             B.C_IDEAL: ep.ideal_time_s,
             B.C_WIN: ep.window_rad,
             B.C_SCALE: ep.scale_rad,
-            B.C_LIMIT: ep.plant.motor.accel_limit_rad_s2,
+            B.C_LIMIT: ep.plant.motor.usable_accel_rad_s2,
             B.C_VMAX: ep.plant.pulse_top_speed_rad_s,
             B.C_TRACKING: 1.0 if sc.tracking else 0.0,
             B.C_TRK_SCALE: 0.1 * abs(sc.distance_rad),
@@ -217,7 +232,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Description
 
-    One episode is one move of the plant of MODEL.md (V-F controller → digital servo →
+    One episode is one move of the plant of docs/model.md (V-F controller → digital servo →
     motor). Each step is one control interval (default 1 ms = 140 ticks): the action sets
     the four settings for that interval, and the compiled, stateful kernel
     (:func:`vfgym.plant._kernel.run_segment`) advances the plant through it; its state (the V-F
@@ -292,20 +307,8 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     accel_law="rise", interval_s=1e-3, settle_time_s=5e-3,
     initial_settings=PAPER_SETTINGS, tracking_weight=0.0, terminate_on_violation=False,
     violation_penalty=5.0, plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
-    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``
-
-    * ``scenario``, ``split``, ``seed_range``, ``accel_law``, ``plant``, ``measures``,
-      ``weights``, ``bounds``: as VFTune-v0.
-    * ``interval_s``, ``settle_time_s``, ``initial_settings``, ``tracking_weight``,
-      ``terminate_on_violation``, ``violation_penalty``: :class:`ServoConfig` (the
-      defaults above). ``interval_s``: the control interval, a whole number of ticks.
-      ``settle_time_s``: how long the motor must stay in position to end the episode.
-      ``initial_settings``: the settings in force before the first action.
-      ``tracking_weight``: weight of the tracking-error shaping term (0: none).
-      ``terminate_on_violation``, ``violation_penalty``: end on a constraint violation,
-      with this extra negative reward.
-    * ``render_mode``: ``"rgb_array"`` draws the episode's move so far (position, speed,
-      acceleration, command against motor) as an (480, 640, 3) uint8 array.
+    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None, axis=None)``; see
+    Parameters.
 
     ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)`` gives
     :class:`vfgym.envs.vector.VFServoVectorEnv`, which steps all N envs in one compiled
@@ -314,6 +317,30 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     ## Version History
 
     * v0: Initial version.
+
+    Parameters
+    ----------
+    scenario : str, Scenario or None
+        As :class:`vfgym.envs.tune.VFTuneEnv`.
+    render_mode : str or None
+        ``"rgb_array"`` draws the episode's move so far (position, speed, acceleration,
+        command against motor) as an (480, 640, 3) uint8 array.
+    **options
+        The other fields of :class:`ServoConfig`, where their defaults live and are
+        checked: VFTune-v0's (``split``, ``seed_range``, ``accel_law``, ``axis``,
+        ``plant``, ``measures``, ``weights``, ``bounds``), and ``interval_s`` (the control
+        interval, a whole number of ticks), ``settle_time_s`` (how long the motor must stay
+        in position to end the episode), ``initial_settings`` (the settings in force
+        before the first action), ``tracking_weight`` (weight of the tracking-error
+        shaping term; 0: none), ``terminate_on_violation`` and ``violation_penalty`` (end
+        on a constraint violation, with this extra negative reward).
+
+    Raises
+    ------
+    ValueError
+        If an argument is out of its range or of the wrong type.
+    TypeError
+        If an option is not a field of :class:`ServoConfig`.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 30}
@@ -353,6 +380,18 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode at rest, before the move's first control interval.
+
+        Parameters
+        ----------
+        seed, options
+            As :meth:`vfgym.envs.tune.VFTuneEnv.reset`.
+
+        Returns
+        -------
+        tuple
+            ``(observation, info)``: the interval's observation and ``{"scenario": name}``.
+        """
         super().reset(seed=seed)
         ep = self.core.source.draw(self.np_random, options)
         self._ep = ep
@@ -365,6 +404,26 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._w[self._obs].astype(np.float32), {"scenario": ep.scenario.name}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Hold the settings the action maps to for one control interval of the move.
+
+        Parameters
+        ----------
+        action : numpy.ndarray
+            A point of ``[-1, 1]⁴``: value, L, k, Ts/Tf on the search space.
+
+        Returns
+        -------
+        tuple
+            ``(observation, reward, terminated, truncated, info)``; ``info`` is empty until
+            the episode ends, then holds the scored move's info.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            After the episode has ended (or before ``reset()``).
+        ValueError
+            If the action is not finite or outside the box.
+        """
         if self._ended or self._cmd is None:
             raise gym.error.ResetNeeded(
                 "call reset() before step(): "
@@ -388,7 +447,18 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         return obs, reward, bool(flags & B.TERMINATED), bool(flags & B.TRUNCATED), info
 
     def render(self) -> np.ndarray | None:
-        """The episode's move so far (the whole move once it has ended) as an RGB array."""
+        """The episode's move so far (the whole move once it has ended) as an RGB array.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            (480, 640, 3) uint8, or ``None`` (with a warning) without a render mode.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            Before the first ``reset()``.
+        """
         if self.render_mode is None:
             gym.logger.warn(
                 "VFServo-v0.render() without a render_mode: make the env with "

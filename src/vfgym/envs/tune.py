@@ -50,7 +50,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Description
 
-    Each episode is one move of the plant of MODEL.md (V-F controller → digital servo →
+    Each episode is one move of the plant of docs/model.md (V-F controller → digital servo →
     motor): ``reset`` picks a scenario (a command profile and the load on the motor), the
     agent answers with the four settings, and ``step`` simulates the whole move tick by tick
     and scores it through :func:`vfgym.evaluate`, the one scoring path, so the reward is
@@ -100,7 +100,8 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     A scenario: the ``scenario`` argument or ``options={"scenario": name}`` if given,
     ``options={"scenario_seed": s}`` for a seed of the split, else a seed drawn from the
-    env's ``np_random`` in ``seed_range`` and the move ``random_scenario(seed, split)``.
+    env's ``np_random`` in ``seed_range`` and the move ``random_scenario(seed, split)`` (on
+    an ``axis``, that split's move set's).
     Train and test scenarios never coincide. The plant starts at rest at 0.
 
     ## Episode End
@@ -111,18 +112,8 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ``gymnasium.make("vfgym/VFTune-v0", scenario=None, split="train", seed_range=None,
     accel_law="rise", plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
-    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``
-
-    * ``scenario``, ``split``, ``seed_range``, ``accel_law``, ``plant``, ``measures``,
-      ``weights``, ``bounds``: :class:`vfgym.envs._common.EnvConfig` (the defaults above).
-      ``scenario``: a fixed scenario (name such as ``"paper-step"`` or ``"test-7"``, or a
-      :class:`vfgym.Scenario`); None draws one per episode. ``split``: ``"train"`` or
-      ``"test"``, the random distribution's split to draw from. ``seed_range``: (low,
-      high), scenario seeds drawn in [low, high) (default [0, 2³¹)). ``accel_law``:
-      ``"rise"`` (the paper's reading) or ``"slew"``. ``plant``, ``measures``, ``weights``,
-      ``bounds``: the scoring path's inputs.
-    * ``render_mode``: ``"rgb_array"`` draws the last move (position, speed, acceleration,
-      command against motor) as an (480, 640, 3) uint8 array.
+    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None, axis=None)``; see
+    Parameters.
 
     ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)`` gives
     :class:`vfgym.envs.vector.VFTuneVectorEnv`, which scores all N moves in one compiled
@@ -131,6 +122,29 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     ## Version History
 
     * v0: Initial version.
+
+    Parameters
+    ----------
+    scenario : str, Scenario or None
+        A fixed scenario (name such as ``"paper-step"`` or ``"test-7"``, or a
+        :class:`vfgym.Scenario`); ``None`` draws one per episode.
+    render_mode : str or None
+        ``"rgb_array"`` draws the last move (position, speed, acceleration, command
+        against motor) as an (480, 640, 3) uint8 array.
+    **options
+        The other fields of :class:`vfgym.envs._common.EnvConfig`, where their defaults
+        live and are checked: ``split`` (``"train"`` or ``"test"``), ``seed_range``
+        ((low, high) of the scenario seeds), ``accel_law`` (``"rise"`` or ``"slew"``),
+        ``axis`` (an axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant,
+        measures and move sets), and the scoring path's inputs ``plant``, ``measures``,
+        ``weights``, ``bounds`` (:func:`vfgym.evaluate`).
+
+    Raises
+    ------
+    ValueError
+        If an argument is out of its range or of the wrong type.
+    TypeError
+        If an option is not a field of :class:`vfgym.envs._common.EnvConfig`.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}
@@ -161,6 +175,22 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode: draw (or take) the scenario of the move.
+
+        Parameters
+        ----------
+        seed : int or None
+            Seeds the env's ``np_random`` (the scenario draws), as Gymnasium does.
+        options : dict or None
+            ``{"scenario": name or Scenario}`` for a given scenario, or
+            ``{"scenario_seed": s}`` for a seed of the env's split.
+
+        Returns
+        -------
+        tuple
+            ``(observation, info)``: the move's features (float32) and
+            ``{"scenario": name}``.
+        """
         super().reset(seed=seed)
         self._ep = self.source.draw(self.np_random, options)
         self._settings = None
@@ -168,6 +198,26 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._ep.features.astype(np.float32), {"scenario": self._ep.scenario.name}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Simulate the whole move with the settings the action maps to, and score it.
+
+        Parameters
+        ----------
+        action : numpy.ndarray
+            A point of ``[-1, 1]⁴``: value, L, k, Ts/Tf on the search space.
+
+        Returns
+        -------
+        tuple
+            ``(observation, reward, terminated, truncated, info)``: the same features,
+            minus the move's cost, ``True``, ``False``, and the scored move's info.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            When the episode's one step has been taken (or before ``reset()``).
+        ValueError
+            If the action is not finite or outside the box.
+        """
         if self._ep is None or self._done:
             raise gym.error.ResetNeeded(
                 "VFTune-v0 episodes are one step long: call reset() before step()"
@@ -191,7 +241,18 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         return ep.features.astype(np.float32), -cost, True, False, info
 
     def render(self) -> np.ndarray | None:
-        """The last move (or, before a step, the command) as an RGB array."""
+        """The last move (or, before a step, the command) as an RGB array.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            (480, 640, 3) uint8, or ``None`` (with a warning) without a render mode.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            Before the first ``reset()``.
+        """
         if self.render_mode is None:
             gym.logger.warn(
                 "VFTune-v0.render() without a render_mode: make the env with "

@@ -274,9 +274,24 @@ class VFTuneVectorEnv(_BatchVectorEnv):
     """N VFTune-v0 envs; each ``step`` scores all N moves in one compiled, multi-threaded
     kernel call (:func:`vfgym.envs.tune.evaluate_pairs`).
 
-    Made by ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)``; takes VFTune-v0's
-    arguments plus ``autoreset_mode`` (``"NextStep"``, ``"SameStep"`` or ``"Disabled"``).
-    Its numbers equal those of N single envs reset with seeds s, s+1, ... (tested)."""
+    Made by ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)``. Its numbers equal those
+    of N single envs reset with seeds s, s+1, ... (tested).
+
+    Parameters
+    ----------
+    num_envs : int
+        N, the sub-envs.
+    scenario : str, Scenario or None
+        As :class:`vfgym.envs.tune.VFTuneEnv`.
+    autoreset_mode : str or gymnasium.vector.AutoresetMode
+        ``"NextStep"``, ``"SameStep"`` or ``"Disabled"``.
+    render_mode : str or None
+        As :class:`vfgym.envs.tune.VFTuneEnv`, for each sub-env.
+    **options
+        As :class:`vfgym.envs.tune.VFTuneEnv` (:class:`vfgym.envs._common.EnvConfig`'s
+        fields: ``split``, ``seed_range``, ``accel_law``, ``axis``, ``plant``,
+        ``measures``, ``weights``, ``bounds``).
+    """
 
     def __init__(
         self,
@@ -342,9 +357,23 @@ class VFServoVectorEnv(_BatchVectorEnv):
     compiled call: the envs' plants tick together in SIMD lanes, blocks of lanes on numba
     threads from 512 envs (:func:`vfgym.envs._batch.step_batch`).
 
-    Made by ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)``; takes VFServo-v0's
-    arguments plus ``autoreset_mode``. Its numbers equal those of N single envs reset with
-    seeds s, s+1, ... (tested)."""
+    Made by ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)``. Its numbers equal those
+    of N single envs reset with seeds s, s+1, ... (tested).
+
+    Parameters
+    ----------
+    num_envs : int
+        N, the sub-envs.
+    scenario : str, Scenario or None
+        As :class:`vfgym.envs.servo.VFServoEnv`.
+    autoreset_mode : str or gymnasium.vector.AutoresetMode
+        ``"NextStep"``, ``"SameStep"`` or ``"Disabled"``.
+    render_mode : str or None
+        As :class:`vfgym.envs.servo.VFServoEnv`, for each sub-env.
+    **options
+        As :class:`vfgym.envs.servo.VFServoEnv` (:class:`vfgym.envs.servo.ServoConfig`'s
+        fields, ``axis`` among them).
+    """
 
     def __init__(
         self,

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from vfgym.plant import Trace
+# The traces written here are vfgym.Trace, typed as Any: io sits below plant
+# (docs/architecture.md) and imports nothing of vfgym, not even for type checking.
 
 TRACE_FIELDS = (
     "tick",
@@ -31,7 +31,7 @@ TRACE_FIELDS = (
 ``encoder_count`` = floor(θ / count angle), the count the servo sees."""
 
 
-def trace_columns(trace: Trace) -> dict[str, np.ndarray]:
+def trace_columns(trace: Any) -> dict[str, np.ndarray]:
     """A :class:`vfgym.Trace` as named per-sample columns (see :data:`TRACE_FIELDS`)."""
     n = trace.time_s.size
     dec = trace.decimation
@@ -55,7 +55,7 @@ def trace_columns(trace: Trace) -> dict[str, np.ndarray]:
     return cols
 
 
-def write_trace_csv(trace: Trace, path: str | Path) -> Path:
+def write_trace_csv(trace: Any, path: str | Path) -> Path:
     """Write a trace's per-sample columns as CSV (floats with 17 significant digits, so
     the file reads back bit for bit)."""
     from vfgym.io.runs import write_text

@@ -28,12 +28,12 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from vfgym.plant import Trace
+# The traces written here are vfgym.Trace, typed as Any: io sits below plant
+# (docs/architecture.md) and imports nothing of vfgym, not even for type checking.
 
 SIGNALS = (("pulse", "!"), ("dir", "%"), ("enc_a", "&"), ("enc_b", "'"))
 """(name, VCD identifier) of the wires, in declaration order."""
@@ -52,7 +52,7 @@ def parse_timescale(timescale: str) -> float:
     return int(m.group(1)) * _UNITS[m.group(2)]
 
 
-def encoder_edges(trace: Trace) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def encoder_edges(trace: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Every encoder count step of a move, in time order: (tick, fraction of the tick in
     [0, 1] at which θ crosses, count after the step, the boundary b crossed, between
     counts b − 1 and b)."""
@@ -85,7 +85,7 @@ def _ascii(text: str) -> str:
 
 
 def vcd_text(
-    trace: Trace,
+    trace: Any,
     *,
     timescale: str = "1 ns",
     comment: str = "",
@@ -181,16 +181,14 @@ def vcd_text(
     return "\n".join(out) + "\n"
 
 
-def write_vcd(
-    trace: Trace, path: str | Path, *, timescale: str = "1 ns", comment: str = ""
-) -> Path:
+def write_vcd(trace: Any, path: str | Path, *, timescale: str = "1 ns", comment: str = "") -> Path:
     """Write :func:`vcd_text` to ``path`` atomically."""
     from vfgym.io.runs import write_text
 
     return write_text(path, vcd_text(trace, timescale=timescale, comment=comment))
 
 
-def edge_counts(trace: Trace) -> dict[str, int]:
+def edge_counts(trace: Any) -> dict[str, int]:
     """What the VCD holds, counted from the trace: pulses by sign and encoder steps."""
     p = trace.pulses
     q = trace.plant.motor.count_rad

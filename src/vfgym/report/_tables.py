@@ -16,7 +16,21 @@ from vfgym.report._comparison import Column, Report
 
 @dataclass(frozen=True)
 class TableColumn:
-    """A column of the printed table: the measure's key, a header, its unit and scale."""
+    """A column of the printed table.
+
+    Parameters
+    ----------
+    key : str
+        The measure, as :meth:`Column.values` takes it.
+    header : str
+        The column's header.
+    unit : str
+        The unit shown after the header (after scaling).
+    scale : float
+        Factor from the measure's unit to the shown one (1e3: s to ms).
+    fmt : str
+        Format spec of the values.
+    """
 
     key: str
     header: str
@@ -84,7 +98,18 @@ def _count(col: Column) -> str:
 
 
 def format_table(report: Report) -> str:
-    """The report as text: per scenario, in aggregate (spread), and win/loss."""
+    """The report as text: per scenario, in aggregate (spread), and win/loss.
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+
+    Returns
+    -------
+    str
+        The table, one line per row.
+    """
     lines: list[str] = []
     ns = len(report.scenarios)
     spec = f" '{report.scenario_spec}'" if report.scenario_spec else ""
@@ -172,8 +197,21 @@ def format_table(report: Report) -> str:
 
 
 def markdown_table(report: Report, measures: Sequence[TableColumn] = TABLE_COLUMNS) -> str:
-    """Aggregate table as Markdown: per controller, each measure's median [IQR]; then the
-    win/loss of each tuned candidate (for README pages)."""
+    """Aggregate table as Markdown (for README pages).
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+    measures : sequence of TableColumn
+        The columns to show.
+
+    Returns
+    -------
+    str
+        Per controller, each measure's median [IQR]; then the win/loss of each tuned
+        candidate.
+    """
     head = ["controller", "n", *[f"{m.header}{_unit(m)}" for m in measures]]
     # n: scenarios where the controller applies (a pulse source cannot follow a sine)
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -209,9 +247,19 @@ def markdown_table(report: Report, measures: Sequence[TableColumn] = TABLE_COLUM
 
 
 def markdown_costs(report: Report) -> str:
-    """Per-scenario cost of every controller as Markdown (``*``: a constraint violated;
-    n/a: the controller does not apply), with each tuned candidate's outcome against each
-    baseline."""
+    """Per-scenario cost of every controller as Markdown.
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+
+    Returns
+    -------
+    str
+        One row per scenario; ``*`` marks a violated constraint, n/a a controller that
+        does not apply.
+    """
     cols = report.columns
     head = ["scenario", *[c.label for c in cols]]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -234,28 +282,54 @@ class CompactRow:
 
     Over the set: the mean settling time of the point-to-point scenarios, the worst
     overshoot and acceleration, the mean cost, and ``feasible`` when it is on every
-    scenario where it applies (``feasible_count`` of them)."""
+    scenario where it applies (``feasible_count`` of them).
+
+    Attributes
+    ----------
+    scenario : str
+        The scenario's name, or ``set (N)`` over the set.
+    settings : str
+        The controller's label.
+    settle_ms : float
+        Settling time into the in-position window (ms); NaN on a moving reference.
+    settled : bool
+        Settled into the window (always, on a moving reference).
+    overshoot_mrad : float
+        Overshoot (mrad).
+    overshoot_win : float
+        Overshoot in in-position windows.
+    accel_krad_s2 : float
+        The pulse train's peak acceleration (krad/s²).
+    accel_ratio : float
+        That peak against the limit, the loaded motor's usable acceleration.
+    cost : float
+        The cost (over the set: the mean).
+    feasible : bool
+        Every constraint ≤ 0 (over the set: on every scenario where it applies).
+    feasible_count : int or None
+        Set rows: on how many scenarios the controller is feasible.
+    """
 
     scenario: str
     settings: str
-    """The controller's label."""
     settle_ms: float
-    """Settling time into the in-position window (ms); NaN on a moving reference."""
     settled: bool
     overshoot_mrad: float
     overshoot_win: float
-    """Overshoot in in-position windows."""
     accel_krad_s2: float
-    """The pulse train's peak acceleration (krad/s²)."""
     accel_ratio: float
-    """That peak against the motor's limit."""
     cost: float
     feasible: bool
     feasible_count: int | None = None
-    """Set rows: on how many scenarios the controller is feasible."""
 
     def as_dict(self) -> dict[str, str | float | bool | int]:
-        """The row as a mapping (per-scenario rows without ``feasible_count``)."""
+        """The row as a mapping.
+
+        Returns
+        -------
+        dict
+            The fields by name (per-scenario rows without ``feasible_count``).
+        """
         d = asdict(self)
         if self.feasible_count is None:
             del d["feasible_count"]
@@ -263,14 +337,32 @@ class CompactRow:
 
 
 class CompactTable(NamedTuple):
-    """The compact table's rows: each controller on each scenario, then over the set."""
+    """The compact table's rows: each controller on each scenario, then over the set.
+
+    What :func:`compact_rows` returns.
+
+    Attributes
+    ----------
+    rows : list of CompactRow
+        Each controller on each scenario, scenario by scenario.
+    set : list of CompactRow
+        Each controller over the set.
+    scenario_count : int
+        The number of scenarios.
+    """
 
     rows: list[CompactRow]
     set: list[CompactRow]
     scenario_count: int
 
     def as_dict(self) -> dict[str, list[dict[str, str | float | bool | int]]]:
-        """``{"rows": [...], "set": [...]}`` as a sweep's ``summary.yaml`` holds it."""
+        """The table as a sweep's ``summary.yaml`` holds it.
+
+        Returns
+        -------
+        dict
+            ``{"rows": [...], "set": [...]}``, each row as :meth:`CompactRow.as_dict`.
+        """
         return {"rows": [r.as_dict() for r in self.rows], "set": [r.as_dict() for r in self.set]}
 
 
@@ -373,6 +465,7 @@ def format_compact(report: Report) -> str:
             )
     lines.append(
         "settle: settling time into the in-position window (* not settled; - a moving "
-        "reference); accel: the pulse train's peak over 1 ms against the motor's limit"
+        "reference); accel: the pulse train's peak over 1 ms against the limit (the loaded "
+        "motor's usable acceleration)"
     )
     return "\n".join(lines)

@@ -49,7 +49,23 @@ OBJECTIVES = ("overshoot_windows", "time_ratio", "accel_violation")
 
 @dataclass(frozen=True)
 class CostWeights:
-    """Weights of the scalar cost (see the module docstring)."""
+    """Weights of the scalar cost (the formula: the module docstring, docs/model.md §6).
+
+    Parameters
+    ----------
+    time : float
+        Weight of move time / ideal time (point-to-point moves).
+    tracking : float
+        Weight of RMS tracking error / 10 % of the amplitude (a moving reference).
+    overshoot : float
+        Weight of the overshoot in in-position windows.
+    accel : float
+        Weight of the acceleration violation max(0, accel constraint).
+    torque : float
+        Weight of the time at the torque limit / ideal time.
+    unsettled : float
+        Added when the move has not settled by the end of the run.
+    """
 
     time: float = 1.0
     tracking: float = 1.0
@@ -61,7 +77,15 @@ class CostWeights:
 
 @dataclass(frozen=True)
 class Bounds:
-    """Constraint bounds: overshoot in in-position windows, time at the torque limit (s)."""
+    """Bounds of the constraints (feasible when each constraint ≤ 0; docs/model.md §6).
+
+    Parameters
+    ----------
+    overshoot_windows : float
+        Overshoot allowed, in in-position windows.
+    torque_limit_time_s : float
+        Time allowed at the torque limit (s).
+    """
 
     overshoot_windows: float = 1.0
     torque_limit_time_s: float = 0.0
@@ -79,10 +103,34 @@ def score(
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
 ) -> tuple[float, np.ndarray, np.ndarray, dict[str, float]]:
-    """Cost, constraints and objectives of one run's measures."""
+    """Cost, constraints and objectives of one run's measures (docs/model.md §6).
+
+    Parameters
+    ----------
+    m : dict
+        The run's measures, as :attr:`vfgym.Trace.metrics` gives them.
+    scenario : Scenario
+        The scenario run (point-to-point or a moving reference; its ideal time).
+    plant : Plant
+        The plant it ran on (acceleration limit, encoder count).
+    measures : Measures
+        Windows and bands the measures were taken with (the in-position window).
+    weights : CostWeights
+        Weights of the cost.
+    bounds : Bounds
+        Bounds of the constraints.
+
+    Returns
+    -------
+    tuple
+        ``(cost, constraints, objectives, extra)``: the scalar cost (float); the
+        constraint values in the order of :data:`CONSTRAINTS` and the objectives in the
+        order of :data:`OBJECTIVES` (float arrays of 3); and ``extra``, a dict with
+        ``ideal_time_s``, ``time_ratio`` and ``window_rad``.
+    """
     ideal = scenario.ideal_time_s(plant)
     window = in_position_rad(measures, plant, scenario.command(plant)[-1])
-    limit = plant.motor.accel_limit_rad_s2
+    limit = plant.motor.usable_accel_rad_s2
     c_acc = m["accel_ratio_pulse"] - 1.0 - m["accel_quantum_rad_s2"] / limit
     c_tq = m["torque_limit_time_s"] - bounds.torque_limit_time_s
     ov_w = m["overshoot_rad"] / window if window > 0 else 0.0

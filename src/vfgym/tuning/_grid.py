@@ -17,6 +17,7 @@ import numpy as np
 from vfgym import space
 from vfgym._validate import check_int
 from vfgym.io.runs import write_text
+from vfgym.moves.axis import axis_digest, axis_kwargs
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.scoring import CONSTRAINTS, evaluate
@@ -26,15 +27,43 @@ from vfgym.tuning._objective import aggregate, settings_key
 
 @dataclass(frozen=True)
 class GridConfig(_Options):
-    """What ``vfgym grid`` does: ``points`` values per dimension over the whole space, then
-    ``refine`` rounds that re-grid (``points`` per dimension) the neighbourhood of the
-    ``keep`` best distinct points, one grid step either side; ``batch`` settings per
-    compiled call."""
+    """What ``vfgym grid`` does; every field is a command-line option and a config key.
 
-    scenarios: str = "paper-step"
+    ``points`` values per dimension over the whole space, then ``refine`` rounds that
+    re-grid (``points`` per dimension) the neighbourhood of the ``keep`` best distinct
+    points, one grid step either side.
+
+    Parameters
+    ----------
+    scenarios, scenario_count, first_seed, laws, axis
+        The scenario set, the acceleration laws searched and the axis file, as in
+        :class:`SweepConfig`.
+    points : int
+        Values per dimension, 2 to 64.
+    refine : int
+        Refinement rounds, 0 to 10.
+    keep : int
+        Best distinct points refined around each round, 1 to 64.
+    batch : int
+        Settings per compiled call.
+    name : str or None
+        The run's name (default: config name + time).
+    runs_dir : str
+        Folder under which the run folder is made.
+    progress : bool
+        Show a progress bar.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range.
+    """
+
+    scenarios: str | None = None
     scenario_count: int = 16
     first_seed: int = 0
     laws: tuple[str, ...] = ("rise",)
+    axis: str | None = None
     points: int = 12
     refine: int = 2
     keep: int = 4
@@ -58,28 +87,50 @@ class GridConfig(_Options):
 
 @dataclass(frozen=True, eq=False)
 class GridRow:
-    """One evaluated setting of the grid."""
+    """One evaluated setting of the grid.
+
+    Attributes
+    ----------
+    level : int
+        0: the whole space; n: the n-th refinement round.
+    settings : Settings
+        The setting.
+    u : numpy.ndarray
+        The settings as unit coordinates in [-1, 1] (:meth:`vfgym.space.Dim.to_unit`).
+    cost : float
+        Mean cost over the scenarios.
+    constraints : numpy.ndarray
+        Worst of each constraint over the scenarios, (3,).
+    feasible : bool
+        Every constraint ≤ 0 on every scenario.
+    """
 
     level: int
-    """0: the whole space; n: the n-th refinement round."""
     settings: Settings
     u: np.ndarray
-    """The settings as unit coordinates in [-1, 1] (:meth:`vfgym.space.Dim.to_unit`)."""
     cost: float
-    """Mean cost over the scenarios."""
     constraints: np.ndarray
-    """Worst of each constraint over the scenarios."""
     feasible: bool
 
     @property
     def accel_law(self) -> str:
+        """The setting's acceleration law."""
         return self.settings.accel_law
 
 
 @dataclass(frozen=True, eq=False)
 class GridResult:
-    """What :func:`run_grid` evaluated, and its best row (the best feasible, else the
-    lowest cost)."""
+    """What :func:`run_grid` evaluated, and its best row.
+
+    Attributes
+    ----------
+    rows : list of GridRow
+        Every evaluated setting, in the order evaluated.
+    best : GridRow
+        The feasible row of least cost (of least cost, if none is feasible).
+    scenarios : list of Scenario
+        The scenarios each setting was scored on.
+    """
 
     rows: list[GridRow]
     best: GridRow
@@ -93,11 +144,28 @@ def _unit_axes(center: np.ndarray, step: float, points: int) -> list[np.ndarray]
 def run_grid(
     cfg: GridConfig, progress: Callable[[int, int, float], None] | None = None
 ) -> GridResult:
-    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`, one
-    compiled call per batch. Returns the rows (unit coordinates, law, level, cost,
-    worst constraints, feasible) and the best."""
+    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`.
+
+    One compiled call per batch, on the config's axis (its plant and measures) if it
+    names one.
+
+    Parameters
+    ----------
+    cfg : GridConfig
+        The grid.
+    progress : callable or None
+        Called after each batch with (settings done, settings in all, best feasible cost).
+
+    Returns
+    -------
+    GridResult
+        ``rows``: one :class:`GridRow` per setting (level, settings, unit coordinates
+        ``u``, mean cost, worst constraints, feasible); ``best``: the feasible row of
+        least cost (or of least cost, if none is feasible); ``scenarios``.
+    """
     scenarios = cfg.scenario_list()
-    evaluate(PAPER_SETTINGS, scenarios)  # compile/load once before timing batches
+    on_axis = axis_kwargs(cfg.load_axis())
+    evaluate(PAPER_SETTINGS, scenarios, **on_axis)  # compile/load once before timing batches
     levels: list[tuple[int, list[Settings]]] = [(0, space.grid(cfg.points, cfg.laws))]
     total = len(levels[0][1]) * (1 + cfg.refine * cfg.keep)
     rows: dict[tuple, GridRow] = {}
@@ -129,7 +197,7 @@ def run_grid(
         todo = [s for s in levels[-1][1] if settings_key(s) not in rows]
         for i in range(0, len(todo), cfg.batch):
             chunk = todo[i : i + cfg.batch]
-            agg = aggregate(evaluate(chunk, scenarios))
+            agg = aggregate(evaluate(chunk, scenarios, **on_axis))
             for j, s in enumerate(chunk):
                 rows[settings_key(s)] = GridRow(
                     level=level,
@@ -150,8 +218,21 @@ def run_grid(
 
 
 def write_grid_csv(rows: Sequence[GridRow], path: Path) -> Path:
-    """``grid.csv``: one line per evaluated setting (level, settings, cost, worst
-    constraints, feasible), floats as ``repr`` so they read back exactly."""
+    """Write the grid's rows as CSV (``grid.csv``), floats in full precision.
+
+    Parameters
+    ----------
+    rows : sequence of GridRow
+        The rows of :func:`run_grid`.
+    path : pathlib.Path
+        The file, written atomically.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``: one line per evaluated setting (level, settings, cost, worst
+        constraints, feasible), floats as ``repr`` so they read back exactly.
+    """
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(
@@ -173,8 +254,23 @@ def write_grid_csv(rows: Sequence[GridRow], path: Path) -> Path:
 
 
 def grid_reference(cfg: GridConfig, result: GridResult) -> dict[str, Any]:
-    """``reference.yaml``'s mapping: the grid's best, in the Settings-YAML format (what
-    :func:`vfgym.tuning.find_reference` reads back)."""
+    """``reference.yaml``'s mapping: the grid's best, in the Settings-YAML format.
+
+    What :func:`vfgym.tuning.find_reference` reads back.
+
+    Parameters
+    ----------
+    cfg : GridConfig
+        The grid that ran.
+    result : GridResult
+        What :func:`run_grid` returned.
+
+    Returns
+    -------
+    dict
+        The best settings, its cost, constraints and feasibility, the scenarios, laws
+        and axis (its :func:`~vfgym.moves.axis.axis_digest`), and how the grid ran.
+    """
     b = result.best
     return {
         "settings": space.settings_to_dict(b.settings),
@@ -183,6 +279,7 @@ def grid_reference(cfg: GridConfig, result: GridResult) -> dict[str, Any]:
         "constraints": dict(zip(CONSTRAINTS, [float(x) for x in b.constraints], strict=True)),
         "scenarios": [s.name for s in result.scenarios],
         "laws": list(cfg.laws),
+        "axis": axis_digest(cfg.load_axis()),
         "points": cfg.points,
         "refine": cfg.refine,
         "keep": cfg.keep,

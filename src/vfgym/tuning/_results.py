@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 from vfgym import report, space
 from vfgym.io.runs import read_yaml, write_text
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_SETTINGS, Settings
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, PAPER_SETTINGS, Measures, Plant, Settings
 from vfgym.report import Candidate, Report
 from vfgym.scoring import CONSTRAINTS, OBJECTIVES
 from vfgym.tuning._config import SweepConfig
@@ -32,7 +32,19 @@ if TYPE_CHECKING:
 
 
 def best_trial(study: Study) -> FrozenTrial | None:
-    """The completed trial with the lowest cost among the feasible ones (any, if none is)."""
+    """The sweep's best trial.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+
+    Returns
+    -------
+    optuna.trial.FrozenTrial or None
+        The completed trial with the lowest cost among the feasible ones (among all, if
+        none is feasible; ties to the earlier trial); ``None`` before any completes.
+    """
     import optuna
 
     done = [
@@ -47,13 +59,37 @@ def best_trial(study: Study) -> FrozenTrial | None:
 
 
 def trial_settings(trial: FrozenTrial) -> Settings:
-    """The settings a trial scored (its ``settings`` user attribute)."""
+    """The settings a trial scored.
+
+    Parameters
+    ----------
+    trial : optuna.trial.FrozenTrial
+        A trial with the ``settings`` user attribute :class:`Objective` sets.
+
+    Returns
+    -------
+    Settings
+        Its settings.
+    """
     return space.settings_from_dict(trial.user_attrs["settings"], source=f"trial {trial.number}")
 
 
 def write_trials_csv(study: Study, path: Path) -> Path:
-    """The trials as CSV, one row each, with the columns ``study.trials_dataframe()`` names
-    (number, value(s), times, params_*, user_attrs_*, state), written atomically."""
+    """The trials as CSV (``trials.csv``), one row each, written atomically.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+    path : pathlib.Path
+        The file.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``. Its columns are those ``study.trials_dataframe()`` names (number,
+        value(s), times, params_*, user_attrs_*, state); lists and dicts as JSON.
+    """
     trials = study.get_trials(deepcopy=False)
     names = study.metric_names or (
         ["value"] if len(study.directions) == 1 else [str(i) for i in range(len(study.directions))]
@@ -92,6 +128,7 @@ def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
     Parameters
     ----------
     study : optuna.Study
+        The study.
     run_dir : Path
         Where ``history.png``, ``importances.png`` (for the cost) and, in the Pareto
         form, ``pareto_front.png`` are written (atomically).
@@ -138,7 +175,14 @@ def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
     return out
 
 
-def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> Report:
+def compare(
+    best: Settings,
+    scenarios: list[Scenario],
+    label: str = "tuned",
+    *,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+) -> Report:
     """The paper's settings against ``best`` on each scenario, through
     :func:`vfgym.report.compare`.
 
@@ -150,12 +194,17 @@ def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> 
         The sweep's (or grid's) scenario set.
     label : str
         ``best``'s column label (``tuned``; the grid: ``grid``).
+    plant : Plant
+        The plant the scenarios run on (an axis's; each scenario applies its load).
+    measures : Measures
+        Windows and bands of the measures (an axis's).
 
     Returns
     -------
     vfgym.report.Report
         Columns ``paper`` (role baseline) then ``label``; :func:`vfgym.report.format_compact`
-        prints it as the sweep's table, :func:`vfgym.report.compact_rows` gives its rows.
+        prints it as the sweep's table (peak pulse-train acceleration against the loaded
+        motor's usable acceleration), :func:`vfgym.report.compact_rows` gives its rows.
     """
     return report.compare(
         [
@@ -164,27 +213,69 @@ def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> 
         ],
         [],
         scenarios,
+        plant=plant,
+        measures=measures,
     )
 
 
 class FoundReference(NamedTuple):
-    """A grid reference found for a sweep: ``reference.yaml`` as read, and where."""
+    """A grid reference found for a sweep: ``reference.yaml`` as read, and where.
+
+    What :func:`find_reference` returns.
+
+    Attributes
+    ----------
+    record : dict
+        The file's mapping (settings, cost, scenarios, laws, axis, ...: see
+        ``grid_reference``).
+    path : pathlib.Path
+        The ``reference.yaml`` file.
+    """
 
     record: dict[str, Any]
-    """The file's mapping (settings, cost, scenarios, laws, ...: see ``grid_reference``)."""
     path: Path
 
     @property
     def cost(self) -> float:
+        """The reference's cost."""
         return float(self.record["cost"])
 
 
 def find_reference(
-    cfg_reference: str | None, runs_dir: str, scenarios: list[Scenario], laws: tuple[str, ...]
+    cfg_reference: str | None,
+    runs_dir: str,
+    scenarios: list[Scenario],
+    laws: tuple[str, ...],
+    axis: str | None = None,
 ) -> FoundReference | None:
-    """A grid reference for these scenarios and laws: ``--reference PATH`` (a
-    ``reference.yaml`` or a grid run folder), else the best of ``RUNS/grid/*/reference.yaml``
-    that matches."""
+    """A grid reference for these scenarios, laws and axis.
+
+    Parameters
+    ----------
+    cfg_reference : str or None
+        ``--reference PATH``: a ``reference.yaml`` or a grid run folder; ``None`` searches
+        ``runs_dir``.
+    runs_dir : str
+        The runs folder whose ``grid/*/reference.yaml`` are searched.
+    scenarios : list of Scenario
+        The sweep's scenarios; a reference must be for the same.
+    laws : tuple of str
+        The sweep's laws; a reference must be for the same.
+    axis : str or None
+        The axis's :func:`~vfgym.moves.axis.axis_digest`; a reference must be for the same.
+
+    Returns
+    -------
+    FoundReference or None
+        The reference's data and file (the best matching one when searching), or ``None``
+        when none matches.
+
+    Raises
+    ------
+    ValueError
+        If the given reference is not a grid reference, or is for other scenarios, laws
+        or axis.
+    """
     names = [s.name for s in scenarios]
     if cfg_reference:
         p = Path(cfg_reference)
@@ -197,6 +288,11 @@ def find_reference(
                 f"reference={str(p)!r} is for scenarios {data.get('scenarios')} and laws "
                 f"{data.get('laws')}, not {names} and {list(laws)}"
             )
+        if data.get("axis") != axis:
+            raise ValueError(
+                f"reference={str(p)!r} is for axis {data.get('axis')}, not {axis}: give a "
+                "grid reference made with the same --axis"
+            )
         return FoundReference(data, p)
     found = []
     for p in sorted(Path(runs_dir).glob("grid/*/reference.yaml")):
@@ -208,6 +304,7 @@ def find_reference(
             isinstance(data, dict)
             and data.get("scenarios") == names
             and list(data.get("laws", [])) == list(laws)
+            and data.get("axis") == axis
             and isinstance(data.get("cost"), (int, float))
         ):
             found.append((float(data["cost"]), str(p), data))
@@ -218,55 +315,141 @@ def find_reference(
 
 
 def gap_pct(cost: float, ref_cost: float) -> float:
-    """How far a cost is above the reference's, in % (negative: below it)."""
+    """How far a cost is above the reference's.
+
+    Parameters
+    ----------
+    cost : float
+        The sweep's best cost.
+    ref_cost : float
+        The grid reference's cost.
+
+    Returns
+    -------
+    float
+        100·(cost − ref)/ref, in % (negative: below the reference).
+    """
     return 100.0 * (cost - ref_cost) / ref_cost
 
 
 @dataclass(frozen=True)
 class ReferenceGap:
-    """A sweep's best against a grid reference."""
+    """A sweep's best against a grid reference (``best.yaml``'s ``reference``).
+
+    Attributes
+    ----------
+    path : str
+        The reference's ``reference.yaml``.
+    cost : float
+        The reference's cost.
+    gap_pct : float
+        :func:`gap_pct` of the sweep's best cost to it.
+    """
 
     path: str
     cost: float
-    """The reference's cost."""
     gap_pct: float
-    """:func:`gap_pct` of the sweep's best cost to it."""
 
     @classmethod
     def between(cls, cost: float, found: FoundReference) -> ReferenceGap:
-        """The gap of ``cost`` to the reference ``found``."""
+        """The gap of a cost to a reference.
+
+        Parameters
+        ----------
+        cost : float
+            The sweep's best cost.
+        found : FoundReference
+            The reference, as :func:`find_reference` found it.
+
+        Returns
+        -------
+        ReferenceGap
+            Its path, its cost and the gap of ``cost`` to it.
+        """
         return cls(str(found.path), found.record["cost"], gap_pct(cost, found.cost))
 
 
 @dataclass(frozen=True)
 class BestRecord:
     """A sweep's best trial as ``best.yaml`` holds it: the settings (what ``vfgym evaluate
-    --settings`` reads), its scores, and where they come from."""
+    --settings`` reads), its scores, and where they come from.
+
+    What :func:`best_record` returns.
+
+    Attributes
+    ----------
+    settings : dict
+        As the trial stored them (:func:`vfgym.space.settings_to_dict`).
+    cost : float
+        Its mean cost over the scenarios.
+    feasible : bool
+        Every constraint ≤ 0 on every scenario.
+    constraints : dict of str to float
+        The worst value of each constraint over the scenarios.
+    objectives : dict of str to float
+        The objectives' means over the scenarios.
+    study : str
+        The study's name.
+    storage : str
+        The storage URL, password masked.
+    trial : int
+        The trial's number.
+    sampler : str
+        The sweep's sampler.
+    objective : str or None
+        The sweep's objective (``cost`` or ``pareto``).
+    scenarios : list of str
+        The scenarios' names.
+    laws : list of str
+        The acceleration laws searched.
+    axis : str or None
+        The axis file tuned on (``None``: the paper's axis).
+    paper_cost : float or None
+        The paper's settings' cost on the same scenarios.
+    reference : ReferenceGap or None
+        The gap to a grid reference, if one was found.
+    """
 
     settings: dict[str, float | str]
-    """As the trial stored them (:func:`vfgym.space.settings_to_dict`)."""
     cost: float
     feasible: bool
     constraints: dict[str, float]
     objectives: dict[str, float]
     study: str
     storage: str
-    """The storage URL, password masked."""
     trial: int
     sampler: str
     objective: str | None
     scenarios: list[str]
     laws: list[str]
+    axis: str | None
     paper_cost: float | None = None
-    """The paper's settings' cost on the same scenarios."""
     reference: ReferenceGap | None = None
 
     def with_reference(self, gap: ReferenceGap) -> BestRecord:
-        """This record with its gap to a grid reference."""
+        """This record with its gap to a grid reference.
+
+        Parameters
+        ----------
+        gap : ReferenceGap
+            The gap.
+
+        Returns
+        -------
+        BestRecord
+            A copy with ``reference`` set.
+        """
         return replace(self, reference=gap)
 
     def as_dict(self) -> dict[str, Any]:
-        """The mapping written to ``best.yaml`` (fields left ``None`` omitted)."""
+        """The mapping written to ``best.yaml``.
+
+        Returns
+        -------
+        dict
+            The fields in order; ``paper_cost`` and ``reference`` omitted when ``None``
+            (``axis`` is always written, ``None`` for the paper's axis).
+        """
         out = asdict(self)
         for k in ("paper_cost", "reference"):
             if out[k] is None:
@@ -287,17 +470,23 @@ def best_record(
     Parameters
     ----------
     study : optuna.Study
+        The study.
     trial : optuna.trial.FrozenTrial
         The best trial (:func:`best_trial`), scored by the sweep's objective.
     cfg : SweepConfig
+        The sweep's configuration (its sampler, objective, laws and axis are recorded).
     spec : StorageSpec
+        Where the study lives (shown without a password).
     scenarios : list of Scenario
+        The sweep's scenarios.
     paper_cost : float, optional
         The paper's settings' cost on the same scenarios.
 
     Returns
     -------
     BestRecord
+        The settings, cost, feasibility, constraints, objectives, and the study, storage,
+        trial, sampler, objective, scenarios, laws and axis they come from.
     """
     ua = trial.user_attrs
     return BestRecord(
@@ -313,5 +502,6 @@ def best_record(
         objective=cfg.objective,
         scenarios=[s.name for s in scenarios],
         laws=list(cfg.laws),
+        axis=cfg.axis,
         paper_cost=paper_cost,
     )

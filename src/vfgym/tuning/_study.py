@@ -9,6 +9,7 @@ from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
 from vfgym import space
+from vfgym.moves.axis import axis_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import OBJECTIVES
@@ -27,7 +28,18 @@ SAMPLER_NEEDS = {"cmaes": ("cmaes",), "gp": ("torch", "scipy")}
 
 
 def check_sampler(cfg: SweepConfig) -> None:
-    """Raise ``ValueError`` naming ``sampler`` when a package it needs is missing."""
+    """Check that the packages the sampler needs are installed.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+
+    Raises
+    ------
+    ValueError
+        Naming ``sampler``, when a package it needs (:data:`SAMPLER_NEEDS`) is missing.
+    """
     import importlib.util
 
     missing = [m for m in SAMPLER_NEEDS.get(cfg.sampler, ()) if not importlib.util.find_spec(m)]
@@ -38,7 +50,20 @@ def check_sampler(cfg: SweepConfig) -> None:
 
 
 def make_sampler(cfg: SweepConfig, seed: int | None) -> BaseSampler:
-    """The Optuna sampler named by ``cfg.sampler``, seeded; constrained where it can be."""
+    """The Optuna sampler named by ``cfg.sampler``, seeded; constrained where it can be.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+    seed : int or None
+        The sampler's seed (``None``: unseeded).
+
+    Returns
+    -------
+    optuna.samplers.BaseSampler
+        TPE (multivariate), CMA-ES, GP, NSGA-II, grid or random.
+    """
     import optuna
 
     s = optuna.samplers
@@ -73,14 +98,37 @@ def grid_space(cfg: SweepConfig) -> dict[str, list[Any]]:
 
 
 def trial_budget(cfg: SweepConfig) -> int:
-    """Trials the study ends with: ``trials``, but at most the grid (plus the baseline)."""
+    """Trials the study ends with.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+
+    Returns
+    -------
+    int
+        ``cfg.trials``, but for the grid sampler at most the grid plus the baseline.
+    """
     if cfg.sampler == "grid":
         return min(cfg.trials, cfg.grid_points ** len(space.SPACE) * len(cfg.laws) + 1)
     return cfg.trials
 
 
 def baseline_params(laws: tuple[str, ...]) -> dict[str, Any]:
-    """The paper's settings as trial parameters (its law if searched, else the fixed one)."""
+    """The paper's settings as trial parameters, the study's first (enqueued) trial.
+
+    Parameters
+    ----------
+    laws : tuple of str
+        The laws searched.
+
+    Returns
+    -------
+    dict
+        The parameters; ``accel_law`` only when several laws are searched (the paper's,
+        if among them, else the first).
+    """
     d = space.settings_to_dict(PAPER_SETTINGS)
     law = d.pop("accel_law")
     if len(laws) > 1:
@@ -91,16 +139,44 @@ def baseline_params(laws: tuple[str, ...]) -> dict[str, Any]:
 @dataclass(frozen=True)
 class StudyMeta:
     """What a study optimises, stored as its ``vfgym`` user attribute and checked when it
-    is resumed."""
+    is resumed.
+
+    Attributes
+    ----------
+    scenarios : list of str
+        The scenarios' names.
+    laws : list of str
+        The acceleration laws searched.
+    objective : str or None
+        ``cost`` or ``pareto``.
+    axis : str or None
+        The axis's :func:`~vfgym.moves.axis.axis_digest` (``None``: the paper's axis).
+    """
 
     scenarios: list[str]
     laws: list[str]
     objective: str | None
+    axis: str | None
 
 
 def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> StudyMeta:
-    """What a sweep with ``cfg`` on ``scenarios`` optimises."""
-    return StudyMeta([s.name for s in scenarios], list(cfg.laws), cfg.objective)
+    """What a sweep optimises.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+    scenarios : list of Scenario
+        The sweep's scenarios.
+
+    Returns
+    -------
+    StudyMeta
+        Its scenarios, laws, objective and axis.
+    """
+    return StudyMeta(
+        [s.name for s in scenarios], list(cfg.laws), cfg.objective, axis_digest(cfg.load_axis())
+    )
 
 
 def create_or_load(
@@ -110,8 +186,31 @@ def create_or_load(
     scenarios: list[Scenario],
     sampler: BaseSampler | None = None,
 ) -> tuple[Study, bool]:
-    """The study ``name``: created with the baseline enqueued first, or loaded (and
-    checked to optimise the same thing). Returns (study, created)."""
+    """The study ``name``: created with the baseline enqueued first, or loaded.
+
+    Parameters
+    ----------
+    storage : optuna.storages.BaseStorage
+        Where it lives (:func:`open_storage`).
+    name : str
+        The study's name.
+    cfg : SweepConfig
+        The sweep's configuration.
+    scenarios : list of Scenario
+        The sweep's scenarios (a loaded study must optimise the same).
+    sampler : optuna.samplers.BaseSampler or None
+        The sampler to attach.
+
+    Returns
+    -------
+    tuple of (optuna.Study, bool)
+        The study, and whether it was created.
+
+    Raises
+    ------
+    ValueError
+        If a study of that name optimises other scenarios, laws, objectives or axis.
+    """
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
