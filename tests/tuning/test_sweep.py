@@ -63,6 +63,15 @@ def test_run_folder_holds_everything_and_best_scores_on_the_one_path(tmp_path, c
     assert best["cost"] == pytest.approx(float(ev.mean_cost[0]), rel=1e-12)
     assert best["feasible"] == bool(ev.feasible.all())
     assert best["scenarios"] == ["short-move", "paper-step"]
+    assert list(best) == [  # best.yaml's keys in their order (no reference found: none)
+        "settings", "cost", "feasible", "constraints", "objectives", "study", "storage",
+        "trial", "sampler", "objective", "scenarios", "laws", "axis", "paper_cost",
+    ]  # fmt: skip
+    summary = yaml.safe_load((run / "summary.yaml").read_text())
+    assert summary["best"] == best and [r["settings"] for r in summary["comparison"]["set"]] == [
+        "paper",
+        "tuned",
+    ]
     paper = evaluate(PAPER_SETTINGS, ["short-move", "paper-step"])
     assert best["paper_cost"] == pytest.approx(float(paper.mean_cost[0]))
     # The baseline is feasible and in the study, so the best is no worse than it.
@@ -177,6 +186,8 @@ def test_nsga2_pareto_form(tmp_path):
     assert float(t["values_time_ratio"]) == pytest.approx(float(ev.objectives[0, 0, 1]))
     assert (run / "pareto_front.png").stat().st_size > 1000
     assert yaml.safe_load((run / "best.yaml").read_text())["objective"] == "pareto"
+    plots = yaml.safe_load((run / "summary.yaml").read_text())["plots"]
+    assert plots == {n: f"{n}.png" for n in ("history", "importances", "pareto_front")}
 
 
 def test_config_file_then_command_line(tmp_path):

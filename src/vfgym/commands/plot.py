@@ -21,7 +21,10 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from optuna import Study
 
 KINDS = ("response", "scurve", "frequency", "compare", "history", "pareto")
 
@@ -81,15 +84,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def load_study(run_dir: str, storage: str | None = None) -> Any:
+def load_study(run_dir: str, storage: str | None = None) -> Study:
     """The Optuna study of a sweep run folder. ``config.yaml`` names the study
-    (``study_name`` or ``study``) and its ``storage``: ``sqlite:///FILE`` (if the file has
-    moved, the folder's own ``study.db``), a journal file, or a database URL. A URL whose
-    password was masked in the file needs ``storage`` given again. A ``storage`` given is
-    used as it is: a file it names must exist (no fallback to the folder's own)."""
+    (``study_name`` or ``study``) and its ``storage``, found by
+    :func:`vfgym.tuning.find_storage` (a file moved with the folder is found in it); a URL
+    whose password was masked in the file needs ``storage`` given again. A ``storage``
+    given is used as it is: a file it names must exist (no fallback to the folder's own)."""
     import optuna
 
     from vfgym.io.runs import read_yaml
+    from vfgym.tuning import find_storage, open_storage
 
     d = Path(run_dir)
     if not d.is_dir():
@@ -100,30 +104,10 @@ def load_study(run_dir: str, storage: str | None = None) -> Any:
         raise ValueError(f"{d / 'config.yaml'}: no study name (is this a sweep folder?)")
     if storage is not None:
         return _load_given(str(name), storage, d)
-    url = str(cfg.get("storage") or f"sqlite:///{d / 'study.db'}")
-    if "***" in url:
-        raise ValueError(f"--sweep {run_dir}: the storage password is masked; give --storage URL")
-    if url.startswith("sqlite:///"):
-        path = Path(url.removeprefix("sqlite:///"))
-        if not path.is_file() and (d / "study.db").is_file():
-            path = d / "study.db"
-        if not path.is_file():
-            raise ValueError(f"--sweep {run_dir}: study storage {path} not found")
-        store: Any = f"sqlite:///{path}"
-    elif "://" in url:
-        store = url
-    else:  # a journal file
-        path = Path(url)
-        if not path.is_file() and (d / path.name).is_file():
-            path = d / path.name
-        if not path.is_file():
-            raise ValueError(f"--sweep {run_dir}: study journal {path} not found")
-        from optuna.storages.journal import JournalFileBackend, JournalStorage
-
-        store = JournalStorage(JournalFileBackend(str(path)))
+    spec = find_storage(cfg.get("storage") or "sqlite", d)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     try:
-        return optuna.load_study(study_name=str(name), storage=store)
+        return optuna.load_study(study_name=str(name), storage=open_storage(spec))
     except KeyError:
         raise ValueError(f"--sweep {run_dir}: no study named {name!r} in its storage") from None
 
@@ -202,20 +186,20 @@ def build_figure(args: argparse.Namespace) -> Any:
     on_axis = axis_kwargs(axis)
     if args.kind == "response":
         ev = evaluate(ctrl, [scenario], keep_traces=True, **on_axis)
+        trace = own_trace(ev, scenario)
         title = f"{scenario.name}: {scenario.description}\n{ev.labels()[0]}"
         return plots.response_figure(
-            own_trace(ev, scenario),
-            title=title,
-            metrics=ev.metrics[0][0],
-            tracking=scenario.tracking,
+            trace, title=title, metrics=ev.metrics[0][0], tracking=scenario.tracking
         )
     others = _against(args, label)
     ev = evaluate([ctrl, *(c.controller for c in others)], [scenario], keep_traces=True, **on_axis)
     own_trace(ev, scenario)
+    kept = ev.traces
+    assert kept is not None  # keep_traces=True
     names = [label, *(c.label for c in others)]
     traces, skipped = {}, []
     for i, name in enumerate(names):
-        tr = ev.traces[i][0]
+        tr = kept[i][0]
         if tr is None:  # a pulse source on a moving reference
             skipped.append(name)
             continue

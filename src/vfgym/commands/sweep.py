@@ -320,6 +320,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     from vfgym import tuning
     from vfgym.io.runs import write_text, write_yaml
     from vfgym.moves.axis import axis_kwargs
+    from vfgym.report import compact_rows, format_compact
 
     tuning.write_trials_csv(study, run_dir / "trials.csv")
     n = tuning.counts(study)
@@ -359,32 +360,30 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         lines.append("no completed trial yet")
     else:
         settings = tuning.trial_settings(best)
-        rec = tuning.best_record(study, best, cfg, spec, scenarios)
         cmp = tuning.compare(settings, scenarios, **axis_kwargs(cfg.load_axis()))
-        paper_cost = cmp["set"][0]["cost"]
-        rec["paper_cost"] = paper_cost
+        paper_cost = cmp.column("paper").mean_cost
+        record = tuning.best_record(study, best, cfg, spec, scenarios, paper_cost)
         lines.append(
-            f"best: trial {best.number}, cost {rec['cost']:.4f} "
-            f"({'feasible' if rec['feasible'] else 'INFEASIBLE'}) against the paper's "
-            f"{paper_cost:.4f} ({tuning.gap_pct(rec['cost'], paper_cost):+.1f} %)"
+            f"best: trial {best.number}, cost {record.cost:.4f} "
+            f"({'feasible' if record.feasible else 'INFEASIBLE'}) against the paper's "
+            f"{paper_cost:.4f} ({tuning.gap_pct(record.cost, paper_cost):+.1f} %)"
         )
         if reference is not None:
-            ref, ref_path = reference
-            gap = tuning.gap_pct(rec["cost"], float(ref["cost"]))
-            rec["reference"] = {"path": str(ref_path), "cost": ref["cost"], "gap_pct": gap}
+            gap = tuning.ReferenceGap.between(record.cost, reference)
+            record = record.with_reference(gap)
             lines.append(
-                f"gap to the grid reference {ref_path} (cost {float(ref['cost']):.4f}): "
-                f"{gap:+.2f} %"
+                f"gap to the grid reference {reference.path} (cost {reference.cost:.4f}): "
+                f"{gap.gap_pct:+.2f} %"
             )
-        s = rec["settings"]
+        s = record.settings
         lines.append(
             f"settings: value {s['value_rad']:.6g} rad, error limit {s['error_limit_rad']:.6g} "
             f"rad, k {s['k']:.6g}, Ts/Tf {s['ts_over_tf']:.4g}, law {s['accel_law']}"
         )
-        write_yaml(run_dir / "best.yaml", rec)
-        summary["best"] = rec
-        summary["comparison"] = cmp
-        lines += ["", tuning.format_comparison(cmp)]
+        write_yaml(run_dir / "best.yaml", record.as_dict())
+        summary["best"] = record.as_dict()
+        summary["comparison"] = compact_rows(cmp).as_dict()
+        lines += ["", format_compact(cmp)]
     if cfg.plots and not interrupted and best is not None:
         plots = tuning.write_plots(study, run_dir, cfg.objective)
         summary["plots"] = plots

@@ -29,12 +29,12 @@ from vfgym.plant import _lanes as LN
 from vfgym.plant import _layout as L
 from vfgym.plant._threads import keeps_torch_threads
 
+from ._common import clip_feature
+
 _jit = numba.njit(cache=True, fastmath=False, nogil=True)
 
 ACTION_TOL = 1e-6
 """Actions may exceed [-1, 1] by this much (float rounding), as :func:`vfgym.space.from_action`."""
-OBS_BOUND = 10.0
-"""Every observation feature is clipped to [-OBS_BOUND, OBS_BOUND]."""
 
 # flags returned by env_step
 TERMINATED = 1
@@ -117,13 +117,7 @@ def width(n_obs: int) -> int:
     return W_OBS + n_obs
 
 
-@_jit
-def _clip(x: float) -> float:
-    if x > OBS_BOUND:
-        return OBS_BOUND
-    if x < -OBS_BOUND:
-        return -OBS_BOUND
-    return x
+_clip = _jit(clip_feature)  # the observation clip, compiled (tests/envs: equal on random x)
 
 
 @_jit

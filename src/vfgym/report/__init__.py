@@ -11,7 +11,7 @@ _comparison
 _stats
     Spreads (median, IQR, bootstrap interval) and win / loss / tie.
 _tables
-    Text and Markdown tables.
+    Text and Markdown tables, and the compact table of sweeps and the grid.
 _files
     CSV and JSON files of a report in a run folder.
 figures
@@ -24,6 +24,7 @@ from vfgym.report._comparison import (
     Candidate,
     Column,
     Policy,
+    PolicyRun,
     Report,
     baseline_candidates,
     compare,
@@ -41,7 +42,11 @@ from vfgym.report._files import (
 from vfgym.report._stats import DEFAULT_RESAMPLES, TIE_RTOL, Spread, WinLoss, outcome, spread
 from vfgym.report._tables import (
     TABLE_COLUMNS,
+    CompactRow,
+    CompactTable,
     TableColumn,
+    compact_rows,
+    format_compact,
     format_table,
     markdown_costs,
     markdown_table,
@@ -54,14 +59,19 @@ __all__ = [
     "TIE_RTOL",
     "Candidate",
     "Column",
+    "CompactRow",
+    "CompactTable",
     "Policy",
+    "PolicyRun",
     "Report",
     "Spread",
     "TableColumn",
     "WinLoss",
     "baseline_candidates",
+    "compact_rows",
     "compare",
     "evaluate_policy",
+    "format_compact",
     "format_table",
     "markdown_costs",
     "markdown_table",

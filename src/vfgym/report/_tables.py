@@ -1,10 +1,13 @@
-"""A report as text and Markdown tables: per scenario and in aggregate, with win / loss."""
+"""A report as text and Markdown tables: per scenario and in aggregate, with win / loss;
+and the compact table a sweep or the grid prints (each controller's settling, overshoot,
+acceleration and cost per scenario and over the set)."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -268,3 +271,201 @@ def markdown_costs(report: Report) -> str:
             cells.append("n/a" if not math.isfinite(x) else f"{x:.3g}{star}")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+# --- the compact table (sweeps and the grid: tuned settings against the paper's) ----------
+
+
+@dataclass(frozen=True)
+class CompactRow:
+    """One line of the compact table: a controller on one scenario, or over the set.
+
+    Over the set: the mean settling time of the point-to-point scenarios, the worst
+    overshoot and acceleration, the mean cost, and ``feasible`` when it is on every
+    scenario where it applies (``feasible_count`` of them).
+
+    Attributes
+    ----------
+    scenario : str
+        The scenario's name, or ``set (N)`` over the set.
+    settings : str
+        The controller's label.
+    settle_ms : float
+        Settling time into the in-position window (ms); NaN on a moving reference.
+    settled : bool
+        Settled into the window (always, on a moving reference).
+    overshoot_mrad : float
+        Overshoot (mrad).
+    overshoot_win : float
+        Overshoot in in-position windows.
+    accel_krad_s2 : float
+        The pulse train's peak acceleration (krad/s²).
+    accel_ratio : float
+        That peak against the limit, the loaded motor's usable acceleration.
+    cost : float
+        The cost (over the set: the mean).
+    feasible : bool
+        Every constraint ≤ 0 (over the set: on every scenario where it applies).
+    feasible_count : int or None
+        Set rows: on how many scenarios the controller is feasible.
+    """
+
+    scenario: str
+    settings: str
+    settle_ms: float
+    settled: bool
+    overshoot_mrad: float
+    overshoot_win: float
+    accel_krad_s2: float
+    accel_ratio: float
+    cost: float
+    feasible: bool
+    feasible_count: int | None = None
+
+    def as_dict(self) -> dict[str, str | float | bool | int]:
+        """The row as a mapping.
+
+        Returns
+        -------
+        dict
+            The fields by name (per-scenario rows without ``feasible_count``).
+        """
+        d = asdict(self)
+        if self.feasible_count is None:
+            del d["feasible_count"]
+        return d
+
+
+class CompactTable(NamedTuple):
+    """The compact table's rows: each controller on each scenario, then over the set.
+
+    What :func:`compact_rows` returns.
+
+    Attributes
+    ----------
+    rows : list of CompactRow
+        Each controller on each scenario, scenario by scenario.
+    set : list of CompactRow
+        Each controller over the set.
+    scenario_count : int
+        The number of scenarios.
+    """
+
+    rows: list[CompactRow]
+    set: list[CompactRow]
+    scenario_count: int
+
+    def as_dict(self) -> dict[str, list[dict[str, str | float | bool | int]]]:
+        """The table as a sweep's ``summary.yaml`` holds it.
+
+        Returns
+        -------
+        dict
+            ``{"rows": [...], "set": [...]}``, each row as :meth:`CompactRow.as_dict`.
+        """
+        return {"rows": [r.as_dict() for r in self.rows], "set": [r.as_dict() for r in self.set]}
+
+
+def compact_rows(report: Report) -> CompactTable:
+    """The report's controllers in the compact layout, scenario by scenario and over the
+    set.
+
+    Parameters
+    ----------
+    report : Report
+        Any report (its columns in order; a sweep's: the paper's settings, then the tuned).
+
+    Returns
+    -------
+    CompactTable
+        Each column on each scenario, then over the set (see :class:`CompactRow`).
+    """
+    rows: list[CompactRow] = []
+    for si, sc in enumerate(report.scenarios):
+        for col in report.columns:
+            m = col.metrics[si]
+            rows.append(
+                CompactRow(
+                    scenario=sc.name,
+                    settings=col.label,
+                    settle_ms=math.nan if sc.tracking else 1e3 * m["settling_time_s"],
+                    settled=bool(m["settled"]) or sc.tracking,
+                    overshoot_mrad=1e3 * m["overshoot_rad"],
+                    overshoot_win=m["overshoot_rad"] / m["window_rad"],
+                    accel_krad_s2=m["peak_accel_pulse_rad_s2"] / 1e3,
+                    accel_ratio=m["accel_ratio_pulse"],
+                    cost=float(col.cost[si]),
+                    feasible=bool(col.feasible[si] > 0.5),
+                )
+            )
+    n = len(report.scenarios)
+    sets = []
+    for col in report.columns:
+        mine = [r for r in rows if r.settings == col.label]
+        settle = [r.settle_ms for r in mine if not math.isnan(r.settle_ms)]
+        count = sum(r.feasible for r in mine)
+        applies = int(np.isfinite(col.feasible).sum())
+        sets.append(
+            CompactRow(
+                scenario=f"set ({n})",
+                settings=col.label,
+                settle_ms=float(np.mean(settle)) if settle else math.nan,
+                settled=all(r.settled for r in mine),
+                overshoot_mrad=max(r.overshoot_mrad for r in mine),
+                overshoot_win=max(r.overshoot_win for r in mine),
+                accel_krad_s2=max(r.accel_krad_s2 for r in mine),
+                accel_ratio=max(r.accel_ratio for r in mine),
+                cost=col.mean_cost,
+                feasible=applies > 0 and count == applies,
+                feasible_count=count,
+            )
+        )
+    return CompactTable(rows, sets, n)
+
+
+def format_compact(report: Report) -> str:
+    """The compact table as text, as ``vfgym sweep`` and ``vfgym grid`` print it.
+
+    Parameters
+    ----------
+    report : Report
+        The controllers to show, in column order.
+
+    Returns
+    -------
+    str
+        Each controller on each scenario (a blank line between scenarios) and, for
+        several scenarios, over the set; a settling time not reached is starred, that of
+        a moving reference is ``-``; a footnote line explains the columns.
+    """
+    table = compact_rows(report)
+    head = (
+        f"{'scenario':14s} {'settings':8s} {'settle ms':>10s} {'overshoot mrad':>15s} "
+        f"{'(windows)':>9s} {'peak accel krad/s2':>19s} {'/limit':>7s} {'cost':>7s} feasible"
+    )
+    lines = [head, "-" * len(head)]
+    k = len(report.columns)
+    groups = [table.rows[i : i + k] for i in range(0, len(table.rows), k)]
+    if table.scenario_count > 1:
+        groups.append(table.set)
+    for g, group in enumerate(groups):
+        if g > 0:
+            lines.append("")
+        for r in group:
+            settle = "-" if math.isnan(r.settle_ms) else f"{r.settle_ms:.2f}"
+            if not r.settled:
+                settle += "*"
+            feas = "yes" if r.feasible else "no"
+            if r.feasible_count is not None:
+                feas = f"{r.feasible_count}/{table.scenario_count}"
+            lines.append(
+                f"{r.scenario:14s} {r.settings:8s} {settle:>10s} {r.overshoot_mrad:15.3f} "
+                f"{r.overshoot_win:9.2f} {r.accel_krad_s2:19.1f} {r.accel_ratio:7.3f} "
+                f"{r.cost:7.4f} {feas}"
+            )
+    lines.append(
+        "settle: settling time into the in-position window (* not settled; - a moving "
+        "reference); accel: the pulse train's peak over 1 ms against the limit (the loaded "
+        "motor's usable acceleration)"
+    )
+    return "\n".join(lines)

@@ -64,7 +64,7 @@ def _bool(name: str, v: Any) -> bool:
 class _Options:
     """Shared by the sweep and grid configurations: merging sources, plain dicts, scenarios."""
 
-    scenarios: str
+    scenarios: str | None  # None only as given: construction fills in the default
     scenario_count: int
     first_seed: int
     laws: tuple[str, ...]
@@ -128,10 +128,11 @@ class _Options:
             ``first_seed`` do not apply); else :func:`vfgym.scenario_set` of
             ``scenarios``, ``scenario_count``, ``first_seed``.
         """
+        spec = str(self.scenarios)
         axis = self.load_axis()
         if axis is not None:
-            return axis.scenario_set(self.scenarios)
-        return scenario_set(self.scenarios, self.scenario_count, self.first_seed)
+            return axis.scenario_set(spec)
+        return scenario_set(spec, self.scenario_count, self.first_seed)
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 from contextlib import nullcontext
-from typing import Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -17,9 +17,35 @@ from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Setting
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
 
+if TYPE_CHECKING:
+    from optuna import Study, Trial
 
-def aggregate(ev: Evaluation) -> dict[str, np.ndarray]:
-    """One controller's results over the scenarios, as a sweep scores a setting.
+
+class Aggregate(NamedTuple):
+    """Each controller's scores over a scenario set (arrays indexed by controller).
+
+    What :func:`aggregate` returns.
+
+    Attributes
+    ----------
+    cost : numpy.ndarray
+        Mean cost over the scenarios, (C,).
+    constraints : numpy.ndarray
+        Worst (max) of each constraint over the scenarios, (C, 3).
+    feasible : numpy.ndarray
+        Every constraint ≤ 0 on every scenario, (C,) bool.
+    objectives : numpy.ndarray
+        The objectives' means over the scenarios, (C, 3).
+    """
+
+    cost: np.ndarray
+    constraints: np.ndarray
+    feasible: np.ndarray
+    objectives: np.ndarray
+
+
+def aggregate(ev: Evaluation) -> Aggregate:
+    """Each controller's results over the scenarios, as a sweep scores a setting.
 
     Parameters
     ----------
@@ -28,18 +54,18 @@ def aggregate(ev: Evaluation) -> dict[str, np.ndarray]:
 
     Returns
     -------
-    dict of str to numpy.ndarray
+    Aggregate
         Per controller: ``cost`` (mean over the scenarios), ``constraints`` (worst, max,
         over the scenarios), ``feasible`` (every constraint ≤ 0 on every scenario) and
         ``objectives`` (means).
     """
     cons = np.nanmax(ev.constraints, axis=1)
-    return {
-        "cost": ev.mean_cost,
-        "constraints": cons,
-        "feasible": np.all(cons <= 0.0, axis=1),
-        "objectives": np.nanmean(ev.objectives, axis=1),
-    }
+    return Aggregate(
+        cost=ev.mean_cost,
+        constraints=cons,
+        feasible=np.all(cons <= 0.0, axis=1),
+        objectives=np.nanmean(ev.objectives, axis=1),
+    )
 
 
 def settings_key(s: Settings) -> tuple:
@@ -74,6 +100,10 @@ class Objective:
         The acceleration laws searched.
     form : str
         ``cost`` (one objective) or ``pareto`` (the three objectives).
+    plant : Plant
+        The plant the settings run on (an axis's, see :class:`vfgym.moves.axis.Axis`).
+    measures : Measures
+        Windows and bands of the measures (an axis's).
     """
 
     def __init__(
@@ -96,7 +126,7 @@ class Objective:
         self.guard: Callable[[], Any] = nullcontext
         self.current: int | None = None
 
-    def __call__(self, trial: Any) -> float | list[float]:
+    def __call__(self, trial: Trial) -> float | list[float]:
         self.current = trial.number
         # Before the claim lock goes: a retried trial inherits its dead worker's attribute,
         # and another worker's recovery must not see this one running under that name.
@@ -105,7 +135,7 @@ class Objective:
             self.on_enter()
         return self._run(trial)
 
-    def _run(self, trial: Any) -> float | list[float]:
+    def _run(self, trial: Trial) -> float | list[float]:
         settings = space.suggest(trial, self.laws)
         key = settings_key(settings)
         hit = self.cache.get(key) or self._lookup(trial.study, settings)
@@ -146,15 +176,15 @@ class Objective:
         )
         attrs = {
             "settings": space.settings_to_dict(settings),
-            "cost": float(agg["cost"][0]),
-            "constraints": [float(x) for x in agg["constraints"][0]],
-            "feasible": bool(agg["feasible"][0]),
-            "objectives": [float(x) for x in agg["objectives"][0]],
+            "cost": float(agg.cost[0]),
+            "constraints": [float(x) for x in agg.constraints[0]],
+            "feasible": bool(agg.feasible[0]),
+            "objectives": [float(x) for x in agg.objectives[0]],
         }
         values = attrs["cost"] if self.form == "cost" else list(attrs["objectives"])
         return values, attrs
 
-    def _lookup(self, study: Any, settings: Settings) -> Any:
+    def _lookup(self, study: Study, settings: Settings) -> tuple[Any, dict[str, Any]] | None:
         import optuna
 
         want = space.settings_to_dict(settings)
