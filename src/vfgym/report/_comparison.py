@@ -32,7 +32,7 @@ from vfgym.scoring import (
 
 Policy = Callable[[Scenario], Settings]
 """A per-scenario controller: the settings an agent picks for a scenario."""
-EXTRA_METRICS = ("ideal_time_s", "time_ratio", "window_rad")
+EXTRA_METRICS = ("ideal_time_s", "time_ratio", "window_rad", "arrived")
 """Measures :func:`vfgym.evaluate` adds to :data:`vfgym.plant.measures.NAMES`."""
 
 
@@ -173,7 +173,8 @@ def evaluate_policy(
     """Each scenario scored with the settings ``policy`` picks for it, through
     :func:`vfgym.evaluate` (scenarios that get identical settings share one call).
 
-    Returns the settings, costs (S,), constraints (S, 3) and measures per scenario.
+    Returns the settings, costs (S,), constraints (S, len(CONSTRAINTS)) and measures per
+    scenario.
     """
     scens = scenario_set(scenarios)
     chosen: list[Settings] = []

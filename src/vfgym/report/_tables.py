@@ -32,17 +32,22 @@ TABLE_COLUMNS: tuple[TableColumn, ...] = (
     TableColumn("torque_limit_time_s", "at torque limit", "ms", 1e3),
     TableColumn("tracking_rms_rad", "tracking rms", "rad"),
     TableColumn("feasible", "feasible", "share", 1.0, ".2f"),
+    TableColumn("arrived", "arrived", "share", 1.0, ".2f"),
 )
 """What the table shows per scenario and in aggregate (the CSV and JSON hold every measure).
 
 Peak acceleration against the limit is given for the pulse train (the constraint the
-tuning respects, windowed second difference) and for the motor (per tick, from ω)."""
+tuning respects, windowed second difference) and for the motor (per tick, from ω).
+``arrived``: the run ended settled in the in-position window (a sine: followed); see
+:mod:`vfgym.scoring`. A run that did not arrive is infeasible."""
+SHARES = ("feasible", "arrived")
+"""Yes/no columns: per scenario yes or no, in aggregate a count."""
 
 
 def _fmt(x: float, m: TableColumn) -> str:
     if x is None or not math.isfinite(x):
         return "n/a"
-    if m.key == "feasible":
+    if m.key in SHARES:
         return f"{x:.2f}"
     return format(x * m.scale, m.fmt)
 
@@ -66,18 +71,18 @@ def _grid(rows: list[list[str]], right: set[int] | None = None) -> list[str]:
 
 
 def _header(m: TableColumn) -> str:
-    return f"{m.header} [{m.unit}]" if m.unit and m.key != "feasible" else m.header
+    return f"{m.header} [{m.unit}]" if m.unit and m.key not in SHARES else m.header
 
 
 def _unit(m: TableColumn) -> str:
-    return f" [{m.unit}]" if m.unit and m.key != "feasible" else ""
+    return f" [{m.unit}]" if m.unit and m.key not in SHARES else ""
 
 
-def _count(col: Column) -> str:
-    """``k/n feasible`` (a share has no useful median)."""
-    f = col.feasible
+def _count(col: Column, key: str = "feasible") -> str:
+    """``k/n feasible`` or ``k/n arrived`` (a share has no useful median)."""
+    f = col.values(key)
     ok = f[np.isfinite(f)]
-    return f"{int(ok.sum())}/{ok.size} feasible"
+    return f"{int(ok.sum())}/{ok.size} {key}"
 
 
 def format_table(report: Report) -> str:
@@ -90,17 +95,17 @@ def format_table(report: Report) -> str:
         "(move time / ideal, or tracking; see vfgym.scoring)"
     )
     lines.append("")
-    per = [m for m in TABLE_COLUMNS if m.key != "feasible"]
+    per = [m for m in TABLE_COLUMNS if m.key not in SHARES]
     wl = report.win_losses()
     by_pair = {(w.tuned, w.baseline): w for w in wl}
-    head = ["scenario", "controller", *[_header(m) for m in per], "feasible"]
+    head = ["scenario", "controller", *[_header(m) for m in per], *SHARES]
     head += [f"vs {b.label}" for b in report.baselines] if report.tuned else []
     rows = [head]
     for si, sc in enumerate(report.scenarios):
         for k, col in enumerate(report.columns):
             row = [sc.name if k == 0 else "", col.label]
             row += [_fmt(float(col.values(m.key)[si]), m) for m in per]
-            row.append(_yes_no(float(col.feasible[si])))
+            row += [_yes_no(float(col.values(k)[si])) for k in SHARES]
             if report.tuned:
                 for b in report.baselines:
                     w = by_pair.get((col.label, b.label))
@@ -122,8 +127,8 @@ def format_table(report: Report) -> str:
                     f"{m.header}{_unit(m)}" if k == 0 else "",
                     col.label,
                     str(s.n),
-                    _count(col)
-                    if m.key == "feasible"
+                    _count(col, m.key)
+                    if m.key in SHARES
                     else f"{_fmt(s.median, m)} [{_fmt(s.q1, m)}, {_fmt(s.q3, m)}]",
                     f"{_fmt(s.mean, m)} ({_fmt(s.ci_low, m)}, {_fmt(s.ci_high, m)})",
                 ]
@@ -178,8 +183,8 @@ def markdown_table(report: Report, measures: Sequence[TableColumn] = TABLE_COLUM
         cells = [col.label, str(report.spread(col.label, "cost").n)]
         for m in measures:
             s = report.spread(col.label, m.key)
-            if m.key == "feasible":
-                cells.append(_count(col).removesuffix(" feasible"))
+            if m.key in SHARES:
+                cells.append(_count(col, m.key).removesuffix(f" {m.key}"))
             elif s.n == 0:
                 cells.append("n/a")
             elif s.n == 1:
@@ -207,8 +212,8 @@ def markdown_table(report: Report, measures: Sequence[TableColumn] = TABLE_COLUM
 
 def markdown_costs(report: Report) -> str:
     """Per-scenario cost of every controller as Markdown (``*``: a constraint violated;
-    n/a: the controller does not apply), with each tuned candidate's outcome against each
-    baseline."""
+    ``†``: did not arrive, i.e. not settled in the in-position window at the scenario's
+    end, or a sine not followed; n/a: the controller does not apply)."""
     cols = report.columns
     head = ["scenario", *[c.label for c in cols]]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -216,7 +221,11 @@ def markdown_costs(report: Report) -> str:
         cells = [sc.name]
         for c in cols:
             x = float(c.cost[si])
-            star = "" if not math.isfinite(x) or c.feasible[si] > 0.5 else "*"
-            cells.append("n/a" if not math.isfinite(x) else f"{x:.3g}{star}")
+            if not math.isfinite(x):
+                cells.append("n/a")
+                continue
+            star = "" if c.feasible[si] > 0.5 else "*"
+            star += "" if c.values("arrived")[si] > 0.5 else "†"
+            cells.append(f"{x:.3g}{star}")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"

@@ -37,6 +37,7 @@ from vfgym.scoring._cost import (
     OBJECTIVES,
     Bounds,
     CostWeights,
+    Score,
     score,
 )
 
@@ -46,7 +47,7 @@ class Evaluation:
     """Measures, constraints, objectives and cost of each (controller, scenario) pair.
 
     ``metrics[c][s]`` is a dict of the named measures (:mod:`vfgym.plant.measures`) plus
-    ``ideal_time_s``, ``time_ratio`` and ``window_rad``; arrays are shaped
+    ``ideal_time_s``, ``time_ratio``, ``window_rad`` and ``arrived``; arrays are shaped
     (controllers, scenarios[, 3]). A pulse source on a moving reference is not applicable:
     its entries are NaN.
     """
@@ -126,11 +127,26 @@ def score_pairs(
     measures: Measures = DEFAULT_MEASURES,
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
-) -> list[tuple[float, np.ndarray, np.ndarray, dict[str, Any]] | None]:
+) -> list[Score | None]:
     """Score ``controllers[i]`` on ``moves[i]`` for every i in one compiled, multi-threaded
-    call: (cost, constraints, objectives, measures) per pair, ``None`` where a pulse source
-    cannot run the move. A move is a :class:`Move` or anything with its attributes (the
-    envs' episodes); moves sharing a command array share it in the batch."""
+    call.
+
+    Parameters
+    ----------
+    controllers : sequence of Settings or pulse sources
+        One per move.
+    moves : sequence of Move
+        A :class:`Move` or anything with its attributes (the envs' episodes); moves sharing
+        a command array share it in the batch.
+    measures, weights, bounds :
+        The scoring path's windows, cost weights and constraint bounds.
+
+    Returns
+    -------
+    list of Score or None
+        One :class:`~vfgym.scoring.Score` per pair (its ``metrics`` hold the measures),
+        ``None`` where a pulse source cannot run the move.
+    """
     if len(controllers) != len(moves):
         raise ValueError(f"{len(controllers)} controllers for {len(moves)} moves")
     slots: dict[int, int] = {}
@@ -154,7 +170,7 @@ def score_pairs(
         cmd_idx.append(j)
         ext_idx.append(e)
         rows.append(r)
-    out: list[tuple[float, np.ndarray, np.ndarray, dict[str, Any]] | None] = [None] * len(moves)
+    out: list[Score | None] = [None] * len(moves)
     if not rows:
         return out
     acc = K.new_acc(len(rows))
@@ -171,8 +187,7 @@ def score_pairs(
     for k, r in enumerate(rows):
         mv = moves[r]
         m = from_acc(acc[k], mv.plant, measures, float(mv.command[-1]), mv.command_end_s)
-        cost, cons, objs, extra = score(m, mv.scenario, mv.plant, measures, weights, bounds)
-        out[r] = (float(cost), cons, objs, m | extra)
+        out[r] = score(m, mv.scenario, mv.plant, measures, weights, bounds)
     return out
 
 
@@ -219,7 +234,8 @@ def evaluate(
         ci, si = divmod(r, ns)
         if res is None:
             continue
-        cost[ci, si], cons[ci, si], objs[ci, si], metrics[ci][si] = res
+        cost[ci, si], cons[ci, si], objs[ci, si] = res.cost, res.constraints, res.objectives
+        metrics[ci][si] = res.metrics
         if traces is not None:
             s, ext = _as_run(ctrls[ci], moves[si])
             traces[ci][si] = simulate(

@@ -26,8 +26,17 @@ from vfgym.tuning._objective import aggregate
 from vfgym.tuning._storage import StorageSpec
 
 
+def _arrives(trial: Any) -> bool:
+    """Whether a trial's settings arrived on every scenario (worst arrival constraint ≤ 0)."""
+    cons = trial.user_attrs.get("constraints") or ()
+    i = CONSTRAINTS.index("arrival")
+    return len(cons) == len(CONSTRAINTS) and cons[i] <= 0.0
+
+
 def best_trial(study: Any) -> Any:
-    """The completed trial with the lowest cost among the feasible ones (any, if none is)."""
+    """The completed trial with the lowest cost among the feasible ones; if none is, among
+    those that arrive on every scenario (a move that never gets there is no candidate while
+    one that does exists); else among all."""
     import optuna
 
     done = [
@@ -38,7 +47,8 @@ def best_trial(study: Any) -> Any:
     if not done:
         return None
     feas = [t for t in done if t.user_attrs.get("feasible")]
-    return min(feas or done, key=lambda t: (t.user_attrs["cost"], t.number))
+    arrive = [t for t in done if _arrives(t)]
+    return min(feas or arrive or done, key=lambda t: (t.user_attrs["cost"], t.number))
 
 
 def trial_settings(trial: Any) -> Settings:
@@ -142,7 +152,7 @@ def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> 
                     "scenario": sc.name,
                     "settings": name,
                     "settle_ms": math.nan if sc.tracking else 1e3 * m["settling_time_s"],
-                    "settled": bool(m["settled"]) or sc.tracking,
+                    "arrived": bool(m["arrived"]),
                     "overshoot_mrad": 1e3 * m["overshoot_rad"],
                     "overshoot_win": m["overshoot_rad"] / m["window_rad"],
                     "accel_krad_s2": m["peak_accel_pulse_rad_s2"] / 1e3,
@@ -160,7 +170,7 @@ def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> 
                 "scenario": f"set ({len(scenarios)})",
                 "settings": name,
                 "settle_ms": float(np.mean(settle)) if settle else math.nan,
-                "settled": all(r["settled"] for r in mine),
+                "arrived": all(r["arrived"] for r in mine),
                 "overshoot_mrad": max(r["overshoot_mrad"] for r in mine),
                 "overshoot_win": max(r["overshoot_win"] for r in mine),
                 "accel_krad_s2": max(r["accel_krad_s2"] for r in mine),
@@ -185,7 +195,7 @@ def format_comparison(cmp: dict[str, Any]) -> str:
     multi = len({r["scenario"] for r in rows}) > 1
     for r in rows + (cmp["set"] if multi else []):
         settle = "-" if math.isnan(r["settle_ms"]) else f"{r['settle_ms']:.2f}"
-        if not r["settled"]:
+        if not r["arrived"]:
             settle += "*"
         feas = "yes" if r["feasible"] else "no"
         if "feasible_count" in r:
@@ -199,8 +209,9 @@ def format_comparison(cmp: dict[str, Any]) -> str:
             f"{r['cost']:7.4f} {feas}"
         )
     lines.append(
-        "settle: settling time into the in-position window (* not settled; - a moving "
-        "reference); accel: the pulse train's peak over 1 ms against the motor's limit"
+        "settle: settling time into the in-position window (- a moving reference; * did not "
+        "arrive: not settled at the end, or a sine not followed); accel: the pulse train's "
+        "peak over 1 ms against the motor's limit"
     )
     return "\n".join(lines)
 
