@@ -112,6 +112,11 @@ def format_table(report: Report) -> str:
                     row.append(w.outcomes[si] if w else "")
             rows.append(row)
     lines += _grid(rows, right=set(range(2, len(per) + 2)))
+    lines.append(
+        "arrived: in the in-position window at the scenario's end (a sine: followed within "
+        "the -3 dB bandwidth); a run that did not arrive is infeasible, its settling and move "
+        "times are the run's duration (a lower bound)"
+    )
     lines.append("")
     lines.append(
         f"Aggregate over the scenarios (n = scenarios where defined): median [interquartile "
