@@ -48,8 +48,9 @@ class Evaluation:
 
     ``metrics[c][s]`` is a dict of the named measures (:mod:`vfgym.plant.measures`) plus
     ``ideal_time_s``, ``time_ratio``, ``window_rad`` and ``arrived``; arrays are shaped
-    (controllers, scenarios[, 3]). A pulse source on a moving reference is not applicable:
-    its entries are NaN.
+    (controllers, scenarios), constraints and objectives with a last axis in the order of
+    :data:`~vfgym.scoring.CONSTRAINTS` and :data:`~vfgym.scoring.OBJECTIVES`. A pulse
+    source on a moving reference is not applicable: its entries are NaN.
     """
 
     controllers: list[Controller]
