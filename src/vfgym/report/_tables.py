@@ -105,7 +105,7 @@ def format_table(report: Report) -> str:
         for k, col in enumerate(report.columns):
             row = [sc.name if k == 0 else "", col.label]
             row += [_fmt(float(col.values(m.key)[si]), m) for m in per]
-            row += [_yes_no(float(col.values(k)[si])) for k in SHARES]
+            row += [_yes_no(float(col.values(key)[si])) for key in SHARES]
             if report.tuned:
                 for b in report.baselines:
                     w = by_pair.get((col.label, b.label))
