@@ -68,6 +68,13 @@ def check_int(name: str, value: Any, lo: int | None = None, hi: int | None = Non
     return n
 
 
+def check_bool(name: str, value: Any) -> bool:
+    """Return ``value`` if it is a bool (``True`` / ``False``; no 0, 1 or strings)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name}={value!r} must be true or false")
+    return bool(value)
+
+
 def check_choice(name: str, value: Any, choices: Iterable[str]) -> str:
     """Return ``value`` if it is one of ``choices``."""
     options = tuple(choices)

@@ -31,7 +31,7 @@ def test_a_controller_that_never_moves_is_infeasible_and_costs_more_than_the_pap
     assert ends_away.count(False) == 1  # multi-move returns to 0: its overshoot catches it
     for si, away in enumerate(ends_away):
         assert (ev.constraints[0, si, ARRIVAL] > 0.0) == away
-    # heavy-load: 1,630 windows short, more than the paper's 363-window overshoot costs
+    # heavy-load: 1,630 windows short, more than the paper's 92-window overshoot costs
     hl = [s.name for s in ev.scenarios].index("heavy-load")
     m = ev.metrics[0][hl]
     assert ev.constraints[0, hl, ARRIVAL] == pytest.approx(10.0 / m["window_rad"] - 1.0)

@@ -31,9 +31,15 @@ VALIDATION_SEED0 = 2**40
 """First train-split seed of the held-out validation scenarios."""
 
 
-def validation_scenarios(n: int) -> list[Scenario]:
-    """The held-out scenarios the evaluation callback scores (never drawn in training)."""
-    return [random_scenario(VALIDATION_SEED0 + i, "train") for i in range(n)]
+def validation_scenarios(n: int, axis: Any = None) -> list[Scenario]:
+    """The held-out scenarios the evaluation callback scores (never drawn in training);
+    on an axis (an :class:`~vfgym.moves.axis.Axis` or its file), its train move set's."""
+    if axis is None:
+        return [random_scenario(VALIDATION_SEED0 + i, "train") for i in range(n)]
+    from vfgym.moves.axis import load_axis
+
+    axis = load_axis(axis) if isinstance(axis, (str, Path)) else axis
+    return [axis.moves.train.pick(VALIDATION_SEED0 + i, "train", axis.plant) for i in range(n)]
 
 
 def _activation(name: str) -> Any:
@@ -134,7 +140,8 @@ def _callbacks(
             self.bar.close()
 
     evaluator = HeldOutEval(
-        params.get("eval_freq", 10_000), validation_scenarios(params.get("n_eval_scenarios", 16))
+        params.get("eval_freq", 10_000),
+        validation_scenarios(params.get("n_eval_scenarios", 16), env_kwargs.get("axis")),
     )
     ckpt = CheckpointCallback(
         save_freq=max(1, params.get("checkpoint_freq", 20_000) // n_envs),

@@ -36,3 +36,32 @@ def positive_int(text: str) -> int:
     if n < 1:
         raise argparse.ArgumentTypeError(f"{n} is out of range: allowed whole numbers >= 1")
     return n
+
+
+AXIS_HELP = (
+    "an axis file (e.g. experiments/axes/belt.yaml): its plant, measures and train/test "
+    "moves (default: the paper's axis, experiments/axes/paper.yaml)"
+)
+
+
+def add_axis_option(p: argparse.ArgumentParser) -> None:
+    """The ``--axis FILE`` option every command takes."""
+    p.add_argument("--axis", metavar="FILE.yaml", help=AXIS_HELP)
+
+
+def axis_from_args(args: argparse.Namespace) -> Any:
+    """The :class:`~vfgym.moves.axis.Axis` of ``--axis FILE`` (a bad file: one-line
+    ``ValueError`` naming it), or ``None`` without the option (the paper's axis, as
+    before axes existed)."""
+    from vfgym.moves.axis import load_axis
+
+    path = getattr(args, "axis", None)
+    return load_axis(path) if path else None
+
+
+def scenario_from_args(args: argparse.Namespace, axis: Any) -> Any:
+    """``--scenario NAME`` on the axis (its listed moves, the named scenarios, or
+    ``<split>-<seed>`` of its random moves), or as :func:`vfgym.get_scenario` without one."""
+    from vfgym.moves.scenarios import get_scenario
+
+    return get_scenario(args.scenario) if axis is None else axis.scenario(args.scenario)

@@ -14,7 +14,7 @@ FORMATS = ("vcd", "csv")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from vfgym.commands._common import positive_int
+    from vfgym.commands._common import add_axis_option, positive_int
 
     p = sub.add_parser(
         "export",
@@ -36,24 +36,27 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--timescale", default="1 ns", help="vcd: time unit, e.g. '1 ns' (default) or '1 ps'"
     )
+    add_axis_option(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from vfgym.commands._common import axis_from_args, scenario_from_args
     from vfgym.commands.plot import _controller
     from vfgym.io.trace_csv import write_trace_csv
     from vfgym.io.vcd import parse_timescale, write_vcd
-    from vfgym.moves.scenarios import get_scenario
+    from vfgym.moves.axis import axis_kwargs
     from vfgym.scoring import evaluate
 
-    scenario = get_scenario(args.scenario)
+    axis = axis_from_args(args)
+    scenario = scenario_from_args(args, axis)
     if args.format == "vcd":
         parse_timescale(args.timescale)
         if args.decimation != 1:
             raise ValueError(f"--decimation={args.decimation} is not allowed for vcd: every tick")
     ctrl, _ = _controller(args)
     dec = args.decimation if args.format == "csv" else 1
-    ev = evaluate(ctrl, [scenario], keep_traces=True, decimation=dec)
+    ev = evaluate(ctrl, [scenario], keep_traces=True, decimation=dec, **axis_kwargs(axis))
     trace = ev.traces[0][0]
     if trace is None:
         raise ValueError(

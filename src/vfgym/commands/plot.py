@@ -26,6 +26,8 @@ KINDS = ("response", "scurve", "frequency", "compare", "history", "pareto")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
+    from vfgym.commands._common import add_axis_option
+
     p = sub.add_parser(
         "plot",
         help="draw a figure (response, scurve, frequency, compare, history, pareto) as PNG",
@@ -57,6 +59,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--out", metavar="PNG", help="output file (default: <kind>-<scenario>.png)")
     p.add_argument("--dpi", type=int, default=120, help="resolution (default: 120)")
+    add_axis_option(p)
     p.set_defaults(func=run)
 
 
@@ -123,7 +126,9 @@ def _against(args: argparse.Namespace, default: str, own: str) -> list[Any]:
 
 def build_figure(args: argparse.Namespace) -> Any:
     """The figure the arguments ask for."""
-    from vfgym.moves.scenarios import get_scenario
+    from vfgym.commands._common import axis_from_args, scenario_from_args
+    from vfgym.moves.axis import axis_kwargs
+    from vfgym.params import PAPER_PLANT
     from vfgym.report import figures as plots
     from vfgym.scoring import evaluate
 
@@ -134,20 +139,22 @@ def build_figure(args: argparse.Namespace) -> Any:
         if args.kind == "history":
             return plots.history_figure(study)
         return plots.pareto_figure(study, x=args.x, y=args.y)
-    scenario = get_scenario(args.scenario)
-    plant = scenario.plant()
+    axis = axis_from_args(args)
+    scenario = scenario_from_args(args, axis)
+    plant = scenario.plant(PAPER_PLANT if axis is None else axis.plant)
     if args.kind == "scurve":
         return plots.scurve_figure(plant, short_rad=args.short_rad, long_rad=args.long_rad)
     ctrl, label = _controller(args)
+    on_axis = axis_kwargs(axis)
     if args.kind == "response":
-        ev = evaluate(ctrl, [scenario], keep_traces=True)
+        ev = evaluate(ctrl, [scenario], keep_traces=True, **on_axis)
         title = f"{scenario.name}: {scenario.description}\n{ev.labels()[0]}"
         return plots.response_figure(
             ev.traces[0][0], title=title, metrics=ev.metrics[0][0], tracking=scenario.tracking
         )
     default = "fixed-frequency" if args.kind == "frequency" else "paper"
     others = _against(args, default, label)
-    ev = evaluate([ctrl, *(c.controller for c in others)], [scenario], keep_traces=True)
+    ev = evaluate([ctrl, *(c.controller for c in others)], [scenario], keep_traces=True, **on_axis)
     names = [label, *(c.label for c in others)]
     traces = {}
     for i, name in enumerate(names):

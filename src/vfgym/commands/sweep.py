@@ -13,9 +13,13 @@ from __future__ import annotations
 import argparse
 
 OPTIONS = (
-    ("--scenarios", "scenario set: a name, 'named', 'train', 'test' or a comma-separated list"),
-    ("--scenario-count", "number of scenarios in a 'train'/'test' set (default 16)"),
-    ("--first-seed", "first seed of a 'train'/'test' set (default 0)"),
+    ("--scenarios", "scenario set: a name, 'named', 'train', 'test' or a comma-separated list "
+     "(default paper-step; with --axis, the axis's train moves)"),
+    ("--scenario-count", "number of scenarios in a 'train'/'test' set (default 16; not with "
+     "--axis, whose file sets its own)"),
+    ("--first-seed", "first seed of a 'train'/'test' set (default 0; not with --axis)"),
+    ("--axis", "an axis file (e.g. experiments/axes/belt.yaml): its plant, measures and "
+     "train/test moves; the sweep tunes on its train moves"),
     ("--laws", "acceleration laws searched: rise, slew or rise,slew (default rise)"),
     ("--sampler", "tpe (default), cmaes, gp, nsga2, grid or random"),
     ("--objective", "cost (default) or pareto (overshoot, move time, accel violation)"),
@@ -71,6 +75,7 @@ def run(args: argparse.Namespace) -> int:
 
     from vfgym import tuning
     from vfgym.io.runs import read_yaml
+    from vfgym.moves.axis import axis_digest
 
     file_data = read_yaml(args.config) if args.config else None
     cfg = tuning.SweepConfig.resolve(file_data, _cli_values(args), source=str(args.config))
@@ -79,7 +84,10 @@ def run(args: argparse.Namespace) -> int:
     name = cfg.study or _default_name(args.config, cfg.runs_dir)
     run_dir = Path(cfg.runs_dir) / "sweep" / name
     spec = tuning.resolve_storage(cfg.storage, run_dir)
-    reference = tuning.find_reference(cfg.reference, cfg.runs_dir, scenarios, cfg.laws)
+    axis = cfg.load_axis()
+    reference = tuning.find_reference(
+        cfg.reference, cfg.runs_dir, scenarios, cfg.laws, axis_digest(axis)
+    )
     storage = None
     if spec.kind == "postgresql":  # reach the server before making a run folder
         storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
@@ -158,6 +166,11 @@ def _record(run_dir, args, cfg, name, spec) -> None:
 
     conf = cfg.to_dict() | {"study": name, "storage": spec.display}
     write_yaml(run_dir / "config.yaml", {"command": "sweep", **conf})
+    axis = cfg.load_axis()
+    if axis is not None:  # the axis as tuned on, beside the config that names its file
+        from vfgym.moves.axis import AXIS_FILE, write_axis
+
+        write_axis(axis, run_dir / AXIS_FILE)
     if len(sys.argv) > 1 and "sweep" in sys.argv[1:]:
         argv = sys.argv[sys.argv.index("sweep") :]
     else:  # called as a function: the options it resolved to
@@ -253,6 +266,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     and summary.yaml. Returns the exit status."""
     from vfgym import tuning
     from vfgym.io.runs import write_text, write_yaml
+    from vfgym.moves.axis import axis_kwargs
 
     tuning.write_trials_csv(study, run_dir / "trials.csv")
     n = tuning.counts(study)
@@ -288,7 +302,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     else:
         settings = tuning.trial_settings(best)
         rec = tuning.best_record(study, best, cfg, spec, scenarios)
-        cmp = tuning.compare(settings, scenarios)
+        cmp = tuning.compare(settings, scenarios, **axis_kwargs(cfg.load_axis()))
         paper_cost = cmp["set"][0]["cost"]
         rec["paper_cost"] = paper_cost
         lines.append(

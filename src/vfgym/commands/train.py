@@ -7,6 +7,8 @@ from pathlib import Path
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
+    from vfgym.commands._common import add_axis_option
+
     p = sub.add_parser(
         "train",
         help="train a PPO, SAC or TD3 agent (agents extra)",
@@ -34,6 +36,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "run of that name is continued",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_axis_option(p)
     p.set_defaults(func=run)
 
 
@@ -46,6 +49,11 @@ def run(args: argparse.Namespace) -> int:
     else:
         file = args.hyperparams_file
     params = hp.load(args.algo, args.env, file, hp.parse_overrides(args.hyperparams))
+    if args.axis:  # the envs draw their moves from the axis (env_kwargs: axis=FILE)
+        from vfgym.commands._common import axis_from_args
+
+        axis_from_args(args)  # a bad file fails before a run folder is made
+        params["env_kwargs"] = {**(params.get("env_kwargs") or {}), "axis": args.axis}
     from vfgym.agents.training import train
     from vfgym.io.runs import new_run_dir, record_command
 

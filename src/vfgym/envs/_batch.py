@@ -29,6 +29,7 @@ import numpy as np
 from vfgym.plant import _kernel as K
 from vfgym.plant import _lanes as LN
 from vfgym.plant import _layout as L
+from vfgym.plant._threads import keeps_torch_threads
 from vfgym.scoring import _cost_compiled as CC
 
 _jit = numba.njit(cache=True, fastmath=False, nogil=True)
@@ -52,7 +53,7 @@ W_ST = W_PRM + L.N_PARAMS
 W_COST = W_ST + L.N_STATE  # the cost's constants (vfgym.scoring._cost_compiled.constants)
 C_IDEAL = W_COST + CC.K_IDEAL  # ideal move time (s), the cost's yardstick
 C_WIN = W_COST + CC.K_WIN  # in-position half-width (rad)
-C_LIMIT = W_COST + CC.K_LIMIT  # motor acceleration limit (rad/s²)
+C_LIMIT = W_COST + CC.K_LIMIT  # the acceleration limit: Motor.usable_accel_rad_s2 (rad/s²)
 _c = W_COST + CC.N_CONST
 # episode constants
 C_N = _c + 0  # ticks of the move (the command's length): the time limit
@@ -456,6 +457,7 @@ def lane_scratch(num_envs: int, interval_ticks: int, acc_window: int) -> tuple[n
     return (*LN.scratch(blocks, interval_ticks, acc_window), np.zeros(blocks, dtype=np.int64))
 
 
+@keeps_torch_threads
 def step_batch_balanced(
     act, W, RING, CMD, active, flags, scratch, lane_min: int = LANE_MIN, parallel_min=None
 ) -> int:

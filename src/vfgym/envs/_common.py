@@ -5,14 +5,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from os import PathLike
 from typing import Any
 
 import numpy as np
 
 from vfgym._validate import check_choice, check_int
 from vfgym.moves import profiles
+from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.scenarios import SPLITS, Scenario, get_scenario, random_scenario
-from vfgym.params import Measures, Plant
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant
 from vfgym.scoring import CONSTRAINTS, Bounds, CostWeights, Yardsticks, yardsticks
 
 SEED_LIMIT = 2**63 - 1
@@ -152,9 +154,35 @@ class Episode:
         )
 
 
+def resolve_axis(
+    axis: Axis | str | None, plant: Plant, measures: Measures
+) -> tuple[Axis | None, Plant, Measures]:
+    """An env's ``axis`` argument (an :class:`~vfgym.moves.axis.Axis` or an axis file's
+    path) with its ``plant`` and ``measures``: an axis brings its own, so giving other
+    ones beside it is an error."""
+    if axis is None:
+        return None, plant, measures
+    if isinstance(axis, (str, PathLike)):
+        axis = load_axis(axis)
+    if not isinstance(axis, Axis):
+        raise ValueError(f"axis={axis!r} is not allowed: give an axis file's path or a vfgym Axis")
+    for name, value, default in (
+        ("plant", plant, PAPER_PLANT),
+        ("measures", measures, DEFAULT_MEASURES),
+    ):
+        if value != default and value != getattr(axis, name):
+            raise ValueError(
+                f"{name}={value!r} is not allowed with axis={axis.name!r}: the axis gives "
+                f"its own {name}; give one or the other"
+            )
+    return axis, axis.plant, axis.measures
+
+
 class ScenarioSource:
     """Where each episode's scenario comes from: a fixed one, or seeded draws from one
-    split (train or test) of the random distribution, seeds in ``seed_range`` = [lo, hi)."""
+    split (train or test) of the random distribution, seeds in ``seed_range`` = [lo, hi);
+    on an ``axis``, from that split's move set (:meth:`vfgym.moves.axis.MoveSet.pick`)
+    and names resolved by :meth:`vfgym.moves.axis.Axis.scenario`."""
 
     def __init__(
         self,
@@ -163,6 +191,7 @@ class ScenarioSource:
         seed_range: tuple[int, int] | None,
         base: Plant,
         measures: Measures,
+        axis: Axis | None = None,
     ) -> None:
         check_choice("split", split, SPLITS)
         lo, hi = DEFAULT_SEED_RANGE if seed_range is None else _check_range(seed_range)
@@ -170,7 +199,8 @@ class ScenarioSource:
         self.seed_range = (lo, hi)
         self.base = base
         self.measures = measures
-        self.fixed = None if scenario is None else get_scenario(_check_scenario(scenario))
+        self.axis = axis
+        self.fixed = None if scenario is None else self._named(scenario)
         self._cache: dict[Scenario, Episode] = {}
         if self.fixed is not None:
             self.episode(self.fixed)  # a bad scenario fails here, not at reset
@@ -188,14 +218,23 @@ class ScenarioSource:
         """The next episode: from ``options`` if they name one, else fixed, else drawn."""
         opts = check_options(options)
         if "scenario" in opts:
-            return self.episode(get_scenario(_check_scenario(opts["scenario"])))
+            return self.episode(self._named(opts["scenario"]))
         if "scenario_seed" in opts:
             seed = check_int("scenario_seed", opts["scenario_seed"], 0, SEED_LIMIT - 1)
-            return self.episode(random_scenario(seed, self.split))
+            return self.episode(self._seeded(seed))
         if self.fixed is not None:
             return self.episode(self.fixed)
         seed = int(rng.integers(self.seed_range[0], self.seed_range[1]))
-        return self.episode(random_scenario(seed, self.split))
+        return self.episode(self._seeded(seed))
+
+    def _named(self, scenario: Any) -> Scenario:
+        sc = _check_scenario(scenario)
+        return get_scenario(sc) if self.axis is None else self.axis.scenario(sc)
+
+    def _seeded(self, seed: int) -> Scenario:
+        if self.axis is None:
+            return random_scenario(seed, self.split)
+        return self.axis.moves.of(self.split).pick(seed, self.split, self.base)
 
 
 def _check_scenario(sc: Any) -> str | Scenario:

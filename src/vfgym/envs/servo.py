@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from vfgym._validate import check_choice, check_real
+from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import (
     ACCEL_LAWS,
@@ -39,6 +40,7 @@ from ._common import (
     ScenarioSource,
     as_action,
     check_scoring,
+    resolve_axis,
 )
 from ._common import scored_info as _scored_info
 
@@ -107,6 +109,7 @@ class ServoCore:
         measures: Measures,
         weights: CostWeights,
         bounds: Bounds,
+        axis: Axis | None = None,
     ) -> None:
         check_scoring(weights, bounds, measures, plant)
         self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
@@ -131,7 +134,8 @@ class ServoCore:
         self.measures = measures
         self.weights = weights
         self.bounds = bounds
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.axis = axis
+        self.source = ScenarioSource(scenario, split, seed_range, plant, measures, axis)
         self.n_obs = len(SERVO_FEATURES)
         self.width = B.width(self.n_obs)
         prm = pack(PAPER_SETTINGS, plant, measures, 1.0, 1)
@@ -190,7 +194,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Description
 
-    One episode is one move of the plant of MODEL.md (V-F controller → digital servo →
+    One episode is one move of the plant of docs/model.md (V-F controller → digital servo →
     motor). Each step is one control interval (default 1 ms = 140 ticks): the action sets
     the four settings for that interval, and the compiled, stateful kernel
     (:func:`vfgym.plant._kernel.run_segment`) advances the plant through it; its state (the V-F
@@ -268,18 +272,9 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     accel_law="rise", interval_s=1e-3, settle_time_s=5e-3,
     initial_settings=PAPER_SETTINGS, tracking_weight=0.0, terminate_on_violation=False,
     violation_penalty=5.0, plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
-    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``
+    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None, axis=None)``
 
-    * ``scenario``, ``split``, ``seed_range``, ``accel_law``, ``plant``, ``measures``,
-      ``weights``, ``bounds``: as VFTune-v0.
-    * ``interval_s``: the control interval, a whole number of ticks.
-    * ``settle_time_s``: how long the motor must stay in position to end the episode.
-    * ``initial_settings``: the settings in force before the first action.
-    * ``tracking_weight``: weight of the tracking-error shaping term (0: none).
-    * ``terminate_on_violation``, ``violation_penalty``: end on a constraint violation,
-      with this extra negative reward.
-    * ``render_mode``: ``"rgb_array"`` draws the episode's move so far (position, speed,
-      acceleration, command against motor) as an (480, 640, 3) uint8 array.
+    See Parameters.
 
     ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)`` gives
     :class:`vfgym.envs.vector.VFServoVectorEnv`, which steps all N envs in one compiled
@@ -288,6 +283,33 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     ## Version History
 
     * v0: Initial version.
+
+    Parameters
+    ----------
+    scenario, split, seed_range, accel_law, axis
+        As :class:`vfgym.envs.tune.VFTuneEnv`.
+    interval_s : float
+        The control interval (s), a whole number of ticks.
+    settle_time_s : float
+        How long the motor must stay in position to end the episode (s).
+    initial_settings : Settings
+        The settings in force before the first action.
+    tracking_weight : float
+        Weight of the tracking-error shaping term (0: none).
+    terminate_on_violation : bool
+        End the episode on a constraint violation.
+    violation_penalty : float
+        The extra negative reward of such an end.
+    plant, measures, weights, bounds
+        The scoring path's inputs (:func:`vfgym.evaluate`).
+    render_mode : str or None
+        ``"rgb_array"`` draws the episode's move so far (position, speed, acceleration,
+        command against motor) as an (480, 640, 3) uint8 array.
+
+    Raises
+    ------
+    ValueError
+        If an argument is out of its range or of the wrong type.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 30}
@@ -310,7 +332,9 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         weights: CostWeights = DEFAULT_WEIGHTS,
         bounds: Bounds = DEFAULT_BOUNDS,
         render_mode: str | None = None,
+        axis: Axis | str | None = None,
     ) -> None:
+        axis, plant, measures = resolve_axis(axis, plant, measures)
         self.core = ServoCore(
             scenario,
             split,
@@ -326,6 +350,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
             measures,
             weights,
             bounds,
+            axis,
         )
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
@@ -354,6 +379,18 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode at rest, before the move's first control interval.
+
+        Parameters
+        ----------
+        seed, options
+            As :meth:`vfgym.envs.tune.VFTuneEnv.reset`.
+
+        Returns
+        -------
+        tuple
+            ``(observation, info)``: the interval's observation and ``{"scenario": name}``.
+        """
         super().reset(seed=seed)
         ep = self.core.source.draw(self.np_random, options)
         self._ep = ep
@@ -366,6 +403,26 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._w[self._obs].astype(np.float32), {"scenario": ep.scenario.name}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Hold the settings the action maps to for one control interval of the move.
+
+        Parameters
+        ----------
+        action : numpy.ndarray
+            A point of ``[-1, 1]⁴``: value, L, k, Ts/Tf on the search space.
+
+        Returns
+        -------
+        tuple
+            ``(observation, reward, terminated, truncated, info)``; ``info`` is empty until
+            the episode ends, then holds the scored move's info.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            After the episode has ended (or before ``reset()``).
+        ValueError
+            If the action is not finite or outside the box.
+        """
         if self._ended or self._cmd is None:
             raise gym.error.ResetNeeded(
                 "call reset() before step(): "
@@ -389,7 +446,18 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         return obs, reward, bool(flags & B.TERMINATED), bool(flags & B.TRUNCATED), info
 
     def render(self) -> np.ndarray | None:
-        """The episode's move so far (the whole move once it has ended) as an RGB array."""
+        """The episode's move so far (the whole move once it has ended) as an RGB array.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            (480, 640, 3) uint8, or ``None`` (with a warning) without a render mode.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            Before the first ``reset()``.
+        """
         if self.render_mode is None:
             gym.logger.warn(
                 "VFServo-v0.render() without a render_mode: make the env with "

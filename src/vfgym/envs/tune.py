@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from vfgym._validate import check_choice
+from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import ACCEL_LAWS, DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.plant import simulate
@@ -30,6 +31,7 @@ from ._common import (
     ScenarioSource,
     as_action,
     check_scoring,
+    resolve_axis,
     scored_info,
 )
 
@@ -55,7 +57,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Description
 
-    Each episode is one move of the plant of MODEL.md (V-F controller → digital servo →
+    Each episode is one move of the plant of docs/model.md (V-F controller → digital servo →
     motor): ``reset`` picks a scenario (a command profile and the load on the motor), the
     agent answers with the four settings, and ``step`` simulates the whole move tick by tick
     and scores it through :func:`vfgym.evaluate`, the one scoring path, so the reward is
@@ -118,16 +120,8 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ``gymnasium.make("vfgym/VFTune-v0", scenario=None, split="train", seed_range=None,
     accel_law="rise", plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
-    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``
-
-    * ``scenario``: a fixed scenario (name such as ``"paper-step"`` or ``"test-7"``, or a
-      :class:`vfgym.Scenario`); None draws one per episode.
-    * ``split``: ``"train"`` or ``"test"``, the random distribution's split to draw from.
-    * ``seed_range``: (low, high), scenario seeds drawn in [low, high) (default [0, 2³¹)).
-    * ``accel_law``: ``"rise"`` (the paper's reading) or ``"slew"``.
-    * ``plant``, ``measures``, ``weights``, ``bounds``: the scoring path's inputs.
-    * ``render_mode``: ``"rgb_array"`` draws the last move (position, speed, acceleration,
-      command against motor) as an (480, 640, 3) uint8 array.
+    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None, axis=None)``; see
+    Parameters.
 
     ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)`` gives
     :class:`vfgym.envs.vector.VFTuneVectorEnv`, which scores all N moves in one compiled
@@ -136,6 +130,32 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     ## Version History
 
     * v0: Initial version.
+
+    Parameters
+    ----------
+    scenario : str, Scenario or None
+        A fixed scenario (name such as ``"paper-step"`` or ``"test-7"``, or a
+        :class:`vfgym.Scenario`); ``None`` draws one per episode.
+    split : str
+        ``"train"`` or ``"test"``, the random distribution's split to draw from.
+    seed_range : tuple of (int, int) or None
+        (low, high): scenario seeds drawn in [low, high) (default [0, 2³¹)).
+    accel_law : str
+        ``"rise"`` (the paper's reading) or ``"slew"``.
+    plant, measures, weights, bounds
+        The scoring path's inputs (:func:`vfgym.evaluate`).
+    axis : str, Axis or None
+        An axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant and measures,
+        and the moves of each split come from its move sets (a random set's draws, or a
+        listed set's move ``seed mod len``); names resolve on the axis.
+    render_mode : str or None
+        ``"rgb_array"`` draws the last move (position, speed, acceleration, command
+        against motor) as an (480, 640, 3) uint8 array.
+
+    Raises
+    ------
+    ValueError
+        If an argument is out of its range or of the wrong type.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}
@@ -152,7 +172,9 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         weights: CostWeights = DEFAULT_WEIGHTS,
         bounds: Bounds = DEFAULT_BOUNDS,
         render_mode: str | None = None,
+        axis: Axis | str | None = None,
     ) -> None:
+        axis, plant, measures = resolve_axis(axis, plant, measures)
         check_scoring(weights, bounds, measures, plant)
         self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
         if render_mode is not None:
@@ -162,7 +184,8 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         self.measures = measures
         self.weights = weights
         self.bounds = bounds
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.axis = axis
+        self.source = ScenarioSource(scenario, split, seed_range, plant, measures, axis)
         self.observation_space, self.action_space = tune_spaces()
         self._ep: Episode | None = None
         self._settings: Settings | None = None
@@ -176,6 +199,22 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode: draw (or take) the scenario of the move.
+
+        Parameters
+        ----------
+        seed : int or None
+            Seeds the env's ``np_random`` (the scenario draws), as Gymnasium does.
+        options : dict or None
+            ``{"scenario": name or Scenario}`` for a given scenario, or
+            ``{"scenario_seed": s}`` for a seed of the env's split.
+
+        Returns
+        -------
+        tuple
+            ``(observation, info)``: the move's features (float32) and
+            ``{"scenario": name}``.
+        """
         super().reset(seed=seed)
         self._ep = self.source.draw(self.np_random, options)
         self._settings = None
@@ -183,6 +222,26 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._ep.features.astype(np.float32), {"scenario": self._ep.scenario.name}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Simulate the whole move with the settings the action maps to, and score it.
+
+        Parameters
+        ----------
+        action : numpy.ndarray
+            A point of ``[-1, 1]⁴``: value, L, k, Ts/Tf on the search space.
+
+        Returns
+        -------
+        tuple
+            ``(observation, reward, terminated, truncated, info)``: the same features,
+            minus the move's cost, ``True``, ``False``, and the scored move's info.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            When the episode's one step has been taken (or before ``reset()``).
+        ValueError
+            If the action is not finite or outside the box.
+        """
         if self._ep is None or self._done:
             raise gym.error.ResetNeeded(
                 "VFTune-v0 episodes are one step long: call reset() before step()"
@@ -205,7 +264,18 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         return ep.features.astype(np.float32), -cost, True, False, info
 
     def render(self) -> np.ndarray | None:
-        """The last move (or, before a step, the command) as an RGB array."""
+        """The last move (or, before a step, the command) as an RGB array.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            (480, 640, 3) uint8, or ``None`` (with a warning) without a render mode.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            Before the first ``reset()``.
+        """
         if self.render_mode is None:
             gym.logger.warn(
                 "VFTune-v0.render() without a render_mode: make the env with "

@@ -20,6 +20,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from vfgym._validate import check_choice, check_int
+from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import (
     ACCEL_LAWS,
@@ -43,6 +44,7 @@ from ._common import (
     Episode,
     ScenarioSource,
     check_scoring,
+    resolve_axis,
     scored_info,
 )
 from .servo import ServoCore, raise_bad_action, servo_spaces
@@ -293,9 +295,20 @@ class VFTuneVectorEnv(_BatchVectorEnv):
     """N VFTune-v0 envs; each ``step`` scores all N moves in one compiled, multi-threaded
     kernel call (:func:`vfgym.envs.tune.evaluate_pairs`).
 
-    Made by ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)``; takes VFTune-v0's
-    arguments plus ``autoreset_mode`` (``"NextStep"``, ``"SameStep"`` or ``"Disabled"``).
-    Its numbers equal those of N single envs reset with seeds s, s+1, ... (tested)."""
+    Made by ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)``. Its numbers equal those
+    of N single envs reset with seeds s, s+1, ... (tested).
+
+    Parameters
+    ----------
+    num_envs : int
+        N, the sub-envs.
+    scenario, split, seed_range, accel_law, plant, measures, weights, bounds
+        As :class:`vfgym.envs.tune.VFTuneEnv`.
+    autoreset_mode : str or gymnasium.vector.AutoresetMode
+        ``"NextStep"``, ``"SameStep"`` or ``"Disabled"``.
+    render_mode : str or None
+        As :class:`vfgym.envs.tune.VFTuneEnv`, for each sub-env.
+    """
 
     def __init__(
         self,
@@ -311,14 +324,17 @@ class VFTuneVectorEnv(_BatchVectorEnv):
         bounds: Bounds = DEFAULT_BOUNDS,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         render_mode: str | None = None,
+        axis: Axis | str | None = None,
     ) -> None:
         super().__init__(num_envs, autoreset_mode, render_mode)
+        axis, plant, measures = resolve_axis(axis, plant, measures)
         check_scoring(weights, bounds, measures, plant)
         self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
         self.measures = measures
         self.weights = weights
         self.bounds = bounds
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.axis = axis
+        self.source = ScenarioSource(scenario, split, seed_range, plant, measures, axis)
         self.single_observation_space, self.single_action_space = tune_spaces()
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -366,9 +382,24 @@ class VFServoVectorEnv(_BatchVectorEnv):
     compiled call: the envs' plants tick together in SIMD lanes, blocks of lanes on numba
     threads from 512 envs (:func:`vfgym.envs._batch.step_batch`).
 
-    Made by ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)``; takes VFServo-v0's
-    arguments plus ``autoreset_mode``. Its numbers equal those of N single envs reset with
-    seeds s, s+1, ... (tested)."""
+    Made by ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)``. Its numbers equal those
+    of N single envs reset with seeds s, s+1, ... (tested).
+
+    Parameters
+    ----------
+    num_envs : int
+        N, the sub-envs.
+    scenario, split, seed_range, accel_law, interval_s, settle_time_s
+        As :class:`vfgym.envs.servo.VFServoEnv`.
+    initial_settings, tracking_weight, terminate_on_violation, violation_penalty
+        As :class:`vfgym.envs.servo.VFServoEnv`.
+    plant, measures, weights, bounds
+        The scoring path's inputs (:func:`vfgym.evaluate`).
+    autoreset_mode : str or gymnasium.vector.AutoresetMode
+        ``"NextStep"``, ``"SameStep"`` or ``"Disabled"``.
+    render_mode : str or None
+        As :class:`vfgym.envs.servo.VFServoEnv`, for each sub-env.
+    """
 
     def __init__(
         self,
@@ -390,8 +421,10 @@ class VFServoVectorEnv(_BatchVectorEnv):
         bounds: Bounds = DEFAULT_BOUNDS,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         render_mode: str | None = None,
+        axis: Axis | str | None = None,
     ) -> None:
         super().__init__(num_envs, autoreset_mode, render_mode)
+        axis, plant, measures = resolve_axis(axis, plant, measures)
         self.core = ServoCore(
             scenario,
             split,
@@ -407,6 +440,7 @@ class VFServoVectorEnv(_BatchVectorEnv):
             measures,
             weights,
             bounds,
+            axis,
         )
         n = self.num_envs
         self.single_observation_space, self.single_action_space = servo_spaces()

@@ -3,7 +3,7 @@
 One kernel (:func:`run_segment`) over plain arrays and scalars, compiled by numba with
 ``cache=True`` (where it can write one) and no fastmath, so its floating-point operations
 are IEEE double in the written order and agree bit for bit with :mod:`vfgym.plant.reference`.
-The equations are those of ``MODEL.md`` §1–§3; their order within a tick is:
+The equations are those of ``docs/model.md`` §1–§3; their order within a tick is:
 
 1. pulse source: V-F controller on the command ``cmd[i]`` (or an external pulse array);
 2. servo: encoder count change since the last tick into the position counter (with the
@@ -262,7 +262,7 @@ def stop_within_tick(theta, omega, f, net, tc, damp, inv_j, T):
 
 @numba.njit(cache=CACHE, fastmath=False, nogil=True, inline="always")
 def vf_tick(P, n, s, e_prev, delta, value, limit, step, law):
-    """One tick of the V-F controller (MODEL.md §1): returns (pulse, sum, limited error).
+    """One tick of the V-F controller (docs/model.md §1): returns (pulse, sum, limited error).
 
     Error against the pulse counter, the error limit, the acceleration law (0 = rise:
     only growth away from zero is held to value/k a tick; 1 = slew: both ways), the

@@ -13,7 +13,21 @@ from vfgym.report._comparison import Column, Report
 
 @dataclass(frozen=True)
 class TableColumn:
-    """A column of the printed table: the measure's key, a header, its unit and scale."""
+    """A column of the printed table.
+
+    Parameters
+    ----------
+    key : str
+        The measure, as :meth:`Column.values` takes it.
+    header : str
+        The column's header.
+    unit : str
+        The unit shown after the header (after scaling).
+    scale : float
+        Factor from the measure's unit to the shown one (1e3: s to ms).
+    fmt : str
+        Format spec of the values.
+    """
 
     key: str
     header: str
@@ -86,7 +100,18 @@ def _count(col: Column, key: str = "feasible") -> str:
 
 
 def format_table(report: Report) -> str:
-    """The report as text: per scenario, in aggregate (spread), and win/loss."""
+    """The report as text: per scenario, in aggregate (spread), and win/loss.
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+
+    Returns
+    -------
+    str
+        The table, one line per row.
+    """
     lines: list[str] = []
     ns = len(report.scenarios)
     spec = f" '{report.scenario_spec}'" if report.scenario_spec else ""
@@ -179,8 +204,21 @@ def format_table(report: Report) -> str:
 
 
 def markdown_table(report: Report, measures: Sequence[TableColumn] = TABLE_COLUMNS) -> str:
-    """Aggregate table as Markdown: per controller, each measure's median [IQR]; then the
-    win/loss of each tuned candidate (for README pages)."""
+    """Aggregate table as Markdown (for README pages).
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+    measures : sequence of TableColumn
+        The columns to show.
+
+    Returns
+    -------
+    str
+        Per controller, each measure's median [IQR]; then the win/loss of each tuned
+        candidate.
+    """
     head = ["controller", "n", *[f"{m.header}{_unit(m)}" for m in measures]]
     # n: scenarios where the controller applies (a pulse source cannot follow a sine)
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -216,9 +254,20 @@ def markdown_table(report: Report, measures: Sequence[TableColumn] = TABLE_COLUM
 
 
 def markdown_costs(report: Report) -> str:
-    """Per-scenario cost of every controller as Markdown (``*``: a constraint violated;
-    ``†``: did not arrive, i.e. not settled in the in-position window at the scenario's
-    end, or a sine not followed; n/a: the controller does not apply)."""
+    """Per-scenario cost of every controller as Markdown.
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+
+    Returns
+    -------
+    str
+        One row per scenario; ``*`` marks a violated constraint, ``†`` a run that did not
+        arrive (not settled in the in-position window at the scenario's end, or a sine not
+        followed), n/a a controller that does not apply.
+    """
     cols = report.columns
     head = ["scenario", *[c.label for c in cols]]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]

@@ -16,8 +16,9 @@ Cost of one run (lower is better; weights in :class:`CostWeights`; :class:`CostT
          + torque · time at the torque limit / ideal_time
          + [not arrived] · (unsettled + arrival · arrival constraint)
 
-ideal_time is the bang–coast–bang time at δ·f and the motor's acceleration limit, so a
-perfect move costs about 1 whatever its length, and scenarios average fairly.
+ideal_time is the bang–coast–bang time at δ·f and the loaded motor's usable acceleration
+(:func:`vfgym.moves.scenarios.ideal_move_time_s`), so a perfect move costs about 1
+whatever its length, and scenarios average fairly.
 
 The first four terms can be known while the move runs: the VFServo-v0 env's running cost
 is the same formula, compiled, on the measures streamed so far
@@ -39,7 +40,8 @@ never moves is the extreme case: on the paper's 10 rad step it ends 1,630 window
 
 Constraints (feasible when ≤ 0; :class:`Bounds`):
 
-- ``accel``: peak pulse-train acceleration / limit − 1 − its one-pulse quantisation / limit
+- ``accel``: peak pulse-train acceleration / limit − 1 − its one-pulse quantisation / limit,
+  the limit being the loaded motor's usable acceleration (:attr:`vfgym.Motor.usable_accel_rad_s2`)
 - ``torque``: time at the torque limit − ``Bounds.torque_limit_time_s``
 - ``overshoot``: overshoot − ``Bounds.overshoot_windows`` in-position windows
 - ``arrival``: point-to-point, (|final error| − window) / window, the in-position windows
@@ -76,11 +78,26 @@ FOLLOW_RATIO = 1.0 / math.sqrt(2.0)
 
 @dataclass(frozen=True)
 class CostWeights:
-    """Weights of the scalar cost (see the module docstring).
+    """Weights of the scalar cost (the formula: the module docstring, docs/model.md §6).
 
-    ``unsettled`` and ``arrival`` price a run that does not arrive: a fixed penalty, and
-    one per in-position window still to go (per unit of the tracking constraint for a
-    moving reference), the same price per window as an overshoot.
+    Parameters
+    ----------
+    time : float
+        Weight of move time / ideal time (point-to-point moves).
+    tracking : float
+        Weight of RMS tracking error / 10 % of the amplitude (a moving reference).
+    overshoot : float
+        Weight of the overshoot in in-position windows.
+    accel : float
+        Weight of the acceleration violation max(0, accel constraint).
+    torque : float
+        Weight of the time at the torque limit / ideal time.
+    unsettled : float
+        The arrival term's fixed part: added when the run does not arrive.
+    arrival : float
+        The arrival term's price per unit of the arrival constraint (per in-position
+        window still to go; for a moving reference, per unit of the tracking
+        constraint): the same price per window as an overshoot.
     """
 
     time: float = 1.0
@@ -94,7 +111,15 @@ class CostWeights:
 
 @dataclass(frozen=True)
 class Bounds:
-    """Constraint bounds: overshoot in in-position windows, time at the torque limit (s)."""
+    """Bounds of the constraints (feasible when each constraint ≤ 0; docs/model.md §6).
+
+    Parameters
+    ----------
+    overshoot_windows : float
+        Overshoot allowed, in in-position windows.
+    torque_limit_time_s : float
+        Time allowed at the torque limit (s).
+    """
 
     overshoot_windows: float = 1.0
     torque_limit_time_s: float = 0.0
@@ -105,22 +130,38 @@ DEFAULT_BOUNDS = Bounds()
 
 
 class Yardsticks(NamedTuple):
-    """What a move's measures are judged against (fixed by the move, not the run)."""
+    """What a move's measures are judged against (fixed by the move, not the run).
+
+    What :func:`yardsticks` returns; :func:`score` and the compiled running cost
+    (:mod:`vfgym.scoring._cost_compiled`) both read them.
+
+    Attributes
+    ----------
+    ideal_time_s : float
+        Bang–coast–bang time of the moves (:meth:`vfgym.Scenario.ideal_time_s`; the
+        sine's duration for a moving reference).
+    window_rad : float
+        In-position half-width around the final command.
+    accel_limit_rad_s2 : float
+        The loaded motor's usable acceleration
+        (:attr:`vfgym.Motor.usable_accel_rad_s2`), the accel constraint's yardstick.
+    tracking : bool
+        A moving reference, judged by tracking error.
+    tracking_scale_rad : float
+        :data:`TRACKING_SCALE` × |amplitude|, the tracking term's unit.
+    reference_rms_rad : float
+        RMS of the command over the move: the tracking error of a motor that never moves.
+    arrival_unit_rad : float
+        The point-to-point arrival constraint's unit: the window, or one count if it is 0.
+    """
 
     ideal_time_s: float
-    """Bang–coast–bang time of the moves (the sine's duration for a moving reference)."""
     window_rad: float
-    """In-position half-width around the final command."""
     accel_limit_rad_s2: float
-    """The motor's acceleration limit, the accel constraint's yardstick."""
     tracking: bool
-    """A moving reference, judged by tracking error."""
     tracking_scale_rad: float
-    """:data:`TRACKING_SCALE` × |amplitude|, the tracking term's unit."""
     reference_rms_rad: float
-    """RMS of the command over the move: the tracking error of a motor that never moves."""
     arrival_unit_rad: float
-    """The point-to-point arrival constraint's unit: the window, or one count if it is 0."""
 
 
 @functools.lru_cache(maxsize=256)
@@ -139,13 +180,15 @@ def yardsticks(scenario: Scenario, plant: Plant, measures: Measures) -> Yardstic
     Returns
     -------
     Yardsticks
+        The move's ideal time, in-position window, usable acceleration and tracking and
+        arrival units.
     """
     cmd = scenario.command(plant)
     window = in_position_rad(measures, plant, float(cmd[-1]))
     return Yardsticks(
         ideal_time_s=scenario.ideal_time_s(plant),
         window_rad=window,
-        accel_limit_rad_s2=plant.motor.accel_limit_rad_s2,
+        accel_limit_rad_s2=plant.motor.usable_accel_rad_s2,
         tracking=scenario.tracking,
         tracking_scale_rad=TRACKING_SCALE * abs(scenario.distance_rad),
         reference_rms_rad=math.sqrt(float(np.dot(cmd, cmd)) / cmd.size),
@@ -154,15 +197,28 @@ def yardsticks(scenario: Scenario, plant: Plant, measures: Measures) -> Yardstic
 
 
 class CostTerms(NamedTuple):
-    """The cost's terms, in the order they are summed (see the module docstring)."""
+    """The cost's terms, in the order they are summed (see the module docstring).
+
+    Attributes
+    ----------
+    main : float
+        time · move time / ideal, or tracking · RMS error / its yardstick.
+    overshoot : float
+        overshoot · overshoot in in-position windows.
+    accel : float
+        accel · max(0, accel constraint).
+    torque : float
+        torque · time at the torque limit / ideal time.
+    arrival : float
+        0 for a run that arrives, else unsettled + arrival · arrival constraint
+        (:func:`arrival_term`).
+    """
 
     main: float
-    """time · move time / ideal, or tracking · RMS error / its yardstick."""
     overshoot: float
     accel: float
     torque: float
     arrival: float
-    """0 for a run that arrives, else unsettled + arrival · arrival constraint."""
 
     @property
     def running(self) -> float:
@@ -176,15 +232,27 @@ class CostTerms(NamedTuple):
 
 
 class Score(NamedTuple):
-    """One run scored: cost, constraints (:data:`CONSTRAINTS` order), objectives
-    (:data:`OBJECTIVES` order), the measures with the yardsticks, and the cost's terms."""
+    """One run scored: what :func:`score` returns.
+
+    Attributes
+    ----------
+    cost : float
+        The scalar cost (:attr:`CostTerms.total`).
+    constraints : numpy.ndarray
+        float, in the order of :data:`CONSTRAINTS`; feasible when each ≤ 0.
+    objectives : numpy.ndarray
+        float, in the order of :data:`OBJECTIVES`.
+    metrics : dict
+        The run's measures plus ``ideal_time_s``, ``time_ratio``, ``window_rad`` and
+        ``arrived``.
+    terms : CostTerms
+        The cost's terms.
+    """
 
     cost: float
     constraints: np.ndarray
     objectives: np.ndarray
     metrics: dict[str, Any]
-    """The run's measures plus ``ideal_time_s``, ``time_ratio``, ``window_rad`` and
-    ``arrived``."""
     terms: CostTerms
 
 
@@ -221,10 +289,12 @@ def arrival_term(c_arrival: float, weights: CostWeights) -> float:
     c_arrival : float
         The arrival constraint (:func:`arrival_constraint`).
     weights : CostWeights
+        Weights of the cost (``unsettled`` and ``arrival``).
 
     Returns
     -------
     float
+        The term, ≥ 0.
     """
     if c_arrival <= 0.0:
         return 0.0
@@ -239,24 +309,32 @@ def score(
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
 ) -> Score:
-    """Cost, constraints and objectives of one run's measures.
+    """Cost, constraints and objectives of one run's measures (docs/model.md §6).
 
     Parameters
     ----------
     m : dict
-        The run's measures (:func:`vfgym.plant.measures.from_acc`).
+        The run's measures, as :attr:`vfgym.Trace.metrics` gives them
+        (:func:`vfgym.plant.measures.from_acc`).
     scenario : Scenario
-        The move it ran.
+        The scenario run (point-to-point or a moving reference; its ideal time).
     plant : Plant
-        The plant it ran on (the scenario's load applied).
+        The plant it ran on, the scenario's load applied (usable acceleration, encoder
+        count).
     measures : Measures
-        The windows the measures were taken with.
+        Windows and bands the measures were taken with (the in-position window).
     weights : CostWeights
+        Weights of the cost.
     bounds : Bounds
+        Bounds of the constraints.
 
     Returns
     -------
     Score
+        The scalar cost; the constraint values in the order of :data:`CONSTRAINTS` and
+        the objectives in the order of :data:`OBJECTIVES` (float arrays of 4 and 3); the
+        measures merged with ``ideal_time_s``, ``time_ratio``, ``window_rad`` and
+        ``arrived``; and the cost's terms.
     """
     y = yardsticks(scenario, plant, measures)
     ideal, window, limit = y.ideal_time_s, y.window_rad, y.accel_limit_rad_s2

@@ -33,7 +33,7 @@ _jit = numba.njit(cache=K.CACHE, fastmath=False, nogil=True)
 K_TICKS = 0  # ticks of the whole move: the RMS tracking error is over all of them
 K_IDEAL = 1  # Yardsticks.ideal_time_s
 K_WIN = 2  # Yardsticks.window_rad
-K_LIMIT = 3  # Yardsticks.accel_limit_rad_s2
+K_LIMIT = 3  # Yardsticks.accel_limit_rad_s2 (Motor.usable_accel_rad_s2)
 K_TRACKING = 4  # 1: a moving reference (Yardsticks.tracking)
 K_TRK_SCALE = 5  # Yardsticks.tracking_scale_rad
 K_W_TIME = 6  # CostWeights.time

@@ -9,6 +9,7 @@ from dataclasses import asdict, dataclass, fields
 from typing import Any
 
 from vfgym._validate import check_choice, check_int, check_real
+from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.scenarios import Scenario, scenario_set
 from vfgym.params import ACCEL_LAWS
 
@@ -38,6 +39,11 @@ def _laws(v: Any) -> tuple[str, ...]:
 def _check_scenario_fields(cfg: Any) -> None:
     """Normalise and check the scenario-set and law fields a sweep and a grid share."""
     s = object.__setattr__
+    if cfg.axis is not None:
+        s(cfg, "axis", str(cfg.axis))
+        load_axis(cfg.axis)  # a bad axis file fails here, naming itself
+    if cfg.scenarios is None:  # an axis is tuned on its train moves
+        s(cfg, "scenarios", "paper-step" if cfg.axis is None else "train")
     if isinstance(cfg.scenarios, (list, tuple)):
         s(cfg, "scenarios", ",".join(str(x) for x in cfg.scenarios))
     s(cfg, "scenarios", str(cfg.scenarios))
@@ -64,10 +70,32 @@ class _Options:
     scenario_count: int
     first_seed: int
     laws: tuple[str, ...]
+    axis: str | None
 
     @classmethod
     def resolve(cls, file_data: Any = None, cli: dict[str, Any] | None = None, source: str = ""):
-        """Defaults, then a config file's values, then the command line's (not None)."""
+        """A configuration from its defaults, then a config file's values, then the
+        command line's.
+
+        Parameters
+        ----------
+        file_data : dict or None
+            A config file's mapping (``-`` in keys read as ``_``); unknown keys raise.
+        cli : dict or None
+            Command-line options; those that are ``None`` (not given) are skipped.
+        source : str
+            Names the file in error messages.
+
+        Returns
+        -------
+        SweepConfig or GridConfig
+            The validated configuration.
+
+        Raises
+        ------
+        ValueError
+            If the file is not a mapping, has an unknown key, or a value is out of range.
+        """
         data: dict[str, Any] = {}
         if file_data is not None:
             if not isinstance(file_data, dict):
@@ -77,11 +105,34 @@ class _Options:
         return cls(**data)
 
     def to_dict(self) -> dict[str, Any]:
+        """The configuration as plain data (for ``config.yaml``).
+
+        Returns
+        -------
+        dict
+            Field name to value, ``laws`` as a list.
+        """
         d = asdict(self)  # type: ignore[call-overload]
         d["laws"] = list(self.laws)
         return d
 
+    def load_axis(self) -> Axis | None:
+        """The axis file's :class:`~vfgym.moves.axis.Axis`, or ``None`` (the paper's)."""
+        return None if self.axis is None else load_axis(self.axis)
+
     def scenario_list(self) -> list[Scenario]:
+        """The scenarios the configuration names.
+
+        Returns
+        -------
+        list of Scenario
+            On an axis, ``train`` / ``test`` are its move sets (``scenario_count`` and
+            ``first_seed`` do not apply); else :func:`vfgym.scenario_set` of
+            ``scenarios``, ``scenario_count``, ``first_seed``.
+        """
+        axis = self.load_axis()
+        if axis is not None:
+            return axis.scenario_set(self.scenarios)
         return scenario_set(self.scenarios, self.scenario_count, self.first_seed)
 
 
@@ -89,21 +140,63 @@ class _Options:
 class SweepConfig(_Options):
     """What ``vfgym sweep`` does; every field is a command-line option and a config key.
 
-    scenarios: a scenario set spec (:func:`vfgym.scenario_set`); scenario_count and
-    first_seed size the ``train`` / ``test`` sets. laws: the acceleration laws searched
-    (one law: fixed). objective: ``cost`` or ``pareto`` (default: pareto for nsga2).
-    trials: completed trials the study ends with (all workers together). timeout: seconds
-    after which a worker starts no new trial. storage: see :data:`STORAGE_HELP`.
-    study: the study's name, also the run folder's (default: config name + time).
-    heartbeat, grace: seconds between a running trial's heartbeats, and without one
-    before it is taken as dead (RDB storages). grid_points: values per dimension for the
-    grid sampler.
+    Parameters
+    ----------
+    scenarios : str
+        A scenario set spec (:func:`vfgym.scenario_set`; a list is joined with commas);
+        default ``train`` on an axis, else ``paper-step``.
+    scenario_count : int
+        Random draws of a ``train`` / ``test`` set, ≥ 1.
+    first_seed : int
+        Seed of the first draw, ≥ 0.
+    axis : str or None
+        An axis file (:mod:`vfgym.moves.axis`): its plant and measures, and ``train`` /
+        ``test`` its move sets.
+    laws : tuple of str
+        The acceleration laws searched (one law: fixed), from
+        :data:`vfgym.params.ACCEL_LAWS`; a comma-separated string is split.
+    sampler : str
+        One of :data:`SAMPLERS`.
+    objective : str or None
+        ``cost`` or ``pareto`` (:data:`FORMS`); default: pareto for nsga2, else cost.
+    trials : int
+        Completed trials the study ends with (all workers together), ≥ 1.
+    timeout : float or None
+        Seconds after which a worker starts no new trial.
+    workers : int
+        Worker processes sharing the study, 1 to 256.
+    seed : int or None
+        The sampler's seed (``None``: unseeded).
+    storage : str
+        ``sqlite``, ``journal`` or a ``postgresql://`` URL (see :data:`STORAGE_HELP`).
+    study : str or None
+        The study's name, also the run folder's (default: config name + time).
+    runs_dir : str
+        Folder under which the run folder is made.
+    reference : str or None
+        A grid run (or its ``reference.yaml``) to report the gap to.
+    grid_points : int
+        Values per dimension for the grid sampler, 1 to 64.
+    plots : bool
+        Draw the history and Pareto plots.
+    progress : bool
+        Show a progress bar.
+    heartbeat : int
+        Seconds between a running trial's heartbeats (RDB storages), ≥ 1.
+    grace : int or None
+        Seconds without a heartbeat before a trial is taken as dead.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range or the objective does not suit the sampler.
     """
 
-    scenarios: str = "paper-step"
+    scenarios: str | None = None
     scenario_count: int = 16
     first_seed: int = 0
     laws: tuple[str, ...] = ("rise",)
+    axis: str | None = None
     sampler: str = "tpe"
     objective: str | None = None
     trials: int = 100
@@ -161,7 +254,26 @@ def _keys(data: dict, cls: type, source: str) -> dict[str, Any]:
 
 
 def check_name(option: str, name: Any) -> str:
-    """A study or run name: it names a folder, so letters, digits, '.', '_', '-'."""
+    """Check a study or run name: it names a folder.
+
+    Parameters
+    ----------
+    option : str
+        The option's name, for the error message.
+    name : str
+        The name: letters, digits, '.', '_' and '-', starting with a letter or digit, at
+        most 100 characters.
+
+    Returns
+    -------
+    str
+        ``name``.
+
+    Raises
+    ------
+    ValueError
+        If the name is not allowed.
+    """
     if not isinstance(name, str) or not NAME_RE.match(name):
         raise ValueError(
             f"{option}={name!r} is not allowed: letters, digits, '.', '_' and '-' "

@@ -17,6 +17,7 @@ import numpy as np
 from vfgym import space
 from vfgym._validate import check_int
 from vfgym.io.runs import write_text
+from vfgym.moves.axis import axis_digest, axis_kwargs
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.scoring import CONSTRAINTS, evaluate
 from vfgym.tuning._config import _bool, _check_scenario_fields, _Options, check_name
@@ -25,15 +26,42 @@ from vfgym.tuning._objective import aggregate, settings_key
 
 @dataclass(frozen=True)
 class GridConfig(_Options):
-    """What ``vfgym grid`` does: ``points`` values per dimension over the whole space, then
-    ``refine`` rounds that re-grid (``points`` per dimension) the neighbourhood of the
-    ``keep`` best distinct points, one grid step either side; ``batch`` settings per
-    compiled call."""
+    """What ``vfgym grid`` does; every field is a command-line option and a config key.
 
-    scenarios: str = "paper-step"
+    ``points`` values per dimension over the whole space, then ``refine`` rounds that
+    re-grid (``points`` per dimension) the neighbourhood of the ``keep`` best distinct
+    points, one grid step either side.
+
+    Parameters
+    ----------
+    scenarios, scenario_count, first_seed, laws
+        The scenario set and the acceleration laws searched, as in :class:`SweepConfig`.
+    points : int
+        Values per dimension, 2 to 64.
+    refine : int
+        Refinement rounds, 0 to 10.
+    keep : int
+        Best distinct points refined around each round, 1 to 64.
+    batch : int
+        Settings per compiled call.
+    name : str or None
+        The run's name (default: config name + time).
+    runs_dir : str
+        Folder under which the run folder is made.
+    progress : bool
+        Show a progress bar.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range.
+    """
+
+    scenarios: str | None = None
     scenario_count: int = 16
     first_seed: int = 0
     laws: tuple[str, ...] = ("rise",)
+    axis: str | None = None
     points: int = 12
     refine: int = 2
     keep: int = 4
@@ -62,11 +90,27 @@ def _unit_axes(center: np.ndarray, step: float, points: int) -> list[np.ndarray]
 def run_grid(
     cfg: GridConfig, progress: Callable[[int, int, float], None] | None = None
 ) -> dict[str, Any]:
-    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`, one
-    compiled call per batch. Returns the rows (unit coordinates, law, level, cost,
-    worst constraints, feasible) and the best."""
+    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`.
+
+    One compiled call per batch.
+
+    Parameters
+    ----------
+    cfg : GridConfig
+        The grid.
+    progress : callable or None
+        Called after each batch with (settings done, settings in all, best feasible cost).
+
+    Returns
+    -------
+    dict
+        ``rows``: one dict per setting (level, settings, accel_law, unit coordinates
+        ``u``, mean cost, worst constraints, feasible); ``best``: the feasible row of
+        least cost (or of least cost, if none is feasible); ``scenarios``.
+    """
     scenarios = cfg.scenario_list()
-    evaluate(PAPER_SETTINGS, scenarios)  # compile/load once before timing batches
+    on_axis = axis_kwargs(cfg.load_axis())
+    evaluate(PAPER_SETTINGS, scenarios, **on_axis)  # compile/load once before timing batches
     levels: list[tuple[int, list[Settings]]] = [(0, space.grid(cfg.points, cfg.laws))]
     total = len(levels[0][1]) * (1 + cfg.refine * cfg.keep)
     rows: dict[tuple, dict[str, Any]] = {}
@@ -99,7 +143,7 @@ def run_grid(
         todo = [s for s in levels[-1][1] if settings_key(s) not in rows]
         for i in range(0, len(todo), cfg.batch):
             chunk = todo[i : i + cfg.batch]
-            agg = aggregate(evaluate(chunk, scenarios))
+            agg = aggregate(evaluate(chunk, scenarios, **on_axis))
             for j, s in enumerate(chunk):
                 rows[settings_key(s)] = {
                     "level": level,
@@ -121,6 +165,20 @@ def run_grid(
 
 
 def write_grid_csv(rows: list[dict[str, Any]], path: Path) -> Path:
+    """Write the grid's rows as CSV (``grid.csv``), floats in full precision.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The rows of :func:`run_grid`.
+    path : pathlib.Path
+        The file, written atomically.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(
@@ -142,7 +200,20 @@ def write_grid_csv(rows: list[dict[str, Any]], path: Path) -> Path:
 
 
 def grid_reference(cfg: GridConfig, result: dict[str, Any]) -> dict[str, Any]:
-    """``reference.yaml``: the grid's best, in the Settings-YAML format."""
+    """``reference.yaml``: the grid's best, in the Settings-YAML format.
+
+    Parameters
+    ----------
+    cfg : GridConfig
+        The grid that ran.
+    result : dict
+        What :func:`run_grid` returned.
+
+    Returns
+    -------
+    dict
+        The best settings, its cost, constraints and feasibility, and how the grid ran.
+    """
     b = result["best"]
     return {
         "settings": space.settings_to_dict(b["settings"]),
@@ -151,6 +222,7 @@ def grid_reference(cfg: GridConfig, result: dict[str, Any]) -> dict[str, Any]:
         "constraints": dict(zip(CONSTRAINTS, [float(x) for x in b["constraints"]], strict=True)),
         "scenarios": [s.name for s in result["scenarios"]],
         "laws": list(cfg.laws),
+        "axis": axis_digest(cfg.load_axis()),
         "points": cfg.points,
         "refine": cfg.refine,
         "keep": cfg.keep,

@@ -13,14 +13,26 @@ import numpy as np
 
 from vfgym import space
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import Settings
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
 
 
 def aggregate(ev: Evaluation) -> dict[str, np.ndarray]:
-    """Per controller: mean cost, worst (max) constraint over the scenarios, feasibility
-    (every constraint ≤ 0 on every scenario) and the objectives' means."""
+    """One controller's results over the scenarios, as a sweep scores a setting.
+
+    Parameters
+    ----------
+    ev : Evaluation
+        What :func:`vfgym.evaluate` returned.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Per controller: ``cost`` (mean over the scenarios), ``constraints`` (worst, max,
+        over the scenarios), ``feasible`` (every constraint ≤ 0 on every scenario) and
+        ``objectives`` (means).
+    """
     cons = np.nanmax(ev.constraints, axis=1)
     return {
         "cost": ev.mean_cost,
@@ -31,19 +43,51 @@ def aggregate(ev: Evaluation) -> dict[str, np.ndarray]:
 
 
 def settings_key(s: Settings) -> tuple:
+    """A hashable key of settings, equal for equal settings.
+
+    Parameters
+    ----------
+    s : Settings
+        The settings.
+
+    Returns
+    -------
+    tuple
+        (value_rad, error_limit_rad, k, ts_over_tf, accel_law).
+    """
     return (s.value_rad, s.error_limit_rad, s.k, s.ts_over_tf, s.accel_law)
 
 
 class Objective:
-    """Settings from the trial → :func:`vfgym.evaluate` on the scenarios → cost (or the
-    three objectives), with the worst constraints and the settings as user attributes.
+    """Settings from the trial → :func:`vfgym.evaluate` on the scenarios (on ``plant``
+    with ``measures``: an axis's) → cost (or the three objectives), with the worst
+    constraints and the settings as user attributes.
 
     A setting already scored (in this process, or by a completed trial of the study) is
     not simulated again: the trial copies that result and records ``cached_from``.
+
+    Parameters
+    ----------
+    scenarios : list of Scenario
+        The scenarios each setting is scored on.
+    laws : tuple of str
+        The acceleration laws searched.
+    form : str
+        ``cost`` (one objective) or ``pareto`` (the three objectives).
     """
 
-    def __init__(self, scenarios: list[Scenario], laws: tuple[str, ...], form: str) -> None:
+    def __init__(
+        self,
+        scenarios: list[Scenario],
+        laws: tuple[str, ...],
+        form: str,
+        *,
+        plant: Plant = PAPER_PLANT,
+        measures: Measures = DEFAULT_MEASURES,
+    ) -> None:
         self.scenarios = scenarios
+        self.plant = plant
+        self.measures = measures
         self.laws = laws
         self.form = form
         self.cache: dict[tuple, tuple[Any, dict[str, Any]]] = {}
@@ -83,8 +127,23 @@ class Objective:
         return values
 
     def score(self, settings: Settings) -> tuple[Any, dict[str, Any]]:
-        """Values and user attributes of one setting (one batched evaluation)."""
-        agg = aggregate(evaluate(settings, self.scenarios))
+        """Values and user attributes of one setting (one batched evaluation).
+
+        Parameters
+        ----------
+        settings : Settings
+            The setting.
+
+        Returns
+        -------
+        tuple
+            ``(values, attrs)``: the mean cost (``cost`` form) or the three objectives'
+            means, and the trial's user attributes (settings, cost, constraints,
+            feasible, objectives).
+        """
+        agg = aggregate(
+            evaluate(settings, self.scenarios, plant=self.plant, measures=self.measures)
+        )
         attrs = {
             "settings": space.settings_to_dict(settings),
             "cost": float(agg["cost"][0]),

@@ -51,7 +51,18 @@ def _worker_alive(worker: str) -> bool | None:
 
 
 def counts(study: Any) -> dict[str, int]:
-    """Trials of the study by state (complete, running, waiting, fail)."""
+    """Trials of the study by state.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+
+    Returns
+    -------
+    dict of str to int
+        Counts of ``complete``, ``running``, ``waiting``, ``fail`` and ``pruned`` trials.
+    """
     out = {"complete": 0, "running": 0, "waiting": 0, "fail": 0, "pruned": 0}
     for t in study.get_trials(deepcopy=False):
         out[t.state.name.lower()] += 1

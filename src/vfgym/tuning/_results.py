@@ -19,7 +19,7 @@ import numpy as np
 from vfgym import space
 from vfgym.io.runs import read_yaml, write_text
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_SETTINGS, Settings
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, PAPER_SETTINGS, Measures, Plant, Settings
 from vfgym.scoring import CONSTRAINTS, OBJECTIVES, evaluate
 from vfgym.tuning._config import SweepConfig
 from vfgym.tuning._objective import aggregate
@@ -34,9 +34,21 @@ def _arrives(trial: Any) -> bool:
 
 
 def best_trial(study: Any) -> Any:
-    """The completed trial with the lowest cost among the feasible ones; if none is, among
-    those that arrive on every scenario (a move that never gets there is no candidate while
-    one that does exists); else among all."""
+    """The sweep's best trial.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+
+    Returns
+    -------
+    optuna.trial.FrozenTrial or None
+        The completed trial with the lowest cost among the feasible ones; if none is, among
+        those that arrive on every scenario (a move that never gets there is no candidate
+        while one that does exists); else among all. Ties go to the earlier trial; ``None``
+        before any completes.
+    """
     import optuna
 
     done = [
@@ -52,12 +64,37 @@ def best_trial(study: Any) -> Any:
 
 
 def trial_settings(trial: Any) -> Settings:
+    """The settings a trial scored.
+
+    Parameters
+    ----------
+    trial : optuna.trial.FrozenTrial
+        A trial with the ``settings`` user attribute :class:`Objective` sets.
+
+    Returns
+    -------
+    Settings
+        Its settings.
+    """
     return space.settings_from_dict(trial.user_attrs["settings"], source=f"trial {trial.number}")
 
 
 def write_trials_csv(study: Any, path: Path) -> Path:
-    """The trials as CSV, one row each, with the columns ``study.trials_dataframe()`` names
-    (number, value(s), times, params_*, user_attrs_*, state), written atomically."""
+    """The trials as CSV (``trials.csv``), one row each, written atomically.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+    path : pathlib.Path
+        The file.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``. Its columns are those ``study.trials_dataframe()`` names (number,
+        value(s), times, params_*, user_attrs_*, state); lists and dicts as JSON.
+    """
     trials = study.get_trials(deepcopy=False)
     names = study.metric_names or (
         ["value"] if len(study.directions) == 1 else [str(i) for i in range(len(study.directions))]
@@ -90,8 +127,23 @@ def _cell(v: Any) -> Any:
 
 
 def write_plots(study: Any, run_dir: Path, form: str) -> dict[str, str]:
-    """Optimisation history, parameter importances and (Pareto form) the Pareto front as
-    PNG; a plot Optuna cannot draw (too few trials, ...) is skipped with its reason."""
+    """Optimisation history, parameter importances and (Pareto form) the Pareto front as PNG.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+    run_dir : pathlib.Path
+        The run folder the PNG files go to.
+    form : str
+        ``cost`` or ``pareto``.
+
+    Returns
+    -------
+    dict of str to str
+        Per plot, its file name, or ``skipped: <reason>`` for a plot Optuna cannot draw
+        (too few trials …).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -137,16 +189,42 @@ def write_plots(study: Any, run_dir: Path, form: str) -> dict[str, str]:
 ROW_KEYS = ("settle_ms", "overshoot_mrad", "overshoot_win", "accel_krad_s2", "accel_ratio", "cost")
 
 
-def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> dict[str, Any]:
-    """The tuned settings against the paper's on each scenario and over the set: settling
-    time, overshoot, peak pulse-train acceleration against the motor's limit, cost."""
-    ev = evaluate([PAPER_SETTINGS, best], scenarios)
+def compare(
+    best: Settings,
+    scenarios: list[Scenario],
+    label: str = "tuned",
+    *,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+) -> dict[str, Any]:
+    """The tuned settings against the paper's on each scenario and over the set.
+
+    Parameters
+    ----------
+    best : Settings
+        The tuned settings.
+    scenarios : list of Scenario
+        The sweep's scenarios.
+    label : str
+        The tuned settings' name in the table.
+    plant, measures
+        The plant and measures the scenarios run on (an axis's).
+
+    Returns
+    -------
+    dict
+        ``rows``: per scenario and settings, the settling time, overshoot, peak
+        pulse-train acceleration against the loaded motor's usable acceleration, cost and
+        feasibility; ``set``: the same over the set (mean settling, worst overshoot and
+        acceleration, mean cost).
+    """
+    ev = evaluate([PAPER_SETTINGS, best], scenarios, plant=plant, measures=measures)
     agg = aggregate(ev)
     rows: list[dict[str, Any]] = []
     for si, sc in enumerate(scenarios):
         for ci, name in enumerate(("paper", label)):
             m = ev.metrics[ci][si]
-            limit = sc.plant().motor.accel_limit_rad_s2
+            limit = sc.plant(plant).motor.usable_accel_rad_s2
             rows.append(
                 {
                     "scenario": sc.name,
@@ -184,8 +262,19 @@ def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> 
 
 
 def format_comparison(cmp: dict[str, Any]) -> str:
-    """The comparison as a text table (set rows: mean settling, worst overshoot and
-    acceleration, mean cost)."""
+    """The comparison as a text table.
+
+    Parameters
+    ----------
+    cmp : dict
+        What :func:`compare` returned.
+
+    Returns
+    -------
+    str
+        One line per scenario and settings, then the set's rows (mean settling, worst
+        overshoot and acceleration, mean cost) when there are several scenarios.
+    """
     head = (
         f"{'scenario':14s} {'settings':8s} {'settle ms':>10s} {'overshoot mrad':>15s} "
         f"{'(windows)':>9s} {'peak accel krad/s2':>19s} {'/limit':>7s} {'cost':>7s} feasible"
@@ -211,17 +300,45 @@ def format_comparison(cmp: dict[str, Any]) -> str:
     lines.append(
         "settle: settling time into the in-position window (- a moving reference; * did not "
         "arrive: not settled at the end, or a sine not followed); accel: the pulse train's "
-        "peak over 1 ms against the motor's limit"
+        "peak over 1 ms against the limit (the loaded motor's usable acceleration)"
     )
     return "\n".join(lines)
 
 
 def find_reference(
-    cfg_reference: str | None, runs_dir: str, scenarios: list[Scenario], laws: tuple[str, ...]
+    cfg_reference: str | None,
+    runs_dir: str,
+    scenarios: list[Scenario],
+    laws: tuple[str, ...],
+    axis: str | None = None,
 ) -> tuple[dict[str, Any], Path] | None:
-    """A grid reference for these scenarios and laws: ``--reference PATH`` (a
-    ``reference.yaml`` or a grid run folder), else the best of ``RUNS/grid/*/reference.yaml``
-    that matches."""
+    """A grid reference for these scenarios and laws.
+
+    Parameters
+    ----------
+    cfg_reference : str or None
+        ``--reference PATH``: a ``reference.yaml`` or a grid run folder; ``None`` searches
+        ``runs_dir``.
+    runs_dir : str
+        The runs folder whose ``grid/*/reference.yaml`` are searched.
+    scenarios : list of Scenario
+        The sweep's scenarios; a reference must be for the same.
+    laws : tuple of str
+        The sweep's laws; a reference must be for the same.
+    axis : str or None
+        The axis's :func:`~vfgym.moves.axis.axis_digest`; a reference must be for the same.
+
+    Returns
+    -------
+    tuple of (dict, pathlib.Path) or None
+        The reference's data and file (the best matching one when searching), or ``None``
+        when none matches.
+
+    Raises
+    ------
+    ValueError
+        If the given reference is not a grid reference, or is for other scenarios or laws.
+    """
     names = [s.name for s in scenarios]
     if cfg_reference:
         p = Path(cfg_reference)
@@ -234,6 +351,11 @@ def find_reference(
                 f"reference={str(p)!r} is for scenarios {data.get('scenarios')} and laws "
                 f"{data.get('laws')}, not {names} and {list(laws)}"
             )
+        if data.get("axis") != axis:
+            raise ValueError(
+                f"reference={str(p)!r} is for axis {data.get('axis')}, not {axis}: give a "
+                "grid reference made with the same --axis"
+            )
         return data, p
     found = []
     for p in sorted(Path(runs_dir).glob("grid/*/reference.yaml")):
@@ -245,6 +367,7 @@ def find_reference(
             isinstance(data, dict)
             and data.get("scenarios") == names
             and list(data.get("laws", [])) == list(laws)
+            and data.get("axis") == axis
             and isinstance(data.get("cost"), (int, float))
         ):
             found.append((float(data["cost"]), str(p), data))
@@ -255,15 +378,47 @@ def find_reference(
 
 
 def gap_pct(cost: float, ref_cost: float) -> float:
-    """How far a cost is above the reference's, in % (negative: below it)."""
+    """How far a cost is above the reference's.
+
+    Parameters
+    ----------
+    cost : float
+        The sweep's best cost.
+    ref_cost : float
+        The grid reference's cost.
+
+    Returns
+    -------
+    float
+        100·(cost − ref)/ref, in % (negative: below the reference).
+    """
     return 100.0 * (cost - ref_cost) / ref_cost
 
 
 def best_record(
     study: Any, trial: Any, cfg: SweepConfig, spec: StorageSpec, scenarios: list[Scenario]
 ) -> dict[str, Any]:
-    """``best.yaml``: the settings (what ``vfgym evaluate --settings`` reads) and where
-    they come from."""
+    """``best.yaml``: the settings (what ``vfgym evaluate --settings`` reads) and their origin.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+    trial : optuna.trial.FrozenTrial
+        Its best trial (:func:`best_trial`).
+    cfg : SweepConfig
+        The sweep's configuration.
+    spec : StorageSpec
+        Where the study lives (shown without a password).
+    scenarios : list of Scenario
+        The sweep's scenarios.
+
+    Returns
+    -------
+    dict
+        The settings, cost, feasibility, constraints, objectives, and the study, storage,
+        trial, sampler, objective, scenarios and laws they come from.
+    """
     return {
         "settings": trial.user_attrs["settings"],
         "cost": trial.user_attrs["cost"],
@@ -277,4 +432,5 @@ def best_record(
         "objective": cfg.objective,
         "scenarios": [s.name for s in scenarios],
         "laws": list(cfg.laws),
+        "axis": cfg.axis,
     }

@@ -24,8 +24,17 @@ STORAGE_HELP = "sqlite, journal, sqlite:///FILE, journal:FILE or postgresql://US
 
 @dataclass(frozen=True)
 class StorageSpec:
-    """Where a study lives: kind ``sqlite`` / ``journal`` / ``postgresql``, the URL Optuna
-    opens (the file path for a journal) and the file, if any."""
+    """Where a study lives, as :func:`resolve_storage` reads it.
+
+    Parameters
+    ----------
+    kind : str
+        ``sqlite``, ``journal`` or ``postgresql``.
+    url : str
+        The URL Optuna opens (the file path for a journal).
+    path : str or None
+        The storage's file, if any.
+    """
 
     kind: str
     url: str
@@ -38,12 +47,42 @@ class StorageSpec:
 
 
 def mask_url(url: str) -> str:
-    """``url`` with any password replaced by ``***``."""
+    """A URL fit to show.
+
+    Parameters
+    ----------
+    url : str
+        A storage URL.
+
+    Returns
+    -------
+    str
+        ``url`` with any password replaced by ``***``.
+    """
     return re.sub(r"^([a-z0-9+]+://[^:/@]*):[^@/]*@", r"\1:***@", url)
 
 
 def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
-    """The storage named by ``--storage`` (see :data:`STORAGE_HELP`); bad input raises."""
+    """The storage named by ``--storage``.
+
+    Parameters
+    ----------
+    text : str
+        ``sqlite``, ``journal``, ``sqlite:///FILE``, ``journal:FILE`` or
+        ``postgresql://USER:PASS@HOST/DB`` (:data:`STORAGE_HELP`).
+    run_dir : pathlib.Path
+        The run folder, where ``sqlite`` and ``journal`` put their file.
+
+    Returns
+    -------
+    StorageSpec
+        The storage, with absolute file paths.
+
+    Raises
+    ------
+    ValueError
+        If the text names no storage, or a driver vfgym does not support.
+    """
     t = str(text).strip()
     if t == "sqlite":
         p = (run_dir / "study.db").resolve()
@@ -80,9 +119,31 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
 
 
 def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = None) -> Any:
-    """The Optuna storage for ``spec``: RDB (with heartbeat and retry of stale trials) for
-    SQLite and PostgreSQL, JournalStorage on a file. Unreachable storages raise
-    ``ValueError`` naming ``storage``."""
+    """The Optuna storage for ``spec``.
+
+    RDB (with heartbeat and retry of stale trials) for SQLite and PostgreSQL, a SQLite
+    file in write-ahead-log mode; JournalStorage on a file, its appends under ``flock``.
+
+    Parameters
+    ----------
+    spec : StorageSpec
+        The storage.
+    heartbeat : int
+        Seconds between a running trial's heartbeats (RDB).
+    grace : int or None
+        Seconds without a heartbeat before a trial is taken as dead (default twice the
+        heartbeat).
+
+    Returns
+    -------
+    optuna.storages.BaseStorage
+        The opened storage.
+
+    Raises
+    ------
+    ValueError
+        Naming ``storage``, if it cannot be opened or its database driver is missing.
+    """
     import optuna
 
     with warnings.catch_warnings():

@@ -8,6 +8,7 @@ import warnings
 from typing import Any
 
 from vfgym import space
+from vfgym.moves.axis import axis_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import OBJECTIVES
@@ -21,7 +22,18 @@ SAMPLER_NEEDS = {"cmaes": ("cmaes",), "gp": ("torch", "scipy")}
 
 
 def check_sampler(cfg: SweepConfig) -> None:
-    """Raise ``ValueError`` naming ``sampler`` when a package it needs is missing."""
+    """Check that the packages the sampler needs are installed.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+
+    Raises
+    ------
+    ValueError
+        Naming ``sampler``, when a package it needs (:data:`SAMPLER_NEEDS`) is missing.
+    """
     import importlib.util
 
     missing = [m for m in SAMPLER_NEEDS.get(cfg.sampler, ()) if not importlib.util.find_spec(m)]
@@ -32,7 +44,20 @@ def check_sampler(cfg: SweepConfig) -> None:
 
 
 def make_sampler(cfg: SweepConfig, seed: int | None) -> Any:
-    """The Optuna sampler named by ``cfg.sampler``, seeded; constrained where it can be."""
+    """The Optuna sampler named by ``cfg.sampler``.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+    seed : int or None
+        The sampler's seed (``None``: unseeded).
+
+    Returns
+    -------
+    optuna.samplers.BaseSampler
+        TPE (multivariate), CMA-ES, GP, NSGA-II, grid or random.
+    """
     import optuna
 
     s = optuna.samplers
@@ -67,14 +92,37 @@ def grid_space(cfg: SweepConfig) -> dict[str, list[Any]]:
 
 
 def trial_budget(cfg: SweepConfig) -> int:
-    """Trials the study ends with: ``trials``, but at most the grid (plus the baseline)."""
+    """Trials the study ends with.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+
+    Returns
+    -------
+    int
+        ``cfg.trials``, but for the grid sampler at most the grid plus the baseline.
+    """
     if cfg.sampler == "grid":
         return min(cfg.trials, cfg.grid_points ** len(space.SPACE) * len(cfg.laws) + 1)
     return cfg.trials
 
 
 def baseline_params(laws: tuple[str, ...]) -> dict[str, Any]:
-    """The paper's settings as trial parameters (its law if searched, else the fixed one)."""
+    """The paper's settings as trial parameters, the study's first (enqueued) trial.
+
+    Parameters
+    ----------
+    laws : tuple of str
+        The laws searched.
+
+    Returns
+    -------
+    dict
+        The parameters; ``accel_law`` only when several laws are searched (the paper's,
+        if among them, else the first).
+    """
     d = space.settings_to_dict(PAPER_SETTINGS)
     law = d.pop("accel_law")
     if len(laws) > 1:
@@ -87,14 +135,38 @@ def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> dict[str, Any]:
         "scenarios": [s.name for s in scenarios],
         "laws": list(cfg.laws),
         "objective": cfg.objective,
+        "axis": axis_digest(cfg.load_axis()),
     }
 
 
 def create_or_load(
     storage: Any, name: str, cfg: SweepConfig, scenarios: list[Scenario], sampler: Any = None
 ) -> tuple[Any, bool]:
-    """The study ``name``: created with the baseline enqueued first, or loaded (and
-    checked to optimise the same thing). Returns (study, created)."""
+    """The study ``name``: created with the baseline enqueued first, or loaded.
+
+    Parameters
+    ----------
+    storage : optuna.storages.BaseStorage
+        Where it lives (:func:`open_storage`).
+    name : str
+        The study's name.
+    cfg : SweepConfig
+        The sweep's configuration.
+    scenarios : list of Scenario
+        The sweep's scenarios (a loaded study must optimise the same).
+    sampler : optuna.samplers.BaseSampler or None
+        The sampler to attach.
+
+    Returns
+    -------
+    tuple of (optuna.Study, bool)
+        The study, and whether it was created.
+
+    Raises
+    ------
+    ValueError
+        If a study of that name optimises other scenarios, laws or objectives.
+    """
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -117,7 +189,7 @@ def create_or_load(
         return study, True
     old = study.user_attrs.get(META_KEY)
     if old is not None:
-        for key in ("scenarios", "laws", "objective"):
+        for key in ("scenarios", "laws", "objective", "axis"):
             if old.get(key) != meta[key]:
                 raise ValueError(
                     f"study={name!r} already optimises {key}={old.get(key)!r}, not "
