@@ -258,11 +258,11 @@ def test_evaluate_pairs_equals_evaluate_pair_by_pair():
     got = evaluate_pairs(
         settings, eps, measures=DEFAULT_MEASURES, weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS
     )
-    for s, ep, (cost, metrics, cons) in zip(settings, eps, got, strict=True):
+    for s, ep, res in zip(settings, eps, got, strict=True):
         ev = evaluate(s, ep.scenario)
-        assert cost == ev.cost[0, 0]
-        assert np.array_equal(cons, ev.constraints[0, 0])
-        assert_same(metrics, ev.metrics[0][0])
+        assert res.cost == ev.cost[0, 0]
+        assert np.array_equal(res.constraints, ev.constraints[0, 0])
+        assert_same(res.metrics, ev.metrics[0][0])
 
 
 def test_a_bad_action_leaves_pending_autoresets_pending():

@@ -1,6 +1,6 @@
 """The compact table sweeps and the grid print (report.compact_rows / format_compact): the
 main job's table digit for digit from its best settings, its set rows from the per-scenario
-ones, and its marks (unsettled, moving reference, infeasible) on made-up columns."""
+ones, and its marks (did not arrive, moving reference, infeasible) on made-up columns."""
 
 # ruff: noqa: E501  (the table as printed)
 from __future__ import annotations
@@ -34,8 +34,9 @@ long-move      tuned        314.73           0.402      0.07               144.2
 
 set (3)        paper        122.60           1.024      0.17               144.2   1.030  3.9458 3/3
 set (3)        tuned        131.02           0.472      0.08               144.2   1.030  3.1899 3/3
-settle: settling time into the in-position window (* not settled; - a moving reference); \
-accel: the pulse train's peak over 1 ms against the limit (the loaded motor's usable acceleration)"""
+settle: settling time into the in-position window (- a moving reference; * did not arrive: \
+not settled at the end, or a sine not followed); accel: the pulse train's peak over 1 ms \
+against the limit (the loaded motor's usable acceleration)"""
 QUICK = ["paper-step", "short-move", "long-move"]
 
 
@@ -77,19 +78,21 @@ def test_rows_are_evaluates_and_the_set_aggregates_them():
 
 
 def _column(label, rows):
-    """A made-up column: (cost, feasible, settled, settling ms, overshoot mrad) per scenario."""
+    """A made-up column: (cost, feasible, arrived, settling ms, overshoot mrad) per scenario."""
     metrics = [
         {
             "settling_time_s": t / 1e3,
-            "settled": settled,
+            "arrived": arrived,
             "overshoot_rad": ov / 1e3,
             "window_rad": 6e-3,
             "peak_accel_pulse_rad_s2": 7e4,
             "accel_ratio_pulse": 0.5,
         }
-        for _, _, settled, t, ov in rows
+        for _, _, arrived, t, ov in rows
     ]
-    cons = np.array([[-1.0, 0.0, -0.5] if ok else [0.2, 0.0, -0.5] for _, ok, *_ in rows])
+    cons = np.array(
+        [[-1.0, 0.0, -0.5, -1.0] if ok else [0.2, 0.0, -0.5, 0.3] for _, ok, *_ in rows]
+    )
     cost = np.array([c for c, *_ in rows])
     return Column(label, "tuned", "", [None] * len(rows), cost, cons, metrics)
 

@@ -20,9 +20,16 @@ from vfgym.params import (
     PAPER_PLANT,
     Measures,
     Plant,
-    in_position_rad,
 )
-from vfgym.scoring import CONSTRAINTS, DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights
+from vfgym.scoring import (
+    CONSTRAINTS,
+    DEFAULT_BOUNDS,
+    DEFAULT_WEIGHTS,
+    Bounds,
+    CostWeights,
+    Yardsticks,
+    yardsticks,
+)
 
 SEED_LIMIT = 2**63 - 1
 """Scenario seeds are whole numbers in [0, SEED_LIMIT) (as :func:`vfgym.random_scenario`)."""
@@ -150,6 +157,8 @@ class Episode:
     window_rad: float
     scale_rad: float
     features: np.ndarray
+    yardsticks: Yardsticks
+    """What the scoring path judges the move against (ideal time, window, ...)."""
 
     @classmethod
     def make(cls, sc: Scenario, base: Plant, measures: Measures) -> Episode:
@@ -160,7 +169,8 @@ class Episode:
             )
         cmd = sc.command(plant)
         target = float(cmd[-1])
-        window = in_position_rad(measures, plant, target)
+        y = yardsticks(sc, plant, measures)
+        window = y.window_rad
         scale = max(abs(main_move(sc, plant)), abs(target), window, 1e-9)
         # the last change of the command: the first tick of its final run of equal values
         # (the plant is at 0 before tick 0); as vfgym.simulate.command_end_s finds it
@@ -173,10 +183,11 @@ class Episode:
             target_rad=target,
             command_end_s=float(last) / plant.tick_hz if last >= 0 else 0.0,
             command_end_tick=last + 1,
-            ideal_time_s=sc.ideal_time_s(plant),
+            ideal_time_s=y.ideal_time_s,
             window_rad=window,
             scale_rad=scale,
             features=scenario_features(sc, base, plant),
+            yardsticks=y,
         )
 
 

@@ -20,6 +20,7 @@ from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import pack
 from vfgym.plant.measures import from_acc
+from vfgym.scoring import _cost_compiled as CC
 from vfgym.scoring import score
 from vfgym.space import SPACE, from_action, to_action
 
@@ -176,28 +177,14 @@ class ServoCore:
         w[B.W_PRM : B.W_PRM + L.N_PARAMS] = pack(
             c.initial_settings, ep.plant, c.measures, ep.target_rad, n
         )
-        wt, bd = c.weights, c.bounds
-        sc = ep.scenario
+        w[B.W_COST : B.W_COST + CC.N_CONST] = CC.constants(ep.yardsticks, n, c.weights, c.bounds)
         cfg = {
             B.C_N: n,
             B.C_I: self.interval_ticks,
             B.C_END: ep.command_end_tick,
             B.C_HOLD: self.hold_ticks,
-            B.C_IDEAL: ep.ideal_time_s,
-            B.C_WIN: ep.window_rad,
             B.C_SCALE: ep.scale_rad,
-            B.C_LIMIT: ep.plant.motor.usable_accel_rad_s2,
             B.C_VMAX: ep.plant.pulse_top_speed_rad_s,
-            B.C_TRACKING: 1.0 if sc.tracking else 0.0,
-            B.C_TRK_SCALE: 0.1 * abs(sc.distance_rad),
-            B.C_W_TIME: wt.time,
-            B.C_W_TRACK: wt.tracking,
-            B.C_W_OV: wt.overshoot,
-            B.C_W_ACC: wt.accel,
-            B.C_W_TQ: wt.torque,
-            B.C_W_UNS: wt.unsettled,
-            B.C_B_OV: bd.overshoot_windows,
-            B.C_B_TQ: bd.torque_limit_time_s,
             B.C_SHAPE: c.tracking_weight,
             B.C_VIOL: 1.0 if c.terminate_on_violation else 0.0,
         }
@@ -214,12 +201,12 @@ class ServoCore:
         c = self.config
         acc = w[B.W_ACC : B.W_ACC + L.N_ACC]
         m = from_acc(acc, ep.plant, c.measures, ep.target_rad, ep.command_end_s)
-        cost, cons, _objs, extra = score(m, ep.scenario, ep.plant, c.measures, c.weights, c.bounds)
+        s = score(m, ep.scenario, ep.plant, c.measures, c.weights, c.bounds)
         violation = bool(flags & B.VIOLATION)
-        reward = float(w[B.X_COST_PREV] - cost) - float(w[B.X_SHAPE])
+        reward = float(w[B.X_COST_PREV] - s.cost) - float(w[B.X_SHAPE])
         if violation:
             reward -= c.violation_penalty
-        info = _scored_info(ep, m | extra, cost, cons)
+        info = _scored_info(ep, s.metrics, s.cost, s.constraints)
         info["ended_settled"] = bool(flags & B.SETTLED)
         info["ended_violation"] = violation
         info["control_ticks"] = int(w[B.X_TICK_END])
@@ -276,14 +263,16 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     ## Rewards
 
     Per interval, ``r = C(before) − C(after) − tracking_weight · ΔISE · T / (D² · t_ideal)``
-    where C is the scoring path's cost formula (:func:`vfgym.scoring.score`) on the
-    measures streamed so far: time out of the in-position window / ideal time (or RMS
-    tracking error for a moving reference), + 0.1 × overshoot in windows, + 5 × the
-    acceleration over the limit (so a violation shades the reward by its degree), + time at
-    the torque limit / ideal time (weights from ``weights``); ΔISE is the interval's sum of
-    squared tracking error (P − θ)². On the last step C(after) is the scoring path's cost
-    of the whole move, including the unsettled penalty, ΔISE runs to the end of the move,
-    and ``violation_penalty`` is subtracted on a violation. So the return of an episode is
+    where C is the scoring path's cost formula (:func:`vfgym.scoring.score`, compiled in
+    :mod:`vfgym.scoring._cost_compiled`) on the measures streamed so far: time out of the
+    in-position window / ideal time (or RMS tracking error for a moving reference), + 0.1 ×
+    overshoot in windows, + 5 × the acceleration over the limit (so a violation shades the
+    reward by its degree), + time at the torque limit / ideal time (weights from
+    ``weights``); ΔISE is the interval's sum of squared tracking error (P − θ)². On the last
+    step C(after) is the scoring path's cost of the whole move, including its arrival term
+    (a move not settled in the in-position window at its end, or a sine not followed, pays
+    a penalty growing with the distance left), ΔISE runs to the end of the move, and
+    ``violation_penalty`` is subtracted on a violation. So the return of an episode is
     minus the cost of its move (to rounding) when ``tracking_weight=0``; C(before) = 0.
 
     ## Starting State
@@ -296,8 +285,9 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
 
     Terminated when the motor has settled: the command is at its final value and the motor
     has stayed in the in-position window for ``settle_time_s``; or, with
-    ``terminate_on_violation``, as soon as a constraint (acceleration, torque, overshoot)
-    is violated. Truncated at the end of the scenario's command (its duration). When an
+    ``terminate_on_violation``, as soon as a constraint that can be known while the move
+    runs (acceleration, torque, overshoot) is violated; arrival is judged at the move's
+    end, in ``info``. Truncated at the end of the scenario's command (its duration). When an
     episode ends early the rest of the move is simulated with the last settings held, so
     that the end-of-episode measures cover the whole command, as ``evaluate``'s do.
 

@@ -16,6 +16,7 @@ from vfgym.plant import simulate
 from vfgym.scoring import (
     Bounds,
     CostWeights,
+    Score,
     evaluate,
     score_pairs,
 )
@@ -90,11 +91,13 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     ``-cost`` of the move from :func:`vfgym.evaluate` (lower cost is better; a perfect
     point-to-point move costs about 1): move time / ideal time (or RMS tracking error for a
     moving reference) plus weighted overshoot, acceleration over the limit, time at the
-    torque limit and not settling (:class:`vfgym.CostWeights`). ``info`` carries every
-    measure of :mod:`vfgym.plant.measures`, ``ideal_time_s``, ``time_ratio``, ``window_rad``,
-    ``cost``, the constraint values ``constraint_accel``, ``constraint_torque``,
-    ``constraint_overshoot`` (feasible when ≤ 0), ``feasible``, ``scenario`` and the
-    settings used.
+    torque limit and, for a move that does not arrive (not settled in the in-position
+    window at its end, or a sine not followed), a penalty growing with the distance left
+    (:class:`vfgym.CostWeights`, :mod:`vfgym.scoring`). ``info`` carries every measure of
+    :mod:`vfgym.plant.measures`, ``ideal_time_s``, ``time_ratio``, ``window_rad``,
+    ``arrived``, ``cost``, the constraint values ``constraint_accel``,
+    ``constraint_torque``, ``constraint_overshoot``, ``constraint_arrival`` (feasible when
+    ≤ 0), ``feasible``, ``scenario`` and the settings used.
 
     ## Starting State
 
@@ -291,11 +294,16 @@ def evaluate_pairs(
     measures: Measures,
     weights: CostWeights,
     bounds: Bounds,
-) -> list[tuple[float, dict[str, Any], np.ndarray]]:
+) -> list[Score]:
     """Score ``settings[i]`` on ``episodes[i]`` for every i in one compiled, multi-threaded
     call: :func:`vfgym.scoring.score_pairs`, the pairwise core of :func:`vfgym.evaluate`.
-    Returns (cost, metrics, constraints) per pair."""
+
+    Returns
+    -------
+    list of Score
+        One per pair (V-F settings run every move).
+    """
     results = score_pairs(
         list(settings), list(episodes), measures=measures, weights=weights, bounds=bounds
     )
-    return [(cost, m, cons) for cost, cons, _objs, m in results]
+    return [r for r in results if r is not None]

@@ -343,10 +343,10 @@ class VFTuneVectorEnv(_BatchVectorEnv):
                 weights=self.config.weights,
                 bounds=self.config.bounds,
             )
-            for i, s, ep, (cost, metrics, cons) in zip(idx, settings, eps, results, strict=True):
-                rew[i] = -cost
+            for i, s, ep, res in zip(idx, settings, eps, results, strict=True):
+                rew[i] = -res.cost
                 term[i] = True
-                info = scored_info(ep, metrics, cost, cons)
+                info = scored_info(ep, res.metrics, res.cost, res.constraints)
                 info.update(settings_to_dict(s))
                 ends[int(i)] = info
         return rew, term, np.zeros(self.num_envs, dtype=np.bool_), ends

@@ -32,7 +32,7 @@ from vfgym.scoring import (
 
 Policy = Callable[[Scenario], Settings]
 """A per-scenario controller: the settings an agent picks for a scenario."""
-EXTRA_METRICS = ("ideal_time_s", "time_ratio", "window_rad")
+EXTRA_METRICS = ("ideal_time_s", "time_ratio", "window_rad", "arrived")
 """Measures :func:`vfgym.evaluate` adds to :data:`vfgym.plant.measures.NAMES`."""
 
 
@@ -53,7 +53,8 @@ class Column:
     cost : numpy.ndarray
         Cost per scenario (NaN where the candidate does not apply).
     constraints : numpy.ndarray
-        Constraint values per scenario, (scenarios, 3).
+        Constraint values per scenario, (scenarios, len(CONSTRAINTS)), in the order of
+        :data:`~vfgym.scoring.CONSTRAINTS`.
     metrics : list of dict
         The measures per scenario, as :func:`vfgym.evaluate` returns them.
     """
@@ -351,8 +352,8 @@ def evaluate_policy(
     Returns
     -------
     PolicyRun
-        The settings picked per scenario, the costs (S,), the constraints (S, 3) and the
-        measures per scenario.
+        The settings picked per scenario, the costs (S,), the constraints
+        (S, len(CONSTRAINTS)) and the measures per scenario.
 
     Raises
     ------

@@ -49,17 +49,22 @@ TABLE_COLUMNS: tuple[TableColumn, ...] = (
     TableColumn("torque_limit_time_s", "at torque limit", "ms", 1e3),
     TableColumn("tracking_rms_rad", "tracking rms", "rad"),
     TableColumn("feasible", "feasible", "share", 1.0, ".2f"),
+    TableColumn("arrived", "arrived", "share", 1.0, ".2f"),
 )
 """What the table shows per scenario and in aggregate (the CSV and JSON hold every measure).
 
 Peak acceleration against the limit is given for the pulse train (the constraint the
-tuning respects, windowed second difference) and for the motor (per tick, from ω)."""
+tuning respects, windowed second difference) and for the motor (per tick, from ω).
+``arrived``: the run ended settled in the in-position window (a sine: followed); see
+:mod:`vfgym.scoring`. A run that did not arrive is infeasible."""
+SHARES = ("feasible", "arrived")
+"""Yes/no columns: per scenario yes or no, in aggregate a count."""
 
 
 def _fmt(x: float, m: TableColumn) -> str:
     if x is None or not math.isfinite(x):
         return "n/a"
-    if m.key == "feasible":
+    if m.key in SHARES:
         return f"{x:.2f}"
     return format(x * m.scale, m.fmt)
 
@@ -83,18 +88,18 @@ def _grid(rows: list[list[str]], right: set[int] | None = None) -> list[str]:
 
 
 def _header(m: TableColumn) -> str:
-    return f"{m.header} [{m.unit}]" if m.unit and m.key != "feasible" else m.header
+    return f"{m.header} [{m.unit}]" if m.unit and m.key not in SHARES else m.header
 
 
 def _unit(m: TableColumn) -> str:
-    return f" [{m.unit}]" if m.unit and m.key != "feasible" else ""
+    return f" [{m.unit}]" if m.unit and m.key not in SHARES else ""
 
 
-def _count(col: Column) -> str:
-    """``k/n feasible`` (a share has no useful median)."""
-    f = col.feasible
+def _count(col: Column, key: str = "feasible") -> str:
+    """``k/n feasible`` or ``k/n arrived`` (a share has no useful median)."""
+    f = col.values(key)
     ok = f[np.isfinite(f)]
-    return f"{int(ok.sum())}/{ok.size} feasible"
+    return f"{int(ok.sum())}/{ok.size} {key}"
 
 
 def format_table(report: Report) -> str:
@@ -118,23 +123,28 @@ def format_table(report: Report) -> str:
         "(move time / ideal, or tracking; see vfgym.scoring)"
     )
     lines.append("")
-    per = [m for m in TABLE_COLUMNS if m.key != "feasible"]
+    per = [m for m in TABLE_COLUMNS if m.key not in SHARES]
     wl = report.win_losses()
     by_pair = {(w.tuned, w.baseline): w for w in wl}
-    head = ["scenario", "controller", *[_header(m) for m in per], "feasible"]
+    head = ["scenario", "controller", *[_header(m) for m in per], *SHARES]
     head += [f"vs {b.label}" for b in report.baselines] if report.tuned else []
     rows = [head]
     for si, sc in enumerate(report.scenarios):
         for k, col in enumerate(report.columns):
             row = [sc.name if k == 0 else "", col.label]
             row += [_fmt(float(col.values(m.key)[si]), m) for m in per]
-            row.append(_yes_no(float(col.feasible[si])))
+            row += [_yes_no(float(col.values(key)[si])) for key in SHARES]
             if report.tuned:
                 for b in report.baselines:
                     w = by_pair.get((col.label, b.label))
                     row.append(w.outcomes[si] if w else "")
             rows.append(row)
     lines += _grid(rows, right=set(range(2, len(per) + 2)))
+    lines.append(
+        "arrived: in the in-position window at the scenario's end (a sine: followed within "
+        "the -3 dB bandwidth); a run that did not arrive is infeasible, its settling and move "
+        "times are the run's duration (a lower bound)"
+    )
     lines.append("")
     lines.append(
         f"Aggregate over the scenarios (n = scenarios where defined): median [interquartile "
@@ -150,8 +160,8 @@ def format_table(report: Report) -> str:
                     f"{m.header}{_unit(m)}" if k == 0 else "",
                     col.label,
                     str(s.n),
-                    _count(col)
-                    if m.key == "feasible"
+                    _count(col, m.key)
+                    if m.key in SHARES
                     else f"{_fmt(s.median, m)} [{_fmt(s.q1, m)}, {_fmt(s.q3, m)}]",
                     f"{_fmt(s.mean, m)} ({_fmt(s.ci_low, m)}, {_fmt(s.ci_high, m)})",
                 ]
@@ -219,8 +229,8 @@ def markdown_table(report: Report, measures: Sequence[TableColumn] = TABLE_COLUM
         cells = [col.label, str(report.spread(col.label, "cost").n)]
         for m in measures:
             s = report.spread(col.label, m.key)
-            if m.key == "feasible":
-                cells.append(_count(col).removesuffix(" feasible"))
+            if m.key in SHARES:
+                cells.append(_count(col, m.key).removesuffix(f" {m.key}"))
             elif s.n == 0:
                 cells.append("n/a")
             elif s.n == 1:
@@ -257,8 +267,9 @@ def markdown_costs(report: Report) -> str:
     Returns
     -------
     str
-        One row per scenario; ``*`` marks a violated constraint, n/a a controller that
-        does not apply.
+        One row per scenario; ``*`` marks a violated constraint, ``†`` a run that did not
+        arrive (not settled in the in-position window at the scenario's end, or a sine not
+        followed), n/a a controller that does not apply.
     """
     cols = report.columns
     head = ["scenario", *[c.label for c in cols]]
@@ -267,8 +278,12 @@ def markdown_costs(report: Report) -> str:
         cells = [sc.name]
         for c in cols:
             x = float(c.cost[si])
-            star = "" if not math.isfinite(x) or c.feasible[si] > 0.5 else "*"
-            cells.append("n/a" if not math.isfinite(x) else f"{x:.3g}{star}")
+            if not math.isfinite(x):
+                cells.append("n/a")
+                continue
+            star = "" if c.feasible[si] > 0.5 else "*"
+            star += "" if c.values("arrived")[si] > 0.5 else "†"
+            cells.append(f"{x:.3g}{star}")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
@@ -292,8 +307,9 @@ class CompactRow:
         The controller's label.
     settle_ms : float
         Settling time into the in-position window (ms); NaN on a moving reference.
-    settled : bool
-        Settled into the window (always, on a moving reference).
+    arrived : bool
+        Arrived: settled in the in-position window at the scenario's end (a sine:
+        followed), as the scoring path's ``arrival`` constraint says.
     overshoot_mrad : float
         Overshoot (mrad).
     overshoot_win : float
@@ -313,7 +329,7 @@ class CompactRow:
     scenario: str
     settings: str
     settle_ms: float
-    settled: bool
+    arrived: bool
     overshoot_mrad: float
     overshoot_win: float
     accel_krad_s2: float
@@ -389,7 +405,7 @@ def compact_rows(report: Report) -> CompactTable:
                     scenario=sc.name,
                     settings=col.label,
                     settle_ms=math.nan if sc.tracking else 1e3 * m["settling_time_s"],
-                    settled=bool(m["settled"]) or sc.tracking,
+                    arrived=bool(m["arrived"]),
                     overshoot_mrad=1e3 * m["overshoot_rad"],
                     overshoot_win=m["overshoot_rad"] / m["window_rad"],
                     accel_krad_s2=m["peak_accel_pulse_rad_s2"] / 1e3,
@@ -410,7 +426,7 @@ def compact_rows(report: Report) -> CompactTable:
                 scenario=f"set ({n})",
                 settings=col.label,
                 settle_ms=float(np.mean(settle)) if settle else math.nan,
-                settled=all(r.settled for r in mine),
+                arrived=all(r.arrived for r in mine),
                 overshoot_mrad=max(r.overshoot_mrad for r in mine),
                 overshoot_win=max(r.overshoot_win for r in mine),
                 accel_krad_s2=max(r.accel_krad_s2 for r in mine),
@@ -453,7 +469,7 @@ def format_compact(report: Report) -> str:
             lines.append("")
         for r in group:
             settle = "-" if math.isnan(r.settle_ms) else f"{r.settle_ms:.2f}"
-            if not r.settled:
+            if not r.arrived:
                 settle += "*"
             feas = "yes" if r.feasible else "no"
             if r.feasible_count is not None:
@@ -464,8 +480,8 @@ def format_compact(report: Report) -> str:
                 f"{r.cost:7.4f} {feas}"
             )
     lines.append(
-        "settle: settling time into the in-position window (* not settled; - a moving "
-        "reference); accel: the pulse train's peak over 1 ms against the limit (the loaded "
-        "motor's usable acceleration)"
+        "settle: settling time into the in-position window (- a moving reference; * did not "
+        "arrive: not settled at the end, or a sine not followed); accel: the pulse train's "
+        "peak over 1 ms against the limit (the loaded motor's usable acceleration)"
     )
     return "\n".join(lines)

@@ -189,7 +189,12 @@ class Objective:
 
         want = space.settings_to_dict(settings)
         for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,)):
-            if t.user_attrs.get("settings") == want and "cost" in t.user_attrs:
+            cons = t.user_attrs.get("constraints")
+            if (
+                t.user_attrs.get("settings") == want
+                and "cost" in t.user_attrs
+                and len(cons or ()) == len(CONSTRAINTS)  # not scored with other constraints
+            ):
                 attrs = {k: t.user_attrs[k] for k in _RESULT_ATTRS if k in t.user_attrs}
                 attrs["cached_from"] = t.user_attrs.get("cached_from", t.number)
                 values = t.value if self.form == "cost" else list(t.values)

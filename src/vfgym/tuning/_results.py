@@ -31,6 +31,13 @@ if TYPE_CHECKING:
     from optuna.trial import FrozenTrial
 
 
+def _arrives(trial: FrozenTrial) -> bool:
+    """Whether a trial's settings arrived on every scenario (worst arrival constraint ≤ 0)."""
+    cons = trial.user_attrs.get("constraints") or ()
+    i = CONSTRAINTS.index("arrival")
+    return len(cons) == len(CONSTRAINTS) and cons[i] <= 0.0
+
+
 def best_trial(study: Study) -> FrozenTrial | None:
     """The sweep's best trial.
 
@@ -42,8 +49,10 @@ def best_trial(study: Study) -> FrozenTrial | None:
     Returns
     -------
     optuna.trial.FrozenTrial or None
-        The completed trial with the lowest cost among the feasible ones (among all, if
-        none is feasible; ties to the earlier trial); ``None`` before any completes.
+        The completed trial with the lowest cost among the feasible ones; if none is, among
+        those that arrive on every scenario (a move that never gets there is no candidate
+        while one that does exists); else among all. Ties go to the earlier trial; ``None``
+        before any completes.
     """
     import optuna
 
@@ -55,7 +64,8 @@ def best_trial(study: Study) -> FrozenTrial | None:
     if not done:
         return None
     feas = [t for t in done if t.user_attrs.get("feasible")]
-    return min(feas or done, key=lambda t: (t.user_attrs["cost"], t.number))
+    arrive = [t for t in done if _arrives(t)]
+    return min(feas or arrive or done, key=lambda t: (t.user_attrs["cost"], t.number))
 
 
 def trial_settings(trial: FrozenTrial) -> Settings:
