@@ -284,8 +284,7 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
             )
         # 3. torque
         u = pc - y
-        tau, clipped = torque(u, omega, K3, tpeak, wknee, wmax, slope)
-        sat += clipped
+        tau, sat = torque(u, omega, sat, K3, tpeak, wknee, wmax, slope)
         # 4. motor over the tick, torque held
         omega_old = omega
         theta, omega = motor(theta, omega, tau - tload, tc, cww, cwf, ctw, ctf, damp, inv_j, T)

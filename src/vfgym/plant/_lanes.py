@@ -15,7 +15,8 @@ What makes the loops vectorise, and must stay so:
 * one flat block array ``Z`` of rows of ``LANES`` numbers, indexed with unsigned
   (:func:`_u`) constant-row offsets, so that LLVM sees fixed distances between rows (no
   negative-index wrap-around, no symbolic row);
-* ``error_model="numpy"`` (no zero-division branch; every divisor is validated > 0);
+* ``error_model="numpy"`` (``simd=True`` in the package's policy, :mod:`vfgym.plant._jit`:
+  no zero-division branch; every divisor is validated > 0);
 * no calls and no reductions across lanes in the vectorised loops; the rare tick in which
   Coulomb friction stops the motor (:func:`vfgym.plant._tick.stop_within_tick`, which calls
   ``log1p``/``expm1``) is flagged and done per lane in a scalar pass between them;

@@ -113,10 +113,14 @@ def servo_sample(sc, y, B, A):
 
 
 @jit(inline=True)
-def torque(u, omega, K3, tpeak, wknee, wmax, slope):
+def torque(u, omega, sat, K3, tpeak, wknee, wmax, slope):
     """τ = K3·u for the servo error ``u`` (counts), clipped to the torque–speed curve at
     speed ``omega`` (the curve bounds only a torque that drives the motor on; braking
-    has the peak). Returns (τ, 1 if clipped else 0)."""
+    has the peak). Returns (τ, ``sat`` + 1 if clipped else ``sat``).
+
+    The count of clipped ticks is kept here, in the clipping branches: returned as a
+    0/1 flag instead, it let LLVM turn the lower clip into a branchless max on the
+    tick's dependency chain (τ → ω → θ → count → τ), ~4 % slower on the paper step."""
     tau = K3 * u
     if tau * omega > 0.0:
         aw = abs(omega)
@@ -129,10 +133,12 @@ def torque(u, omega, K3, tpeak, wknee, wmax, slope):
     else:
         lim = tpeak
     if tau > lim:
-        return lim, 1
-    if tau < -lim:
-        return -lim, 1
-    return tau, 0
+        tau = lim
+        sat += 1
+    elif tau < -lim:
+        tau = -lim
+        sat += 1
+    return tau, sat
 
 
 # --- 4. motor ------------------------------------------------------------------------------
