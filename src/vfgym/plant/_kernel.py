@@ -230,8 +230,9 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
 
     The loop state is held in locals (registers) between the state row's loads and
     stores, one line per block; each tick runs the blocks of :mod:`vfgym.plant._tick`."""
-    # the parameter row, read once (loads inside the loop could not be hoisted past the
-    # stores into ``st``, ``ring`` and ``rec``, which LLVM cannot tell apart from ``prm``)
+    # the parameter row, read once before the loop: the loop stores into ``st``, ``ring``
+    # and ``rec``, which LLVM cannot prove distinct from ``prm``, so a read inside the
+    # loop would be repeated every tick
     T, q, inv_j, damp = prm[P_TICK_S], prm[P_COUNT_RAD], prm[P_INV_J], prm[P_DAMP]
     delta, value, limit, step = prm[P_DELTA], prm[P_VALUE], prm[P_LIMIT], prm[P_STEP]
     law, use_ext = int(prm[P_LAW]), prm[P_USE_EXT] != 0.0
