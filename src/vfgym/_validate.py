@@ -128,7 +128,13 @@ def check_name(option: str, name: Any) -> str:
     Returns
     -------
     str
-        ``name``, if allowed; else ``ValueError``.
+        ``name``, if allowed.
+
+    Raises
+    ------
+    ValueError
+        If the name is not a string of those characters (starting with a letter or digit,
+        at most 100), naming the option and what is allowed.
     """
     if not isinstance(name, str) or not NAME_RE.match(name):
         raise ValueError(

@@ -26,15 +26,17 @@ import math
 import numba
 import numpy as np
 
+from vfgym.plant import _jit as J
 from vfgym.plant import _kernel as K
 from vfgym.plant import _lanes as LN
 from vfgym.plant import _layout as L
+from vfgym.plant import _tick as TK
 from vfgym.plant._threads import keeps_torch_threads
 from vfgym.scoring import _cost_compiled as CC
 
 from ._common import clip_feature
 
-_jit = numba.njit(cache=True, fastmath=False, nogil=True)
+_jit = J.jit
 
 ACTION_TOL = 1e-6
 """Actions may exceed [-1, 1] by this much (float rounding), as :func:`vfgym.space.from_action`."""
@@ -311,12 +313,12 @@ def step_one(act, w, ring, cmd, obs):
 
 LANE_MIN = LN.LANES // 2
 """A block runs in SIMD lanes when at least this many of its envs can; else env by env."""
-PARALLEL_MIN_ENVS = 32 if K.SPINNING_WORKERS else 512
+PARALLEL_MIN_ENVS = 32 if J.SPINNING_WORKERS else 512
 """From this many envs a step spreads its blocks over numba's threads; below, it stays on
 the calling thread. A step of 64 envs takes ~150 us on one core. Waking numba's sleeping
 workers (vfgym's default, OMP_WAIT_POLICY=PASSIVE) costs ~55 us a call, so on the 2-core
 VM measured (benchmarks/bench_envs.py) the second thread only paid from ~512 envs; with
-spinning workers (opt-in, :data:`vfgym.plant._kernel.SPINNING_WORKERS`) it paid from 32."""
+spinning workers (opt-in, :data:`vfgym.plant._jit.SPINNING_WORKERS`) it paid from 32."""
 
 
 @_jit
@@ -407,7 +409,7 @@ def _end_block(b: int, W, RING, CMD, active, flags, I0, H, G, m: int) -> None:
             flags[r] = f
 
 
-@numba.njit(cache=True, fastmath=False, nogil=True, parallel=True)
+@J.jit(parallel=True)
 def step_batch(
     act, W, RING, CMD, active, flags, Z, CB, H, G, lane_min=LANE_MIN, parallel_min=PARALLEL_MIN_ENVS
 ) -> int:
@@ -472,6 +474,6 @@ def ring_size(prm: np.ndarray) -> int:
     return int(K.ring_size(prm))
 
 
-# The functions here compile the kernel, the lane kernel and the compiled cost into
-# themselves.
-K.guard_cache(step_one, (K, L, LN, CC))
+# The functions here compile the kernel, its tick, the lane kernel and the compiled cost
+# into themselves.
+J.guard_cache(step_one, (K, TK, LN, L, CC))

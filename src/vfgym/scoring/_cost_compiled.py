@@ -20,14 +20,13 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-from vfgym.plant import _kernel as K
+from vfgym.plant import _jit as J
 from vfgym.plant import _layout as L
 from vfgym.scoring._cost import Bounds, CostWeights, Yardsticks
 
-_jit = numba.njit(cache=K.CACHE, fastmath=False, nogil=True)
+_jit = J.jit
 
 # --- the constants row -------------------------------------------------------------------
 K_TICKS = 0  # ticks of the whole move: the RMS tracking error is over all of them
@@ -148,4 +147,4 @@ def violated(st, prm, k) -> bool:
 
 
 # The functions here read the loop state's slot numbers, compiled in as constants.
-K.guard_cache(running_cost, (L,))
+J.guard_cache(running_cost, (L,))
