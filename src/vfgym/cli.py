@@ -52,11 +52,13 @@ class Parser(argparse.ArgumentParser):
     """argparse's parser with one-line usage errors (exit status 2), reported by the
     sub-command they concern."""
 
-    def parse_args(self, args: Any = None, namespace: Any = None) -> argparse.Namespace:
+    def parse_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override]
         ns, extras = self.parse_known_args(args, namespace)
         if extras:
-            sub = self._subparsers._group_actions[0].choices if self._subparsers else {}
-            owner = sub.get(getattr(ns, "command", None), self)
+            sub: dict[str, argparse.ArgumentParser] = {}
+            if self._subparsers:
+                sub = dict(self._subparsers._group_actions[0].choices or {})  # type: ignore[call-overload]
+            owner = sub.get(getattr(ns, "command", None) or "", self)
             owner.error(f"unrecognized arguments: {' '.join(extras)}")
         return ns
 

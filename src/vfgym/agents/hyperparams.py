@@ -215,6 +215,7 @@ def validate(
     sig = inspect.signature(cls.__init__).parameters
     out: dict[str, Any] = {}
     for key, value in params.items():
+        types: tuple[type, ...] | None
         if key in RUN_KEYS:
             types = RUN_KEYS[key]
         elif key in sig and key not in RESERVED:
