@@ -375,6 +375,34 @@ class Plant:
         """
         return replace(self, motor=replace(self.motor, **changes))
 
+    def whole_ticks(self, name: str, duration_s: float) -> int:
+        """A duration as a whole number (≥ 1) of controller ticks.
+
+        Parameters
+        ----------
+        name : str
+            The parameter the duration was given as, for the error message.
+        duration_s : float
+            The duration (s); within 1e-9 (relative) of a whole multiple of T.
+
+        Returns
+        -------
+        int
+            The number of ticks.
+
+        Raises
+        ------
+        ValueError
+            Naming ``name``, if ``duration_s`` is not a whole number (≥ 1) of ticks.
+        """
+        ticks = check_real(name, duration_s, 0.0, lo_open=True) * self.tick_hz
+        if abs(ticks - round(ticks)) > 1e-9 * max(1.0, ticks) or round(ticks) < 1:
+            raise ValueError(
+                f"{name}={duration_s!r} is not a whole number of ticks "
+                f"(T = {self.tick_s:.6g} s): allowed whole multiples of T"
+            )
+        return round(ticks)
+
     def with_sample_period(self, sample_period_s: float) -> Plant:
         """A copy whose servo samples every ``sample_period_s`` (a whole number of ticks).
 
@@ -391,16 +419,10 @@ class Plant:
         Raises
         ------
         ValueError
-            If ``sample_period_s`` is not a whole number (≥ 1) of controller ticks.
+            If ``sample_period_s`` is not a whole number (≥ 1) of controller ticks (raised
+            by :meth:`whole_ticks`).
         """
-        ts = check_real("sample_period_s", sample_period_s, 0.0, lo_open=True)
-        ticks = ts * self.tick_hz
-        if abs(ticks - round(ticks)) > 1e-9 * max(1.0, ticks) or round(ticks) < 1:
-            raise ValueError(
-                f"sample_period_s={sample_period_s!r} is not a whole number of ticks "
-                f"(T = {self.tick_s:.6g} s): allowed whole multiples of T"
-            )
-        return self.with_servo(sample_ticks=round(ticks))
+        return self.with_servo(sample_ticks=self.whole_ticks("sample_period_s", sample_period_s))
 
     def with_servo(self, **changes: Any) -> Plant:
         """A copy whose servo has some fields changed.

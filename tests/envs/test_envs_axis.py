@@ -121,7 +121,8 @@ def test_an_axis_brings_its_own_plant_and_measures(small):
         gym.make("vfgym/VFTune-v0", axis=str(small.parent / "nope.yaml"))
     # the paper's defaults beside an axis are no conflict
     env = VFTuneEnv(axis=str(small), plant=PAPER_PLANT)
-    assert env.plant == load_axis(small).plant
+    assert env.config.plant == load_axis(small).plant
+    assert env.config.axis == load_axis(small)  # resolved once, in EnvConfig
 
 
 def test_the_engineered_axes_make_environments():

@@ -108,10 +108,10 @@ def test_feasible_only_if_feasible_on_every_move():
     cons[1, 2, k - 1] = 1e-9  # one constraint on one move, barely violated
     cons[2, :, 0] = 0.0  # on the bound everywhere: feasible
     agg = aggregate(_made_up(cons))
-    assert agg["feasible"].tolist() == [True, False, True]
-    assert agg["constraints"][1, k - 1] == 1e-9  # the worst over the moves
+    assert agg.feasible.tolist() == [True, False, True]
+    assert agg.constraints[1, k - 1] == 1e-9  # the worst over the moves
     for how in AGGREGATES:  # feasibility does not depend on the aggregate
-        assert aggregate(_made_up(cons), how)["feasible"].tolist() == [True, False, True]
+        assert aggregate(_made_up(cons), how).feasible.tolist() == [True, False, True]
 
 
 def test_the_objective_minimises_the_aggregate_and_needs_every_train_move():

@@ -189,6 +189,22 @@ def _save_checkpoint(model: Any, run: Path) -> None:
         model.save_replay_buffer(run / "checkpoints" / f"model_replay_buffer_{steps}_steps.pkl")
 
 
+def check_same_run(run: Path, algo: str, env_id: str, seed: int) -> None:
+    """A run folder that already holds a run must hold one of the same algorithm, env and
+    seed (it is continued); otherwise ``ValueError``."""
+    old = Path(run) / "config.yaml"
+    if not old.is_file():
+        return
+    prev = read_yaml(old)
+    prev = prev if isinstance(prev, dict) else {}
+    for key, value in (("algo", algo), ("env", env_id), ("seed", seed)):
+        if prev.get(key) != value:
+            raise ValueError(
+                f"{run}: holds a run with {key}={prev.get(key)!r}, not {value!r}; "
+                "choose another --name"
+            )
+
+
 def train(
     algo: str,
     env_id: str,
@@ -211,16 +227,8 @@ def train(
 
     cls = algo_class(algo)
     config = {"algo": algo, "env": env_id, "seed": seed, "device": device, "hyperparams": params}
-    old = run / "config.yaml"
-    if old.is_file():
-        prev = read_yaml(old) or {}
-        for key in ("algo", "env", "seed"):
-            if prev.get(key) != config[key]:
-                raise ValueError(
-                    f"{run}: holds a run with {key}={prev.get(key)!r}, not "
-                    f"{config[key]!r}; choose another --name"
-                )
-    write_yaml(old, config)
+    check_same_run(run, algo, env_id, seed)
+    write_yaml(run / "config.yaml", config)
 
     n_envs = int(params.get("n_envs", 1))
     total = int(params.get("n_timesteps", 10_000))

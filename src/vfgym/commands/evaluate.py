@@ -16,7 +16,7 @@ AGENTS_HINT = 'pip install -c constraints.txt -e ".[agents]"'
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from vfgym.commands._common import add_axis_option, positive_int
+    from vfgym.commands._common import SEED, add_axis_option, positive_int, whole
 
     p = sub.add_parser(
         "evaluate",
@@ -59,7 +59,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--first-seed",
-        type=int,
+        type=whole(0),
         help="seed of the first random scenario (default: 0; an axis sets its own)",
     )
     p.add_argument(
@@ -69,7 +69,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="N",
         help="bootstrap resamples for the 95%% interval of means (default: 2000)",
     )
-    p.add_argument("--seed", type=int, default=0, help="bootstrap seed (default: 0)")
+    p.add_argument("--seed", type=SEED, default=0, help="bootstrap seed (default: 0)")
     p.add_argument("--name", help="run folder name (default: a timestamp)")
     p.add_argument("--runs-dir", default="runs", help="root of run folders (default: runs)")
     add_axis_option(p)
@@ -83,17 +83,6 @@ def _labels(paths: list[str], taken: set[str]) -> list[str]:
     for p, s in zip(paths, stems, strict=True):
         out.append(p if (stems.count(s) > 1 or s in taken) else s)
     return out
-
-
-def load_settings_file(path: str) -> Any:
-    """Settings from a file; any problem raises a one-line ``ValueError`` naming the file."""
-    from vfgym.commands._common import load_settings
-
-    try:
-        return load_settings(path)
-    except ValueError as exc:
-        msg = str(exc)
-        raise ValueError(msg if msg.startswith(str(path)) else f"{path}: {msg}") from None
 
 
 def load_policy(model_path: str, axis: str | None = None) -> Any:
@@ -116,7 +105,8 @@ def load_policy(model_path: str, axis: str | None = None) -> Any:
 def run(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
-    from vfgym.commands._common import axis_from_args
+    from vfgym._validate import check_name, check_output_path
+    from vfgym.commands._common import axis_from_args, load_settings
     from vfgym.io.runs import new_run_dir, record_command, write_yaml
     from vfgym.moves.axis import AXIS_FILE, axis_kwargs, write_axis
     from vfgym.moves.baselines import BASELINE_NAMES
@@ -136,13 +126,19 @@ def run(args: argparse.Namespace) -> int:
             )
     count = 32 if args.count is None else args.count
     first_seed = 0 if args.first_seed is None else args.first_seed
-    if first_seed < 0:
-        raise ValueError(f"--first-seed={first_seed} is out of range: allowed >= 0")
+    if args.name is not None:
+        check_name("--name", args.name)
+    check_output_path(
+        "--runs-dir",
+        Path(args.runs_dir) / "evaluate" / (args.name or ""),
+        folder=True,
+        shown=args.runs_dir,
+    )
     against = args.against.strip()
     if against in ("all", ""):
         against = ",".join(BASELINE_NAMES)
     base = [] if against == "none" else baseline_candidates(against)
-    settings = [load_settings_file(f) for f in args.settings]
+    settings = [load_settings(f) for f in args.settings]
     taken = {b.label for b in base}
     s_labels = _labels(args.settings, taken)
     m_labels = [f"agent:{lab}" for lab in _labels(args.model, taken)]

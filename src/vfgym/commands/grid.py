@@ -53,8 +53,10 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from vfgym import tuning
+    from vfgym._validate import check_output_path
     from vfgym.io.runs import read_yaml, record_command, write_text, write_yaml
     from vfgym.moves.axis import AXIS_FILE, axis_kwargs, write_axis
+    from vfgym.report import format_compact
 
     keys = [f.lstrip("-").replace("-", "_") for f, _ in OPTIONS] + ["progress"]
     file_data = read_yaml(args.config) if args.config else None
@@ -64,6 +66,7 @@ def run(args: argparse.Namespace) -> int:
     scenarios = cfg.scenario_list()
     name = cfg.name or _default_name(cfg)
     run_dir = Path(cfg.runs_dir) / "grid" / name
+    check_output_path("runs_dir", run_dir, folder=True, shown=cfg.runs_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
     write_yaml(run_dir / "config.yaml", {"command": "grid", **cfg.to_dict(), "name": name})
     axis = cfg.load_axis()
@@ -90,23 +93,23 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     elapsed = time.monotonic() - t0
-    tuning.write_grid_csv(result["rows"], run_dir / "grid.csv")
+    tuning.write_grid_csv(result.rows, run_dir / "grid.csv")
     ref = tuning.grid_reference(cfg, result)
     ref["elapsed_s"] = round(elapsed, 3)
     write_yaml(run_dir / "reference.yaml", ref)
-    cmp = tuning.compare(result["best"]["settings"], scenarios, label="grid", **axis_kwargs(axis))
+    cmp = tuning.compare(result.best.settings, scenarios, label="grid", **axis_kwargs(axis))
     s = ref["settings"]
-    n = len(result["rows"])
+    n = len(result.rows)
     text = "\n".join(
         [
             f"{n} settings evaluated in {elapsed:.1f} s ({n * len(scenarios) / elapsed:.0f} "
             "runs/s)",
             f"reference: cost {ref['cost']:.4f} ({'feasible' if ref['feasible'] else 'INFEASIBLE'})"
-            f" against the paper's {cmp['set'][0]['cost']:.4f}",
+            f" against the paper's {cmp.column('paper').mean_cost:.4f}",
             f"settings: value {s['value_rad']:.6g} rad, error limit {s['error_limit_rad']:.6g} "
             f"rad, k {s['k']:.6g}, Ts/Tf {s['ts_over_tf']:.4g}, law {s['accel_law']}",
             "",
-            tuning.format_comparison(cmp),
+            format_compact(cmp),
         ]
     )
     write_text(run_dir / "report.txt", text + "\n")

@@ -24,10 +24,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import yaml
 
+    from vfgym._validate import check_output_path
     from vfgym.commands._common import axis_from_args, scenario_from_args
     from vfgym.space import settings_to_dict
 
     scenario = scenario_from_args(args, axis_from_args(args))
+    if args.out is not None:
+        check_output_path("--out", args.out)
     try:
         from vfgym.agents import policy_settings
     except ImportError as exc:  # pragma: no cover - depends on the install

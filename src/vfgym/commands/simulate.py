@@ -1,4 +1,5 @@
-"""``vfgym simulate``: one move, its measures printed (and the trace written as CSV)."""
+"""``vfgym simulate``: one move, its measures printed. ``vfgym export --format csv`` writes
+the same move's per-tick trace, ``vfgym plot response`` draws it."""
 
 from __future__ import annotations
 

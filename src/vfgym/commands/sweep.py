@@ -73,11 +73,12 @@ def _cli_values(args: argparse.Namespace) -> dict:
 
 def run(args: argparse.Namespace) -> int:
     import signal
-    import sys
     import time
     from pathlib import Path
 
     from vfgym import tuning
+    from vfgym._validate import check_output_path
+    from vfgym.commands._common import Interrupted
     from vfgym.io.runs import read_yaml
     from vfgym.moves.axis import axis_digest
 
@@ -87,26 +88,22 @@ def run(args: argparse.Namespace) -> int:
     tuning.check_sampler(cfg)
     name = cfg.study or _default_name(args.config, cfg.runs_dir)
     run_dir = Path(cfg.runs_dir) / "sweep" / name
+    check_output_path("runs_dir", run_dir, folder=True, shown=cfg.runs_dir)
     spec = tuning.resolve_storage(cfg.storage, run_dir)
+    _check_storage_file(cfg.storage, spec)
     axis = cfg.load_axis()
     reference = (
         tuning.find_reference(cfg.reference, cfg.runs_dir, scenarios, cfg.laws, axis_digest(axis))
         if cfg.aggregate == "mean"
         else None
     )  # a grid's reference is a mean cost
-    storage = None
-    if spec.kind == "postgresql":  # reach the server before making a run folder
-        storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
-    run_dir.mkdir(parents=True, exist_ok=True)
+    study, created = _open_study(cfg, spec, name, run_dir, scenarios)
     _record(run_dir, args, cfg, name, spec)
-    if storage is None:
-        storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
-    study, created = tuning.create_or_load(storage, name, cfg, scenarios)
     budget = tuning.trial_budget(cfg)
     n0 = tuning.counts(study)
     print(
         f"vfgym sweep: study {name} ({'new' if created else 'continued'}: "
-        f"{n0['complete']}/{budget} trials done) on {spec.display}\n"
+        f"{_done(n0['complete'], budget)}) on {spec.display}\n"
         f"  {cfg.sampler} sampler, {cfg.objective} objective, {cfg.workers} worker(s), "
         f"laws {','.join(cfg.laws)}, scenarios {', '.join(s.name for s in scenarios)}\n"
         f"  run folder {run_dir}",
@@ -139,14 +136,67 @@ def run(args: argparse.Namespace) -> int:
     elapsed = time.monotonic() - t0
     code = _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapsed, reports)
     if interrupted:
-        print(
-            f"interrupted: completed trials are kept in {spec.display}; continue with the "
-            f"same command and --study {name}",
-            file=sys.stderr,
-        )
         signal.signal(signal.SIGINT, signal.default_int_handler)
-        raise KeyboardInterrupt
+        raise Interrupted(
+            f"completed trials are kept in {spec.display}; continue with the same command "
+            f"and --study {name}"
+        )
     return code
+
+
+def _done(complete: int, budget: int) -> str:
+    """How far the study is: ``3/10 trials done``, or that it already has its trials."""
+    if complete < budget:
+        return f"{complete}/{budget} trials done"
+    return (
+        f"{complete} trials done, --trials {budget} asked: nothing to run; give --trials "
+        f"above {complete} to continue it"
+    )
+
+
+def _check_storage_file(text: str, spec) -> None:
+    """A storage file named by the user (sqlite:///FILE, journal:FILE) must go in an
+    existing folder: a typo must not make folders silently. The defaults ``sqlite`` and
+    ``journal`` live in the run folder, which the sweep makes."""
+    from pathlib import Path
+
+    from vfgym._validate import check_output_path
+
+    if spec.path is None or str(text).strip() in ("sqlite", "journal"):
+        return
+    folder = Path(spec.path).parent
+    check_output_path("storage", spec.path, shown=text)  # a file in the way, read-only, ...
+    if not folder.is_dir():
+        raise ValueError(
+            f"storage={text!r} is not allowed: folder {folder} does not exist; create it "
+            "first, or give storage 'sqlite' to keep the study in the run folder"
+        )
+
+
+def _open_study(cfg, spec, name, run_dir, scenarios):
+    """Open the storage and create or load the study; a run folder made here is removed
+    again if that fails (a refused sweep leaves nothing behind)."""
+    import json
+    import shutil
+
+    from vfgym import tuning
+
+    storage = None
+    if spec.kind == "postgresql":  # reach the server before making a run folder
+        storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
+    made = not run_dir.exists()
+    run_dir.mkdir(parents=True, exist_ok=True)
+    try:
+        if storage is None:
+            storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
+        try:
+            return tuning.create_or_load(storage, name, cfg, scenarios)
+        except (UnicodeDecodeError, json.JSONDecodeError) as exc:  # a file, not a journal
+            raise ValueError(f"storage={spec.display!r} cannot be opened: {exc}") from None
+    except BaseException:
+        if made:
+            shutil.rmtree(run_dir, ignore_errors=True)
+        raise
 
 
 def _default_name(config: str | None, runs_dir: str) -> str:
@@ -163,11 +213,12 @@ def _default_name(config: str | None, runs_dir: str) -> str:
 
 
 def _record(run_dir, args, cfg, name, spec) -> None:
-    """config.yaml (resolved, password masked) and command.txt (every invocation)."""
+    """config.yaml (resolved, password masked) and command.txt (every invocation that
+    opened the study: a refused one is not recorded)."""
     import shlex
     import sys
 
-    from vfgym.io.runs import write_text, write_yaml
+    from vfgym.io.runs import command_args, write_text, write_yaml
     from vfgym.tuning import mask_url
 
     conf = cfg.to_dict() | {"study": name, "storage": spec.display}
@@ -177,7 +228,9 @@ def _record(run_dir, args, cfg, name, spec) -> None:
         from vfgym.moves.axis import AXIS_FILE, write_axis
 
         write_axis(axis, run_dir / AXIS_FILE)
-    if len(sys.argv) > 1 and "sweep" in sys.argv[1:]:
+    if command_args() is not None:  # run by vfgym.cli.main
+        argv = command_args() or []
+    elif len(sys.argv) > 1 and "sweep" in sys.argv[1:]:
         argv = sys.argv[sys.argv.index("sweep") :]
     else:  # called as a function: the options it resolved to
         argv = ["sweep"] + [f"--{k.replace('_', '-')}={v}" for k, v in _cli_values(args).items()
@@ -274,14 +327,19 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     from vfgym.io.runs import write_text, write_yaml
     from vfgym.moves.axis import axis_kwargs
     from vfgym.params import PAPER_SETTINGS
-    from vfgym.report import axis_verdict, format_verdict
+    from vfgym.report import axis_verdict, compact_rows, format_compact, format_verdict
 
     tuning.write_trials_csv(study, run_dir / "trials.csv")
     n = tuning.counts(study)
     budget = tuning.trial_budget(cfg)
     stops = sorted({r.get("stopped", "") for r in reports})
+    done = (
+        f"{n['complete']}/{budget} completed trials"
+        if n["complete"] <= budget
+        else f"{n['complete']} completed trials (--trials {budget} asked)"
+    )
     lines = [
-        f"study {study.study_name}: {n['complete']}/{budget} completed trials "
+        f"study {study.study_name}: {done} "
         f"({n['fail']} failed, {n['running']} running, {n['waiting']} waiting) "
         f"in {elapsed:.1f} s"
     ]
@@ -309,32 +367,30 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         lines.append("no completed trial yet")
     else:
         settings = tuning.trial_settings(best)
-        rec = tuning.best_record(study, best, cfg, spec, scenarios)
         cmp = tuning.compare(settings, scenarios, **axis_kwargs(cfg.load_axis()))
         paper_cost = tuning.set_cost(PAPER_SETTINGS, scenarios, cfg)  # as the sweep scores
-        rec["paper_cost"] = paper_cost
+        record = tuning.best_record(study, best, cfg, spec, scenarios, paper_cost)
         lines.append(
-            f"best: trial {best.number}, {tuning.describe(cfg)} cost {rec['cost']:.4f} "
-            f"({'feasible' if rec['feasible'] else 'INFEASIBLE'}) against the paper's "
-            f"{paper_cost:.4f} ({tuning.gap_pct(rec['cost'], paper_cost):+.1f} %)"
+            f"best: trial {best.number}, {tuning.describe(cfg)} cost {record.cost:.4f} "
+            f"({'feasible' if record.feasible else 'INFEASIBLE'}) against the paper's "
+            f"{paper_cost:.4f} ({tuning.gap_pct(record.cost, paper_cost):+.1f} %)"
         )
         if reference is not None:
-            ref, ref_path = reference
-            gap = tuning.gap_pct(rec["cost"], float(ref["cost"]))
-            rec["reference"] = {"path": str(ref_path), "cost": ref["cost"], "gap_pct": gap}
+            gap = tuning.ReferenceGap.between(record.cost, reference)
+            record = record.with_reference(gap)
             lines.append(
-                f"gap to the grid reference {ref_path} (cost {float(ref['cost']):.4f}): "
-                f"{gap:+.2f} %"
+                f"gap to the grid reference {reference.path} (cost {reference.cost:.4f}): "
+                f"{gap.gap_pct:+.2f} %"
             )
-        s = rec["settings"]
+        s = record.settings
         lines.append(
             f"settings: value {s['value_rad']:.6g} rad, error limit {s['error_limit_rad']:.6g} "
             f"rad, k {s['k']:.6g}, Ts/Tf {s['ts_over_tf']:.4g}, law {s['accel_law']}"
         )
-        write_yaml(run_dir / "best.yaml", rec)
-        summary["best"] = rec
-        summary["comparison"] = cmp
-        lines += ["", tuning.format_comparison(cmp)]
+        write_yaml(run_dir / "best.yaml", record.as_dict())
+        summary["best"] = record.as_dict()
+        summary["comparison"] = compact_rows(cmp).as_dict()
+        lines += ["", format_compact(cmp)]
     if cfg.plots and not interrupted and best is not None:
         plots = tuning.write_plots(study, run_dir, cfg.objective)
         summary["plots"] = plots

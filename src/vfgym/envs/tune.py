@@ -10,31 +10,26 @@ import numpy as np
 from gymnasium import spaces
 
 from vfgym._validate import check_choice
-from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import ACCEL_LAWS, DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.params import Measures, Settings
 from vfgym.plant import simulate
 from vfgym.scoring import (
-    DEFAULT_BOUNDS,
-    DEFAULT_WEIGHTS,
     Bounds,
     CostWeights,
+    Score,
     evaluate,
     score_pairs,
 )
 from vfgym.space import SPACE, from_action, settings_to_dict
 
 from ._common import (
+    OBS_BOUND,
     SCENARIO_FEATURES,
+    EnvConfig,
     Episode,
-    ScenarioSource,
     as_action,
-    check_scoring,
-    resolve_axis,
     scored_info,
 )
-
-OBS_BOUND = 10.0
 
 
 def tune_spaces() -> tuple[spaces.Box, spaces.Box]:
@@ -96,17 +91,20 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     ``-cost`` of the move from :func:`vfgym.evaluate` (lower cost is better; a perfect
     point-to-point move costs about 1): move time / ideal time (or RMS tracking error for a
     moving reference) plus weighted overshoot, acceleration over the limit, time at the
-    torque limit and not settling (:class:`vfgym.CostWeights`). ``info`` carries every
-    measure of :mod:`vfgym.plant.measures`, ``ideal_time_s``, ``time_ratio``, ``window_rad``,
-    ``cost``, the constraint values ``constraint_accel``, ``constraint_torque``,
-    ``constraint_overshoot`` (feasible when ≤ 0), ``feasible``, ``scenario`` and the
-    settings used.
+    torque limit and, for a move that does not arrive (not settled in the in-position
+    window at its end, or a sine not followed), a penalty growing with the distance left
+    (:class:`vfgym.CostWeights`, :mod:`vfgym.scoring`). ``info`` carries every measure of
+    :mod:`vfgym.plant.measures`, ``ideal_time_s``, ``time_ratio``, ``window_rad``,
+    ``arrived``, ``cost``, the constraint values ``constraint_accel``,
+    ``constraint_torque``, ``constraint_overshoot``, ``constraint_arrival`` (feasible when
+    ≤ 0), ``feasible``, ``scenario`` and the settings used.
 
     ## Starting State
 
     A scenario: the ``scenario`` argument or ``options={"scenario": name}`` if given,
     ``options={"scenario_seed": s}`` for a seed of the split, else a seed drawn from the
-    env's ``np_random`` in ``seed_range`` and the move ``random_scenario(seed, split)``.
+    env's ``np_random`` in ``seed_range`` and the move ``random_scenario(seed, split)`` (on
+    an ``axis``, that split's move set's).
     Train and test scenarios never coincide. The plant starts at rest at 0.
 
     ## Episode End
@@ -133,26 +131,23 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     scenario : str, Scenario or None
         A fixed scenario (name such as ``"paper-step"`` or ``"test-7"``, or a
         :class:`vfgym.Scenario`); ``None`` draws one per episode.
-    split : str
-        ``"train"`` or ``"test"``, the random distribution's split to draw from.
-    seed_range : tuple of (int, int) or None
-        (low, high): scenario seeds drawn in [low, high) (default [0, 2³¹)).
-    accel_law : str
-        ``"rise"`` (the paper's reading) or ``"slew"``.
-    plant, measures, weights, bounds
-        The scoring path's inputs (:func:`vfgym.evaluate`).
-    axis : str, Axis or None
-        An axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant and measures,
-        and the moves of each split come from its move sets (a random set's draws, or a
-        listed set's move ``seed mod len``); names resolve on the axis.
     render_mode : str or None
         ``"rgb_array"`` draws the last move (position, speed, acceleration, command
         against motor) as an (480, 640, 3) uint8 array.
+    **options
+        The other fields of :class:`vfgym.envs._common.EnvConfig`, where their defaults
+        live and are checked: ``split`` (``"train"`` or ``"test"``), ``seed_range``
+        ((low, high) of the scenario seeds), ``accel_law`` (``"rise"`` or ``"slew"``),
+        ``axis`` (an axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant,
+        measures and move sets), and the scoring path's inputs ``plant``, ``measures``,
+        ``weights``, ``bounds`` (:func:`vfgym.evaluate`).
 
     Raises
     ------
     ValueError
         If an argument is out of its range or of the wrong type.
+    TypeError
+        If an option is not a field of :class:`vfgym.envs._common.EnvConfig`.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}
@@ -161,28 +156,15 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         self,
         scenario: str | Scenario | None = None,
         *,
-        split: str = "train",
-        seed_range: tuple[int, int] | None = None,
-        accel_law: str = "rise",
-        plant: Plant = PAPER_PLANT,
-        measures: Measures = DEFAULT_MEASURES,
-        weights: CostWeights = DEFAULT_WEIGHTS,
-        bounds: Bounds = DEFAULT_BOUNDS,
         render_mode: str | None = None,
-        axis: Axis | str | None = None,
+        **options: Any,
     ) -> None:
-        axis, plant, measures = resolve_axis(axis, plant, measures)
-        check_scoring(weights, bounds, measures, plant)
-        self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
+        self.config = EnvConfig(scenario, **options)
+        self.accel_law = self.config.accel_law
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
         self.render_mode = render_mode
-        self.plant = plant
-        self.measures = measures
-        self.weights = weights
-        self.bounds = bounds
-        self.axis = axis
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures, axis)
+        self.source = self.config.scenario_source()
         self.observation_space, self.action_space = tune_spaces()
         self._ep: Episode | None = None
         self._settings: Settings | None = None
@@ -245,13 +227,14 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
             )
         ep = self._ep
         settings = action_settings(action, self.accel_law)
+        c = self.config
         ev = evaluate(
             settings,
             ep.scenario,
-            plant=self.plant,
-            measures=self.measures,
-            weights=self.weights,
-            bounds=self.bounds,
+            plant=c.plant,
+            measures=c.measures,
+            weights=c.weights,
+            bounds=c.bounds,
         )
         cost = float(ev.cost[0, 0])
         info = scored_info(ep, ev.metrics[0][0], cost, ev.constraints[0, 0])
@@ -287,9 +270,9 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         title = f"VFTune-v0, {ep.scenario.name}"
         if self._settings is None:
             return move_picture(
-                ep.plant, ep.command, None, None, None, self.measures.accel_window_s, title
+                ep.plant, ep.command, None, None, None, self.config.measures.accel_window_s, title
             )
-        tr = simulate(ep.command, self._settings, ep.plant, measures=self.measures)
+        tr = simulate(ep.command, self._settings, ep.plant, measures=self.config.measures)
         s = self._settings
         title += f": value {s.value_rad:.3g}, L {s.error_limit_rad:.3g}, k {s.k:.3g}, "
         title += f"Ts/Tf {s.ts_over_tf:.3g}"
@@ -299,7 +282,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
             tr.pulse_rad,
             tr.motor_rad,
             tr.speed_rad_s,
-            self.measures.accel_window_s,
+            self.config.measures.accel_window_s,
             title,
         )
 
@@ -311,11 +294,16 @@ def evaluate_pairs(
     measures: Measures,
     weights: CostWeights,
     bounds: Bounds,
-) -> list[tuple[float, dict[str, Any], np.ndarray]]:
+) -> list[Score]:
     """Score ``settings[i]`` on ``episodes[i]`` for every i in one compiled, multi-threaded
     call: :func:`vfgym.scoring.score_pairs`, the pairwise core of :func:`vfgym.evaluate`.
-    Returns (cost, metrics, constraints) per pair."""
+
+    Returns
+    -------
+    list of Score
+        One per pair (V-F settings run every move).
+    """
     results = score_pairs(
         list(settings), list(episodes), measures=measures, weights=weights, bounds=bounds
     )
-    return [(cost, m, cons) for cost, cons, _objs, m in results]
+    return [r for r in results if r is not None]

@@ -19,35 +19,14 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from vfgym._validate import check_choice, check_int
-from vfgym.moves.axis import Axis
+from vfgym._validate import check_int
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import (
-    ACCEL_LAWS,
-    DEFAULT_MEASURES,
-    PAPER_PLANT,
-    PAPER_SETTINGS,
-    Measures,
-    Plant,
-    Settings,
-)
 from vfgym.plant import _layout as L
-from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights
 from vfgym.space import settings_to_dict
 
 from . import _batch as B
-from ._common import (
-    SERVO_INTERVAL_S,
-    SERVO_SETTLE_TIME_S,
-    SERVO_TRACKING_WEIGHT,
-    SERVO_VIOLATION_PENALTY,
-    Episode,
-    ScenarioSource,
-    check_scoring,
-    resolve_axis,
-    scored_info,
-)
-from .servo import ServoCore, raise_bad_action, servo_spaces
+from ._common import EnvConfig, Episode, scored_info
+from .servo import ServoConfig, ServoCore, raise_bad_action, servo_spaces
 from .tune import action_settings, evaluate_pairs, tune_spaces
 
 Infos = dict[str, Any]
@@ -302,12 +281,16 @@ class VFTuneVectorEnv(_BatchVectorEnv):
     ----------
     num_envs : int
         N, the sub-envs.
-    scenario, split, seed_range, accel_law, plant, measures, weights, bounds
+    scenario : str, Scenario or None
         As :class:`vfgym.envs.tune.VFTuneEnv`.
     autoreset_mode : str or gymnasium.vector.AutoresetMode
         ``"NextStep"``, ``"SameStep"`` or ``"Disabled"``.
     render_mode : str or None
         As :class:`vfgym.envs.tune.VFTuneEnv`, for each sub-env.
+    **options
+        As :class:`vfgym.envs.tune.VFTuneEnv` (:class:`vfgym.envs._common.EnvConfig`'s
+        fields: ``split``, ``seed_range``, ``accel_law``, ``axis``, ``plant``,
+        ``measures``, ``weights``, ``bounds``).
     """
 
     def __init__(
@@ -315,26 +298,14 @@ class VFTuneVectorEnv(_BatchVectorEnv):
         num_envs: int = 1,
         scenario: str | Scenario | None = None,
         *,
-        split: str = "train",
-        seed_range: tuple[int, int] | None = None,
-        accel_law: str = "rise",
-        plant: Plant = PAPER_PLANT,
-        measures: Measures = DEFAULT_MEASURES,
-        weights: CostWeights = DEFAULT_WEIGHTS,
-        bounds: Bounds = DEFAULT_BOUNDS,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         render_mode: str | None = None,
-        axis: Axis | str | None = None,
+        **options: Any,
     ) -> None:
         super().__init__(num_envs, autoreset_mode, render_mode)
-        axis, plant, measures = resolve_axis(axis, plant, measures)
-        check_scoring(weights, bounds, measures, plant)
-        self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
-        self.measures = measures
-        self.weights = weights
-        self.bounds = bounds
-        self.axis = axis
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures, axis)
+        self.config = EnvConfig(scenario, **options)
+        self.accel_law = self.config.accel_law
+        self.source = self.config.scenario_source()
         self.single_observation_space, self.single_action_space = tune_spaces()
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -366,12 +337,16 @@ class VFTuneVectorEnv(_BatchVectorEnv):
         ends: dict[int, Infos] = {}
         if idx.size:
             results = evaluate_pairs(
-                settings, eps, measures=self.measures, weights=self.weights, bounds=self.bounds
+                settings,
+                eps,
+                measures=self.config.measures,
+                weights=self.config.weights,
+                bounds=self.config.bounds,
             )
-            for i, s, ep, (cost, metrics, cons) in zip(idx, settings, eps, results, strict=True):
-                rew[i] = -cost
+            for i, s, ep, res in zip(idx, settings, eps, results, strict=True):
+                rew[i] = -res.cost
                 term[i] = True
-                info = scored_info(ep, metrics, cost, cons)
+                info = scored_info(ep, res.metrics, res.cost, res.constraints)
                 info.update(settings_to_dict(s))
                 ends[int(i)] = info
         return rew, term, np.zeros(self.num_envs, dtype=np.bool_), ends
@@ -389,16 +364,15 @@ class VFServoVectorEnv(_BatchVectorEnv):
     ----------
     num_envs : int
         N, the sub-envs.
-    scenario, split, seed_range, accel_law, interval_s, settle_time_s
+    scenario : str, Scenario or None
         As :class:`vfgym.envs.servo.VFServoEnv`.
-    initial_settings, tracking_weight, terminate_on_violation, violation_penalty
-        As :class:`vfgym.envs.servo.VFServoEnv`.
-    plant, measures, weights, bounds
-        The scoring path's inputs (:func:`vfgym.evaluate`).
     autoreset_mode : str or gymnasium.vector.AutoresetMode
         ``"NextStep"``, ``"SameStep"`` or ``"Disabled"``.
     render_mode : str or None
         As :class:`vfgym.envs.servo.VFServoEnv`, for each sub-env.
+    **options
+        As :class:`vfgym.envs.servo.VFServoEnv` (:class:`vfgym.envs.servo.ServoConfig`'s
+        fields, ``axis`` among them).
     """
 
     def __init__(
@@ -406,42 +380,12 @@ class VFServoVectorEnv(_BatchVectorEnv):
         num_envs: int = 1,
         scenario: str | Scenario | None = None,
         *,
-        split: str = "train",
-        seed_range: tuple[int, int] | None = None,
-        accel_law: str = "rise",
-        interval_s: float = SERVO_INTERVAL_S,
-        settle_time_s: float = SERVO_SETTLE_TIME_S,
-        initial_settings: Settings = PAPER_SETTINGS,
-        tracking_weight: float = SERVO_TRACKING_WEIGHT,
-        terminate_on_violation: bool = False,
-        violation_penalty: float = SERVO_VIOLATION_PENALTY,
-        plant: Plant = PAPER_PLANT,
-        measures: Measures = DEFAULT_MEASURES,
-        weights: CostWeights = DEFAULT_WEIGHTS,
-        bounds: Bounds = DEFAULT_BOUNDS,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         render_mode: str | None = None,
-        axis: Axis | str | None = None,
+        **options: Any,
     ) -> None:
         super().__init__(num_envs, autoreset_mode, render_mode)
-        axis, plant, measures = resolve_axis(axis, plant, measures)
-        self.core = ServoCore(
-            scenario,
-            split,
-            seed_range,
-            accel_law,
-            interval_s,
-            settle_time_s,
-            initial_settings,
-            tracking_weight,
-            terminate_on_violation,
-            violation_penalty,
-            plant,
-            measures,
-            weights,
-            bounds,
-            axis,
-        )
+        self.core = ServoCore(ServoConfig(scenario, **options))
         n = self.num_envs
         self.single_observation_space, self.single_action_space = servo_spaces()
         self.observation_space = batch_space(self.single_observation_space, n)

@@ -59,8 +59,18 @@ AXIS_FILE = "axis.yaml"
 class MoveSet:
     """The moves of one split: a list of moves, or a seeded random distribution.
 
-    moves: the moves (names unique within the set).
-    random: a distribution; its set is ``count`` draws from ``first_seed``.
+    Parameters
+    ----------
+    moves : tuple of Scenario
+        The moves (names unique within the set); give these or ``random``.
+    random : MoveDistribution or None
+        A distribution; its set is ``count`` draws from ``first_seed``.
+
+    Raises
+    ------
+    ValueError
+        If neither or both are given, a move is not a :class:`vfgym.Scenario`, or two
+        moves share a name.
     """
 
     moves: tuple[Scenario, ...] = ()
@@ -86,14 +96,42 @@ class MoveSet:
                 )
 
     def scenarios(self, split: str, base: Plant = PAPER_PLANT) -> list[Scenario]:
-        """The set: the listed moves, or the distribution's ``count`` draws of ``split``."""
+        """The set as scenarios.
+
+        Parameters
+        ----------
+        split : str
+            ``train`` or ``test``: the split a distribution draws from.
+        base : Plant
+            The axis's plant (a distribution's loads are drawn on it).
+
+        Returns
+        -------
+        list of Scenario
+            The listed moves, or the distribution's ``count`` draws of ``split``.
+        """
         if self.random is not None:
             return self.random.scenarios(split, base)
         return list(self.moves)
 
     def pick(self, seed: int, split: str, base: Plant = PAPER_PLANT) -> Scenario:
-        """The move of a seed, as the environments draw them: the distribution's draw, or
-        for a list the move ``seed mod len(moves)`` (seeds cycle through a listed set)."""
+        """The move of a seed, as the environments draw them.
+
+        Parameters
+        ----------
+        seed : int
+            The scenario seed.
+        split : str
+            ``train`` or ``test``: the split a distribution draws from.
+        base : Plant
+            The axis's plant.
+
+        Returns
+        -------
+        Scenario
+            The distribution's draw, or for a list the move ``seed mod len(moves)``
+            (seeds cycle through a listed set).
+        """
         if self.random is not None:
             return self.random.draw(seed, split, base)
         return self.moves[int(seed) % len(self.moves)]
@@ -101,8 +139,22 @@ class MoveSet:
 
 @dataclass(frozen=True)
 class MoveSets:
-    """An axis's train moves (what a sweep tunes on, the envs' train split) and test moves
-    (what ``vfgym evaluate`` judges on by default, the envs' test split)."""
+    """An axis's train moves and test moves.
+
+    Parameters
+    ----------
+    train : MoveSet
+        What a sweep tunes on, the envs' train split (default: 16 draws of the default
+        random distribution).
+    test : MoveSet
+        What ``vfgym evaluate`` judges on by default, the envs' test split (default: 32
+        draws).
+
+    Raises
+    ------
+    ValueError
+        If either is not a :class:`MoveSet`.
+    """
 
     train: MoveSet = field(
         default_factory=lambda: MoveSet(random=replace(DEFAULT_DISTRIBUTION, count=16))
@@ -117,7 +169,18 @@ class MoveSets:
                 raise ValueError(f"{split}={getattr(self, split)!r} must be a MoveSet")
 
     def of(self, split: str) -> MoveSet:
-        """The move set of ``split`` (train or test)."""
+        """The move set of a split.
+
+        Parameters
+        ----------
+        split : str
+            ``train`` or ``test``.
+
+        Returns
+        -------
+        MoveSet
+            Its moves.
+        """
         return getattr(self, check_choice("split", split, SPLITS))
 
 
@@ -131,6 +194,24 @@ class Axis:
     Every listed move must be able to arrive: its duration exceeds its ideal move time on
     the axis (:func:`vfgym.moves.scenarios.ideal_move_time_s`) and its command reaches
     its target within it.
+
+    Parameters
+    ----------
+    name : str
+        The axis's name (an axis file's default: its stem).
+    description : str
+        Free text.
+    plant : Plant
+        The machine: motor (with its load), servo, controller clock.
+    measures : Measures
+        The measures' windows and bands on this machine.
+    moves : MoveSets
+        The train and test move sets; a move's load is added to the plant's.
+
+    Raises
+    ------
+    ValueError
+        If a field has the wrong type, or a listed move cannot arrive within its duration.
     """
 
     name: str = "paper"
@@ -148,12 +229,39 @@ class Axis:
                 _check_arrives(sc, self.plant, f"moves.{split}[{i}]")
 
     def scenarios(self, split: str) -> list[Scenario]:
-        """The train or test moves."""
+        """The train or test moves.
+
+        Parameters
+        ----------
+        split : str
+            ``train`` or ``test``.
+
+        Returns
+        -------
+        list of Scenario
+            The split's move set, drawn on the axis's plant if random.
+        """
         return self.moves.of(split).scenarios(split, self.plant)
 
     def scenario(self, name: str | Scenario) -> Scenario:
-        """A move by name: a listed move of the axis, a named scenario
-        (:data:`vfgym.SCENARIOS`), or ``<split>-<seed>`` of a random move set."""
+        """A move by name.
+
+        Parameters
+        ----------
+        name : str or Scenario
+            A listed move of the axis, a named scenario (:data:`vfgym.SCENARIOS`), or
+            ``<split>-<seed>`` of a random move set; a Scenario is returned as it is.
+
+        Returns
+        -------
+        Scenario
+            The move.
+
+        Raises
+        ------
+        ValueError
+            If the name is none of these.
+        """
         if isinstance(name, Scenario):
             return name
         for split in SPLITS:
@@ -177,8 +285,20 @@ class Axis:
         )
 
     def scenario_set(self, spec: str | Scenario | list | tuple) -> list[Scenario]:
-        """Scenarios from a spec: ``train`` / ``test`` (the axis's move sets), ``named``
-        (the eight named scenarios), a move's name, a comma-separated list, or a list."""
+        """Scenarios from a spec, resolved on the axis.
+
+        Parameters
+        ----------
+        spec : str, Scenario, list or tuple
+            ``train`` / ``test`` (the axis's move sets), ``named`` (the eight named
+            scenarios), a move's name (:meth:`scenario`), a comma-separated list, or a
+            list of these.
+
+        Returns
+        -------
+        list of Scenario
+            The scenarios, in order.
+        """
         if isinstance(spec, Scenario):
             return [spec]
         if isinstance(spec, (list, tuple)):
@@ -331,7 +451,12 @@ def axis_from_dict(data: Any, name: str = "axis") -> Axis:
     Returns
     -------
     Axis
-        The axis; a bad key or value raises one ``ValueError`` naming its key path.
+        The axis.
+
+    Raises
+    ------
+    ValueError
+        One line naming the key path, for a bad key or value.
     """
     if data is None:
         data = {}
@@ -356,8 +481,20 @@ def axis_from_dict(data: Any, name: str = "axis") -> Axis:
 
 
 def axis_to_dict(axis: Axis) -> dict[str, Any]:
-    """The axis as an axis file's mapping, every field written out (a run folder's record
-    does not depend on today's defaults); :func:`axis_from_dict` reads it back equal."""
+    """The axis as an axis file's mapping, every field written out.
+
+    A run folder's record so does not depend on today's defaults.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis.
+
+    Returns
+    -------
+    dict
+        The mapping; :func:`axis_from_dict` reads it back equal.
+    """
     motor = axis.plant.motor
     preset = motor.name if motor.name in MOTOR_PRESETS else SGME_02A.name
 
@@ -382,13 +519,38 @@ def axis_to_dict(axis: Axis) -> dict[str, Any]:
 
 def axis_kwargs(axis: Axis | None) -> dict[str, Any]:
     """``plant=`` and ``measures=`` for :func:`vfgym.evaluate`, the reports and the
-    objective: the axis's, or none (their defaults, the paper's) for ``None``."""
+    objective.
+
+    Parameters
+    ----------
+    axis : Axis or None
+        The axis, or ``None`` for the paper's.
+
+    Returns
+    -------
+    dict
+        The axis's ``plant`` and ``measures``, or empty (their defaults, the paper's) for
+        ``None``.
+    """
     return {} if axis is None else {"plant": axis.plant, "measures": axis.measures}
 
 
 def axis_digest(axis: Axis | None) -> str | None:
-    """``name:hash`` of everything the axis holds (``None`` for no axis): a study or a grid
-    reference made on one axis is never mistaken for another's with the same move names."""
+    """A fingerprint of everything the axis holds.
+
+    So a study or a grid reference made on one axis is never mistaken for another's with
+    the same move names.
+
+    Parameters
+    ----------
+    axis : Axis or None
+        The axis, or ``None`` for none.
+
+    Returns
+    -------
+    str or None
+        ``name:hash`` (12 hex digits of the SHA-256 of :func:`axis_to_dict`), or ``None``.
+    """
     if axis is None:
         return None
     text = json.dumps(axis_to_dict(axis), sort_keys=True)

@@ -408,21 +408,39 @@ class MoveDistribution:
     is named ``<split>-<seed>``. Every draw takes the same random numbers whatever the
     ranges, so changing one range changes that quantity alone.
 
-    count, first_seed: the set (:meth:`scenarios`): seeds first_seed … first_seed+count−1.
-    distance_rad: [low, high] of the distance, drawn log-uniform (0 < low).
-    both_directions: a random sign (default), else forward moves only.
-    profiles: each move's profile, drawn uniformly from this list (repeat a name to
-        weight it); from :data:`DRAWN_PROFILES`. Default: step 50 %, trapezoid and
-        scurve 25 % each.
-    inertia_ratio, viscous_nm_s_rad: [low, high], uniform: load added to the axis's own
-        (rotor inertias; N·m·s/rad). Default up to 5 rotor inertias, 0.3 mN·m·s/rad.
-    coulomb_nm, coulomb_share: Coulomb friction uniform in [low, high] on a share of the
-        moves, none on the rest (default up to 4 mN·m on half: more would leave the
-        P-type servo's dead band τc/K3 outside the in-position window).
-    load_torque_nm, load_torque_share: a constant load torque uniform in [low, high] on a
-        share of the moves (default ±4 mN·m on a quarter).
-    time_factor, settle_s: a move lasts time_factor × its ideal move time
-        (:func:`ideal_move_time_s` on its loaded plant) + settle_s (default 2 × + 80 ms).
+    Parameters
+    ----------
+    count, first_seed : int
+        The set (:meth:`scenarios`): seeds first_seed … first_seed+count−1 (count ≥ 1).
+    distance_rad : tuple of (float, float)
+        [low, high] of the distance, drawn log-uniform (0 < low).
+    both_directions : bool
+        A random sign (default), else forward moves only.
+    profiles : tuple of str
+        Each move's profile, drawn uniformly from this list (repeat a name to weight it);
+        from :data:`DRAWN_PROFILES`. Default: step 50 %, trapezoid and scurve 25 % each.
+    inertia_ratio, viscous_nm_s_rad : tuple of (float, float)
+        [low, high], uniform: load added to the axis's own (rotor inertias; N·m·s/rad).
+        Default up to 5 rotor inertias, 0.3 mN·m·s/rad.
+    coulomb_nm : tuple of (float, float)
+        Coulomb friction uniform in [low, high] on a share of the moves, none on the rest
+        (default up to 4 mN·m: more would leave the P-type servo's dead band τc/K3
+        outside the in-position window).
+    coulomb_share : float
+        That share, in [0, 1] (default half).
+    load_torque_nm : tuple of (float, float)
+        A constant load torque uniform in [low, high] on a share of the moves (default
+        ±4 mN·m).
+    load_torque_share : float
+        That share, in [0, 1] (default a quarter).
+    time_factor, settle_s : float
+        A move lasts time_factor × its ideal move time (:func:`ideal_move_time_s` on its
+        loaded plant) + settle_s (default 2 × + 80 ms); time_factor ≥ 1, settle_s ≥ 0.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range, or a range's low exceeds its high.
     """
 
     count: int = 16
@@ -512,7 +530,20 @@ class MoveDistribution:
         )
 
     def scenarios(self, split: str, base: Plant = PAPER_PLANT) -> list[Scenario]:
-        """The set: ``count`` draws of ``split`` from ``first_seed``."""
+        """The set: ``count`` draws of ``split`` from ``first_seed``.
+
+        Parameters
+        ----------
+        split : str
+            ``train`` or ``test``.
+        base : Plant
+            The axis's plant, as :meth:`draw` takes it.
+
+        Returns
+        -------
+        list of Scenario
+            The draws, in seed order.
+        """
         return [self.draw(self.first_seed + i, split, base) for i in range(self.count)]
 
 

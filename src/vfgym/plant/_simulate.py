@@ -28,6 +28,7 @@ from vfgym.params import (
 )
 from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
+from vfgym.plant import _tick as TK
 from vfgym.plant.measures import command_end_s, from_acc
 
 
@@ -98,8 +99,8 @@ def motor_coefficients(plant: Plant) -> tuple[float, float, float, float]:
     inv_j = 1.0 / m.inertia_kgm2
     T = plant.tick_s
     x = m.viscous_nm_s_rad * inv_j * T
-    h = K.phi_h.py_func(x)
-    g = K.phi_g.py_func(x)
+    h = TK.phi_h.py_func(x)
+    g = TK.phi_g.py_func(x)
     return math.exp(-x), T * h * inv_j, T * h, T * T * g * inv_j
 
 

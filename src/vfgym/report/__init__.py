@@ -11,7 +11,7 @@ _comparison
 _stats
     Spreads (median, IQR, bootstrap interval) and win / loss / tie.
 _tables
-    Text and Markdown tables.
+    Text and Markdown tables, and the compact table of sweeps and the grid.
 _files
     CSV and JSON files of a report in a run folder.
 _verdict
@@ -27,6 +27,7 @@ from vfgym.report._comparison import (
     Candidate,
     Column,
     Policy,
+    PolicyRun,
     Report,
     baseline_candidates,
     compare,
@@ -44,7 +45,11 @@ from vfgym.report._files import (
 from vfgym.report._stats import DEFAULT_RESAMPLES, TIE_RTOL, Spread, WinLoss, outcome, spread
 from vfgym.report._tables import (
     TABLE_COLUMNS,
+    CompactRow,
+    CompactTable,
     TableColumn,
+    compact_rows,
+    format_compact,
     format_table,
     markdown_costs,
     markdown_table,
@@ -67,7 +72,10 @@ __all__ = [
     "VERDICT_BASELINES",
     "Candidate",
     "Column",
+    "CompactRow",
+    "CompactTable",
     "Policy",
+    "PolicyRun",
     "Report",
     "Spread",
     "TableColumn",
@@ -76,8 +84,10 @@ __all__ = [
     "WinLoss",
     "axis_verdict",
     "baseline_candidates",
+    "compact_rows",
     "compare",
     "evaluate_policy",
+    "format_compact",
     "format_table",
     "format_verdict",
     "held_out_verdict",

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -32,7 +32,7 @@ from vfgym.scoring import (
 
 Policy = Callable[[Scenario], Settings]
 """A per-scenario controller: the settings an agent picks for a scenario."""
-EXTRA_METRICS = ("ideal_time_s", "time_ratio", "window_rad")
+EXTRA_METRICS = ("ideal_time_s", "time_ratio", "window_rad", "arrived")
 """Measures :func:`vfgym.evaluate` adds to :data:`vfgym.plant.measures.NAMES`."""
 
 
@@ -53,7 +53,8 @@ class Column:
     cost : numpy.ndarray
         Cost per scenario (NaN where the candidate does not apply).
     constraints : numpy.ndarray
-        Constraint values per scenario, (scenarios, 3).
+        Constraint values per scenario, (scenarios, len(CONSTRAINTS)), in the order of
+        :data:`~vfgym.scoring.CONSTRAINTS`.
     metrics : list of dict
         The measures per scenario, as :func:`vfgym.evaluate` returns them.
     """
@@ -72,6 +73,12 @@ class Column:
         ok = np.all(self.constraints <= 0.0, axis=-1).astype(float)
         ok[np.isnan(self.cost)] = np.nan
         return ok
+
+    @property
+    def mean_cost(self) -> float:
+        """The set's cost: the mean over the scenarios where the candidate applies (as
+        :attr:`vfgym.Evaluation.mean_cost`)."""
+        return float(np.nanmean(self.cost))
 
     def values(self, key: str) -> np.ndarray:
         """One measure per scenario as floats.
@@ -291,6 +298,29 @@ def _column_from_rows(
     )
 
 
+class PolicyRun(NamedTuple):
+    """A policy's settings and scores on each scenario (arrays indexed by scenario).
+
+    What :func:`evaluate_policy` returns.
+
+    Attributes
+    ----------
+    settings : list of Settings
+        The settings the policy picked, per scenario.
+    cost : numpy.ndarray
+        Cost per scenario, (S,).
+    constraints : numpy.ndarray
+        Constraint values per scenario, (S, 3).
+    metrics : list of dict
+        The measures :func:`vfgym.evaluate` returned, per scenario.
+    """
+
+    settings: list[Settings]
+    cost: np.ndarray
+    constraints: np.ndarray
+    metrics: list[dict[str, Any]]
+
+
 def evaluate_policy(
     policy: Policy,
     scenarios: str | Scenario | Sequence[str | Scenario],
@@ -299,7 +329,7 @@ def evaluate_policy(
     measures: Measures = DEFAULT_MEASURES,
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
-) -> tuple[list[Settings], np.ndarray, np.ndarray, list[dict[str, Any]]]:
+) -> PolicyRun:
     """Each scenario scored with the settings ``policy`` picks for it.
 
     Through :func:`vfgym.evaluate`; scenarios that get identical settings share one call.
@@ -321,9 +351,9 @@ def evaluate_policy(
 
     Returns
     -------
-    tuple
-        ``(settings, cost, constraints, metrics)``: the settings picked per scenario, the
-        costs (S,), the constraints (S, 3) and the measures per scenario.
+    PolicyRun
+        The settings picked per scenario, the costs (S,), the constraints
+        (S, len(CONSTRAINTS)) and the measures per scenario.
 
     Raises
     ------
@@ -358,7 +388,7 @@ def evaluate_policy(
             cost[i] = ev.cost[0, j]
             cons[i] = ev.constraints[0, j]
             metrics[i] = ev.metrics[0][j]
-    return chosen, cost, cons, metrics
+    return PolicyRun(chosen, cost, cons, metrics)
 
 
 def compare(

@@ -38,6 +38,7 @@ from vfgym.scoring._cost import (
     OBJECTIVES,
     Bounds,
     CostWeights,
+    Score,
     score,
 )
 
@@ -46,8 +47,10 @@ from vfgym.scoring._cost import (
 class Evaluation:
     """Measures, constraints, objectives and cost of each (controller, scenario) pair.
 
-    What :func:`evaluate` returns. Arrays are shaped (controllers, scenarios[, 3]). A pulse
-    source on a moving reference is not applicable: its entries are NaN.
+    What :func:`evaluate` returns. Arrays are shaped (controllers, scenarios), constraints
+    and objectives with a last axis in the order of :data:`~vfgym.scoring.CONSTRAINTS`
+    (4) and :data:`~vfgym.scoring.OBJECTIVES` (3). A pulse source on a moving reference
+    is not applicable: its entries are NaN.
 
     Attributes
     ----------
@@ -57,11 +60,11 @@ class Evaluation:
         The scenarios.
     metrics : list of list of dict
         ``metrics[c][s]``: the named measures (:mod:`vfgym.plant.measures`) plus
-        ``ideal_time_s``, ``time_ratio`` and ``window_rad``.
+        ``ideal_time_s``, ``time_ratio``, ``window_rad`` and ``arrived``.
     cost : numpy.ndarray
         The scalar cost, (controllers, scenarios).
     constraints : numpy.ndarray
-        (controllers, scenarios, 3), in the order of :data:`CONSTRAINTS`; feasible ≤ 0.
+        (controllers, scenarios, 4), in the order of :data:`CONSTRAINTS`; feasible ≤ 0.
     objectives : numpy.ndarray
         (controllers, scenarios, 3), in the order of :data:`OBJECTIVES`.
     traces : list of list of Trace or None
@@ -187,7 +190,7 @@ def score_pairs(
     measures: Measures = DEFAULT_MEASURES,
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
-) -> list[tuple[float, np.ndarray, np.ndarray, dict[str, Any]] | None]:
+) -> list[Score | None]:
     """Score ``controllers[i]`` on ``moves[i]`` for every i in one compiled, multi-threaded call.
 
     Parameters
@@ -206,10 +209,9 @@ def score_pairs(
 
     Returns
     -------
-    list
-        Per pair, ``(cost, constraints, objectives, measures)`` as :func:`score` gives
-        them (the measures merged with its ``extra``), or ``None`` where a pulse source
-        cannot run the move (a moving reference).
+    list of Score or None
+        One :class:`~vfgym.scoring.Score` per pair (its ``metrics`` hold the measures),
+        or ``None`` where a pulse source cannot run the move (a moving reference).
 
     Raises
     ------
@@ -239,7 +241,7 @@ def score_pairs(
         cmd_idx.append(j)
         ext_idx.append(e)
         rows.append(r)
-    out: list[tuple[float, np.ndarray, np.ndarray, dict[str, Any]] | None] = [None] * len(moves)
+    out: list[Score | None] = [None] * len(moves)
     if not rows:
         return out
     acc = K.new_acc(len(rows))
@@ -256,8 +258,7 @@ def score_pairs(
     for k, r in enumerate(rows):
         mv = moves[r]
         m = from_acc(acc[k], mv.plant, measures, float(mv.command[-1]), mv.command_end_s)
-        cost, cons, objs, extra = score(m, mv.scenario, mv.plant, measures, weights, bounds)
-        out[r] = (float(cost), cons, objs, m | extra)
+        out[r] = score(m, mv.scenario, mv.plant, measures, weights, bounds)
     return out
 
 
@@ -332,7 +333,8 @@ def evaluate(
         ci, si = divmod(r, ns)
         if res is None:
             continue
-        cost[ci, si], cons[ci, si], objs[ci, si], metrics[ci][si] = res
+        cost[ci, si], cons[ci, si], objs[ci, si] = res.cost, res.constraints, res.objectives
+        metrics[ci][si] = res.metrics
         if traces is not None:
             s, ext = _as_run(ctrls[ci], moves[si])
             traces[ci][si] = simulate(

@@ -35,7 +35,8 @@ the mean (default), the CVaR (mean of the costliest share) or the worst
 Modules: ``_config`` (sweep and grid configurations), ``_storage`` (storages and the claim
 lock), ``_objective`` (a trial scored by the one path), ``_study`` (samplers, search space,
 budget), ``_workers`` and ``_recovery`` (workers sharing a study), ``_results`` (best trial,
-CSV, gap to a reference), ``_grid`` (the exhaustive grid).
+CSV, figures, the tuned settings against the paper's as a :class:`vfgym.report.Report`,
+gap to a reference), ``_grid`` (the exhaustive grid).
 
 The grid (:func:`run_grid`) evaluates :func:`vfgym.space.grid` through the batched kernel,
 then refines around its best points; its best is the near-true optimum a sweep's best is
@@ -53,23 +54,40 @@ from vfgym.tuning._aggregate import (
     set_cost,
 )
 from vfgym.tuning._config import FORMS, SAMPLERS, SweepConfig, check_name
-from vfgym.tuning._grid import GridConfig, grid_reference, run_grid, write_grid_csv
-from vfgym.tuning._objective import Objective, aggregate, settings_key
+from vfgym.tuning._grid import (
+    GridConfig,
+    GridResult,
+    GridRow,
+    grid_reference,
+    run_grid,
+    write_grid_csv,
+)
+from vfgym.tuning._objective import Aggregate, Objective, aggregate, settings_key
 from vfgym.tuning._recovery import WORKER_ATTR, counts
 from vfgym.tuning._results import (
+    BestRecord,
+    FoundReference,
+    ReferenceGap,
     best_record,
     best_trial,
     compare,
     find_reference,
-    format_comparison,
     gap_pct,
     trial_settings,
     write_plots,
     write_trials_csv,
 )
-from vfgym.tuning._storage import STORAGE_HELP, StorageSpec, mask_url, open_storage, resolve_storage
+from vfgym.tuning._storage import (
+    STORAGE_HELP,
+    StorageSpec,
+    find_storage,
+    mask_url,
+    open_storage,
+    resolve_storage,
+)
 from vfgym.tuning._study import (
     SAMPLER_NEEDS,
+    StudyMeta,
     baseline_params,
     check_sampler,
     create_or_load,
@@ -87,10 +105,17 @@ __all__ = [
     "SAMPLER_NEEDS",
     "STORAGE_HELP",
     "WORKER_ATTR",
+    "Aggregate",
+    "BestRecord",
     "DeferredInterrupt",
+    "FoundReference",
     "GridConfig",
+    "GridResult",
+    "GridRow",
     "Objective",
+    "ReferenceGap",
     "StorageSpec",
+    "StudyMeta",
     "SweepConfig",
     "WorkerReport",
     "aggregate",
@@ -107,7 +132,7 @@ __all__ = [
     "cvar",
     "describe",
     "find_reference",
-    "format_comparison",
+    "find_storage",
     "gap_pct",
     "grid_reference",
     "make_sampler",

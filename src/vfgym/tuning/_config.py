@@ -4,11 +4,10 @@ the command line (in that order).
 
 from __future__ import annotations
 
-import re
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-from vfgym._validate import check_choice, check_int, check_real
+from vfgym._validate import check_choice, check_int, check_name, check_real
 from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.scenarios import Scenario, scenario_set
 from vfgym.params import ACCEL_LAWS
@@ -20,7 +19,6 @@ deterministic objective, NSGA-II (the Pareto form by default), a grid over
 :func:`vfgym.space.grid`, and uniform random sampling (a control)."""
 FORMS = ("cost", "pareto")
 """``cost``: minimise the mean cost; ``pareto``: minimise the three objectives."""
-NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
 
 
 def _opt_float(name: str, v: Any, lo: float) -> float | None:
@@ -67,7 +65,7 @@ def _bool(name: str, v: Any) -> bool:
 class _Options:
     """Shared by the sweep and grid configurations: merging sources, plain dicts, scenarios."""
 
-    scenarios: str
+    scenarios: str | None  # None only as given: construction fills in the default
     scenario_count: int
     first_seed: int
     laws: tuple[str, ...]
@@ -131,10 +129,11 @@ class _Options:
             ``first_seed`` do not apply); else :func:`vfgym.scenario_set` of
             ``scenarios``, ``scenario_count``, ``first_seed``.
         """
+        spec = str(self.scenarios)
         axis = self.load_axis()
         if axis is not None:
-            return axis.scenario_set(self.scenarios)
-        return scenario_set(self.scenarios, self.scenario_count, self.first_seed)
+            return axis.scenario_set(spec)
+        return scenario_set(spec, self.scenario_count, self.first_seed)
 
 
 @dataclass(frozen=True)
@@ -245,7 +244,7 @@ class SweepConfig(_Options):
         s(self, "runs_dir", str(self.runs_dir))
         if self.reference is not None:
             s(self, "reference", str(self.reference))
-        s(self, "grid_points", check_int("grid_points", self.grid_points, 1, 64))
+        s(self, "grid_points", check_int("grid_points", self.grid_points, 2, 64))
         s(self, "plots", _bool("plots", self.plots))
         s(self, "progress", _bool("progress", self.progress))
         s(self, "heartbeat", check_int("heartbeat", self.heartbeat, 1))
@@ -263,32 +262,3 @@ def _keys(data: dict, cls: type, source: str) -> dict[str, Any]:
             f"{source}: unknown key(s) {', '.join(unknown)}; allowed: {', '.join(sorted(known))}"
         )
     return out
-
-
-def check_name(option: str, name: Any) -> str:
-    """Check a study or run name: it names a folder.
-
-    Parameters
-    ----------
-    option : str
-        The option's name, for the error message.
-    name : str
-        The name: letters, digits, '.', '_' and '-', starting with a letter or digit, at
-        most 100 characters.
-
-    Returns
-    -------
-    str
-        ``name``.
-
-    Raises
-    ------
-    ValueError
-        If the name is not allowed.
-    """
-    if not isinstance(name, str) or not NAME_RE.match(name):
-        raise ValueError(
-            f"{option}={name!r} is not allowed: letters, digits, '.', '_' and '-' "
-            "(starting with a letter or digit, at most 100)"
-        )
-    return name

@@ -7,7 +7,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 from contextlib import nullcontext
-from typing import Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -18,11 +18,37 @@ from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, aggregate_costs
 from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
 
+if TYPE_CHECKING:
+    from optuna import Study, Trial
+
+
+class Aggregate(NamedTuple):
+    """Each controller's scores over a scenario set (arrays indexed by controller).
+
+    What :func:`aggregate` returns.
+
+    Attributes
+    ----------
+    cost : numpy.ndarray
+        The cost's aggregate over the scenarios (the mean by default), (C,).
+    constraints : numpy.ndarray
+        Worst (max) of each constraint over the scenarios, (C, 3).
+    feasible : numpy.ndarray
+        Every constraint ≤ 0 on every scenario, (C,) bool.
+    objectives : numpy.ndarray
+        The objectives' means over the scenarios, (C, 3).
+    """
+
+    cost: np.ndarray
+    constraints: np.ndarray
+    feasible: np.ndarray
+    objectives: np.ndarray
+
 
 def aggregate(
     ev: Evaluation, how: str = DEFAULT_AGGREGATE, cvar_alpha: float = DEFAULT_CVAR_ALPHA
-) -> dict[str, np.ndarray]:
-    """One controller's results over the scenarios, as a sweep scores a setting.
+) -> Aggregate:
+    """Each controller's results over the scenarios, as a sweep scores a setting.
 
     Parameters
     ----------
@@ -36,18 +62,18 @@ def aggregate(
 
     Returns
     -------
-    dict of str to numpy.ndarray
+    Aggregate
         Per controller: ``cost`` (the aggregate over the scenarios), ``constraints``
-        (worst, max, over the scenarios), ``feasible`` (every constraint ≤ 0 on every
-        scenario) and ``objectives`` (means).
+        (worst, max, over the scenarios), ``feasible`` (every constraint ≤ 0 on every scenario) and
+        ``objectives`` (means).
     """
     cons = np.nanmax(ev.constraints, axis=1)
-    return {
-        "cost": aggregate_costs(ev.cost, how, cvar_alpha),
-        "constraints": cons,
-        "feasible": np.all(cons <= 0.0, axis=1),
-        "objectives": np.nanmean(ev.objectives, axis=1),
-    }
+    return Aggregate(
+        cost=aggregate_costs(ev.cost, how, cvar_alpha),
+        constraints=cons,
+        feasible=np.all(cons <= 0.0, axis=1),
+        objectives=np.nanmean(ev.objectives, axis=1),
+    )
 
 
 def settings_key(s: Settings) -> tuple:
@@ -82,6 +108,10 @@ class Objective:
         The acceleration laws searched.
     form : str
         ``cost`` (one objective) or ``pareto`` (the three objectives).
+    plant : Plant
+        The plant the settings run on (an axis's, see :class:`vfgym.moves.axis.Axis`).
+    measures : Measures
+        Windows and bands of the measures (an axis's).
     aggregate, cvar_alpha : str, float
         The cost's aggregate over the scenarios (:func:`aggregate`).
     """
@@ -109,7 +139,7 @@ class Objective:
         self.guard: Callable[[], Any] = nullcontext
         self.current: int | None = None
 
-    def __call__(self, trial: Any) -> float | list[float]:
+    def __call__(self, trial: Trial) -> float | list[float]:
         self.current = trial.number
         # Before the claim lock goes: a retried trial inherits its dead worker's attribute,
         # and another worker's recovery must not see this one running under that name.
@@ -118,7 +148,7 @@ class Objective:
             self.on_enter()
         return self._run(trial)
 
-    def _run(self, trial: Any) -> float | list[float]:
+    def _run(self, trial: Trial) -> float | list[float]:
         settings = space.suggest(trial, self.laws)
         key = settings_key(settings)
         hit = self.cache.get(key) or self._lookup(trial.study, settings)
@@ -160,20 +190,25 @@ class Objective:
         )
         attrs = {
             "settings": space.settings_to_dict(settings),
-            "cost": float(agg["cost"][0]),
-            "constraints": [float(x) for x in agg["constraints"][0]],
-            "feasible": bool(agg["feasible"][0]),
-            "objectives": [float(x) for x in agg["objectives"][0]],
+            "cost": float(agg.cost[0]),
+            "constraints": [float(x) for x in agg.constraints[0]],
+            "feasible": bool(agg.feasible[0]),
+            "objectives": [float(x) for x in agg.objectives[0]],
         }
         values = attrs["cost"] if self.form == "cost" else list(attrs["objectives"])
         return values, attrs
 
-    def _lookup(self, study: Any, settings: Settings) -> Any:
+    def _lookup(self, study: Study, settings: Settings) -> tuple[Any, dict[str, Any]] | None:
         import optuna
 
         want = space.settings_to_dict(settings)
         for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,)):
-            if t.user_attrs.get("settings") == want and "cost" in t.user_attrs:
+            cons = t.user_attrs.get("constraints")
+            if (
+                t.user_attrs.get("settings") == want
+                and "cost" in t.user_attrs
+                and len(cons or ()) == len(CONSTRAINTS)  # not scored with other constraints
+            ):
                 attrs = {k: t.user_attrs[k] for k in _RESULT_ATTRS if k in t.user_attrs}
                 attrs["cached_from"] = t.user_attrs.get("cached_from", t.number)
                 values = t.value if self.form == "cost" else list(t.values)

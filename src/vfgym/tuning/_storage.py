@@ -15,9 +15,12 @@ import re
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from vfgym.tuning._recovery import RetryStale
+
+if TYPE_CHECKING:
+    from optuna.storages import BaseStorage, RDBStorage
 
 STORAGE_HELP = "sqlite, journal, sqlite:///FILE, journal:FILE or postgresql://USER:PASS@HOST/DB"
 
@@ -62,6 +65,12 @@ def mask_url(url: str) -> str:
     return re.sub(r"^([a-z0-9+]+://[^:/@]*):[^@/]*@", r"\1:***@", url)
 
 
+def _file_spec(kind: str, path: Path) -> StorageSpec:
+    """A SQLite or journal storage on the file ``path`` (made absolute)."""
+    p = path.resolve()
+    return StorageSpec(kind, f"sqlite:///{p}" if kind == "sqlite" else str(p), str(p))
+
+
 def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
     """The storage named by ``--storage``.
 
@@ -85,22 +94,18 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
     """
     t = str(text).strip()
     if t == "sqlite":
-        p = (run_dir / "study.db").resolve()
-        return StorageSpec("sqlite", f"sqlite:///{p}", str(p))
+        return _file_spec("sqlite", run_dir / "study.db")
     if t == "journal":
-        p = (run_dir / "journal.log").resolve()
-        return StorageSpec("journal", str(p), str(p))
+        return _file_spec("journal", run_dir / "journal.log")
     if t.startswith("journal:"):
         rest = t[len("journal:") :]
         rest = rest[2:] if rest.startswith("//") else rest
         if not rest or rest.endswith("/"):
             raise ValueError(f"storage={text!r} is not allowed: give journal:FILE")
-        p = Path(rest).expanduser().resolve()
-        return StorageSpec("journal", str(p), str(p))
+        return _file_spec("journal", Path(rest).expanduser())
     m = re.match(r"^sqlite:///(.+)$", t)
     if m:
-        p = Path(m.group(1)).expanduser().resolve()
-        return StorageSpec("sqlite", f"sqlite:///{p}", str(p))
+        return _file_spec("sqlite", Path(m.group(1)).expanduser())
     m = re.match(
         r"^postgres(?:ql)?(\+[a-z0-9]+)?://([^:@/\s]+)(:[^@/\s]*)?@([^:/\s]+)(:\d{1,5})?/(\w[\w.-]*)$",
         t,
@@ -118,7 +123,44 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
     raise ValueError(f"storage={mask_url(t)!r} is not allowed: give {STORAGE_HELP}")
 
 
-def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = None) -> Any:
+def find_storage(text: str, run_dir: Path) -> StorageSpec:
+    """The storage a sweep's run folder recorded, found again.
+
+    Parsed by :func:`resolve_storage` (the one parser).
+
+    Parameters
+    ----------
+    text : str
+        The folder's ``config.yaml`` ``storage`` (a :attr:`StorageSpec.display`: a
+        journal shows as its bare path) or what ``--storage`` names.
+    run_dir : Path
+        The run folder; a SQLite or journal file no longer where it was recorded is
+        looked for in it (the folder was moved).
+
+    Returns
+    -------
+    StorageSpec
+        The storage, pointing at the moved file where it was moved.
+
+    Raises
+    ------
+    ValueError
+        Naming ``storage``, for a masked password, an unknown URL or a missing file.
+    """
+    t = str(text).strip()
+    if "***" in t:
+        raise ValueError(f"storage={t!r}: the password is masked; give the storage URL again")
+    known = t in ("sqlite", "journal") or t.startswith(("journal:", "sqlite:")) or "://" in t
+    spec = resolve_storage(t if known else f"journal:{t}", run_dir)  # a journal shows as its path
+    if spec.path is None or Path(spec.path).is_file():
+        return spec
+    moved = run_dir / ("study.db" if spec.kind == "sqlite" else Path(spec.path).name)
+    if not moved.is_file():
+        raise ValueError(f"storage={t!r}: no {spec.kind} file {spec.path} (nor {moved})")
+    return _file_spec(spec.kind, moved)
+
+
+def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = None) -> BaseStorage:
     """The Optuna storage for ``spec``.
 
     RDB (with heartbeat and retry of stale trials) for SQLite and PostgreSQL, a SQLite
@@ -211,7 +253,7 @@ class _JournalFlock:
             self._fd = None
 
 
-def _sqlite_wal(storage: Any) -> None:
+def _sqlite_wal(storage: RDBStorage) -> None:
     """Put the SQLite file in write-ahead-log mode (it stays so) with ``synchronous=NORMAL``
     on every connection: readers never wait for a writer, a worker frozen or killed
     mid-write blocks no reader, and a commit needs no fsync (a crash of the process loses

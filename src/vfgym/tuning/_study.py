@@ -5,7 +5,8 @@ the study created or resumed with the paper's settings enqueued first.
 from __future__ import annotations
 
 import warnings
-from typing import Any
+from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING, Any
 
 from vfgym import space
 from vfgym.moves.axis import axis_digest
@@ -14,6 +15,11 @@ from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import OBJECTIVES
 from vfgym.tuning._aggregate import describe
 from vfgym.tuning._config import SweepConfig
+
+if TYPE_CHECKING:
+    from optuna import Study
+    from optuna.samplers import BaseSampler
+    from optuna.storages import BaseStorage
 
 META_KEY = "vfgym"
 """Study user attribute recording what the study optimises (checked when resumed)."""
@@ -44,8 +50,8 @@ def check_sampler(cfg: SweepConfig) -> None:
         )
 
 
-def make_sampler(cfg: SweepConfig, seed: int | None) -> Any:
-    """The Optuna sampler named by ``cfg.sampler``.
+def make_sampler(cfg: SweepConfig, seed: int | None) -> BaseSampler:
+    """The Optuna sampler named by ``cfg.sampler``, seeded; constrained where it can be.
 
     Parameters
     ----------
@@ -131,19 +137,63 @@ def baseline_params(laws: tuple[str, ...]) -> dict[str, Any]:
     return d
 
 
-def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> dict[str, Any]:
-    return {
-        "scenarios": [s.name for s in scenarios],
-        "laws": list(cfg.laws),
-        "objective": cfg.objective,
-        "axis": axis_digest(cfg.load_axis()),
-        "aggregate": describe(cfg),
-    }
+@dataclass(frozen=True)
+class StudyMeta:
+    """What a study optimises, stored as its ``vfgym`` user attribute and checked when it
+    is resumed.
+
+    Attributes
+    ----------
+    scenarios : list of str
+        The scenarios' names.
+    laws : list of str
+        The acceleration laws searched.
+    objective : str or None
+        ``cost`` or ``pareto``.
+    axis : str or None
+        The axis's :func:`~vfgym.moves.axis.axis_digest` (``None``: the paper's axis).
+    aggregate : str
+        The cost's aggregate over the scenarios (``mean``, ``worst``, ``cvar 0.25``).
+    """
+
+    scenarios: list[str]
+    laws: list[str]
+    objective: str | None
+    axis: str | None
+    aggregate: str = "mean"
+
+
+def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> StudyMeta:
+    """What a sweep optimises.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+    scenarios : list of Scenario
+        The sweep's scenarios.
+
+    Returns
+    -------
+    StudyMeta
+        Its scenarios, laws, objective, axis and aggregate.
+    """
+    return StudyMeta(
+        [s.name for s in scenarios],
+        list(cfg.laws),
+        cfg.objective,
+        axis_digest(cfg.load_axis()),
+        describe(cfg),
+    )
 
 
 def create_or_load(
-    storage: Any, name: str, cfg: SweepConfig, scenarios: list[Scenario], sampler: Any = None
-) -> tuple[Any, bool]:
+    storage: BaseStorage,
+    name: str,
+    cfg: SweepConfig,
+    scenarios: list[Scenario],
+    sampler: BaseSampler | None = None,
+) -> tuple[Study, bool]:
     """The study ``name``: created with the baseline enqueued first, or loaded.
 
     Parameters
@@ -167,7 +217,7 @@ def create_or_load(
     Raises
     ------
     ValueError
-        If a study of that name optimises other scenarios, laws or objectives.
+        If a study of that name optimises other scenarios, laws, objectives or axis.
     """
     import optuna
 
@@ -183,7 +233,7 @@ def create_or_load(
         study = optuna.load_study(study_name=name, storage=storage, sampler=sampler)
         created = False
     if created:
-        study.set_user_attr(META_KEY, meta)
+        study.set_user_attr(META_KEY, asdict(meta))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             study.set_metric_names(["cost"] if cfg.objective == "cost" else list(OBJECTIVES))
@@ -192,11 +242,11 @@ def create_or_load(
     old = study.user_attrs.get(META_KEY)
     if old is not None:
         old = {"aggregate": "mean"} | old  # a study made before the aggregate was recorded
-        for key in ("scenarios", "laws", "objective", "axis", "aggregate"):
-            if old.get(key) != meta[key]:
+        for key, want in asdict(meta).items():
+            if old.get(key) != want:
                 raise ValueError(
                     f"study={name!r} already optimises {key}={old.get(key)!r}, not "
-                    f"{meta[key]!r}: give another --study, or the same {key}"
+                    f"{want!r}: give another --study, or the same {key}"
                 )
     if len(study.directions) != len(directions):
         raise ValueError(

@@ -23,7 +23,7 @@ import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from vfgym.moves.axis import axis_kwargs
 from vfgym.params import PAPER_SETTINGS
@@ -33,6 +33,9 @@ from vfgym.tuning._objective import Objective
 from vfgym.tuning._recovery import RetryStale, _fail_and_retry, _retry, counts, recover
 from vfgym.tuning._storage import StorageSpec, _claim_lock, open_storage
 from vfgym.tuning._study import make_sampler, trial_budget
+
+if TYPE_CHECKING:
+    from optuna import Study
 
 
 class DeferredInterrupt:
@@ -133,7 +136,7 @@ def run_worker(
     spec: StorageSpec,
     study_name: str,
     index: int = 0,
-    on_trial: Callable[[Any], None] | None = None,
+    on_trial: Callable[[Study], object] | None = None,
     poll_s: float = 0.25,
 ) -> WorkerReport:
     """Run trials of ``study_name`` until it holds the trials asked for (or the timeout).
@@ -236,7 +239,9 @@ def run_worker(
     return rep
 
 
-def spawn_workers(cfg: SweepConfig, spec: StorageSpec, study: str, n: int) -> list[Any]:
+def spawn_workers(
+    cfg: SweepConfig, spec: StorageSpec, study: str, n: int
+) -> list[subprocess.Popen[str]]:
     """Start worker processes on the study (``python -m vfgym.tuning``).
 
     Their job goes through stdin, so the storage password never shows on a command line.
