@@ -32,7 +32,7 @@ HAS_SB3 = importlib.util.find_spec("stable_baselines3") is not None
 
 TRIMS = {
     "trials": (
-        "sweeps: 4 trials (quick.yaml asks 60, ~30 s here; the cmaes line 500, minutes); "
+        "sweeps: 4 trials (quick.yaml asks 300, ~35 s here; the cmaes line 500, minutes); "
         "the sampler, storage, workers and report paths run all the same"
     ),
     "grid": (
@@ -91,6 +91,23 @@ def _sweep(key: str, *extra: str, needs: tuple[str, ...] = ()) -> Run:
 README_RUNS: dict[str, list[Run]] = {
     "vfgym sweep --config experiments/quick.yaml": [
         Run("quick", ["sweep", "--config", "experiments/quick.yaml", *SWEEP_TRIM], trim="trials"),
+    ],
+    "vfgym sweep --config experiments/quick.yaml --axis experiments/axes/bare.yaml": [
+        Run(
+            "bare",
+            [
+                "sweep",
+                "--config",
+                "experiments/quick.yaml",
+                "--axis",
+                "experiments/axes/bare.yaml",
+                *SWEEP_TRIM,
+                "--study",
+                "bare",
+            ],
+            writes=("runs/sweep/bare/best.yaml",),
+            trim="trials",
+        ),
     ],
     "vfgym simulate --scenario NAME [--settings F | --baseline B]": [
         Run("sim-paper", ["simulate", "--scenario", "paper-step"]),
