@@ -13,7 +13,7 @@ import pytest
 from vfgym import Settings, evaluate, get_scenario, tuning
 from vfgym.report import Column, Report, compact_rows, format_compact
 
-# The main job's best (vfgym sweep --config experiments/quick.yaml, trial 38; README).
+# An earlier main job's best (quick.yaml on three named scenarios, trial 38): a fixed input.
 QUICK_BEST = Settings(
     value_rad=0.6371293687865839,
     error_limit_rad=0.5141381797916926,
