@@ -23,6 +23,10 @@ OPTIONS = (
     ("--laws", "acceleration laws searched: rise, slew or rise,slew (default rise)"),
     ("--sampler", "tpe (default), cmaes, gp, nsga2, grid or random"),
     ("--objective", "cost (default) or pareto (overshoot, move time, accel violation)"),
+    ("--aggregate", "the cost minimised over the scenarios: mean (default), cvar (mean of the "
+     "costliest --cvar-alpha share) or worst"),
+    ("--cvar-alpha", "the share of the costliest scenarios cvar averages, in (0, 1] "
+     "(default 0.25)"),
     ("--trials", "completed trials the study ends with, all workers together (default 100)"),
     ("--timeout", "seconds after which workers start no new trial"),
     ("--workers", "worker processes on the study (default 1: this process)"),
@@ -88,9 +92,11 @@ def run(args: argparse.Namespace) -> int:
     spec = tuning.resolve_storage(cfg.storage, run_dir)
     _check_storage_file(cfg.storage, spec)
     axis = cfg.load_axis()
-    reference = tuning.find_reference(
-        cfg.reference, cfg.runs_dir, scenarios, cfg.laws, axis_digest(axis)
-    )
+    reference = (
+        tuning.find_reference(cfg.reference, cfg.runs_dir, scenarios, cfg.laws, axis_digest(axis))
+        if cfg.aggregate == "mean"
+        else None
+    )  # a grid's reference is a mean cost
     study, created = _open_study(cfg, spec, name, run_dir, scenarios)
     _record(run_dir, args, cfg, name, spec)
     budget = tuning.trial_budget(cfg)
@@ -320,7 +326,8 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     from vfgym import tuning
     from vfgym.io.runs import write_text, write_yaml
     from vfgym.moves.axis import axis_kwargs
-    from vfgym.report import compact_rows, format_compact
+    from vfgym.params import PAPER_SETTINGS
+    from vfgym.report import axis_verdict, compact_rows, format_compact, format_verdict
 
     tuning.write_trials_csv(study, run_dir / "trials.csv")
     n = tuning.counts(study)
@@ -361,10 +368,10 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     else:
         settings = tuning.trial_settings(best)
         cmp = tuning.compare(settings, scenarios, **axis_kwargs(cfg.load_axis()))
-        paper_cost = cmp.column("paper").mean_cost
+        paper_cost = tuning.set_cost(PAPER_SETTINGS, scenarios, cfg)  # as the sweep scores
         record = tuning.best_record(study, best, cfg, spec, scenarios, paper_cost)
         lines.append(
-            f"best: trial {best.number}, cost {record.cost:.4f} "
+            f"best: trial {best.number}, {tuning.describe(cfg)} cost {record.cost:.4f} "
             f"({'feasible' if record.feasible else 'INFEASIBLE'}) against the paper's "
             f"{paper_cost:.4f} ({tuning.gap_pct(record.cost, paper_cost):+.1f} %)"
         )
@@ -394,6 +401,10 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
             f"({', '.join(stops) or 'no report'}); run the same command again to continue"
         )
         code = 1
+    if best is not None and not interrupted:  # the report ends with the held-out verdict
+        v = axis_verdict(tuning.trial_settings(best), cfg.load_axis(), tuned_on=scenarios)
+        summary["verdict"] = v.to_dict()
+        lines += ["", format_verdict(v)]
     text = "\n".join(lines)
     write_text(run_dir / "report.txt", text + "\n")
     write_yaml(run_dir / "summary.yaml", summary)

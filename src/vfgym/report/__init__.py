@@ -14,6 +14,9 @@ _tables
     Text and Markdown tables, and the compact table of sweeps and the grid.
 _files
     CSV and JSON files of a report in a run folder.
+_verdict
+    The held-out verdict a sweep ends with: the tuned setting against the baselines on
+    the test moves, read off a :class:`Report`.
 figures
     The paper's figures, S-curve and frequency plots, overlays, sweep history and Pareto
     front (matplotlib, imported only when a figure is drawn).
@@ -51,12 +54,22 @@ from vfgym.report._tables import (
     markdown_costs,
     markdown_table,
 )
+from vfgym.report._verdict import (
+    VERDICT_BASELINES,
+    Verdict,
+    VerdictRow,
+    axis_verdict,
+    format_verdict,
+    held_out_verdict,
+    verdict,
+)
 
 __all__ = [
     "DEFAULT_RESAMPLES",
     "EXTRA_METRICS",
     "TABLE_COLUMNS",
     "TIE_RTOL",
+    "VERDICT_BASELINES",
     "Candidate",
     "Column",
     "CompactRow",
@@ -66,13 +79,18 @@ __all__ = [
     "Report",
     "Spread",
     "TableColumn",
+    "Verdict",
+    "VerdictRow",
     "WinLoss",
+    "axis_verdict",
     "baseline_candidates",
     "compact_rows",
     "compare",
     "evaluate_policy",
     "format_compact",
     "format_table",
+    "format_verdict",
+    "held_out_verdict",
     "markdown_costs",
     "markdown_table",
     "outcome",
@@ -82,6 +100,7 @@ __all__ = [
     "spread",
     "summary_csv",
     "summary_rows",
+    "verdict",
     "win_loss_rows",
     "write_report",
 ]

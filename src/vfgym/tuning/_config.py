@@ -11,6 +11,7 @@ from vfgym._validate import check_choice, check_int, check_name, check_real
 from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.scenarios import Scenario, scenario_set
 from vfgym.params import ACCEL_LAWS
+from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, check_aggregate
 
 SAMPLERS = ("tpe", "cmaes", "gp", "nsga2", "grid", "random")
 """Samplers of ``vfgym sweep --sampler``: TPE (default), CMA-ES, a Gaussian process for the
@@ -158,6 +159,12 @@ class SweepConfig(_Options):
         One of :data:`SAMPLERS`.
     objective : str or None
         ``cost`` or ``pareto`` (:data:`FORMS`); default: pareto for nsga2, else cost.
+    aggregate : str
+        What the cost form minimises over the scenarios: ``mean`` (default), ``cvar``
+        (the mean of the costliest ``cvar_alpha`` share) or ``worst``
+        (:mod:`vfgym.tuning._aggregate`); feasible means feasible on every scenario.
+    cvar_alpha : float
+        The share of the costliest scenarios ``cvar`` averages, in (0, 1]; default 0.25.
     trials : int
         Completed trials the study ends with (all workers together), ≥ 1.
     timeout : float or None
@@ -198,6 +205,8 @@ class SweepConfig(_Options):
     axis: str | None = None
     sampler: str = "tpe"
     objective: str | None = None
+    aggregate: str = DEFAULT_AGGREGATE
+    cvar_alpha: float = DEFAULT_CVAR_ALPHA
     trials: int = 100
     timeout: float | None = None
     workers: int = 1
@@ -221,6 +230,9 @@ class SweepConfig(_Options):
         if form == "pareto" and self.sampler == "cmaes":
             raise ValueError("objective='pareto' is not allowed with sampler='cmaes': use nsga2")
         s(self, "objective", form)
+        how, alpha = check_aggregate(self.aggregate, self.cvar_alpha)
+        s(self, "aggregate", how)
+        s(self, "cvar_alpha", alpha)
         s(self, "trials", check_int("trials", self.trials, 1))
         s(self, "timeout", _opt_float("timeout", self.timeout, 0.0))
         s(self, "workers", check_int("workers", self.workers, 1, 256))

@@ -15,6 +15,7 @@ from vfgym import space
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
+from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, aggregate_costs
 from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
 
 if TYPE_CHECKING:
@@ -29,7 +30,7 @@ class Aggregate(NamedTuple):
     Attributes
     ----------
     cost : numpy.ndarray
-        Mean cost over the scenarios, (C,).
+        The cost's aggregate over the scenarios (the mean by default), (C,).
     constraints : numpy.ndarray
         Worst (max) of each constraint over the scenarios, (C, 3).
     feasible : numpy.ndarray
@@ -44,24 +45,31 @@ class Aggregate(NamedTuple):
     objectives: np.ndarray
 
 
-def aggregate(ev: Evaluation) -> Aggregate:
+def aggregate(
+    ev: Evaluation, how: str = DEFAULT_AGGREGATE, cvar_alpha: float = DEFAULT_CVAR_ALPHA
+) -> Aggregate:
     """Each controller's results over the scenarios, as a sweep scores a setting.
 
     Parameters
     ----------
     ev : Evaluation
         What :func:`vfgym.evaluate` returned.
+    how : str
+        The cost's aggregate over the scenarios: ``mean``, ``cvar`` or ``worst``
+        (:mod:`vfgym.tuning._aggregate`).
+    cvar_alpha : float
+        The share of the costliest scenarios ``cvar`` averages.
 
     Returns
     -------
     Aggregate
-        Per controller: ``cost`` (mean over the scenarios), ``constraints`` (worst, max,
-        over the scenarios), ``feasible`` (every constraint ≤ 0 on every scenario) and
+        Per controller: ``cost`` (the aggregate over the scenarios), ``constraints``
+        (worst, max, over the scenarios), ``feasible`` (every constraint ≤ 0 on every scenario) and
         ``objectives`` (means).
     """
     cons = np.nanmax(ev.constraints, axis=1)
     return Aggregate(
-        cost=ev.mean_cost,
+        cost=aggregate_costs(ev.cost, how, cvar_alpha),
         constraints=cons,
         feasible=np.all(cons <= 0.0, axis=1),
         objectives=np.nanmean(ev.objectives, axis=1),
@@ -104,6 +112,8 @@ class Objective:
         The plant the settings run on (an axis's, see :class:`vfgym.moves.axis.Axis`).
     measures : Measures
         Windows and bands of the measures (an axis's).
+    aggregate, cvar_alpha : str, float
+        The cost's aggregate over the scenarios (:func:`aggregate`).
     """
 
     def __init__(
@@ -114,8 +124,11 @@ class Objective:
         *,
         plant: Plant = PAPER_PLANT,
         measures: Measures = DEFAULT_MEASURES,
+        aggregate: str = DEFAULT_AGGREGATE,
+        cvar_alpha: float = DEFAULT_CVAR_ALPHA,
     ) -> None:
         self.scenarios = scenarios
+        self.how = (aggregate, cvar_alpha)
         self.plant = plant
         self.measures = measures
         self.laws = laws
@@ -167,12 +180,13 @@ class Objective:
         Returns
         -------
         tuple
-            ``(values, attrs)``: the mean cost (``cost`` form) or the three objectives'
-            means, and the trial's user attributes (settings, cost, constraints,
+            ``(values, attrs)``: the aggregate cost (``cost`` form) or the three
+            objectives' means, and the trial's user attributes (settings, cost, constraints,
             feasible, objectives).
         """
         agg = aggregate(
-            evaluate(settings, self.scenarios, plant=self.plant, measures=self.measures)
+            evaluate(settings, self.scenarios, plant=self.plant, measures=self.measures),
+            *self.how,
         )
         attrs = {
             "settings": space.settings_to_dict(settings),

@@ -13,6 +13,7 @@ from vfgym.moves.axis import axis_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import OBJECTIVES
+from vfgym.tuning._aggregate import describe
 from vfgym.tuning._config import SweepConfig
 
 if TYPE_CHECKING:
@@ -151,12 +152,15 @@ class StudyMeta:
         ``cost`` or ``pareto``.
     axis : str or None
         The axis's :func:`~vfgym.moves.axis.axis_digest` (``None``: the paper's axis).
+    aggregate : str
+        The cost's aggregate over the scenarios (``mean``, ``worst``, ``cvar 0.25``).
     """
 
     scenarios: list[str]
     laws: list[str]
     objective: str | None
     axis: str | None
+    aggregate: str = "mean"
 
 
 def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> StudyMeta:
@@ -172,10 +176,14 @@ def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> StudyMeta:
     Returns
     -------
     StudyMeta
-        Its scenarios, laws, objective and axis.
+        Its scenarios, laws, objective, axis and aggregate.
     """
     return StudyMeta(
-        [s.name for s in scenarios], list(cfg.laws), cfg.objective, axis_digest(cfg.load_axis())
+        [s.name for s in scenarios],
+        list(cfg.laws),
+        cfg.objective,
+        axis_digest(cfg.load_axis()),
+        describe(cfg),
     )
 
 
@@ -233,6 +241,7 @@ def create_or_load(
         return study, True
     old = study.user_attrs.get(META_KEY)
     if old is not None:
+        old = {"aggregate": "mean"} | old  # a study made before the aggregate was recorded
         for key, want in asdict(meta).items():
             if old.get(key) != want:
                 raise ValueError(
