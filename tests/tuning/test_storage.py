@@ -60,4 +60,4 @@ def test_plot_reads_a_journal_sweep_and_names_a_missing_storage(tmp_path, capsys
     bad = ["plot", "history", "--sweep", str(run), "--storage", "sqlite:////nowhere/x.db"]
     assert cli.main([*bad, "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
-    assert "no sqlite file" in err and "\n" not in err
+    assert "/nowhere/x.db: no such file" in err and "\n" not in err

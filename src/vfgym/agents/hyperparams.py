@@ -291,15 +291,27 @@ def _net_arch(where: str, arch: Any) -> None:
 
 def _env_kwargs(where: str, kwargs: dict[str, Any], env_id: str | None) -> None:
     """Keys of the env's constructor that YAML can give (numbers, strings, booleans)."""
-    from vfgym.envs.servo import VFServoEnv
+    import dataclasses
+
+    from vfgym.envs._common import EnvConfig
+    from vfgym.envs.servo import ServoConfig, VFServoEnv
     from vfgym.envs.tune import VFTuneEnv
 
-    classes = {"vfgym/VFTune-v0": VFTuneEnv, "vfgym/VFServo-v0": VFServoEnv}
+    # the env's own arguments, then its options: the fields of its frozen config
+    classes = {
+        "vfgym/VFTune-v0": (VFTuneEnv, EnvConfig),
+        "vfgym/VFServo-v0": (VFServoEnv, ServoConfig),
+    }
+    plain = (str, int, float, bool, tuple)
     allowed: set[str] = set()
-    for cls in [classes[env_id]] if env_id in classes else classes.values():
+    for cls, config in [classes[env_id]] if env_id in classes else classes.values():
         for name, par in inspect.signature(cls.__init__).parameters.items():
-            if par.default is None or isinstance(par.default, (str, int, float, bool, tuple)):
+            named = par.kind in (par.KEYWORD_ONLY, par.POSITIONAL_OR_KEYWORD) and name != "self"
+            if named and (par.default is None or isinstance(par.default, plain)):
                 allowed.add(name)
+        for f in dataclasses.fields(config):
+            if f.default is None or isinstance(f.default, plain):
+                allowed.add(f.name)
     unknown = sorted(set(kwargs) - allowed)
     if unknown:
         raise ValueError(

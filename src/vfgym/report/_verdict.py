@@ -117,7 +117,7 @@ class Verdict:
             spread of the cost difference tuned − baseline.
         """
 
-        def spread(s: Spread) -> dict[str, float]:
+        def spread(s: Spread) -> dict[str, float | None]:
             return {k: (None if math.isnan(v) else v) for k, v in s.__dict__.items()}
 
         rows = []

@@ -185,8 +185,14 @@ def run_worker(
             study_name=study_name, storage=storage, sampler=make_sampler(cfg, seed)
         )
         on_axis = axis_kwargs(cfg.load_axis())
-        how = {"aggregate": cfg.aggregate, "cvar_alpha": cfg.cvar_alpha}
-        objective = Objective(scenarios, cfg.laws, cfg.objective, **on_axis, **how)
+        objective = Objective(
+            scenarios,
+            cfg.laws,
+            str(cfg.objective),
+            **on_axis,  # type: ignore[arg-type]
+            aggregate=cfg.aggregate,
+            cvar_alpha=cfg.cvar_alpha,
+        )
         # First call compiles/loads the kernel before any trial is claimed.
         evaluate(PAPER_SETTINGS, scenarios[:1], **on_axis)
         lock = _claim_lock(spec, study_name)
