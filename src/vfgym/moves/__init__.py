@@ -21,6 +21,8 @@ from vfgym.moves import axis, baselines, profiles, pulse_sources, scenarios
 from vfgym.moves.axis import PAPER_AXIS, Axis, MoveSet, load_axis, write_axis
 from vfgym.moves.pulse_sources import fixed_frequency_pulses, scurve_pulses
 from vfgym.moves.scenarios import (
+    DEFAULT_DISTRIBUTION,
+    LOAD_DISTRIBUTION,
     SCENARIOS,
     MoveDistribution,
     Scenario,
@@ -30,6 +32,8 @@ from vfgym.moves.scenarios import (
 )
 
 __all__ = [
+    "DEFAULT_DISTRIBUTION",
+    "LOAD_DISTRIBUTION",
     "PAPER_AXIS",
     "SCENARIOS",
     "Axis",

@@ -188,8 +188,9 @@ class MoveSets:
 class Axis:
     """One machine and its moves: the plant (with its load), the measures' windows, and
     the train and test move sets. The default is the paper's axis: the paper's plant,
-    16 train and 32 test moves of the default random distribution (what ``vfgym`` uses
-    without ``--axis``; ``experiments/axes/paper.yaml``).
+    its load fixed, with 16 train and 32 test moves of the default random distribution
+    (:data:`~vfgym.moves.scenarios.DEFAULT_DISTRIBUTION`: distance, direction and profile
+    vary); what ``vfgym`` uses without ``--axis``; ``experiments/axes/paper.yaml``.
 
     Every listed move must be able to arrive: its duration exceeds its ideal move time on
     the axis (:func:`vfgym.moves.scenarios.ideal_move_time_s`) and its command reaches

@@ -4,9 +4,11 @@ distribution of moves with disjoint train and test seeds.
 A scenario is data: a profile with its numbers, a duration, and the load it adds to the
 base plant (load inertia, friction, load torque). ``command()`` and ``plant()`` build
 what the simulator needs; both are cached, so every caller (env, objective, evaluation)
-simulates exactly the same arrays. :class:`MoveDistribution` is the random distribution,
-its ranges frozen (the defaults are :func:`random_scenario`'s); an axis file
-(:mod:`vfgym.moves.axis`) gives its own.
+simulates exactly the same arrays. :class:`MoveDistribution` is a random distribution,
+its ranges frozen. Its defaults are the moves of one machine, the load its own (the
+default axis's, :mod:`vfgym.moves.axis`; an axis file gives its own ranges);
+:data:`LOAD_DISTRIBUTION` adds a random load to each move: what the agents learn across
+(:func:`random_scenario`).
 """
 
 from __future__ import annotations
@@ -364,8 +366,9 @@ def get_scenario(name: str | Scenario) -> Scenario:
     Parameters
     ----------
     name : str or Scenario
-        A name of :data:`SCENARIOS`, or ``train-<seed>`` / ``test-<seed>`` for a random
-        draw; a :class:`Scenario` is returned as it is.
+        A name of :data:`SCENARIOS`, or ``train-<seed>`` / ``test-<seed>`` for a move of
+        the default axis (:data:`DEFAULT_DISTRIBUTION`); a :class:`Scenario` is returned
+        as it is.
 
     Returns
     -------
@@ -383,7 +386,7 @@ def get_scenario(name: str | Scenario) -> Scenario:
         return SCENARIOS[name]
     split, _, seed = str(name).partition("-")
     if split in SPLITS and seed.isdigit():
-        return random_scenario(int(seed), split)
+        return DEFAULT_DISTRIBUTION.draw(int(seed), split)
     raise ValueError(
         f"scenario={name!r} is not known: choose one of {', '.join(SCENARIOS)}, "
         "or train-<seed> / test-<seed>"
@@ -402,7 +405,12 @@ def _range(name: str, value: Any, lo: float | None = None, lo_open: bool = False
 @dataclass(frozen=True)
 class MoveDistribution:
     """A seeded distribution of single point-to-point moves, and its set of ``count``
-    draws from ``first_seed``; the defaults are :func:`random_scenario`'s distribution.
+    draws from ``first_seed``.
+
+    The defaults are one machine's moves: distance, direction and profile vary, the load
+    is the plant's own (no load, friction or load torque added per move), as an axis is
+    one machine. :data:`LOAD_DISTRIBUTION` adds a random load to each move
+    (:func:`random_scenario`, the environments' default).
 
     Train and test draws never coincide: the generator's key is (split, seed) and a move
     is named ``<split>-<seed>``. Every draw takes the same random numbers whatever the
@@ -421,16 +429,16 @@ class MoveDistribution:
         from :data:`DRAWN_PROFILES`. Default: step 50 %, trapezoid and scurve 25 % each.
     inertia_ratio, viscous_nm_s_rad : tuple of (float, float)
         [low, high], uniform: load added to the axis's own (rotor inertias; N·m·s/rad).
-        Default up to 5 rotor inertias, 0.3 mN·m·s/rad.
+        Default none; :data:`LOAD_DISTRIBUTION`: up to 5 rotor inertias, 0.3 mN·m·s/rad.
     coulomb_nm : tuple of (float, float)
         Coulomb friction uniform in [low, high] on a share of the moves, none on the rest
-        (default up to 4 mN·m: more would leave the P-type servo's dead band τc/K3
-        outside the in-position window).
+        (default none; :data:`LOAD_DISTRIBUTION`: up to 4 mN·m, as more would leave the
+        P-type servo's dead band τc/K3 outside the in-position window).
     coulomb_share : float
         That share, in [0, 1] (default half).
     load_torque_nm : tuple of (float, float)
         A constant load torque uniform in [low, high] on a share of the moves (default
-        ±4 mN·m).
+        none; :data:`LOAD_DISTRIBUTION`: ±4 mN·m).
     load_torque_share : float
         That share, in [0, 1] (default a quarter).
     time_factor, settle_s : float
@@ -448,11 +456,11 @@ class MoveDistribution:
     distance_rad: tuple[float, float] = (0.2, 50.0)
     both_directions: bool = True
     profiles: tuple[str, ...] = ("step", "step", "trapezoid", "scurve")
-    inertia_ratio: tuple[float, float] = (0.0, 5.0)
-    coulomb_nm: tuple[float, float] = (0.0, 0.004)
+    inertia_ratio: tuple[float, float] = (0.0, 0.0)
+    coulomb_nm: tuple[float, float] = (0.0, 0.0)
     coulomb_share: float = 0.5
-    viscous_nm_s_rad: tuple[float, float] = (0.0, 3e-4)
-    load_torque_nm: tuple[float, float] = (-0.004, 0.004)
+    viscous_nm_s_rad: tuple[float, float] = (0.0, 0.0)
+    load_torque_nm: tuple[float, float] = (0.0, 0.0)
     load_torque_share: float = 0.25
     time_factor: float = 2.0
     settle_s: float = 0.08
@@ -548,16 +556,29 @@ class MoveDistribution:
 
 
 DEFAULT_DISTRIBUTION = MoveDistribution()
+"""The default axis's moves: one machine, the paper's plant with no load added per move."""
+
+LOAD_DISTRIBUTION = MoveDistribution(
+    inertia_ratio=(0.0, 5.0),  # up to the heavy-load scenario's 5 rotor inertias
+    coulomb_nm=(0.0, 0.004),  # τc/K3 stays inside the in-position window
+    viscous_nm_s_rad=(0.0, 3e-4),
+    load_torque_nm=(-0.004, 0.004),
+)
+"""The moves of :data:`DEFAULT_DISTRIBUTION` with a random load each: what the agents
+learn across, where the best settings depend on the load (:func:`random_scenario`)."""
 
 
 def random_scenario(seed: int, split: str = "train") -> Scenario:
-    """A move drawn from the default distribution (:class:`MoveDistribution`) on the
-    paper's plant.
+    """A move drawn from :data:`LOAD_DISTRIBUTION` on the paper's plant: the
+    environments' default distribution, across loads.
 
-    Train and test draws never coincide: the generator's key is (split, seed) and the
-    drawn scenario is named after both. Distribution: distance log-uniform in
+    The draw of a seed has the distance, direction and profile of the default axis's
+    move of that seed (the same random numbers), with a load of its own added; it shares
+    its name, ``<split>-<seed>``, which names the default axis's move elsewhere
+    (:func:`get_scenario`). Train and test draws never coincide: the generator's key is
+    (split, seed). Distribution: distance log-uniform in
     [0.2, 50] rad with a random sign; profile step (50 %), trapezoid (25 %) or scurve
-    (25 %); inertia ratio uniform in [0, 5]; Coulomb friction uniform in [0, 4] mN·m
+    (25 %); added inertia ratio uniform in [0, 5]; Coulomb friction uniform in [0, 4] mN·m
     (half of the draws: none; more would leave the P-type servo's dead band τc/K3 outside
     the in-position window); viscous friction uniform in [0, 3e-4] N·m·s/rad; load torque
     uniform in [−4, 4] mN·m (a quarter of the draws, else none). Duration: the ideal
@@ -575,7 +596,7 @@ def random_scenario(seed: int, split: str = "train") -> Scenario:
     Scenario
         Named ``<split>-<seed>``; the same for the same arguments, in every version.
     """
-    return DEFAULT_DISTRIBUTION.draw(seed, split)
+    return LOAD_DISTRIBUTION.draw(seed, split)
 
 
 def scenario_set(
@@ -586,7 +607,8 @@ def scenario_set(
     Parameters
     ----------
     spec : str, Scenario, list or tuple
-        A scenario name, ``named`` (all eight), ``train`` / ``test`` (random draws), a
+        A scenario name, ``named`` (all eight), ``train`` / ``test`` (the default axis's
+        random moves, :data:`DEFAULT_DISTRIBUTION`), a
         comma-separated list of these, a :class:`Scenario`, or a list of any of them.
     count : int
         How many random draws ``train`` / ``test`` give, ≥ 1.
