@@ -23,17 +23,15 @@ from vfgym.moves.axis import (
     write_axis,
 )
 from vfgym.moves.baselines import baseline, rule_of_thumb
-from vfgym.moves.scenarios import (
+from vfgym.moves.distribution import (
     DEFAULT_DISTRIBUTION,
     LOAD_DISTRIBUTION,
-    SCENARIOS,
     MoveDistribution,
-    Scenario,
     get_scenario,
-    ideal_move_time_s,
     random_scenario,
     scenario_set,
 )
+from vfgym.moves.scenarios import SCENARIOS, Scenario, ideal_move_time_s
 from vfgym.params import paper_k
 
 AXES = Path(__file__).resolve().parents[2] / "experiments" / "axes"

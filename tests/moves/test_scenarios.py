@@ -12,14 +12,8 @@ from hypothesis import strategies as st
 
 from vfgym import PAPER_PLANT
 from vfgym.moves import profiles
-from vfgym.moves.scenarios import (
-    PAPER_SINE_AMPLITUDE_RAD,
-    PAPER_SINE_FREQ_HZ,
-    SCENARIOS,
-    get_scenario,
-    random_scenario,
-    scenario_set,
-)
+from vfgym.moves.distribution import get_scenario, random_scenario, scenario_set
+from vfgym.moves.scenarios import PAPER_SINE_AMPLITUDE_RAD, PAPER_SINE_FREQ_HZ, SCENARIOS
 
 F = PAPER_PLANT.tick_hz
 V_MAX = PAPER_PLANT.pulse_top_speed_rad_s
