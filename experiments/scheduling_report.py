@@ -4,7 +4,9 @@ control interval, against the best fixed settings for the same moves.
     python experiments/scheduling_report.py --model runs/train/servo-ppo/best_model.zip \
         [--count 16] [--trials 150] [--seed 0]
 
-On the first ``count`` test scenarios (never seen in training) and the named ones: the
+On the first ``count`` test moves of the environments' distribution (new loads and moves,
+never seen in training: :func:`vfgym.random_scenario`, the servo following its load) and
+five named scenarios: the
 cost of the agent's scheduled move (the scoring path's cost of the whole move, as
 VFServo-v0 reports at the end of an episode), of the paper's fixed settings, and of the
 best fixed settings a seeded per-scenario TPE sweep finds (``trials`` trials, the paper's
@@ -18,7 +20,7 @@ import argparse
 import numpy as np
 from amortised_report import optuna_best
 
-from vfgym import PAPER_SETTINGS, SCENARIOS, evaluate, scenario_set
+from vfgym import PAPER_SETTINGS, SCENARIOS, evaluate, random_scenario
 from vfgym.agents import load_model
 from vfgym.agents.training import make_env, rollout_cost
 
@@ -34,7 +36,8 @@ def main() -> None:
     model, cfg = load_model(args.model)
     env = make_env("vfgym/VFServo-v0", (cfg.get("hyperparams") or {}).get("env_kwargs"))
     names = ["paper-step", "short-move", "long-move", "heavy-load", "friction"]
-    scenarios = [SCENARIOS[n] for n in names] + scenario_set("test", args.count)
+    scenarios = [SCENARIOS[n] for n in names]
+    scenarios += [random_scenario(seed, "test") for seed in range(args.count)]
     agent = np.array([float(rollout_cost(model, env, sc)["cost"]) for sc in scenarios])
     paper = evaluate(PAPER_SETTINGS, scenarios).cost[0]
     fixed = np.array(
