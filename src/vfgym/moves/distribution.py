@@ -12,7 +12,7 @@ the default axis.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -28,15 +28,17 @@ from vfgym.moves.scenarios import (
 from vfgym.params import PAPER_PLANT, Plant
 
 
-def get_scenario(name: str | Scenario) -> Scenario:
+def get_scenario(name: str | Scenario, distribution: MoveDistribution | None = None) -> Scenario:
     """A scenario by name.
 
     Parameters
     ----------
     name : str or Scenario
-        A name of :data:`SCENARIOS`, or ``train-<seed>`` / ``test-<seed>`` for a move of
-        the default axis (:data:`DEFAULT_DISTRIBUTION`); a :class:`Scenario` is returned
-        as it is.
+        A name of :data:`SCENARIOS`, or ``train-<seed>`` / ``test-<seed>`` for a random
+        move; a :class:`Scenario` is returned as it is.
+    distribution : MoveDistribution, optional
+        What ``<split>-<seed>`` draws from: by default the default axis's moves
+        (:data:`DEFAULT_DISTRIBUTION`); :data:`LOAD_DISTRIBUTION` for the environments'.
 
     Returns
     -------
@@ -54,7 +56,7 @@ def get_scenario(name: str | Scenario) -> Scenario:
         return SCENARIOS[name]
     split, _, seed = str(name).partition("-")
     if split in SPLITS and seed.isdigit():
-        return DEFAULT_DISTRIBUTION.draw(int(seed), split)
+        return (distribution or DEFAULT_DISTRIBUTION).draw(int(seed), split)
     raise ValueError(
         f"scenario={name!r} is not known: choose one of {', '.join(SCENARIOS)}, "
         "or train-<seed> / test-<seed>"
@@ -268,7 +270,10 @@ def random_scenario(seed: int, split: str = "train") -> Scenario:
 
 
 def scenario_set(
-    spec: str | Scenario | list | tuple, count: int = 16, first_seed: int = 0
+    spec: str | Scenario | list | tuple,
+    count: int = 16,
+    first_seed: int = 0,
+    distribution: MoveDistribution | None = None,
 ) -> list[Scenario]:
     """Scenarios from a spec.
 
@@ -282,6 +287,10 @@ def scenario_set(
         How many random draws ``train`` / ``test`` give, ≥ 1.
     first_seed : int
         The first draw's seed; the draws use ``first_seed``, ``first_seed + 1`` …
+    distribution : MoveDistribution, optional
+        What ``train`` / ``test`` and ``<split>-<seed>`` draw from (its own count and
+        first seed aside): by default the default axis's moves
+        (:data:`DEFAULT_DISTRIBUTION`); :data:`LOAD_DISTRIBUTION` for the environments'.
 
     Returns
     -------
@@ -291,12 +300,14 @@ def scenario_set(
     if isinstance(spec, Scenario):
         return [spec]
     if isinstance(spec, (list, tuple)):
-        return [s for item in spec for s in scenario_set(item, count, first_seed)]
+        return [s for item in spec for s in scenario_set(item, count, first_seed, distribution)]
     spec = str(spec)
     if "," in spec:
-        return scenario_set([p.strip() for p in spec.split(",") if p.strip()], count, first_seed)
+        parts = [p.strip() for p in spec.split(",") if p.strip()]
+        return scenario_set(parts, count, first_seed, distribution)
     if spec == "named":
         return list(SCENARIOS.values())
     if spec in SPLITS:
-        return MoveDistribution(count=count, first_seed=first_seed).scenarios(spec)
-    return [get_scenario(spec)]
+        dist = replace(distribution or DEFAULT_DISTRIBUTION, count=count, first_seed=first_seed)
+        return dist.scenarios(spec)
+    return [get_scenario(spec, distribution)]

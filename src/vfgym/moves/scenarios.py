@@ -27,7 +27,8 @@ PAPER_SINE_FREQ_HZ = 10.0
 
 SPLITS = ("train", "test")
 DRAWN_PROFILES = ("step", "ramp", "trapezoid", "scurve")
-"""The profiles a :class:`~vfgym.moves.distribution.MoveDistribution` may draw: single point-to-point moves."""
+"""The profiles a :class:`~vfgym.moves.distribution.MoveDistribution` may draw: single
+point-to-point moves."""
 
 
 def ideal_move_time_s(distance_rad: float, plant: Plant) -> float:
