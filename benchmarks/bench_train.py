@@ -12,8 +12,8 @@ rollout and update outside the timing (compiles, first allocations). Figures:
    within it (VFTune-v0: :func:`vfgym.plant._kernel.run_batch`).
 
 With ``--compare SRC`` every measurement runs also on another source tree (its
-``src`` folder, e.g. an older commit exported by ``git archive``), interleaved, so that
-before/after ratios come from one run.
+``src`` folder, e.g. an older commit exported by ``git archive``), each measurement on
+both trees before the next, so that before/after ratios come from one run.
 
     python benchmarks/bench_train.py [--steps-servo N] [--steps-tune N] [--compare SRC]
 """
@@ -121,28 +121,36 @@ def main() -> None:
     if args.compare:
         trees.append((f"--compare {args.compare}", str(Path(args.compare) / "src")))
     servo, tune = "vfgym/VFServo-v0", "vfgym/VFTune-v0"
+    alone, both, t = {}, {}, {}
+    for label, src in trees:  # each measurement on every tree before the next one
+        alone[label] = result(spawn(servo, args.steps_servo, src))
     for label, src in trees:
-        alone = result(spawn(servo, args.steps_servo, src))
         pair = [spawn(servo, args.steps_servo, src) for _ in range(2)]
-        both = [result(p) for p in pair]
-        t = result(spawn(tune, args.steps_tune, src))
-        a = alone["steps_per_s"]
+        both[label] = [result(p) for p in pair]
+    for label, src in trees:
+        t[label] = result(spawn(tune, args.steps_tune, src))
+    for label, _ in trees:
+        a = alone[label]["steps_per_s"]
         print(f"{label}:")
         print(f"  VFServo-v0 PPO alone        : {a:8.0f} steps/s")
-        for i, r in enumerate(both):
+        for i, r in enumerate(both[label]):
             s = r["steps_per_s"]
             print(
                 f"  two side by side, run {i + 1}   : {s:8.0f} steps/s = {s / a:.2f}x alone"
                 "   (target >= 0.45x)"
             )
         print(
-            f"  env share of PPO wall time : VFServo-v0 {alone['env_share']:.1%}, VFTune-v0 "
-            f"{t['env_share']:.1%} (target <= 10 %)"
+            f"  env share of PPO wall time : VFServo-v0 {alone[label]['env_share']:.1%}, "
+            f"VFTune-v0 {t[label]['env_share']:.1%} (target <= 10 %)"
         )
         print(
-            f"  VFTune-v0 PPO              : {t['steps_per_s']:8.0f} steps/s; its compiled "
-            f"simulation {t['kernel_share']:.1%} of the wall time"
+            f"  VFTune-v0 PPO              : {t[label]['steps_per_s']:8.0f} steps/s; its "
+            f"compiled simulation {t[label]['kernel_share']:.1%} of the wall time"
         )
+    if args.compare:
+        this, other = (label for label, _ in trees)
+        ratio = t[this]["steps_per_s"] / t[other]["steps_per_s"]
+        print(f"VFTune-v0 PPO steps/s, this tree / {other}: {ratio:.2f}x")
 
 
 if __name__ == "__main__":

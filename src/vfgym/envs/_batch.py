@@ -461,6 +461,7 @@ def step_batch_balanced(
     env whose episode ends runs the rest of its move in the same call, so the work is
     uneven). The chunk size is set from Python: set inside the compiled function it would
     stop numba from caching it."""
+    J.announce_compile("vector env", "the vector env's SIMD-lane kernels", step_batch)
     old = numba.set_parallel_chunksize(1)
     try:
         par = PARALLEL_MIN_ENVS if parallel_min is None else parallel_min
