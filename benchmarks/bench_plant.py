@@ -96,7 +96,7 @@ def cold_compiles() -> None:
     for name, code in FIRST_USE.items():
         with tempfile.TemporaryDirectory() as cache:
             cpu, wall, notice = first_use(code, cache)
-            warm_cpu, warm_wall, warm_notice = first_use(code, cache)
+            warm_cpu, _, warm_notice = first_use(code, cache)
         print(
             f"  {name:18s}: cold {cpu:6.1f} s CPU ({wall:6.1f} s wall), warm {warm_cpu:5.2f} s "
             f"CPU; notice cold: {notice or '-'}; warm: {warm_notice or '-'}"
