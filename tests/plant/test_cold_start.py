@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import vfgym
-from vfgym.plant import _jit as J
+from vfgym.plant import _notice as N
 
 TINY = """
 from vfgym.plant._jit import jit
@@ -29,7 +29,7 @@ RUN = """
 import sys
 sys.path.insert(0, sys.argv[1])
 import tiny
-from vfgym.plant._jit import COLD_COMPILE_S, announce_compile
+from vfgym.plant._notice import COLD_COMPILE_S, announce_compile
 COLD_COMPILE_S["tiny"] = 7.0
 announce_compile("tiny", "a tiny kernel", tiny.plus_one)
 assert tiny.plus_one(1) == 2
@@ -63,8 +63,8 @@ def test_a_cold_compile_says_so_once_and_a_cached_one_says_nothing(tmp_path):
 @pytest.fixture
 def cold(monkeypatch):
     """Every entry point looks uncompiled, and none has announced itself yet."""
-    monkeypatch.setattr(J, "is_compiled", lambda d: False)
-    monkeypatch.setattr(J, "_ANNOUNCED", set())
+    monkeypatch.setattr(N, "is_compiled", lambda d: False)
+    monkeypatch.setattr(N, "_ANNOUNCED", set())
 
 
 @pytest.mark.parametrize(

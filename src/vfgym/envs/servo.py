@@ -19,7 +19,7 @@ from vfgym.params import (
 from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import pack
-from vfgym.plant._jit import announce_compile
+from vfgym.plant._notice import announce_compile
 from vfgym.plant.measures import from_acc
 from vfgym.scoring import _cost_compiled as CC
 from vfgym.scoring import score

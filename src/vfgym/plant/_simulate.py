@@ -29,7 +29,7 @@ from vfgym.params import (
 from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import _tick as TK
-from vfgym.plant._jit import announce_compile
+from vfgym.plant._notice import announce_compile
 from vfgym.plant.measures import command_end_s, from_acc
 
 

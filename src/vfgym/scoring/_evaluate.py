@@ -28,7 +28,7 @@ from vfgym.params import (
 )
 from vfgym.plant import Trace, command_end_s, pack, simulate
 from vfgym.plant import _kernel as K
-from vfgym.plant._jit import announce_compile
+from vfgym.plant._notice import announce_compile
 from vfgym.plant._threads import keeps_torch_threads
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.plant.measures import from_acc
