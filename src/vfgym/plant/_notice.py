@@ -40,14 +40,15 @@ def is_compiled(dispatcher: Any) -> bool:
 
 
 COLD_COMPILE_S = {
-    "simulate": 2.0,
-    "evaluate": 2.0,
-    "servo env": 2.0,
-    "vector env": 2.0,
+    "simulate": 6.5,
+    "evaluate": 15.2,
+    "servo env": 18.7,
+    "vector env": 260.0,
 }
-"""Seconds a first call compiles for, with numba's cache empty, per entry point (measured
-on the README's 2-core machine: ``python benchmarks/bench_plant.py --cold``); what
-:func:`announce_compile` tells the user."""
+"""CPU seconds a first call compiles for, with numba's cache empty, per entry point
+(measured on the README's 2-core machine at load ≈ 10–17, so on the high side:
+``python benchmarks/bench_plant.py --cold``); what :func:`announce_compile` tells the
+user."""
 
 _ANNOUNCED: set[str] = set()
 
