@@ -5,7 +5,13 @@ with measures only, with the full per-tick trace, and for the plain-Python refer
 ratios are taken within this one run. Cold start: `import vfgym` plus the first
 simulation in a fresh process, with numba's cache cold (a new cache directory) and warm.
 
-    python benchmarks/bench_plant.py [--ticks N] [--repeats R]
+``--cold`` prints only the first-use compile of each entry point (simulate, evaluate,
+VFServo-v0's step, the vector env's SIMD-lane step, VFTune-v0's vector step): its CPU
+seconds in a fresh process with an empty cache and with the cache it left (CPU time, not
+wall time: on a shared machine the wall time mostly measures the others' load), the
+figures vfgym's one-line compile notice quotes (``vfgym.plant._jit.COLD_COMPILE_S``).
+
+    python benchmarks/bench_plant.py [--ticks N] [--repeats R] [--cold]
 """
 
 from __future__ import annotations
@@ -49,12 +55,64 @@ def cold_start(cache_dir: str) -> float:
     return float(out.stdout.strip())
 
 
+FIRST_USE = {
+    "simulate": "vfgym.simulate(vfgym.step_command(10.0, 14000))",
+    "evaluate": "vfgym.evaluate(['paper'], ['short-move'])",
+    "servo env": (
+        "e = gym.make('vfgym/VFServo-v0'); e.reset(seed=0); e.step(np.zeros(4, np.float32))"
+    ),
+    "vector env": (
+        "e = gym.make_vec('vfgym/VFServo-v0', num_envs=16, vectorization_mode="
+        "'vector_entry_point'); e.reset(seed=0); e.step(np.zeros((16, 4), np.float32))"
+    ),
+    "VFTune vector env": (
+        "e = gym.make_vec('vfgym/VFTune-v0', num_envs=4, vectorization_mode="
+        "'vector_entry_point'); e.reset(seed=0); e.step(np.zeros((4, 4), np.float32))"
+    ),
+}
+"""The first call of each entry point, as the compile notice names them."""
+
+
+def first_use(code: str, cache_dir: str) -> tuple[float, float, str]:
+    """(CPU s, wall s, stderr) of ``code`` after ``import vfgym`` in a fresh process."""
+    prog = (
+        "import time, gymnasium as gym, numpy as np, vfgym\n"
+        "c, w = time.process_time(), time.perf_counter()\n"
+        f"{code}\n"
+        "print(time.process_time() - c, time.perf_counter() - w)"
+    )
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
+    out = subprocess.run(
+        [sys.executable, "-c", prog], env=env, check=True, capture_output=True, text=True
+    )
+    cpu, wall = out.stdout.split()[-2:]
+    return float(cpu), float(wall), out.stderr.strip()
+
+
+def cold_compiles() -> None:
+    """Print each entry point's first-use compile, cold and warm cache."""
+    load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
+    print(f"first-use compile, fresh process and cache (load average {load})")
+    for name, code in FIRST_USE.items():
+        with tempfile.TemporaryDirectory() as cache:
+            cpu, wall, notice = first_use(code, cache)
+            warm_cpu, _, warm_notice = first_use(code, cache)
+        print(
+            f"  {name:18s}: cold {cpu:6.1f} s CPU ({wall:6.1f} s wall), warm {warm_cpu:5.2f} s "
+            f"CPU; notice cold: {notice or '-'}; warm: {warm_notice or '-'}"
+        )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ticks", type=int, default=2_800_000, help="ticks per kernel run")
     ap.add_argument("--ref-ticks", type=int, default=70_000, help="ticks per reference run")
     ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--cold", action="store_true", help="only the first-use compiles")
     args = ap.parse_args()
+    if args.cold:
+        cold_compiles()
+        return
     n = args.ticks
     cmd = step_command(10.0, n)
     prm = pack(PAPER_SETTINGS, PAPER_PLANT, DEFAULT_MEASURES, 10.0, n)

@@ -197,3 +197,28 @@ def test_unknown_algorithm_and_bad_override(tmp_path, capsys):
         main(["train", "--algo", "ppo", "--runs-dir", str(tmp_path), "--hyperparams", "gamma"]) == 2
     )
     assert "key=value" in capsys.readouterr().err
+
+
+def test_train_threads_sets_torch_and_numba_and_records_them(tmp_path):
+    """``vfgym train --threads N`` (default 1) sets torch's and numba's threads, and the
+    run's config.yaml records them."""
+    import numba
+    import torch
+
+    before = torch.get_num_threads(), numba.get_num_threads()
+    base = ["train", "--algo", "ppo", "--runs-dir", str(tmp_path), "--no-progress"]
+    over = ["--hyperparams", "n_timesteps=16", "n_envs=2", "n_steps=8", "batch_size=16"]
+    over += ["eval_freq=16", "n_eval_scenarios=1"]
+    try:
+        torch.set_num_threads(2)
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+        assert main([*base, "--name", "one", *over]) == 0  # the default
+        assert (torch.get_num_threads(), numba.get_num_threads()) == (1, 1)
+        assert yaml.safe_load((tmp_path / "train/one/config.yaml").read_text())["threads"] == 1
+        n = numba.config.NUMBA_NUM_THREADS
+        assert main([*base, "--name", "all", "--threads", str(n), *over]) == 0
+        assert (torch.get_num_threads(), numba.get_num_threads()) == (n, n)
+        assert yaml.safe_load((tmp_path / "train/all/config.yaml").read_text())["threads"] == n
+    finally:
+        torch.set_num_threads(before[0])
+        numba.set_num_threads(before[1])

@@ -200,10 +200,11 @@ README_RUNS: dict[str, list[Run]] = {
     ],
     # each algorithm once on VFTune-v0; VFServo-v0 through the two servo lines below (a
     # full 3 x 2 product would add three trainings of ~20 s for nothing the CLI does anew)
-    "vfgym train --algo ppo|sac|td3 --env vfgym/VFTune-v0|vfgym/VFServo-v0 [--hyperparams k=v …]": [
+    "vfgym train --algo ppo|sac|td3 --env vfgym/VFTune-v0|vfgym/VFServo-v0 [--hyperparams k=v …] "
+    "[--threads N]": [
         Run(
             f"train-{algo}",
-            train_trim(["train", "--algo", algo, "--env", "vfgym/VFTune-v0"]),
+            train_trim(["train", "--algo", algo, "--env", "vfgym/VFTune-v0", "--threads", "1"]),
             writes=(f"runs/train/{algo}-VFTune-v0-seed0/best_model.zip",),
             trim="train",
             agents=True,

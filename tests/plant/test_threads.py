@@ -1,5 +1,8 @@
 """vfgym never changes the torch thread count a user set (numba's OpenMP layer and torch
-share libgomp's thread setting); checked in fresh processes, both import orders."""
+share libgomp's thread setting); checked in fresh processes, both import orders, after
+every kind of parallel call: ``vfgym.evaluate``, a sweep (its objective), a grid, the
+VFServo-v0 vector env on numba's threads and the VFTune-v0 vector env (one batched
+kernel call a step)."""
 
 from __future__ import annotations
 
@@ -21,29 +24,50 @@ else:
     import torch
 import gymnasium as gym
 import numpy as np
+from vfgym.cli import main
+
+runs = sys.argv[2]
+
+
+def check(what, n):
+    assert torch.get_num_threads() == n, (what, torch.get_num_threads(), n)
+
 
 torch.set_num_threads(1)
+# torch reads its count once here: without vfgym's guard, every parallel call below
+# would then leave it at numba's (checked by breaking the guard)
+check("set", 1)
 vfgym.evaluate(["paper", "rule-of-thumb", "scurve"], ["paper-step", "short-move", "reversal"])
-assert torch.get_num_threads() == 1, ("evaluate", torch.get_num_threads())
+check("evaluate", 1)
+sweep = ["sweep", "--scenarios", "short-move", "--trials", "3", "--no-progress"]
+assert main([*sweep, "--runs-dir", runs, "--study", "s"]) == 0
+check("sweep", 1)
+grid = ["grid", "--scenarios", "short-move", "--points", "2", "--refine", "0", "--no-progress"]
+assert main([*grid, "--runs-dir", runs]) == 0
+check("grid", 1)
 envs = gym.make_vec("vfgym/VFServo-v0", num_envs=600, vectorization_mode="vector_entry_point")
 envs.reset(seed=0)
 for _ in range(2):
     envs.step(np.zeros((600, 4), dtype=np.float32))
-assert torch.get_num_threads() == 1, ("vector env", torch.get_num_threads())
+check("VFServo-v0 vector env", 1)
+tune = gym.make_vec("vfgym/VFTune-v0", num_envs=8, vectorization_mode="vector_entry_point")
+tune.reset(seed=0)
+tune.step(np.zeros((8, 4), dtype=np.float32))
+check("VFTune-v0 vector env", 1)
 torch.set_num_threads(2)
 vfgym.evaluate(["paper"], ["paper-step", "short-move"])
-assert torch.get_num_threads() == 2, ("evaluate at 2", torch.get_num_threads())
+check("evaluate at 2", 2)
 print("ok")
 """
 
 
 @pytest.mark.parametrize("order", ["torch-first", "vfgym-first"])
-def test_parallel_calls_keep_the_torch_thread_count(order: str) -> None:
+def test_parallel_calls_keep_the_torch_thread_count(order: str, tmp_path) -> None:
     out = subprocess.run(
-        [sys.executable, "-c", textwrap.dedent(SCRIPT), order],
+        [sys.executable, "-c", textwrap.dedent(SCRIPT), order, str(tmp_path)],
         capture_output=True,
         text=True,
-        timeout=600,
+        timeout=900,
     )
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip().endswith("ok")

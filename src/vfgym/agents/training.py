@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from vfgym._validate import check_int
 from vfgym.agents.hyperparams import algo_class
 from vfgym.io.runs import read_yaml, write_text, write_yaml
 from vfgym.moves.distribution import random_scenario
@@ -206,6 +207,25 @@ def check_same_run(run: Path, algo: str, env_id: str, seed: int) -> None:
             )
 
 
+def use_threads(n: int) -> None:
+    """Run this process's training on ``n`` threads: torch's intra-op threads
+    (``torch.set_num_threads``) and numba's threads of the calling thread
+    (``numba.set_num_threads``, at most the ``NUMBA_NUM_THREADS`` numba started with),
+    which simulate VFTune-v0's moves and vector envs from 512 envs. torch's inter-op
+    threads are left alone (as rl-zoo3's ``--num-threads``).
+
+    Parameters
+    ----------
+    n : int
+        Threads, ≥ 1.
+    """
+    import numba
+    import torch
+
+    torch.set_num_threads(n)
+    numba.set_num_threads(min(n, numba.config.NUMBA_NUM_THREADS))
+
+
 def train(
     algo: str,
     env_id: str,
@@ -216,18 +236,33 @@ def train(
     device: str = "cpu",
     progress: bool = True,
     log: Callable[[str], None] = print,
+    threads: int | None = None,
 ) -> Any:
     """Train (or continue) the run in ``run``; returns the trained model.
 
     ``params`` are validated hyperparameters (:func:`vfgym.agents.hyperparams.load`). A
     run folder that already holds a config must hold the same algorithm, env and seed.
+    ``threads``: :func:`use_threads` first (``vfgym train --threads``, default 1 there);
+    ``None`` keeps the thread counts the caller set. The run's ``config.yaml`` records
+    the threads it trained on.
     """
     from stable_baselines3.common.noise import NormalActionNoise
 
     from vfgym.envs.sb3 import make_sb3_vec_env
 
     cls = algo_class(algo)
-    config = {"algo": algo, "env": env_id, "seed": seed, "device": device, "hyperparams": params}
+    if threads is not None:
+        use_threads(check_int("threads", threads, 1))
+    import torch
+
+    config = {
+        "algo": algo,
+        "env": env_id,
+        "seed": seed,
+        "device": device,
+        "threads": torch.get_num_threads(),
+        "hyperparams": params,
+    }
     check_same_run(run, algo, env_id, seed)
     write_yaml(run / "config.yaml", config)
 

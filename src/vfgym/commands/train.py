@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
+
+CORES = os.cpu_count() or 1
+"""The most threads ``--threads`` allows: this machine's cores."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from vfgym.commands._common import SEED, add_axis_option
+    from vfgym.commands._common import SEED, add_axis_option, whole
 
     p = sub.add_parser(
         "train",
@@ -34,6 +38,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--name",
         help="run folder name (default ALGO-ENV-seedSEED); an existing "
         "run of that name is continued",
+    )
+    p.add_argument(
+        "--threads",
+        type=whole(1, CORES),
+        default=1,
+        help="threads of this training: torch's intra-op threads and numba's (the "
+        "simulations of VFTune-v0 and of vector envs from 512 envs), whole number in "
+        f"[1, {CORES}] (default 1: small policies on CPU train fastest so, and two "
+        "trainings side by side do not slow each other down)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_axis_option(p)
@@ -71,7 +84,15 @@ def run(args: argparse.Namespace) -> int:
     record_command(run_dir)
     print(f"run folder: {run_dir}")
     try:
-        train(args.algo, args.env, params, run_dir, seed=args.seed, progress=not args.no_progress)
+        train(
+            args.algo,
+            args.env,
+            params,
+            run_dir,
+            seed=args.seed,
+            progress=not args.no_progress,
+            threads=args.threads,
+        )
     except KeyboardInterrupt:
         raise Interrupted(
             f"the steps trained are saved in {run_dir / 'checkpoints'}; the same command "

@@ -31,6 +31,7 @@ from vfgym.plant import _kernel as K
 from vfgym.plant import _lanes as LN
 from vfgym.plant import _layout as L
 from vfgym.plant import _tick as TK
+from vfgym.plant._notice import announce_compile
 from vfgym.plant._threads import keeps_torch_threads
 from vfgym.scoring import _cost_compiled as CC
 
@@ -461,6 +462,7 @@ def step_batch_balanced(
     env whose episode ends runs the rest of its move in the same call, so the work is
     uneven). The chunk size is set from Python: set inside the compiled function it would
     stop numba from caching it."""
+    announce_compile("vector env", "the vector env's SIMD-lane kernels", step_batch)
     old = numba.set_parallel_chunksize(1)
     try:
         par = PARALLEL_MIN_ENVS if parallel_min is None else parallel_min

@@ -170,7 +170,7 @@ class Episode:
             )
         cmd = sc.command(plant)
         target = float(cmd[-1])
-        y = yardsticks(sc, plant, measures)
+        y = yardsticks(sc, plant, measures, cmd)
         window = y.window_rad
         scale = max(abs(main_move(sc, plant)), abs(target), window, 1e-9)
         # the last change of the command: the first tick of its final run of equal values

@@ -19,6 +19,7 @@ from vfgym.params import (
 from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import pack
+from vfgym.plant._notice import announce_compile
 from vfgym.plant.measures import from_acc
 from vfgym.scoring import _cost_compiled as CC
 from vfgym.scoring import score
@@ -386,6 +387,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         ep = self.core.source.draw(self.np_random, options)
         self._ep = ep
         self._cmd = ep.command
+        announce_compile("servo env", "VFServo-v0's step", _step_one)
         self.core.start(self._w, self._ring, self._cmd, ep)
         self._ended = False
         if self.render_mode is not None:

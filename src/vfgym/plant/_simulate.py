@@ -29,6 +29,7 @@ from vfgym.params import (
 from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import _tick as TK
+from vfgym.plant._notice import announce_compile
 from vfgym.plant.measures import command_end_s, from_acc
 
 
@@ -232,6 +233,7 @@ def run_move(
     numpy.ndarray
         The accumulator row the measures are decoded from (:mod:`vfgym.plant.measures`).
     """
+    announce_compile("simulate", "the simulation kernel", K.run_segment)
     st = np.empty(L.N_STATE, dtype=np.float64)
     ring = np.empty(K.ring_size.py_func(prm), dtype=np.int64)
     K.init_state.py_func(prm, st, ring)

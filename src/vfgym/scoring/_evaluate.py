@@ -29,6 +29,7 @@ from vfgym.params import (
 )
 from vfgym.plant import Trace, command_end_s, pack, simulate
 from vfgym.plant import _kernel as K
+from vfgym.plant._notice import announce_compile
 from vfgym.plant._threads import keeps_torch_threads
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.plant.measures import from_acc
@@ -246,6 +247,7 @@ def score_pairs(
     if not rows:
         return out
     acc = K.new_acc(len(rows))
+    announce_compile("evaluate", "the batched simulation kernel", K.run_batch)
     keeps_torch_threads(K.run_batch)(
         np.concatenate(cmds),
         np.concatenate([[0], np.cumsum([c.size for c in cmds])]).astype(np.int64),
