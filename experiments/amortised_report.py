@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -55,6 +56,7 @@ def main() -> None:
     ap.add_argument("--optima", default="experiments/optima/test.csv")
     ap.add_argument("--count", type=int, default=48)
     ap.add_argument("--model", default=str(PRETRAINED), help="a settings model (JSON)")
+    ap.add_argument("--also", action="append", default=[], help="another settings model")
     ap.add_argument("--agent", help="a VFTune-v0 agent (stable-baselines3 .zip)")
     ap.add_argument("--refine", type=int, default=0, help="trials of the refinement sweep")
     ap.add_argument("--out", help="write the per-move figures as YAML")
@@ -70,9 +72,14 @@ def main() -> None:
     picks = [model.settings(sc) for sc in scenarios]
     dt = (time.perf_counter() - t0) / n
     sup, sup_feas = score(picks, scenarios)
-    rows = [row("supervised", sup, sup_feas, best, paper)]
+    rows = [row(f"{type(model).__name__} {Path(args.model).name}", sup, sup_feas, best, paper)]
     per_move = {"scenarios": [o.scenario for o in optima], "optimum_cost": best.tolist()}
-    per_move |= {"paper_cost": paper.tolist(), "supervised_cost": sup.tolist()}
+    per_move |= {"paper_cost": paper.tolist(), "model_cost": sup.tolist()}
+    for path in args.also:
+        other = load_settings_model(path)
+        c, f = score([other.settings(sc) for sc in scenarios], scenarios)
+        rows.append(row(f"{type(other).__name__} {path}", c, f, best, paper))
+        per_move[f"cost {path}"] = c.tolist()
     if args.agent:
         from vfgym.agents import policy_settings
 
@@ -121,8 +128,9 @@ def main() -> None:
         hits = np.array(reached)
         print(
             f"refinement: trials to within 1 % of the optimum: median {np.median(hits):g} "
-            f"(within {args.refine} trials on {np.sum(np.isfinite(hits))}/{n} moves; "
-            f"quartiles {np.percentile(hits, 25):g}, {np.percentile(hits, 75):g})"
+            f"(within {args.refine} trials on {np.sum(np.isfinite(hits))}/{n} moves; already "
+            f"at the prediction on {np.sum(hits == 1)}/{n}; upper quartile "
+            f"{np.percentile(hits, 75, method='lower'):g})"
         )
     if args.out:
         write_yaml(args.out, {"summary": rows, "per_move": per_move})

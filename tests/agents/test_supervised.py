@@ -5,6 +5,7 @@ refinement sweep and ``vfgym predict`` without a trained agent."""
 from __future__ import annotations
 
 import itertools
+import json
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,7 @@ from vfgym.agents.refine import refine
 from vfgym.agents.supervised import (
     PRETRAINED,
     TrainConfig,
+    fit_pick_model,
     fit_settings_model,
     load_settings_model,
     settings_targets,
@@ -117,14 +119,38 @@ def test_shipped_model_is_reproduced_by_its_training_command():
     cfg = TrainConfig(**yaml.safe_load((folder / "config.yaml").read_text()))
     command = (folder / "command.txt").read_text().split()
     assert command[:2] == ["python", "experiments/train_settings_model.py"]
-    assert command[command.index("--optima") + 1] == cfg.optima
-    assert float(command[command.index("--ridge") + 1]) == cfg.ridge
-    assert int(command[command.index("--degree") + 1]) == cfg.degree
-    again = train_settings_model(cfg, REPO)
-    shipped = load_settings_model()
-    assert again.degree == shipped.degree and again.ridge == shipped.ridge
-    np.testing.assert_allclose(again.coef, shipped.coef, rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(again.mean, shipped.mean, rtol=1e-12)
+    for flag, value in (("--kind", cfg.kind), ("--optima", cfg.optima), ("--costs", cfg.costs),
+                        ("--neighbours", str(cfg.neighbours)), ("--library", str(cfg.library)),
+                        ("--ignore", ",".join(cfg.ignore))):  # fmt: skip
+        assert command[command.index(flag) + 1] == value
+    again = train_settings_model(cfg, REPO).to_dict()
+    shipped = json.loads(PRETRAINED.read_text())
+    assert again.keys() == shipped.keys()
+    for key, value in again.items():
+        if isinstance(value, list) and key not in ("features", "targets"):
+            np.testing.assert_allclose(np.array(value), np.array(shipped[key]), rtol=1e-9)
+        else:
+            assert value == shipped[key], key
+
+
+def test_pick_model_picks_the_candidate_best_on_the_nearest_moves():
+    """Three training moves, two candidates: a move's own features pick, among its
+    nearest ``neighbours`` training moves, the candidate of least mean cost ratio."""
+    moves = scenario_set("train", 3, 7000)
+    opt = [MoveOptimum(sc.name, from_action(np.full(4, 0.1 * i)), 1.0, True)
+           for i, sc in enumerate(moves)]  # fmt: skip
+    # candidate 0 is twice the optimum on move 2 and infeasible on move 1; 2 is best there
+    cost = np.array([[1.0, 1.5, 1.2], [1.0, 1.0, 1.1], [2.0, 3.0, 1.0]])
+    feas = np.array([[True, True, True], [False, True, True], [True, True, True]])
+    m = fit_pick_model(moves, opt, cost, feas, neighbours=1, library=3, ignore=())
+    x = [scenario_features(sc, PAPER_PLANT) for sc in moves]
+    lib = [tuple(np.round(t, 9)) for t in m.library]
+    targets = [tuple(np.round(settings_targets(o.settings, sc.plant()), 9))
+               for o, sc in zip(opt, moves, strict=True)]  # fmt: skip
+    assert [lib.index(targets[j]) for j in (0, 1, 2)] == [m.pick(x[i]) for i in (0, 1, 2)]
+    m3 = fit_pick_model(moves, opt, cost, feas, neighbours=3, library=3, ignore=())
+    # mean ratios with the infeasible penalty: [4/3+1/3, 5.5/3, 3.3/3] -> candidate 2
+    assert m3.pick(x[0]) == lib.index(targets[2])
 
 
 def test_refine_starts_from_the_prediction_and_never_ends_worse():

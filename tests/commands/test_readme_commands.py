@@ -210,7 +210,10 @@ README_RUNS: dict[str, list[Run]] = {
         )
         for algo in ("ppo", "sac", "td3")
     ],
-    "vfgym predict --model RUN/best_model.zip --scenario NAME": [
+    "vfgym predict --scenario NAME [--model M.json|RUN/best_model.zip] [--refine N]": [
+        Run("predict-shipped", ["predict", "--scenario", "test-3", "--out", "p.yaml"],
+            writes=("p.yaml",)),  # fmt: skip
+        Run("predict-refine", ["predict", "--scenario", "short-move", "--refine", "5"]),
         Run(
             "predict",
             ["predict", "--model", "{model}", "--scenario", "test-3"],
