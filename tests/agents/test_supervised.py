@@ -183,3 +183,18 @@ def test_predict_on_an_axis(capsys):
     assert main(["predict", "--axis", str(axis), "--scenario", "test-0"]) == 0
     doc = yaml.safe_load(capsys.readouterr().out)
     assert set(doc["settings"]) >= {"value_rad", "error_limit_rad", "k", "ts_over_tf"}
+
+
+def test_the_wheel_carries_the_shipped_model():
+    """pyproject's package-data covers every file of the pretrained folder, so a wheel
+    holds them (``pip wheel .`` then ``vfgym predict`` from that install, checked by hand)."""
+    import fnmatch
+    import tomllib
+
+    data = tomllib.loads((REPO / "pyproject.toml").read_text())
+    globs = data["tool"]["setuptools"]["package-data"]["vfgym"]
+    files = [p for p in PRETRAINED.parent.iterdir() if p.is_file()]
+    assert {p.name for p in files} == {"settings_model.json", "config.yaml", "command.txt"}
+    for p in files:
+        rel = p.relative_to(REPO / "src" / "vfgym").as_posix()
+        assert any(fnmatch.fnmatch(rel, g) for g in globs), rel
