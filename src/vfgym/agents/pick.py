@@ -4,22 +4,19 @@ optima, by their cost on the training moves most like it (the shipped settings m
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from vfgym._validate import check_choice, check_int
 from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
-from vfgym.io.runs import write_text
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_PLANT, Plant, Settings
+from vfgym.params import PAPER_PLANT, Plant
 
 from .optima import MoveOptimum
-from .targets import TARGETS, settings_targets, target_settings
+from .targets import TargetModel, model_head, settings_targets
 
 PICK_KIND = "vfgym-settings-pick"
 INFEASIBLE_PENALTY = 1.0
@@ -78,7 +75,7 @@ def greedy_library(ratios: np.ndarray, size: int) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class PickModel:
+class PickModel(TargetModel):
     """Settings picked from a library of candidates by the moves most like this one.
 
     Candidates are optimal settings of training moves in the regression's coordinates
@@ -131,33 +128,25 @@ class PickModel:
         near = np.argsort(d, kind="stable")[: self.neighbours]
         return int(np.argmin(self.ratios[near].mean(axis=0)))
 
-    def settings(self, scenario: Scenario, plant: Plant = PAPER_PLANT) -> Settings:
-        """The settings the model picks for a move.
+    def targets_of(self, features: np.ndarray) -> np.ndarray:
+        """The picked candidate's targets for one move's features.
 
         Parameters
         ----------
-        scenario : Scenario
-            The move.
-        plant : Plant
-            The base plant (an axis's), before the move's load.
+        features : numpy.ndarray
+            (len(SCENARIO_FEATURES),).
 
         Returns
         -------
-        Settings
-            Inside the search space.
+        numpy.ndarray
+            (4,), a row of :attr:`library`.
         """
-        loaded = scenario.plant(plant)
-        j = self.pick(scenario_features(scenario, plant, loaded))
-        return target_settings(self.library[j], loaded, self.accel_law)
+        return self.library[self.pick(features)]
 
     def to_dict(self) -> dict[str, Any]:
         """The model as plain data (what :meth:`save` writes)."""
-        return {
-            "kind": PICK_KIND,
-            "features": list(SCENARIO_FEATURES),
-            "targets": list(TARGETS),
+        return model_head(PICK_KIND, self.accel_law) | {
             "neighbours": self.neighbours,
-            "accel_law": self.accel_law,
             "mean": self.mean.tolist(),
             "scale": self.scale.tolist(),
             "weights": self.weights.tolist(),
@@ -165,16 +154,6 @@ class PickModel:
             "points": self.points.tolist(),
             "ratios": self.ratios.tolist(),
         }
-
-    def save(self, path: str | Path) -> None:
-        """Write the model as JSON.
-
-        Parameters
-        ----------
-        path : str or Path
-            The file.
-        """
-        write_text(path, json.dumps(self.to_dict()) + "\n")
 
 
 def fit_pick_model(

@@ -27,13 +27,12 @@ import numpy as np
 
 from vfgym._validate import check_choice
 from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
-from vfgym.io.runs import write_text
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_PLANT, Plant, Settings
+from vfgym.params import PAPER_PLANT, Plant
 
 from .optima import MoveOptimum
 from .pick import PICK_KIND, PickModel, fit_pick_model, greedy_library, ratio_table
-from .targets import TARGETS, accel_k, settings_targets, target_settings
+from .targets import TARGETS, TargetModel, accel_k, model_head, settings_targets, target_settings
 
 PRETRAINED = Path(__file__).parent / "pretrained" / "settings_model.json"
 """The shipped model (its ``config.yaml`` and ``command.txt`` beside it)."""
@@ -65,7 +64,7 @@ def expand(x: np.ndarray, degree: int) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class SettingsModel:
+class SettingsModel(TargetModel):
     """A fitted ridge regression from move features to settings (module doc).
 
     Attributes
@@ -105,48 +104,30 @@ class SettingsModel:
         z = (expand(features, self.degree) - self.mean) / self.scale
         return self.coef[0] + z @ self.coef[1:]
 
-    def settings(self, scenario: Scenario, plant: Plant = PAPER_PLANT) -> Settings:
-        """The settings the model picks for a move.
+    def targets_of(self, features: np.ndarray) -> np.ndarray:
+        """The regression's targets for one move's features.
 
         Parameters
         ----------
-        scenario : Scenario
-            The move.
-        plant : Plant
-            The base plant (an axis's), before the move's load.
+        features : numpy.ndarray
+            (len(SCENARIO_FEATURES),).
 
         Returns
         -------
-        Settings
-            Inside the search space.
+        numpy.ndarray
+            (4,).
         """
-        loaded = scenario.plant(plant)
-        t = self.predict_targets(scenario_features(scenario, plant, loaded))[0]
-        return target_settings(t, loaded, self.accel_law)
+        return self.predict_targets(features)[0]
 
     def to_dict(self) -> dict[str, Any]:
         """The model as plain data (what :meth:`save` writes)."""
-        return {
-            "kind": MODEL_KIND,
-            "features": list(SCENARIO_FEATURES),
-            "targets": list(TARGETS),
+        return model_head(MODEL_KIND, self.accel_law) | {
             "degree": self.degree,
             "ridge": self.ridge,
-            "accel_law": self.accel_law,
             "mean": self.mean.tolist(),
             "scale": self.scale.tolist(),
             "coef": self.coef.tolist(),
         }
-
-    def save(self, path: str | Path) -> None:
-        """Write the model as JSON.
-
-        Parameters
-        ----------
-        path : str or Path
-            The file.
-        """
-        write_text(path, json.dumps(self.to_dict(), indent=1) + "\n")
 
 
 def load_settings_model(path: str | Path = PRETRAINED) -> PickModel | SettingsModel:

@@ -8,12 +8,18 @@ the best k: a step's optimal k sits at k_a, on the acceleration limit.
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from vfgym import space
-from vfgym.params import Plant, Settings, paper_k
+from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
+from vfgym.io.runs import write_text
+from vfgym.moves.scenarios import Scenario
+from vfgym.params import PAPER_PLANT, Plant, Settings, paper_k
 
 TARGETS = ("value_rad", "error_limit_rad", "log10_k_over_ka", "ts_over_tf")
 """What the regression predicts (module doc)."""
@@ -82,4 +88,90 @@ def target_settings(t: np.ndarray, plant: Plant, accel_law: str = "rise") -> Set
     return space.from_action(u, accel_law)
 
 
-__all__ = ["K_LOG_RANGE", "TARGETS", "accel_k", "settings_targets", "target_settings"]
+class TargetModel:
+    """What both settings models share: settings from the targets a model gives for a
+    move's features (:meth:`targets_of`, each model's own), and writing it as JSON."""
+
+    accel_law: str
+
+    def targets_of(self, features: np.ndarray) -> np.ndarray:
+        """The targets (:data:`TARGETS`) for one move's features; each model's own.
+
+        Parameters
+        ----------
+        features : numpy.ndarray
+            (len(SCENARIO_FEATURES),).
+
+        Returns
+        -------
+        numpy.ndarray
+            (4,).
+        """
+        raise NotImplementedError
+
+    def to_dict(self) -> dict[str, Any]:
+        """The model as plain data (what :meth:`save` writes); each model's own."""
+        raise NotImplementedError
+
+    def settings(self, scenario: Scenario, plant: Plant = PAPER_PLANT) -> Settings:
+        """The settings the model picks for a move.
+
+        Parameters
+        ----------
+        scenario : Scenario
+            The move.
+        plant : Plant
+            The base plant (an axis's), before the move's load.
+
+        Returns
+        -------
+        Settings
+            Inside the search space.
+        """
+        loaded = scenario.plant(plant)
+        t = self.targets_of(scenario_features(scenario, plant, loaded))
+        return target_settings(t, loaded, self.accel_law)
+
+    def save(self, path: str | Path) -> None:
+        """Write the model as JSON.
+
+        Parameters
+        ----------
+        path : str or Path
+            The file.
+        """
+        write_text(path, json.dumps(self.to_dict()) + "\n")
+
+
+def model_head(kind: str, accel_law: str) -> dict[str, Any]:
+    """The keys every model file starts with: its kind, features, targets and law.
+
+    Parameters
+    ----------
+    kind : str
+        The model's kind.
+    accel_law : str
+        The law of its settings.
+
+    Returns
+    -------
+    dict
+        ``kind``, ``features``, ``targets``, ``accel_law``.
+    """
+    return {
+        "kind": kind,
+        "features": list(SCENARIO_FEATURES),
+        "targets": list(TARGETS),
+        "accel_law": accel_law,
+    }
+
+
+__all__ = [
+    "K_LOG_RANGE",
+    "TARGETS",
+    "TargetModel",
+    "accel_k",
+    "model_head",
+    "settings_targets",
+    "target_settings",
+]
