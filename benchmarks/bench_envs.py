@@ -40,7 +40,7 @@ import vfgym.envs  # noqa: F401  (registers the ids)
 from vfgym import DEFAULT_MEASURES, PAPER_SETTINGS
 from vfgym.envs import _batch as B
 from vfgym.envs.vector import VFServoVectorEnv, VFTuneVectorEnv
-from vfgym.moves.scenarios import get_scenario
+from vfgym.moves.distribution import get_scenario
 from vfgym.plant import _kernel as K
 from vfgym.plant import _lanes as LN
 from vfgym.plant import _layout as L

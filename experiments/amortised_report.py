@@ -29,6 +29,21 @@ from vfgym.agents.optima import read_optima
 from vfgym.agents.refine import refine
 from vfgym.agents.supervised import PRETRAINED, load_settings_model
 from vfgym.io.runs import write_yaml
+from vfgym.moves import LOAD_DISTRIBUTION
+
+
+def optuna_best(scenario, trials: int, seed: int) -> float:
+    """The lowest cost a seeded TPE sweep finds on this one scenario (the paper's settings
+    enqueued first); ``scheduling_report.py``'s best fixed settings per move."""
+    import optuna
+
+    from vfgym.space import NAMES, suggest
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    study = optuna.create_study(sampler=optuna.samplers.TPESampler(seed=seed))
+    study.enqueue_trial({k: getattr(PAPER_SETTINGS, k) for k in NAMES})
+    study.optimize(lambda t: float(evaluate(suggest(t), [scenario]).cost[0, 0]), n_trials=trials)
+    return float(study.best_value)
 
 
 def score(settings, scenarios) -> tuple[np.ndarray, np.ndarray]:
@@ -63,7 +78,7 @@ def main() -> None:
     args = ap.parse_args()
 
     optima = read_optima(args.optima)[: args.count]
-    scenarios = [get_scenario(o.scenario) for o in optima]
+    scenarios = [get_scenario(o.scenario, LOAD_DISTRIBUTION) for o in optima]
     n = len(scenarios)
     best = np.array([o.cost for o in optima])
     paper, paper_feas = score([PAPER_SETTINGS] * n, scenarios)

@@ -21,6 +21,7 @@ import numpy as np
 from vfgym import get_scenario
 from vfgym.agents.optima import read_optima
 from vfgym.agents.supervised import settings_targets, target_settings
+from vfgym.moves import LOAD_DISTRIBUTION
 from vfgym.scoring import Move, score_pairs
 
 
@@ -31,7 +32,7 @@ def main() -> None:
     ap.add_argument("--batch", type=int, default=20_000)
     args = ap.parse_args()
     optima = read_optima(args.optima)
-    moves = [Move.of(get_scenario(o.scenario)) for o in optima]
+    moves = [Move.of(get_scenario(o.scenario, LOAD_DISTRIBUTION)) for o in optima]
     cand = [settings_targets(o.settings, mv.plant) for o, mv in zip(optima, moves, strict=True)]
     n = len(optima)
     pairs = [(i, j) for i in range(n) for j in range(n)]

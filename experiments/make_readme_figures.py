@@ -85,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from vfgym import PAPER_SETTINGS, __version__
     from vfgym.moves.baselines import BASELINE_NAMES, controller_label
-    from vfgym.moves.scenarios import get_scenario
+    from vfgym.moves.distribution import get_scenario
     from vfgym.report import (
         baseline_candidates,
         compare,

@@ -17,6 +17,7 @@ import time
 
 from vfgym import scenario_set
 from vfgym.agents.optima import OptimumSearch, move_optima, write_optima
+from vfgym.moves import LOAD_DISTRIBUTION
 
 
 def main() -> None:
@@ -27,7 +28,7 @@ def main() -> None:
     ap.add_argument("--out", required=True)
     args = ap.parse_args()
     search = OptimumSearch()
-    scenarios = scenario_set(args.split, args.count, args.first_seed)
+    scenarios = scenario_set(args.split, args.count, args.first_seed, LOAD_DISTRIBUTION)
     t0 = time.time()
     optima = move_optima(
         scenarios, search, progress=lambda s: print(f"{time.time() - t0:7.1f} s  {s}", flush=True)

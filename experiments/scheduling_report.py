@@ -2,14 +2,15 @@
 control interval, against the best fixed settings for the same moves.
 
     python experiments/scheduling_report.py --model runs/train/servo-ppo/best_model.zip \
-        [--count 16] [--optima experiments/optima/test.csv]
+        [--count 16] [--trials 150] [--seed 0]
 
-On the first ``count`` test scenarios (never seen in training) and five named ones: the
+On the first ``count`` test moves of the environments' distribution (new loads and moves,
+never seen in training: :func:`vfgym.random_scenario`, the servo following its load) and
+five named scenarios: the
 cost of the agent's scheduled move (the scoring path's cost of the whole move, as
 VFServo-v0 reports at the end of an episode), of the paper's fixed settings, and of the
-best fixed settings per move (:func:`vfgym.agents.optima.move_optima`: the test moves'
-from the cached optima file, the named moves' searched here), all from
-``vfgym.evaluate``'s cost formula.
+best fixed settings a seeded per-scenario TPE sweep finds (``trials`` trials, the paper's
+settings first), all from ``vfgym.evaluate``'s cost formula.
 """
 
 from __future__ import annotations
@@ -17,10 +18,10 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
+from amortised_report import optuna_best
 
-from vfgym import PAPER_SETTINGS, SCENARIOS, evaluate, scenario_set
+from vfgym import PAPER_SETTINGS, SCENARIOS, evaluate, random_scenario
 from vfgym.agents import load_model
-from vfgym.agents.optima import move_optima, read_optima
 from vfgym.agents.training import make_env, rollout_cost
 
 
@@ -28,19 +29,20 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--model", required=True)
     ap.add_argument("--count", type=int, default=16)
-    ap.add_argument("--optima", default="experiments/optima/test.csv")
+    ap.add_argument("--trials", type=int, default=150)
+    ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
 
     model, cfg = load_model(args.model)
     env = make_env("vfgym/VFServo-v0", (cfg.get("hyperparams") or {}).get("env_kwargs"))
     names = ["paper-step", "short-move", "long-move", "heavy-load", "friction"]
-    scenarios = [SCENARIOS[n] for n in names] + scenario_set("test", args.count)
+    scenarios = [SCENARIOS[n] for n in names]
+    scenarios += [random_scenario(seed, "test") for seed in range(args.count)]
     agent = np.array([float(rollout_cost(model, env, sc)["cost"]) for sc in scenarios])
     paper = evaluate(PAPER_SETTINGS, scenarios).cost[0]
-    cached = {o.scenario: o.cost for o in read_optima(args.optima)}
-    missing = [sc for sc in scenarios if sc.name not in cached]
-    cached |= {o.scenario: o.cost for o in move_optima(missing)}
-    fixed = np.array([cached[sc.name] for sc in scenarios])
+    fixed = np.array(
+        [optuna_best(sc, args.trials, args.seed + i) for i, sc in enumerate(scenarios)]
+    )
     print(f"{'scenario':12s} {'scheduled':>10s} {'best fixed':>10s} {'paper':>8s}")
     for sc, a, f, p in zip(scenarios, agent, fixed, paper, strict=True):
         print(f"{sc.name:12s} {a:10.3f} {f:10.3f} {p:8.3f}")

@@ -36,6 +36,7 @@ from vfgym.agents.supervised import (
 )
 from vfgym.envs._common import scenario_features
 from vfgym.io.runs import write_text, write_yaml
+from vfgym.moves import LOAD_DISTRIBUTION
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -43,7 +44,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def cross_validate(cfg: TrainConfig, folds: int) -> None:
     """K-fold figures of the pick model for a few neighbour counts and library sizes."""
     optima = read_optima(ROOT / cfg.optima)
-    scenarios = [get_scenario(o.scenario) for o in optima]
+    scenarios = [get_scenario(o.scenario, LOAD_DISTRIBUTION) for o in optima]
     table = np.load(ROOT / cfg.costs)
     cost, feas = table["cost"], table["feasible"]
     best = np.array([o.cost for o in optima])

@@ -13,8 +13,9 @@ on top, and :mod:`vfgym.agents` and :mod:`vfgym.commands` above those.
 from vfgym import envs  # importing envs registers vfgym/VFTune-v0, VFServo-v0
 from vfgym.moves import baselines
 from vfgym.moves.axis import PAPER_AXIS, Axis, load_axis
+from vfgym.moves.distribution import get_scenario, random_scenario, scenario_set
 from vfgym.moves.pulse_sources import fixed_frequency_pulses, scurve_pulses
-from vfgym.moves.scenarios import SCENARIOS, Scenario, get_scenario, random_scenario, scenario_set
+from vfgym.moves.scenarios import SCENARIOS, Scenario
 from vfgym.params import (
     DEFAULT_MEASURES,
     PAPER_ACCEL_LIMIT_RAD_S2,

@@ -29,6 +29,7 @@ from vfgym.agents.supervised import (
 )
 from vfgym.cli import main
 from vfgym.envs._common import scenario_features
+from vfgym.moves import LOAD_DISTRIBUTION as LOAD
 from vfgym.space import SPACE, from_action
 
 REPO = Path(__file__).resolve().parents[2]
@@ -37,7 +38,7 @@ REPO = Path(__file__).resolve().parents[2]
 def test_optima_with_no_refinement_are_the_grid_minimum():
     """rounds=0: each move's optimum is the coarse grid's feasible minimum, found by
     scoring the same grid through vfgym.evaluate move by move."""
-    moves = scenario_set("test", 2, 900)
+    moves = scenario_set("test", 2, 900, LOAD)
     search = OptimumSearch(points=3, rounds=0)
     found = move_optima(moves, search)
     grid = [from_action(np.array(u)) for u in itertools.product((-1.0, 0.0, 1.0), repeat=4)]
@@ -52,7 +53,7 @@ def test_optima_with_no_refinement_are_the_grid_minimum():
 
 
 def test_refinement_rounds_never_lose_the_grid_minimum():
-    moves = scenario_set("test", 2, 900)
+    moves = scenario_set("test", 2, 900, LOAD)
     coarse = move_optima(moves, OptimumSearch(points=3, rounds=0))
     fine = move_optima(moves, OptimumSearch(points=3, rounds=2, keep=1))
     for a, b in zip(coarse, fine, strict=True):
@@ -78,7 +79,7 @@ def test_optima_csv_round_trip(tmp_path):
 )
 def test_targets_and_settings_are_inverse(u, seed):
     s = from_action(np.array(u))
-    plant = get_scenario(f"train-{seed}").plant()
+    plant = get_scenario(f"train-{seed}", LOAD).plant()
     back = target_settings(settings_targets(s, plant), plant)
     for d in SPACE:
         assert getattr(back, d.name) == pytest.approx(getattr(s, d.name), rel=1e-9)
@@ -87,7 +88,7 @@ def test_targets_and_settings_are_inverse(u, seed):
 def test_fit_recovers_an_exact_linear_map():
     """Optima made by a known linear map of the features (degree 1) are fitted exactly
     (ridge 0), and the model's settings give them back."""
-    moves = scenario_set("train", 60, 5000)
+    moves = scenario_set("train", 60, 5000, LOAD)
     x = np.array([scenario_features(sc, PAPER_PLANT) for sc in moves])
     w = np.random.default_rng(0).normal(0.0, 0.05, (x.shape[1], 4))
     t = np.clip(0.1 + x @ w, -0.9, 0.9)
@@ -107,7 +108,7 @@ def test_fit_recovers_an_exact_linear_map():
 def test_shipped_model_beats_the_papers_settings_on_unseen_test_moves():
     """Test moves beyond the report's 64 (never used to train or to choose the model)."""
     model = load_settings_model()
-    moves = scenario_set("test", 8, 5000)
+    moves = scenario_set("test", 8, 5000, LOAD)
     picks = [model.settings(sc) for sc in moves]
     ours = np.array([evaluate(s, sc).cost[0, 0] for s, sc in zip(picks, moves, strict=True)])
     paper = evaluate(PAPER_SETTINGS, moves).cost[0]
@@ -136,7 +137,7 @@ def test_shipped_model_is_reproduced_by_its_training_command():
 def test_pick_model_picks_the_candidate_best_on_the_nearest_moves():
     """Three training moves, two candidates: a move's own features pick, among its
     nearest ``neighbours`` training moves, the candidate of least mean cost ratio."""
-    moves = scenario_set("train", 3, 7000)
+    moves = scenario_set("train", 3, 7000, LOAD)
     opt = [MoveOptimum(sc.name, from_action(np.full(4, 0.1 * i)), 1.0, True)
            for i, sc in enumerate(moves)]  # fmt: skip
     # candidate 0 is twice the optimum on move 2 and infeasible on move 1; 2 is best there
@@ -154,7 +155,7 @@ def test_pick_model_picks_the_candidate_best_on_the_nearest_moves():
 
 
 def test_refine_starts_from_the_prediction_and_never_ends_worse():
-    sc = get_scenario("test-901")
+    sc = get_scenario("test-901", LOAD)
     start = load_settings_model().settings(sc)
     r = refine(sc, start, 6)
     assert len(r.costs) == 6

@@ -15,7 +15,7 @@ import yaml
 from vfgym import Settings, evaluate
 from vfgym.cli import main
 from vfgym.moves.baselines import rule_of_thumb
-from vfgym.moves.scenarios import scenario_set
+from vfgym.moves.distribution import scenario_set
 
 TUNED = {"value_rad": 0.7, "error_limit_rad": 0.7, "k": 350.0, "ts_over_tf": 0.25}
 

@@ -92,20 +92,20 @@ README_RUNS: dict[str, list[Run]] = {
     "vfgym sweep --config experiments/quick.yaml": [
         Run("quick", ["sweep", "--config", "experiments/quick.yaml", *SWEEP_TRIM], trim="trials"),
     ],
-    "vfgym sweep --config experiments/quick.yaml --axis experiments/axes/bare.yaml": [
+    "vfgym sweep --config experiments/quick.yaml --axis experiments/axes/loads.yaml": [
         Run(
-            "bare",
+            "loads",
             [
                 "sweep",
                 "--config",
                 "experiments/quick.yaml",
                 "--axis",
-                "experiments/axes/bare.yaml",
+                "experiments/axes/loads.yaml",
                 *SWEEP_TRIM,
                 "--study",
-                "bare",
+                "loads",
             ],
-            writes=("runs/sweep/bare/best.yaml",),
+            writes=("runs/sweep/loads/best.yaml",),
             trim="trials",
         ),
     ],

@@ -23,15 +23,15 @@ from vfgym.moves.axis import (
     write_axis,
 )
 from vfgym.moves.baselines import baseline, rule_of_thumb
-from vfgym.moves.scenarios import (
+from vfgym.moves.distribution import (
     DEFAULT_DISTRIBUTION,
-    SCENARIOS,
+    LOAD_DISTRIBUTION,
     MoveDistribution,
-    Scenario,
-    ideal_move_time_s,
+    get_scenario,
     random_scenario,
     scenario_set,
 )
+from vfgym.moves.scenarios import SCENARIOS, Scenario, ideal_move_time_s
 from vfgym.params import paper_k
 
 AXES = Path(__file__).resolve().parents[2] / "experiments" / "axes"
@@ -60,10 +60,37 @@ def test_the_paper_axis_file_is_the_default_axis():
     axis = load_axis(AXES / "paper.yaml")
     assert dataclasses.replace(axis, description="") == PAPER_AXIS
     assert axis.plant == PAPER_PLANT
-    # its moves are today's random moves: vfgym.random_scenario and scenario_set
+    # its moves are what the commands take without --axis: scenario_set and get_scenario
     assert axis.scenarios("test") == scenario_set("test", 32, 0)
-    assert axis.scenarios("train") == [random_scenario(s, "train") for s in range(16)]
-    assert axis.scenario("train-123") == random_scenario(123, "train")
+    assert axis.scenarios("train") == scenario_set("train", 16, 0)
+    assert axis.scenario("train-123") == get_scenario("train-123")
+    assert [s.name for s in axis.scenarios("train")] == [f"train-{i}" for i in range(16)]
+
+
+def test_the_paper_axis_is_one_machine_and_loads_is_its_moves_across_loads():
+    """An axis is one machine: on the default one no move adds a load, and the moves vary
+    in distance, direction and profile; loads.yaml is the same draws with a load each,
+    the environments' distribution (vfgym.random_scenario)."""
+    paper, loads = PAPER_AXIS, load_axis(AXES / "loads.yaml")
+    assert loads.plant == paper.plant
+    for split, count in (("train", 16), ("test", 32)):
+        mine, loaded = paper.scenarios(split), loads.scenarios(split)
+        assert len(mine) == count
+        assert loaded == [random_scenario(s, split) for s in range(count)]
+        for a, b in zip(mine, loaded, strict=True):
+            assert a.name == b.name
+            # the same draw: distance, direction and profile
+            assert (a.distance_rad, a.profile) == (b.distance_rad, b.profile)
+            assert (a.inertia_ratio, a.coulomb_nm, a.viscous_nm_s_rad, a.load_torque_nm) == (
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+            )
+        assert max(s.inertia_ratio for s in loaded) > 3.0
+        # moves vary: both directions and every drawn profile occur
+        assert {s.distance_rad > 0 for s in mine} == {True, False}
+        assert {s.profile for s in mine} == {"step", "trapezoid", "scurve"}
 
 
 def test_the_engineered_axes_hold_what_their_comments_say():
@@ -129,11 +156,22 @@ def test_named_moves_and_seeds_resolve_on_the_axis():
 # --- the distribution -------------------------------------------------------------------
 
 
-def test_default_distribution_is_random_scenario():
+def test_random_scenario_is_the_load_distribution_and_names_the_default_axis_moves():
     assert MoveDistribution() == DEFAULT_DISTRIBUTION
     for seed in range(50):
         for split in ("train", "test"):
-            assert DEFAULT_DISTRIBUTION.draw(seed, split) == random_scenario(seed, split)
+            loaded = random_scenario(seed, split)
+            assert LOAD_DISTRIBUTION.draw(seed, split) == loaded
+            assert get_scenario(f"{split}-{seed}") == DEFAULT_DISTRIBUTION.draw(seed, split)
+            # the load distribution differs from the default in its load ranges alone
+            unloaded = dataclasses.replace(
+                LOAD_DISTRIBUTION,
+                inertia_ratio=(0.0, 0.0),
+                coulomb_nm=(0.0, 0.0),
+                viscous_nm_s_rad=(0.0, 0.0),
+                load_torque_nm=(0.0, 0.0),
+            )
+            assert unloaded == DEFAULT_DISTRIBUTION
 
 
 FIXED = {
@@ -149,8 +187,8 @@ FIXED = {
 @given(seed=st.integers(0, 2**40), key=st.sampled_from(sorted(FIXED)))
 def test_changing_one_range_changes_that_quantity_alone(seed, key):
     """Every draw takes the same random numbers whatever the ranges."""
-    a = DEFAULT_DISTRIBUTION.draw(seed, "train")
-    b = MoveDistribution(**{key: FIXED[key]}).draw(seed, "train")
+    a = LOAD_DISTRIBUTION.draw(seed, "train")
+    b = dataclasses.replace(LOAD_DISTRIBUTION, **{key: FIXED[key]}).draw(seed, "train")
     changed = {
         f.name
         for f in dataclasses.fields(Scenario)

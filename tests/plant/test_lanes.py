@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vfgym import DEFAULT_MEASURES
-from vfgym.moves.scenarios import get_scenario, random_scenario
+from vfgym.moves.distribution import get_scenario, random_scenario
 from vfgym.params import Settings
 from vfgym.plant import _kernel as K
 from vfgym.plant import _lanes, pack, simulate

@@ -11,7 +11,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from vfgym import PAPER_SETTINGS, Measures, Settings, evaluate
-from vfgym.moves.scenarios import SCENARIOS, Scenario, random_scenario
+from vfgym.moves.distribution import random_scenario
+from vfgym.moves.scenarios import SCENARIOS, Scenario
 from vfgym.scoring import CONSTRAINTS, DEFAULT_WEIGHTS, yardsticks
 from vfgym.space import SPACE, from_action
 

@@ -11,7 +11,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from vfgym import PAPER_PLANT, Measures
-from vfgym.moves.scenarios import SCENARIOS, Scenario, random_scenario
+from vfgym.moves.distribution import random_scenario
+from vfgym.moves.scenarios import SCENARIOS, Scenario
 from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import command_end_s, pack

@@ -13,7 +13,8 @@ from oracles import measures_from_trace as from_trace
 import vfgym
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, Measures, Settings, evaluate, simulate
 from vfgym.moves import baselines as B
-from vfgym.moves.scenarios import SCENARIOS, scenario_set
+from vfgym.moves.distribution import scenario_set
+from vfgym.moves.scenarios import SCENARIOS
 from vfgym.plant.measures import NAMES
 
 INTS = {"settled", "pulse_count", "pulse_reversals"}

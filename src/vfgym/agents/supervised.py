@@ -302,10 +302,10 @@ def train_settings_model(cfg: TrainConfig, root: str | Path = ".") -> PickModel 
         The fitted model.
     """
     from vfgym.agents.optima import read_optima
-    from vfgym.moves.scenarios import get_scenario
+    from vfgym.moves import LOAD_DISTRIBUTION, get_scenario
 
     optima = read_optima(Path(root) / cfg.optima)
-    scenarios = [get_scenario(o.scenario) for o in optima]
+    scenarios = [get_scenario(o.scenario, LOAD_DISTRIBUTION) for o in optima]
     if cfg.kind == "ridge":
         return fit_settings_model(scenarios, optima, degree=cfg.degree, ridge=cfg.ridge)
     table = np.load(Path(root) / cfg.costs)

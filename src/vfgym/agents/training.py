@@ -25,7 +25,8 @@ import numpy as np
 
 from vfgym.agents.hyperparams import algo_class
 from vfgym.io.runs import read_yaml, write_text, write_yaml
-from vfgym.moves.scenarios import Scenario, random_scenario
+from vfgym.moves.distribution import random_scenario
+from vfgym.moves.scenarios import Scenario
 
 VALIDATION_SEED0 = 2**40
 """First train-split seed of the held-out validation scenarios."""

@@ -104,6 +104,6 @@ def axis_from_args(args: argparse.Namespace) -> Any:
 def scenario_from_args(args: argparse.Namespace, axis: Any) -> Any:
     """``--scenario NAME`` on the axis (its listed moves, the named scenarios, or
     ``<split>-<seed>`` of its random moves), or as :func:`vfgym.get_scenario` without one."""
-    from vfgym.moves.scenarios import get_scenario
+    from vfgym.moves.distribution import get_scenario
 
     return get_scenario(args.scenario) if axis is None else axis.scenario(args.scenario)

@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.io.runs import new_run_dir, record_command, write_yaml
     from vfgym.moves.axis import AXIS_FILE, axis_kwargs, write_axis
     from vfgym.moves.baselines import BASELINE_NAMES
-    from vfgym.moves.scenarios import scenario_set
+    from vfgym.moves.distribution import scenario_set
     from vfgym.report import Candidate, baseline_candidates, compare, format_table, write_report
     from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS
     from vfgym.space import settings_to_dict

@@ -13,7 +13,8 @@ import numpy as np
 from vfgym._validate import check_choice, check_int
 from vfgym.moves import profiles
 from vfgym.moves.axis import Axis, load_axis
-from vfgym.moves.scenarios import SPLITS, Scenario, get_scenario, random_scenario
+from vfgym.moves.distribution import get_scenario, random_scenario
+from vfgym.moves.scenarios import SPLITS, Scenario
 from vfgym.params import (
     ACCEL_LAWS,
     DEFAULT_MEASURES,

@@ -19,17 +19,20 @@ axis
 
 from vfgym.moves import axis, baselines, profiles, pulse_sources, scenarios
 from vfgym.moves.axis import PAPER_AXIS, Axis, MoveSet, load_axis, write_axis
-from vfgym.moves.pulse_sources import fixed_frequency_pulses, scurve_pulses
-from vfgym.moves.scenarios import (
-    SCENARIOS,
+from vfgym.moves.distribution import (
+    DEFAULT_DISTRIBUTION,
+    LOAD_DISTRIBUTION,
     MoveDistribution,
-    Scenario,
     get_scenario,
     random_scenario,
     scenario_set,
 )
+from vfgym.moves.pulse_sources import fixed_frequency_pulses, scurve_pulses
+from vfgym.moves.scenarios import SCENARIOS, Scenario
 
 __all__ = [
+    "DEFAULT_DISTRIBUTION",
+    "LOAD_DISTRIBUTION",
     "PAPER_AXIS",
     "SCENARIOS",
     "Axis",

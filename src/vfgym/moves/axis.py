@@ -15,7 +15,7 @@ same constructors validate every value::
       test: {random: {count: 32, first_seed: 0, inertia_ratio: [0, 0]}}  # MoveDistribution
 
 A move set is a list of moves (:class:`~vfgym.moves.scenarios.Scenario` fields, or the
-name of a named scenario) or ``random:`` a :class:`~vfgym.moves.scenarios.MoveDistribution`.
+name of a named scenario) or ``random:`` a :class:`~vfgym.moves.distribution.MoveDistribution`.
 A move's load (``inertia_ratio``, friction, ``load_torque_nm``) is added to the axis's own.
 Every problem raises one ``ValueError`` line naming the file, the key, the value and what
 is allowed (the command line turns it into exit status 2).
@@ -32,13 +32,8 @@ from typing import Any
 
 from vfgym._validate import check_choice
 from vfgym.io.runs import read_yaml, write_yaml
-from vfgym.moves.scenarios import (
-    DEFAULT_DISTRIBUTION,
-    SCENARIOS,
-    SPLITS,
-    MoveDistribution,
-    Scenario,
-)
+from vfgym.moves.distribution import DEFAULT_DISTRIBUTION, MoveDistribution
+from vfgym.moves.scenarios import SCENARIOS, SPLITS, Scenario
 from vfgym.params import (
     DEFAULT_MEASURES,
     MOTOR_PRESETS,
@@ -188,8 +183,9 @@ class MoveSets:
 class Axis:
     """One machine and its moves: the plant (with its load), the measures' windows, and
     the train and test move sets. The default is the paper's axis: the paper's plant,
-    16 train and 32 test moves of the default random distribution (what ``vfgym`` uses
-    without ``--axis``; ``experiments/axes/paper.yaml``).
+    its load fixed, with 16 train and 32 test moves of the default random distribution
+    (:data:`~vfgym.moves.distribution.DEFAULT_DISTRIBUTION`: distance, direction and profile
+    vary); what ``vfgym`` uses without ``--axis``; ``experiments/axes/paper.yaml``.
 
     Every listed move must be able to arrive: its duration exceeds its ideal move time on
     the axis (:func:`vfgym.moves.scenarios.ideal_move_time_s`) and its command reaches

@@ -18,7 +18,8 @@ import numpy as np
 
 from vfgym._validate import check_int
 from vfgym.moves.baselines import BASELINE_NAMES, Baseline, Controller, resolve
-from vfgym.moves.scenarios import Scenario, scenario_set
+from vfgym.moves.distribution import scenario_set
+from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.report._stats import DEFAULT_RESAMPLES, Spread, WinLoss, outcome, spread
 from vfgym.scoring import (

@@ -18,7 +18,8 @@ from vfgym.moves.baselines import (
     controller_label,
     resolve,
 )
-from vfgym.moves.scenarios import Scenario, scenario_set
+from vfgym.moves.distribution import scenario_set
+from vfgym.moves.scenarios import Scenario
 from vfgym.params import (
     DEFAULT_MEASURES,
     PAPER_PLANT,

@@ -9,7 +9,8 @@ from typing import Any
 
 from vfgym._validate import check_choice, check_int, check_name, check_real
 from vfgym.moves.axis import Axis, load_axis
-from vfgym.moves.scenarios import Scenario, scenario_set
+from vfgym.moves.distribution import scenario_set
+from vfgym.moves.scenarios import Scenario
 from vfgym.params import ACCEL_LAWS
 from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, check_aggregate
 
