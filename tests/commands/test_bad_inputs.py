@@ -145,6 +145,15 @@ CASES = [
     (["predict", "--model", "missing.zip"], "missing.zip: no such file"),
     (["predict", "--model", "missing.zip", "--out", "afile/s.yaml"], "afile is a file"),
     (["predict", "--model", "missing.zip", "--scenario", "mars"], "scenario='mars'"),
+    (["predict", "--model", "missing.json"], "missing.json: no such file"),
+    (["predict", "--model", "good.yaml"], "not a vfgym settings model"),
+    (["predict", "--model", "bin.yaml"], "not a vfgym settings model"),
+    (["predict", "--refine", "0"], "--refine='0' is out of range"),
+    (["predict", "--refine", "-3"], "--refine='-3' is out of range"),
+    (["predict", "--refine", "2.5"], "--refine='2.5' is not allowed"),
+    (["predict", "--refine", "many"], "--refine='many' must be"),
+    (["predict", "--refine", "nan"], "--refine='nan' is not allowed"),
+    (["predict", "--refine", "3", "--seed", "-1"], "--seed='-1' is out of range"),
 ]
 
 

@@ -211,13 +211,23 @@ README_RUNS: dict[str, list[Run]] = {
         )
         for algo in ("ppo", "sac", "td3")
     ],
-    "vfgym predict --model RUN/best_model.zip --scenario NAME": [
+    "vfgym predict --scenario NAME [--model M.json|RUN/best_model.zip] [--refine N]": [
+        Run(
+            "predict-shipped",
+            ["predict", "--scenario", "test-3", "--out", "p.yaml"],
+            writes=("p.yaml",),
+        ),
+        Run("predict-refine", ["predict", "--scenario", "short-move", "--refine", "5"]),
         Run(
             "predict",
             ["predict", "--model", "{model}", "--scenario", "test-3"],
             ("train-ppo",),
             agents=True,
         ),
+    ],
+    "vfgym predict --scenario test-3": [Run("predict-test-3", ["predict", "--scenario", "test-3"])],
+    "vfgym predict --scenario NAME --refine N": [
+        Run("predict-refine-3", ["predict", "--scenario", "test-5", "--refine", "3"]),
     ],
     "vfgym plot response --scenario paper-step": [
         Run(

@@ -1,4 +1,8 @@
-"""``vfgym predict``: the settings a trained VFTune-v0 agent picks for a move, as YAML."""
+"""``vfgym predict``: the settings an amortised tuner picks for a move, as YAML. The tuner
+is the settings model vfgym ships (a regression from the move's features to its optimal
+settings, no training needed), another settings model (JSON), or a trained VFTune-v0
+agent (``.zip``); ``--refine N`` then runs a short sweep on the move from those
+settings."""
 
 from __future__ import annotations
 
@@ -10,12 +14,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser(
         "predict",
-        help="print the settings an agent picks for a scenario",
+        help="print the settings an amortised tuner picks for a scenario",
         description=__doc__ + " The output is a settings file that "
         "`vfgym evaluate --settings` reads.",
     )
-    p.add_argument("--model", required=True, help="a saved model, e.g. RUN/best_model.zip")
+    p.add_argument(
+        "--model",
+        help="a settings model (.json) or a VFTune-v0 agent (.zip, e.g. RUN/best_model.zip); "
+        "default: the pretrained settings model shipped with vfgym",
+    )
     p.add_argument("--scenario", default="paper-step", help="scenario name (or test-<seed>)")
+    p.add_argument(
+        "--refine",
+        metavar="N",
+        help="then run N trials of the default sampler on the move, the prediction first",
+    )
+    p.add_argument("--seed", default="0", help="the refinement sampler's seed (default 0)")
     p.add_argument("--out", help="also write the YAML to this file")
     add_axis_option(p)
     p.set_defaults(func=run)
@@ -24,26 +38,47 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import yaml
 
-    from vfgym._validate import check_output_path
+    from vfgym._validate import check_int, check_output_path
+    from vfgym.agents.supervised import PRETRAINED, load_settings_model
     from vfgym.commands._common import axis_from_args, scenario_from_args
+    from vfgym.moves.axis import axis_kwargs
+    from vfgym.params import PAPER_PLANT
     from vfgym.space import settings_to_dict
 
-    scenario = scenario_from_args(args, axis_from_args(args))
+    refine_n = None if args.refine is None else check_int("--refine", args.refine, 1, 100_000)
+    seed = check_int("--seed", args.seed, 0, 2**31 - 1)
+    axis = axis_from_args(args)
+    scenario = scenario_from_args(args, axis)
     if args.out is not None:
         check_output_path("--out", args.out)
-    try:
-        from vfgym.agents import policy_settings
-    except ImportError as exc:  # pragma: no cover - depends on the install
-        raise ValueError(
-            f"agent support needs the agents extra ({exc.name} missing): "
-            'pip install -c constraints.txt -e ".[agents]"'
-        ) from None
-    settings = policy_settings(args.model, args.axis)(scenario)
-    doc = {
-        "settings": settings_to_dict(settings),
-        "source": f"agent {args.model}",
-        "scenario": scenario.name,
-    }
+    model_path = PRETRAINED if args.model is None else args.model
+    if str(model_path).endswith(".zip"):
+        try:
+            from vfgym.agents import policy_settings
+        except ImportError as exc:  # pragma: no cover - depends on the install
+            raise ValueError(
+                f"agent support needs the agents extra ({exc.name} missing): "
+                'pip install -c constraints.txt -e ".[agents]"'
+            ) from None
+        settings = policy_settings(model_path, args.axis)(scenario)
+        source = f"agent {model_path}"
+    else:
+        plant = axis.plant if axis is not None else PAPER_PLANT
+        settings = load_settings_model(model_path).settings(scenario, plant)
+        source = "pretrained settings model" if args.model is None else f"model {model_path}"
+    doc = {"settings": settings_to_dict(settings), "source": source, "scenario": scenario.name}
+    if refine_n is not None:
+        from vfgym.agents.refine import refine
+
+        r = refine(scenario, settings, refine_n, seed=seed, **axis_kwargs(axis))
+        doc = {
+            "settings": settings_to_dict(r.settings),
+            "source": f"{source}, refined by {refine_n} trials (seed {seed})",
+            "scenario": scenario.name,
+            "cost": r.cost,
+            "feasible": r.feasible,
+            "predicted": {"settings": settings_to_dict(settings), "cost": r.start_cost},
+        }
     text = yaml.safe_dump(doc, sort_keys=False)
     print(text, end="")
     if args.out:

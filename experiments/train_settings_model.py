@@ -1,0 +1,111 @@
+"""Train a settings model on per-move optima and write it with its config and the
+command that made it (the shipped one: ``src/vfgym/agents/pretrained/``):
+
+    python experiments/train_settings_model.py --kind pick --neighbours 6 --library 64 \
+        --out src/vfgym/agents/pretrained
+    python experiments/train_settings_model.py --kind ridge --degree 2 --ridge 1.0 \
+        --out runs/ridge-model
+
+``pick`` (:class:`vfgym.agents.supervised.PickModel`): the library candidate with the
+least mean cost ratio over the move's nearest training moves, from the cost table of
+``experiments/candidate_costs.py``; ``ridge`` (:class:`~vfgym.agents.supervised.SettingsModel`):
+a ridge regression from the features to the optimal settings. Both fit in seconds,
+deterministically. ``--cv K`` first prints, for the pick model, K-fold cross-validated
+figures on the training moves (costs looked up in the table, no simulation): the mean
+cost over the optima's, the median gap and the feasible share, for a few neighbour
+counts and library sizes (model selection on train moves only).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+
+from vfgym import PAPER_PLANT, get_scenario
+from vfgym.agents.optima import read_optima
+from vfgym.agents.supervised import (
+    TrainConfig,
+    fit_pick_model,
+    greedy_library,
+    ratio_table,
+    train_settings_model,
+)
+from vfgym.envs._common import scenario_features
+from vfgym.io.runs import write_text, write_yaml
+from vfgym.moves import LOAD_DISTRIBUTION
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def cross_validate(cfg: TrainConfig, folds: int) -> None:
+    """K-fold figures of the pick model for a few neighbour counts and library sizes."""
+    optima = read_optima(ROOT / cfg.optima)
+    scenarios = [get_scenario(o.scenario, LOAD_DISTRIBUTION) for o in optima]
+    table = np.load(ROOT / cfg.costs)
+    cost, feas = table["cost"], table["feasible"]
+    best = np.array([o.cost for o in optima])
+    n = len(optima)
+    fold = np.arange(n) % folds
+    for nb in (3, 4, 6, 8):
+        for lib in (32, 64, 128):
+            got = np.zeros(n, dtype=np.int64)
+            for f in range(folds):
+                tr, te = np.flatnonzero(fold != f), np.flatnonzero(fold == f)
+                m = fit_pick_model([scenarios[i] for i in tr], [optima[i] for i in tr],
+                                   cost[np.ix_(tr, tr)], feas[np.ix_(tr, tr)],
+                                   neighbours=nb, library=min(lib, len(tr)),
+                                   ignore=cfg.ignore)  # fmt: skip
+                lib_cols = _library_columns(m, cost[np.ix_(tr, tr)], feas[np.ix_(tr, tr)], best[tr])
+                for i in te:
+                    got[i] = tr[lib_cols[m.pick(scenario_features(scenarios[i], PAPER_PLANT))]]
+            c = cost[np.arange(n), got]
+            gap = c / best - 1.0
+            print(
+                f"neighbours {nb} library {lib}: mean cost / optima {c.mean() / best.mean():.4f}, "
+                f"median gap {100 * np.median(gap):.2f} %, feasible "
+                f"{feas[np.arange(n), got].mean():.3f}"
+            )
+
+
+def _library_columns(model, cost, feas, best) -> list[int]:
+    """The table columns the model's library rows came from (as fit_pick_model picks)."""
+    return list(greedy_library(np.round(ratio_table(cost, feas, best), 6), model.library.shape[0]))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    d = TrainConfig()
+    ap.add_argument("--kind", default=d.kind)
+    ap.add_argument("--optima", default=d.optima)
+    ap.add_argument("--costs", default=d.costs)
+    ap.add_argument("--neighbours", type=int, default=d.neighbours)
+    ap.add_argument("--library", type=int, default=d.library)
+    ap.add_argument("--ignore", default=",".join(d.ignore))
+    ap.add_argument("--degree", type=int, default=d.degree)
+    ap.add_argument("--ridge", type=float, default=d.ridge)
+    ap.add_argument("--cv", type=int, default=0)
+    ap.add_argument("--out", default="src/vfgym/agents/pretrained")
+    args = ap.parse_args()
+    ignore = tuple(x for x in args.ignore.split(",") if x)
+    cfg = TrainConfig(args.kind, args.optima, args.costs, args.neighbours, args.library,
+                      ignore, args.degree, args.ridge)  # fmt: skip
+    if args.cv:
+        cross_validate(cfg, args.cv)
+    model = train_settings_model(cfg, ROOT)
+    out = Path(args.out)
+    model.save(out / "settings_model.json")
+    write_yaml(out / "config.yaml", asdict(cfg) | {"ignore": list(cfg.ignore)})
+    argv = ["python", "experiments/train_settings_model.py", "--kind", cfg.kind,
+            "--optima", cfg.optima, "--costs", cfg.costs, "--neighbours", str(cfg.neighbours),
+            "--library", str(cfg.library), "--ignore", ",".join(cfg.ignore),
+            "--degree", str(cfg.degree), "--ridge", repr(cfg.ridge), "--out", args.out]  # fmt: skip
+    write_text(out / "command.txt", " ".join(argv) + "\n")
+    print(f"model -> {out / 'settings_model.json'}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()

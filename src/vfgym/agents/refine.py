@@ -1,0 +1,111 @@
+"""Refinement: a short Optuna sweep on one move, warm-started from an amortised tuner's
+settings (``vfgym predict --refine N``).
+
+The study is the sweeps' own machinery (:mod:`vfgym.tuning`): the default sampler of
+:class:`vfgym.tuning.SweepConfig` (:func:`vfgym.tuning.make_sampler`), the
+:class:`vfgym.tuning.Objective` on the one move, and the best trial as a sweep picks it
+(:func:`vfgym.tuning.best_trial`). The predicted settings are enqueued as trial 0, so
+the refined settings are never worse than the prediction.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+from vfgym import space
+from vfgym._validate import check_int
+from vfgym.moves.scenarios import Scenario
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+
+
+@dataclass(frozen=True)
+class Refinement:
+    """What :func:`refine` found.
+
+    Attributes
+    ----------
+    settings : Settings
+        The best trial's settings.
+    cost : float
+        Its cost on the move.
+    feasible : bool
+        Every constraint ≤ 0.
+    start_cost : float
+        The cost of the settings it started from (trial 0).
+    costs : tuple of float
+        Every trial's cost, in order (trial 0: the start).
+    """
+
+    settings: Settings
+    cost: float
+    feasible: bool
+    start_cost: float
+    costs: tuple[float, ...]
+
+
+def refine(
+    scenario: Scenario,
+    start: Settings,
+    trials: int,
+    *,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+    seed: int | None = 0,
+) -> Refinement:
+    """Run ``trials`` trials of the default sampler on one move, from ``start``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The move.
+    start : Settings
+        The settings enqueued first (an amortised tuner's prediction).
+    trials : int
+        Trials in all, the enqueued one included, ≥ 1.
+    plant : Plant
+        The base plant (an axis's).
+    measures : Measures
+        Windows and bands of the measures (an axis's).
+    seed : int or None
+        The sampler's seed.
+
+    Returns
+    -------
+    Refinement
+        The best trial (feasible first, as a sweep picks it) and every trial's cost.
+
+    Raises
+    ------
+    ValueError
+        If ``trials`` is not a whole number ≥ 1.
+    """
+    import optuna
+
+    from vfgym.tuning import Objective, SweepConfig, best_trial, make_sampler, trial_settings
+
+    trials = check_int("refine", trials, 1)
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    laws = (start.accel_law,)
+    cfg = SweepConfig(laws=laws, seed=seed, plots=False)  # its sampler: the default
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        study = optuna.create_study(direction="minimize", sampler=make_sampler(cfg, cfg.seed))
+    params = space.settings_to_dict(start)
+    params.pop("accel_law")
+    study.enqueue_trial(params)
+    objective = Objective([scenario], laws, "cost", plant=plant, measures=measures)
+    study.optimize(objective, n_trials=trials)
+    done = study.trials
+    best = best_trial(study)
+    assert best is not None  # trials ≥ 1 completed
+    return Refinement(
+        settings=trial_settings(best),
+        cost=float(best.user_attrs["cost"]),
+        feasible=bool(best.user_attrs["feasible"]),
+        start_cost=float(done[0].user_attrs["cost"]),
+        costs=tuple(float(t.user_attrs["cost"]) for t in done),
+    )
+
+
+__all__ = ["Refinement", "refine"]
