@@ -12,10 +12,11 @@ from vfgym._validate import check_choice, check_int, check_real
 from vfgym.moves.scenarios import Scenario, scenario_set
 from vfgym.params import ACCEL_LAWS
 
-SAMPLERS = ("tpe", "cmaes", "gp", "nsga2", "grid", "random")
-"""Samplers of ``vfgym sweep --sampler``: TPE (default), CMA-ES, a Gaussian process for the
-deterministic objective, NSGA-II (the Pareto form by default), a grid over
-:func:`vfgym.space.grid`, and uniform random sampling (a control)."""
+SAMPLERS = ("compass", "tpe", "cmaes", "gp", "nsga2", "grid", "random")
+"""Samplers of ``vfgym sweep --sampler``: the compass search with model checks in the
+problem's own coordinates (default; :mod:`vfgym.tuning._compass`), TPE, CMA-ES, a
+Gaussian process for the deterministic objective, NSGA-II (the Pareto form by default), a
+grid over :func:`vfgym.space.grid`, and uniform random sampling (a control)."""
 FORMS = ("cost", "pareto")
 """``cost``: minimise the mean cost; ``pareto``: minimise the three objectives."""
 NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
@@ -97,14 +98,15 @@ class SweepConfig(_Options):
     study: the study's name, also the run folder's (default: config name + time).
     heartbeat, grace: seconds between a running trial's heartbeats, and without one
     before it is taken as dead (RDB storages). grid_points: values per dimension for the
-    grid sampler.
+    grid sampler. batch: trials a worker claims at once and simulates in one batched call
+    (default: the sampler's own, :func:`vfgym.tuning.batch_size`).
     """
 
     scenarios: str = "paper-step"
     scenario_count: int = 16
     first_seed: int = 0
     laws: tuple[str, ...] = ("rise",)
-    sampler: str = "tpe"
+    sampler: str = "compass"
     objective: str | None = None
     trials: int = 100
     timeout: float | None = None
@@ -115,6 +117,7 @@ class SweepConfig(_Options):
     runs_dir: str = "runs"
     reference: str | None = None
     grid_points: int = 5
+    batch: int | None = None
     plots: bool = True
     progress: bool = True
     heartbeat: int = 10
@@ -126,8 +129,10 @@ class SweepConfig(_Options):
         check_choice("sampler", self.sampler, SAMPLERS)
         form = self.objective or ("pareto" if self.sampler == "nsga2" else "cost")
         check_choice("objective", form, FORMS)
-        if form == "pareto" and self.sampler == "cmaes":
-            raise ValueError("objective='pareto' is not allowed with sampler='cmaes': use nsga2")
+        if form == "pareto" and self.sampler in ("cmaes", "compass"):
+            raise ValueError(
+                f"objective='pareto' is not allowed with sampler={self.sampler!r}: use nsga2"
+            )
         s(self, "objective", form)
         s(self, "trials", check_int("trials", self.trials, 1))
         s(self, "timeout", _opt_float("timeout", self.timeout, 0.0))
@@ -141,6 +146,8 @@ class SweepConfig(_Options):
         if self.reference is not None:
             s(self, "reference", str(self.reference))
         s(self, "grid_points", check_int("grid_points", self.grid_points, 1, 64))
+        if self.batch is not None:
+            s(self, "batch", check_int("batch", self.batch, 1, 1024))
         s(self, "plots", _bool("plots", self.plots))
         s(self, "progress", _bool("progress", self.progress))
         s(self, "heartbeat", check_int("heartbeat", self.heartbeat, 1))

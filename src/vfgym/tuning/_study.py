@@ -7,16 +7,19 @@ from __future__ import annotations
 import warnings
 from typing import Any
 
+import numpy as np
+
 from vfgym import space
+from vfgym.moves.baselines import rule_of_thumb, usable_accel
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_SETTINGS
+from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Settings, paper_k
 from vfgym.scoring import OBJECTIVES
 from vfgym.tuning._config import SweepConfig
 
 META_KEY = "vfgym"
 """Study user attribute recording what the study optimises (checked when resumed)."""
 
-SAMPLER_NEEDS = {"cmaes": ("cmaes",), "gp": ("torch", "scipy")}
+SAMPLER_NEEDS = {"cmaes": ("cmaes",), "gp": ("torch", "scipy"), "compass": ("scipy",)}
 """Packages a sampler needs beyond Optuna."""
 
 
@@ -31,13 +34,21 @@ def check_sampler(cfg: SweepConfig) -> None:
         )
 
 
-def make_sampler(cfg: SweepConfig, seed: int | None) -> Any:
-    """The Optuna sampler named by ``cfg.sampler``, seeded; constrained where it can be."""
+def make_sampler(
+    cfg: SweepConfig, seed: int | None, scenarios: list[Scenario] | None = None
+) -> Any:
+    """The Optuna sampler named by ``cfg.sampler``, seeded. The constraints reach TPE, GP
+    and NSGA-II through the trials (``trial.set_constraint``, Optuna 5's way; its
+    ``constraints_func`` is deprecated); CMA-ES and the grid ignore them."""
     import optuna
 
     s = optuna.samplers
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        if cfg.sampler == "compass":
+            from vfgym.tuning._compass import CompassSampler
+
+            return CompassSampler(relative_space(scenarios or cfg.scenario_list()), cfg.laws, seed)
         if cfg.sampler == "tpe":
             return s.TPESampler(seed=seed, multivariate=True)
         if cfg.sampler == "cmaes":
@@ -51,6 +62,33 @@ def make_sampler(cfg: SweepConfig, seed: int | None) -> Any:
         if cfg.sampler == "grid":
             return s.GridSampler(grid_space(cfg), seed=seed)
         return s.RandomSampler(seed=seed)
+
+
+def relative_space(scenarios: list[Scenario]) -> space.Relative:
+    """The compass sampler's coordinates: ``k`` relative to the acceleration limit's k
+    (:func:`vfgym.params.paper_k`) of the scenarios' plants (their geometric mean: the
+    limit is the motor's, the same for every load)."""
+    ks = [paper_k(sc.plant(PAPER_PLANT)) for sc in scenarios] or [paper_k(PAPER_PLANT)]
+    return space.Relative(float(np.exp(np.mean(np.log(ks)))))
+
+
+BATCH = {"tpe": 1, "gp": 1, "cmaes": 8, "nsga2": 8, "grid": 16, "random": 16}
+"""Trials a worker claims and simulates at once, by sampler: one for the samplers that
+learn from every trial (TPE, GP: a batch would be asked blind), CMA-ES's population (4 +
+3 ln 4 = 8 in four dimensions), a share of NSGA-II's generation, and more for the grid
+and random sampling, which never look at results."""
+
+
+def batch_size(cfg: SweepConfig, sampler: Any = None, study: Any = None) -> int:
+    """Trials to claim next: ``cfg.batch``, else the sampler's own — what its
+    ``batch_hint(study)`` asks for (the compass sampler: one generation), else
+    :data:`BATCH`'s."""
+    if cfg.batch:
+        return cfg.batch
+    hint = getattr(sampler, "batch_hint", None)
+    if hint is not None and study is not None:
+        return int(hint(study))
+    return BATCH.get(cfg.sampler, 1)
 
 
 def grid_space(cfg: SweepConfig) -> dict[str, list[Any]]:
@@ -73,13 +111,30 @@ def trial_budget(cfg: SweepConfig) -> int:
     return cfg.trials
 
 
-def baseline_params(laws: tuple[str, ...]) -> dict[str, Any]:
-    """The paper's settings as trial parameters (its law if searched, else the fixed one)."""
-    d = space.settings_to_dict(PAPER_SETTINGS)
+def baseline_params(laws: tuple[str, ...], settings: Settings = PAPER_SETTINGS) -> dict[str, Any]:
+    """Settings (the paper's by default) as trial parameters: clipped to the search space,
+    with their law if it is searched, else the fixed one."""
+    d = space.settings_to_dict(settings)
     law = d.pop("accel_law")
+    for dim in space.SPACE:
+        d[dim.name] = min(max(d[dim.name], dim.low), dim.high)
     if len(laws) > 1:
         d["accel_law"] = law if law in laws else laws[0]
     return d
+
+
+def warm_starts(scenarios: list[Scenario]) -> list[tuple[str, Settings]]:
+    """The settings a study tries first: the paper's, then the rule of thumb
+    (:func:`vfgym.moves.baselines.rule_of_thumb`) for the scenarios' most loaded plant
+    (the one with the least usable acceleration, whose limits bind the set), if it
+    differs. Returned as (baseline name, settings)."""
+    plants = [sc.plant(PAPER_PLANT) for sc in scenarios]
+    loaded = min(plants, key=usable_accel) if plants else PAPER_PLANT
+    out = [("paper", PAPER_SETTINGS)]
+    rot = rule_of_thumb(loaded)
+    if rot != PAPER_SETTINGS:
+        out.append(("rule-of-thumb", rot))
+    return out
 
 
 def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> dict[str, Any]:
@@ -113,7 +168,8 @@ def create_or_load(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             study.set_metric_names(["cost"] if cfg.objective == "cost" else list(OBJECTIVES))
-        study.enqueue_trial(baseline_params(cfg.laws), user_attrs={"baseline": "paper"})
+        for label, settings in warm_starts(scenarios):
+            study.enqueue_trial(baseline_params(cfg.laws, settings), user_attrs={"baseline": label})
         return study, True
     old = study.user_attrs.get(META_KEY)
     if old is not None:
