@@ -180,12 +180,13 @@ def main(argv: list[str] | None = None) -> int:
         "against the motor's limit: of the pulse train (2nd difference over 1 ms) and of "
         "the motor. Feasible: scenarios meeting all constraints (overshoot within one "
         "in-position window, pulse-train acceleration within the limit, no time at the "
-        "torque limit).",
+        "torque limit, arrival: in the in-position window at the end, a sine followed "
+        "within the -3 dB bandwidth).",
         "",
         f"## The eight named scenarios ({len(named.scenarios)})",
         "",
         markdown_table(named),
-        "Cost per scenario (`*`: a constraint violated):",
+        "Cost per scenario (`*`: a constraint violated; `†`: did not arrive):",
         "",
         markdown_costs(named),
         f"## {len(test.scenarios)} random test scenarios (test-0 … test-{args.count - 1})",

@@ -34,9 +34,29 @@ from pathlib import Path
 import optuna
 
 from vfgym import tuning
+from vfgym.moves.axis import axis_digest
 
-PROBLEMS = ("paper-step", "heavy-load", "short-move", "multi-move", "paper-step,short-move,long-move")
-"""The paper's step; one loaded, one short, one multi-move scenario; experiments/quick.yaml's set."""
+PROBLEMS = (
+    "paper-step",
+    "heavy-load",
+    "short-move",
+    "multi-move",
+    "experiments/axes/bare.yaml:train",
+)
+"""The paper's step; one loaded, one short, one multi-move scenario; the main job's train
+set (the 16 train moves of the bare axis, one machine, its load fixed). ``AXIS_FILE:SET``
+is a scenario set on an axis."""
+
+
+def problem_config(problem: str, **kw: object) -> tuning.SweepConfig:
+    """The sweep configuration of a problem: a scenario set, or ``AXIS_FILE:SET``."""
+    if problem.endswith(".yaml") or ".yaml:" in problem:
+        axis, _, scen = problem.partition(".yaml")
+        scen = scen.lstrip(":") or "train"
+        return tuning.SweepConfig(axis=axis + ".yaml", scenarios=scen, **kw)  # type: ignore[arg-type]
+    return tuning.SweepConfig(scenarios=problem, **kw)  # type: ignore[arg-type]
+
+
 CHECKPOINTS = (50, 100, 200)
 
 
@@ -62,8 +82,8 @@ class Run:
 def run_one(problem: str, sampler: str, seed: int, trials: int, ref_cost: float) -> Run:
     """The sweep's worker on a fresh SQLite study; the trials read back in completion order."""
     with tempfile.TemporaryDirectory(prefix="vfgym-ttr-") as tmp:
-        cfg = tuning.SweepConfig(
-            scenarios=problem, sampler=sampler, objective="cost", trials=trials, seed=seed,
+        cfg = problem_config(
+            problem, sampler=sampler, objective="cost", trials=trials, seed=seed,
             storage=f"sqlite:///{tmp}/study.db", progress=False, plots=False,
         )  # fmt: skip
         spec = tuning.resolve_storage(cfg.storage, Path(tmp))
@@ -112,8 +132,11 @@ def main() -> None:
             f"{'s to 2 %':>14s} " + " ".join(f"{'gap@' + str(n):>8s}" for n in CHECKPOINTS)
             + "  best feasible")  # fmt: skip
     for problem in args.problems.split(";"):
-        scen = tuning.SweepConfig(scenarios=problem).scenario_list()
-        found = tuning.find_reference(None, args.refs, scen, ("rise",))
+        pcfg = problem_config(problem)
+        scen = pcfg.scenario_list()
+        found = tuning.find_reference(
+            None, args.refs, scen, ("rise",), axis_digest(pcfg.load_axis())
+        )
         if found is None:
             raise SystemExit(f"no grid reference for {problem} in {args.refs}/grid/*/")
         ref_cost = float(found[0]["cost"])

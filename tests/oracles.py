@@ -34,7 +34,7 @@ def measures_from_trace(trace: Any) -> dict[str, Any]:
     target = float(P[-1])
     win = in_position_rad(measures, plant, target)
     q = plant.motor.count_rad
-    limit = plant.motor.accel_limit_rad_s2
+    limit = plant.motor.usable_accel_rad_s2
 
     prev = np.concatenate([[0.0], P[:-1]])
     change = prev != P
@@ -62,7 +62,7 @@ def measures_from_trace(trace: Any) -> dict[str, Any]:
 
     # torque clipped: the command K3·u beyond what the curve allowed at last tick's speed
     m = plant.motor
-    tau_cmd = plant.servo.torque_per_count_nm * trace.servo_error_counts
+    tau_cmd = plant.torque_per_count_nm * trace.servo_error_counts
     w_prev = np.concatenate([[0.0], speed[:-1]])
     aw = np.abs(w_prev)
     slope = (m.torque_at_max_speed_nm - m.peak_torque_nm) / (m.max_speed_rad_s - m.knee_speed_rad_s)

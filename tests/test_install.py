@@ -13,9 +13,9 @@ import pytest
 import vfgym
 
 SCRIPT = (
-    "import vfgym, vfgym.plant._kernel as K; "
+    "import vfgym, vfgym.plant._jit as J; "
     "tr = vfgym.simulate(vfgym.step_command(10.0, 14000)); "
-    "print(K.CACHE, tr.metrics['pulse_count'], tr.metrics['move_time_s'])"
+    "print(J.CACHE, tr.metrics['pulse_count'], tr.metrics['move_time_s'])"
 )
 
 

@@ -12,6 +12,7 @@ on top, and :mod:`vfgym.agents` and :mod:`vfgym.commands` above those.
 
 from vfgym import envs  # importing envs registers vfgym/VFTune-v0, VFServo-v0
 from vfgym.moves import baselines
+from vfgym.moves.axis import PAPER_AXIS, Axis, load_axis
 from vfgym.moves.pulse_sources import fixed_frequency_pulses, scurve_pulses
 from vfgym.moves.scenarios import SCENARIOS, Scenario, get_scenario, random_scenario, scenario_set
 from vfgym.params import (
@@ -39,6 +40,7 @@ __version__ = "0.1.0"
 __all__ = [
     "DEFAULT_MEASURES",
     "PAPER_ACCEL_LIMIT_RAD_S2",
+    "PAPER_AXIS",
     "PAPER_K",
     "PAPER_PLANT",
     "PAPER_PULSE_RAD",
@@ -47,6 +49,7 @@ __all__ = [
     "PAPER_TICK_HZ",
     "SCENARIOS",
     "SGME_02A",
+    "Axis",
     "Bounds",
     "CostWeights",
     "Evaluation",
@@ -62,6 +65,7 @@ __all__ = [
     "evaluate",
     "fixed_frequency_pulses",
     "get_scenario",
+    "load_axis",
     "paper_k",
     "random_scenario",
     "scenario_set",

@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from vfgym._validate import check_choice, check_int, check_real
+from vfgym._validate import check_bool, check_choice, check_int, check_real
 
 
 def _set(obj: object, name: str, value: Any) -> None:
@@ -37,19 +37,31 @@ PAPER_STEP_RAD = 10.0
 
 ACCEL_LAWS = ("rise", "slew")
 """``rise``: the error may grow away from zero by at most value/k a tick (the paper's
-reading, default); ``slew``: |e_i − e_prev| ≤ value/k both ways (see MODEL.md §1)."""
+reading, default); ``slew``: |e_i − e_prev| ≤ value/k both ways (see docs/model.md §1)."""
 
 
 @dataclass(frozen=True)
 class Settings:
-    """The tuned settings of the V-F controller and the servo's filter.
+    """The tuned settings of the V-F controller and the servo's filter (docs/model.md §1).
 
-    value_rad: V-F transformer threshold ``value`` (rad); a pulse per ``value`` of
+    Parameters
+    ----------
+    value_rad : float
+        V-F transformer threshold ``value`` (rad), > 0: a pulse per ``value`` of
         accumulated error, so the position gain is Kv = δ/(value·T).
-    error_limit_rad: error limit ``L`` (rad) applied to the error before the accumulator.
-    k: acceleration ratio a_max/a_motor (≥ 1); the error may rise by value/k a tick.
-    ts_over_tf: the servo's digital filter ratio A = Ts/Tf in (0, 1] (1: no filtering).
-    accel_law: ``"rise"`` (default) or ``"slew"``.
+    error_limit_rad : float
+        Error limit ``L`` (rad), > 0, applied to the error before the accumulator.
+    k : float
+        Acceleration ratio a_max/a_motor, ≥ 1: the error may rise by value/k a tick.
+    ts_over_tf : float
+        The servo's digital filter ratio A = Ts/Tf in (0, 1] (1: no filtering).
+    accel_law : str
+        ``"rise"`` (default, the paper's reading) or ``"slew"`` (see :data:`ACCEL_LAWS`).
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range (the message names the parameter and the range).
     """
 
     value_rad: float = 1.0
@@ -70,7 +82,18 @@ class Settings:
         check_choice("accel_law", self.accel_law, ACCEL_LAWS)
 
     def replace(self, **changes: Any) -> Settings:
-        """A copy with some fields changed (validated again)."""
+        """A copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            Fields of :class:`Settings` and their new values.
+
+        Returns
+        -------
+        Settings
+            The new settings.
+        """
         return replace(self, **changes)
 
 
@@ -80,22 +103,56 @@ PAPER_SETTINGS = Settings()
 
 @dataclass(frozen=True)
 class Motor:
-    """A servomotor with its load, encoder and torque–speed characteristic.
+    """A servomotor with its load, encoder and torque–speed characteristic (docs/model.md §3).
 
     The torque available for motoring is ``peak_torque_nm`` up to ``knee_speed_rad_s``,
     then falls linearly to ``torque_at_max_speed_nm`` at ``max_speed_rad_s``, and is zero
     above it (the drive's voltage limit). Braking torque (torque against the motion) is
-    available up to ``peak_torque_nm`` at any speed.
+    available up to ``peak_torque_nm`` at any speed. The defaults are the SGME-02A.
+
+    Parameters
+    ----------
+    name : str
+        A label for tables.
+    rotor_inertia_kgm2 : float
+        Rotor inertia (kg·m²), > 0.
+    inertia_ratio : float
+        Load inertia over rotor inertia, ≥ 0; total J = rotor·(1 + ratio).
+    viscous_nm_s_rad : float
+        Viscous friction b (N·m·s/rad), ≥ 0.
+    coulomb_nm : float
+        Coulomb friction τc (N·m), ≥ 0.
+    load_torque_nm : float
+        A constant torque opposing positive motion (N·m; e.g. gravity on a vertical axis).
+    rated_torque_nm : float
+        Rated (continuous) torque (N·m), > 0.
+    peak_torque_nm : float
+        Peak torque (N·m), > 0.
+    knee_speed_rad_s : float
+        Speed up to which the peak torque is available (rad/s), > 0.
+    max_speed_rad_s : float
+        Maximum speed (rad/s), above ``knee_speed_rad_s``.
+    torque_at_max_speed_nm : float
+        Torque available at ``max_speed_rad_s`` (N·m), in [0, ``peak_torque_nm``].
+    encoder_lines : int
+        Encoder lines per revolution (counts after ×4 decoding: 4 × lines), ≥ 1.
+    accel_limit_rad_s2 : float
+        The stated acceleration limit (rad/s²; the paper's 140 krad/s²), > 0. It caps
+        :attr:`usable_accel_rad_s2`, the limit every move is held to; an axis sets its
+        own limit here.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range (the message names the parameter and the range).
     """
 
     name: str = "SGME-02A"
     rotor_inertia_kgm2: float = 0.106e-4
     inertia_ratio: float = 0.0
-    """Load inertia over rotor inertia; total J = rotor·(1 + ratio)."""
     viscous_nm_s_rad: float = 0.0
     coulomb_nm: float = 0.0
     load_torque_nm: float = 0.0
-    """A constant torque opposing positive motion (e.g. gravity on a vertical axis)."""
     rated_torque_nm: float = 0.637
     peak_torque_nm: float = 1.91
     knee_speed_rad_s: float = 3000.0 * 2.0 * math.pi / 60.0
@@ -103,7 +160,6 @@ class Motor:
     torque_at_max_speed_nm: float = 0.8
     encoder_lines: int = 2048
     accel_limit_rad_s2: float = PAPER_ACCEL_LIMIT_RAD_S2
-    """The acceleration the move must respect (the paper's 140 krad/s²)."""
 
     def __post_init__(self) -> None:
         for name, lo in (
@@ -139,6 +195,18 @@ class Motor:
         return self.rotor_inertia_kgm2 * (1.0 + self.inertia_ratio)
 
     @property
+    def usable_accel_rad_s2(self) -> float:
+        """The acceleration a move may ask of the loaded motor (rad/s²): peak torque over
+        total inertia, capped by the stated limit ``accel_limit_rad_s2``.
+
+        The one definition of "the limit": the acceleration constraint, the measures'
+        ``accel_ratio_*``, the ideal move time, the profiles' default acceleration and the
+        rule of thumb all use it. The bare SGME-02A can give 180 krad/s², so its limit
+        is the paper's 140 krad/s²; with 3x its rotor inertia as load, 45 krad/s².
+        """
+        return min(self.accel_limit_rad_s2, self.peak_torque_nm / self.inertia_kgm2)
+
+    @property
     def counts_per_rev(self) -> int:
         """Encoder counts per revolution after ×4 quadrature decoding."""
         return 4 * self.encoder_lines
@@ -161,22 +229,45 @@ class Motor:
 #   No friction or load by default (a bare shaft); scenarios add them.
 SGME_02A = Motor()
 
+MOTOR_PRESETS: dict[str, Motor] = {SGME_02A.name: SGME_02A}
+"""Motors by name: an axis file's ``motor: {preset: NAME, ...}`` starts from one of these."""
+
 
 @dataclass(frozen=True)
 class Servo:
-    """The patent's digital servo (seed 004), less its tuned filter ratio.
+    """The patent's digital servo, less its tuned filter ratio (docs/model.md §2).
 
-    gear: electronic gear, encoder counts per command pulse (whole number).
-    sample_ticks: Ns, the speed counter's sample period Ts = Ns controller ticks.
-    speed_gain_b: B, the speed counter's output multiplier (x = B·count); K2 = B·Ts,
-        so the servo's position gain is Kv = 1/(B·Ts).
-    torque_per_count_nm: K3, the PWM + power amplifier gain (N·m per count of error).
+    Parameters
+    ----------
+    gear : int
+        Electronic gear g, encoder counts per command pulse (whole number, ≥ 1).
+    sample_ticks : int
+        Ns, the speed counter's sample period Ts = Ns controller ticks (≥ 1).
+    speed_gain_b : float
+        B, the speed counter's output multiplier (x = B·count), > 0; K2 = B·Ts, so the
+        servo's position gain is Kv = 1/(B·Ts).
+    torque_per_count_nm : float
+        K3, the PWM + power amplifier gain (N·m per count of error), > 0, tuned for the
+        bare motor (see README, "Motor preset and servo defaults").
+    follows_load : bool
+        True (default): the drive scales K3 with the total inertia, K3·(1 + inertia_ratio),
+        as a drive does once its inertia ratio is set, so a loaded loop keeps the bare
+        loop's natural frequency ωn = sqrt(K3·K4) and damping ζ = K2·ωn/2
+        (K4 = counts per rad / J). False: K3 stays as tuned for the bare motor, so load
+        lowers ωn by sqrt(1 + ratio) and ζ with it (a mis-tuned drive, to study
+        mis-tuning). :attr:`Plant.torque_per_count_nm` is the K3 in force.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range (the message names the parameter and the range).
     """
 
     gear: int = 4
     sample_ticks: int = 70
     speed_gain_b: float = 12.5
     torque_per_count_nm: float = 5.3e-4
+    follows_load: bool = True
 
     def __post_init__(self) -> None:
         _set(self, "gear", check_int("gear", self.gear, 1))
@@ -187,11 +278,30 @@ class Servo:
             "torque_per_count_nm",
             check_real("torque_per_count_nm", self.torque_per_count_nm, 0.0, lo_open=True),
         )
+        _set(self, "follows_load", check_bool("follows_load", self.follows_load))
 
 
 @dataclass(frozen=True)
 class Plant:
-    """Everything physical: time base, pulse equivalent, servo, motor."""
+    """Everything physical: time base, pulse equivalent, servo, motor (docs/model.md).
+
+    Parameters
+    ----------
+    tick_hz : float
+        Controller tick rate f (Hz), > 0; one tick is T = 1/f.
+    pulse_rad : float
+        Pulse equivalent δ (rad per command pulse), > 0.
+    servo : Servo
+        The digital servo.
+    motor : Motor
+        The motor, its load and encoder.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range, or ``servo`` / ``motor`` is not a
+        :class:`Servo` / :class:`Motor`.
+    """
 
     tick_hz: float = PAPER_TICK_HZ
     pulse_rad: float = PAPER_PULSE_RAD
@@ -222,31 +332,111 @@ class Plant:
         return self.pulse_rad * self.tick_hz
 
     @property
+    def torque_per_count_nm(self) -> float:
+        """K3 in force on this plant (N·m per count): the servo's K3 times
+        (1 + inertia_ratio) when it follows its load (:class:`Servo`), else as tuned."""
+        sv = self.servo
+        if not sv.follows_load:
+            return sv.torque_per_count_nm
+        return sv.torque_per_count_nm * (1.0 + self.motor.inertia_ratio)
+
+    @property
     def servo_kv(self) -> float:
         """The servo's position gain Kv = 1/(B·Ts) (1/s), the patent's velocity constant."""
         return 1.0 / (self.servo.speed_gain_b * self.sample_s)
 
     def replace(self, **changes: Any) -> Plant:
-        """A copy with some fields changed (validated again)."""
+        """A copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            Fields of :class:`Plant` and their new values.
+
+        Returns
+        -------
+        Plant
+            The new plant.
+        """
         return replace(self, **changes)
 
     def with_motor(self, **changes: Any) -> Plant:
-        """A copy whose motor has some fields changed."""
+        """A copy whose motor has some fields changed.
+
+        Parameters
+        ----------
+        **changes
+            Fields of :class:`Motor` and their new values.
+
+        Returns
+        -------
+        Plant
+            The new plant.
+        """
         return replace(self, motor=replace(self.motor, **changes))
 
-    def with_sample_period(self, sample_period_s: float) -> Plant:
-        """A copy whose servo samples every ``sample_period_s`` (a whole number of ticks)."""
-        ts = check_real("sample_period_s", sample_period_s, 0.0, lo_open=True)
-        ticks = ts * self.tick_hz
+    def whole_ticks(self, name: str, duration_s: float) -> int:
+        """A duration as a whole number (≥ 1) of controller ticks.
+
+        Parameters
+        ----------
+        name : str
+            The parameter the duration was given as, for the error message.
+        duration_s : float
+            The duration (s); within 1e-9 (relative) of a whole multiple of T.
+
+        Returns
+        -------
+        int
+            The number of ticks.
+
+        Raises
+        ------
+        ValueError
+            Naming ``name``, if ``duration_s`` is not a whole number (≥ 1) of ticks.
+        """
+        ticks = check_real(name, duration_s, 0.0, lo_open=True) * self.tick_hz
         if abs(ticks - round(ticks)) > 1e-9 * max(1.0, ticks) or round(ticks) < 1:
             raise ValueError(
-                f"sample_period_s={sample_period_s!r} is not a whole number of ticks "
+                f"{name}={duration_s!r} is not a whole number of ticks "
                 f"(T = {self.tick_s:.6g} s): allowed whole multiples of T"
             )
-        return self.with_servo(sample_ticks=round(ticks))
+        return round(ticks)
+
+    def with_sample_period(self, sample_period_s: float) -> Plant:
+        """A copy whose servo samples every ``sample_period_s`` (a whole number of ticks).
+
+        Parameters
+        ----------
+        sample_period_s : float
+            The servo's sample period Ts (s), > 0.
+
+        Returns
+        -------
+        Plant
+            The new plant, with ``servo.sample_ticks = Ts·f``.
+
+        Raises
+        ------
+        ValueError
+            If ``sample_period_s`` is not a whole number (≥ 1) of controller ticks (raised
+            by :meth:`whole_ticks`).
+        """
+        return self.with_servo(sample_ticks=self.whole_ticks("sample_period_s", sample_period_s))
 
     def with_servo(self, **changes: Any) -> Plant:
-        """A copy whose servo has some fields changed."""
+        """A copy whose servo has some fields changed.
+
+        Parameters
+        ----------
+        **changes
+            Fields of :class:`Servo` and their new values.
+
+        Returns
+        -------
+        Plant
+            The new plant.
+        """
         return replace(self, servo=replace(self.servo, **changes))
 
 
@@ -255,28 +445,54 @@ PAPER_PLANT = Plant()
 
 
 def paper_k(plant: Plant = PAPER_PLANT, accel_limit_rad_s2: float | None = None) -> float:
-    """k that holds the pulse train's acceleration to the motor's limit: f²δ / a_motor."""
+    """k that holds the pulse train's acceleration to the motor's limit: f²δ / a_motor.
+
+    Parameters
+    ----------
+    plant : Plant
+        Gives f, δ and (by default) the motor's acceleration limit.
+    accel_limit_rad_s2 : float or None
+        The acceleration to hold to (rad/s²); default the motor's ``accel_limit_rad_s2``.
+
+    Returns
+    -------
+    float
+        k = f²δ / a (docs/model.md §1: a_max = f²δ is the uncontrolled peak).
+    """
     limit = plant.motor.accel_limit_rad_s2 if accel_limit_rad_s2 is None else accel_limit_rad_s2
     return plant.tick_hz**2 * plant.pulse_rad / limit
 
 
 @dataclass(frozen=True)
 class Measures:
-    """Windows and bands of the measures of a move (MODEL.md §5); see :mod:`vfgym.plant.measures`.
+    """Windows and bands of the measures of a move (docs/model.md §5).
 
-    in_position_counts: half-width of the in-position window around the final command,
-        in encoder counts (a servo drive's "positioning completed width").
-    accel_window_s: window w over which the pulse train's acceleration is taken as the
-        second difference of the pulse count; its quantisation is 2δ/w².
-    steady_window_s: the steady-state error is the mean error over this last stretch.
+    The measures themselves are defined in :mod:`vfgym.plant.measures`.
+
+    Parameters
+    ----------
+    in_position_counts : float
+        Half-width of the in-position window around the final command, in encoder counts
+        (a servo drive's "positioning completed width"), ≥ 0.
+    accel_window_s : float
+        Window w (s) over which the pulse train's acceleration is taken as the second
+        difference of the pulse count; its quantisation is 2δ/w². > 0.
+    steady_window_s : float
+        The steady-state error is the mean error over this last stretch (s), > 0.
+    in_position_pct : float or None
+        If set, the in-position half-width is this % of the move instead (as
+        python-control's ``step_info``), in (0, 100].
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range (the message names the parameter and the range).
     """
 
     in_position_counts: float = 8.0
     accel_window_s: float = 1e-3
     steady_window_s: float = 5e-3
-
     in_position_pct: float | None = None
-    """If set, the in-position half-width is this % of the move instead (as step_info)."""
 
     def __post_init__(self) -> None:
         if self.in_position_pct is not None:

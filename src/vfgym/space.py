@@ -11,12 +11,16 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from vfgym._validate import check_choice
 from vfgym.params import ACCEL_LAWS, Settings
+
+if TYPE_CHECKING:
+    from optuna import Trial
+    from optuna.distributions import BaseDistribution
 
 
 @dataclass(frozen=True)
@@ -78,7 +82,7 @@ def to_action(settings: Settings) -> np.ndarray:
     return np.array([d.to_unit(getattr(settings, d.name)) for d in SPACE], dtype=np.float32)
 
 
-def suggest(trial: Any, laws: tuple[str, ...] = ("rise",)) -> Settings:
+def suggest(trial: Trial, laws: tuple[str, ...] = ("rise",)) -> Settings:
     """Settings suggested by an Optuna trial over :data:`SPACE` (and the law, if several)."""
     kw: dict[str, Any] = {
         d.name: trial.suggest_float(d.name, d.low, d.high, log=d.log) for d in SPACE
@@ -87,11 +91,11 @@ def suggest(trial: Any, laws: tuple[str, ...] = ("rise",)) -> Settings:
     return Settings(**kw, accel_law=law)
 
 
-def distributions(laws: tuple[str, ...] = ("rise",)) -> dict[str, Any]:
+def distributions(laws: tuple[str, ...] = ("rise",)) -> dict[str, BaseDistribution]:
     """Optuna distributions of the space (for enqueueing and grid samplers)."""
     import optuna
 
-    out: dict[str, Any] = {
+    out: dict[str, BaseDistribution] = {
         d.name: optuna.distributions.FloatDistribution(d.low, d.high, log=d.log) for d in SPACE
     }
     if len(laws) > 1:
@@ -152,7 +156,7 @@ class Relative:
 
     def bounds(self) -> np.ndarray:
         """(4, 2) array of the natural-log bounds of each axis."""
-        v, lim, k, a = SPACE
+        v, _, k, a = SPACE
         return np.log(
             [
                 [v.low, v.high],
@@ -164,9 +168,7 @@ class Relative:
 
     def to_unit(self, s: Settings) -> np.ndarray:
         """The unit coordinates of ``s`` (clipped to [0, 1]⁴)."""
-        x = np.log(
-            [s.value_rad, s.error_limit_rad / s.value_rad, s.k / self.k_ref, s.ts_over_tf]
-        )
+        x = np.log([s.value_rad, s.error_limit_rad / s.value_rad, s.k / self.k_ref, s.ts_over_tf])
         b = self.bounds()
         return np.clip((x - b[:, 0]) / (b[:, 1] - b[:, 0]), 0.0, 1.0)
 

@@ -110,7 +110,7 @@ def test_model_without_agent_support(tmp_path, capsys, monkeypatch):
         ("- just\n- a list", [], "expected a mapping", True),
         ({"settings": TUNED}, ["--against", "paper,pid"], "baseline='pid' is not known", False),
         ({"settings": TUNED}, ["--scenarios", "mars"], "scenario='mars' is not known", False),
-        ({"settings": TUNED}, ["--first-seed", "-1"], "--first-seed=-1", False),
+        ({"settings": TUNED}, ["--first-seed", "-1"], "--first-seed='-1' is out of range", False),
     ],
 )
 def test_bad_input_one_line(tmp_path, capsys, content, extra, needle, names_file):

@@ -36,7 +36,7 @@ from vfgym.envs.tune import VFTuneEnv
 from vfgym.plant import _layout as L
 from vfgym.plant import pack
 from vfgym.plant.measures import NAMES as METRIC_NAMES
-from vfgym.scoring import CONSTRAINTS
+from vfgym.scoring import CONSTRAINTS, DEFAULT_WEIGHTS
 from vfgym.space import NAMES, from_action, settings_from_dict, to_action
 
 TUNE, SERVO = vfgym.envs.ENV_IDS
@@ -185,9 +185,14 @@ def test_servo_terminates_when_settled_and_truncates_at_the_time_limit():
     assert info["control_ticks"] < get_scenario("paper-step").command().size
     # a sluggish setting (value at its top: Kv tiny) never gets there
     slow = np.array([1.0, 1.0, 0.0, 0.0], dtype=np.float32)
-    _, _, term, trunc, info = run_episode(env, slow)
+    rewards, _, term, trunc, info = run_episode(env, slow)
     assert (term, trunc) == (False, True)
     assert not info["settled"] and info["cost"] > 5.0
+    # not arriving is infeasible, and its arrival term is in the last reward: the return
+    # is still minus the cost of the whole move
+    assert not info["arrived"] and not info["feasible"] and info["constraint_arrival"] > 0.0
+    assert rewards.sum() == pytest.approx(-info["cost"], rel=1e-9)
+    assert -rewards[-1] > DEFAULT_WEIGHTS.unsettled
 
 
 def test_servo_terminate_on_violation_ends_early_with_the_penalty():

@@ -22,7 +22,7 @@ from vfgym.envs._common import ScenarioSource
 from vfgym.envs.tune import evaluate_pairs
 from vfgym.envs.vector import VFServoVectorEnv, VFTuneVectorEnv
 from vfgym.params import DEFAULT_MEASURES
-from vfgym.plant import _kernel as K
+from vfgym.plant import _jit as J
 from vfgym.plant import _layout as L
 from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS
 from vfgym.space import from_action, to_action
@@ -258,11 +258,11 @@ def test_evaluate_pairs_equals_evaluate_pair_by_pair():
     got = evaluate_pairs(
         settings, eps, measures=DEFAULT_MEASURES, weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS
     )
-    for s, ep, (cost, metrics, cons) in zip(settings, eps, got, strict=True):
+    for s, ep, res in zip(settings, eps, got, strict=True):
         ev = evaluate(s, ep.scenario)
-        assert cost == ev.cost[0, 0]
-        assert np.array_equal(cons, ev.constraints[0, 0])
-        assert_same(metrics, ev.metrics[0][0])
+        assert res.cost == ev.cost[0, 0]
+        assert np.array_equal(res.constraints, ev.constraints[0, 0])
+        assert_same(res.metrics, ev.metrics[0][0])
 
 
 def test_a_bad_action_leaves_pending_autoresets_pending():
@@ -296,15 +296,15 @@ def test_a_bad_action_leaves_pending_autoresets_pending():
     ],
 )
 def test_wait_policy_read_as_libgomp_reads_it(environ, spin):
-    assert K.workers_spin(environ) is spin
+    assert J.workers_spin(environ) is spin
 
 
 def test_threads_start_where_the_wait_policy_makes_them_pay():
     """vfgym makes numba's workers sleep unless the user opted in to spinning, and the
     vector envs go parallel from 512 envs with sleeping workers, from 32 with spinning."""
     code = (
-        "import vfgym.envs._batch as B, vfgym.plant._kernel as K, os;"
-        "print(os.environ.get('OMP_WAIT_POLICY'), K.SPINNING_WORKERS, B.PARALLEL_MIN_ENVS)"
+        "import vfgym.envs._batch as B, vfgym.plant._jit as J, os;"
+        "print(os.environ.get('OMP_WAIT_POLICY'), J.SPINNING_WORKERS, B.PARALLEL_MIN_ENVS)"
     )
     base = {k: v for k, v in os.environ.items() if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
     runs = [base, {**base, "GOMP_SPINCOUNT": "300000"}, {**base, "OMP_WAIT_POLICY": "ACTIVE"}]

@@ -471,7 +471,8 @@ def test_property_count_speed_symmetry(kw):
         assert prof.reached_drive_speed
         assert prof.t_acc_end == pytest.approx(ta, rel=1e-9, abs=1e-15)
     else:
-        assert prof.peak_speed_pps < dv
+        # short of the drive speed; with SV within rounding of DV the peak rounds to DV
+        assert prof.peak_speed_pps < dv or dv - sv <= 1e-12 * dv
         if kw["triangle_prevention"]:
             tau = switch_time(sv, jk, kw["total_pulses"])
             assert prof.t_acc_increase == pytest.approx(tau, rel=1e-7)

@@ -1,4 +1,4 @@
-"""The V-F controller against the paper's numbers and MODEL.md §1's consequences."""
+"""The V-F controller against the paper's numbers and docs/model.md §1's consequences."""
 
 from __future__ import annotations
 

@@ -16,6 +16,7 @@ from vfgym.report.figures import (
     compare_figure,
     frequency_figure,
     history_figure,
+    importances_figure,
     motor_accel,
     objective_points,
     pareto_figure,
@@ -257,8 +258,22 @@ def test_plot_cli_bad_input(tmp_path, capsys, argv, needle):
     assert needle in err and "\n" not in err
 
 
+def test_importances_figure_draws_optunas_importances(tmp_path):
+    _, s1 = make_sweep(tmp_path, multi=False)
+    fig = importances_figure(s1, target_name="cost")
+    bars = {p.get_y() + p.get_height() / 2: p.get_width() for p in fig.get_axes()[0].patches}
+    names = [t.get_text() for t in fig.get_axes()[0].get_yticklabels()]
+    want = optuna.importance.get_param_importances(s1)
+    assert sorted(names) == sorted(want) and len(bars) == len(want)
+    assert [bars[y] for y in sorted(bars)] == pytest.approx(list(want.values())[::-1])
+    one = optuna.create_study(study_name="one")
+    one.optimize(lambda t: t.suggest_float("x", 0, 1), n_trials=1)
+    with pytest.raises(ValueError, match="fewer than 2"):
+        importances_figure(one)
+
+
 def test_objectives_from_user_attributes():
-    from vfgym.report.figures import _attr_objectives
+    from vfgym.report._sweep_figures import _attr_objectives
 
     names = list(OBJECTIVES)
     forms = [

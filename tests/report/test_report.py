@@ -19,6 +19,7 @@ from vfgym.report import (
     Candidate,
     compare,
     format_table,
+    markdown_costs,
     markdown_table,
     outcome,
     results_csv,
@@ -189,3 +190,23 @@ def test_text_tables(report):
     md = markdown_table(report)
     assert "| tuned | 4 |" in md and "| fixed-frequency | 3 |" in md  # n: where it applies
     assert "| tuned | paper |" in md
+
+
+def test_tables_mark_runs_that_did_not_arrive():
+    never = Settings(value_rad=1e9, error_limit_rad=1e9)  # emits no pulse
+    r = compare([Candidate("still", never)], ["paper"], ["short-move", "paper-sine"])
+    text = format_table(r)
+    head, *rows = text.splitlines()[2:7]
+    assert head.split()[-4:] == ["feasible", "arrived", "vs", "paper"]
+    for row in rows:  # still: ... no no loss; paper: ... yes yes
+        cells = row.split()
+        assert cells[-3:] == ["no", "no", "loss"] if "still" in row else cells[-2:] == ["yes"] * 2
+    assert "0/2 arrived" in text and "2/2 arrived" in text
+    assert "did not arrive" in text  # the legend
+    costs = markdown_costs(r).splitlines()[2:]
+    assert all(c.split("|")[2].strip().endswith("*†") for c in costs)  # still: never arrives
+    assert not any("†" in c.split("|")[3] for c in costs)  # the paper's arrive
+    assert "| arrived |" in markdown_table(r).splitlines()[0] + "|"
+    rows = list(csv.DictReader(io.StringIO(results_csv(r))))
+    assert [row["arrived"] for row in rows] == ["False", "True", "False", "True"]
+    assert all(float(row["constraint_arrival"]) > 0 for row in rows[::2])

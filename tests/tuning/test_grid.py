@@ -65,9 +65,9 @@ def test_batches_do_not_change_the_numbers():
     cfg = tuning.GridConfig(scenarios="short-move", points=2, refine=0, batch=5)
     a = tuning.run_grid(cfg)
     b = tuning.run_grid(tuning.GridConfig(scenarios="short-move", points=2, refine=0))
-    assert [r["cost"] for r in a["rows"]] == [r["cost"] for r in b["rows"]]
-    one = evaluate(a["rows"][7]["settings"], "short-move")
-    assert a["rows"][7]["cost"] == float(one.mean_cost[0])
+    assert [r.cost for r in a.rows] == [r.cost for r in b.rows]
+    one = evaluate(a.rows[7].settings, "short-move")
+    assert a.rows[7].cost == float(one.mean_cost[0])
 
 
 def test_sweep_reports_its_gap_to_the_reference(grid_run, capsys):

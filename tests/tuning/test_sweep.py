@@ -13,7 +13,7 @@ import yaml
 from vfgym import cli, space, tuning
 from vfgym.commands._common import load_settings
 from vfgym.params import PAPER_SETTINGS
-from vfgym.scoring import evaluate
+from vfgym.scoring import CONSTRAINTS, evaluate
 
 
 def sweep(tmp_path: Path, *extra: str, study: str = "s") -> int:
@@ -63,6 +63,15 @@ def test_run_folder_holds_everything_and_best_scores_on_the_one_path(tmp_path, c
     assert best["cost"] == pytest.approx(float(ev.mean_cost[0]), rel=1e-12)
     assert best["feasible"] == bool(ev.feasible.all())
     assert best["scenarios"] == ["short-move", "paper-step"]
+    assert list(best) == [  # best.yaml's keys in their order (no reference found: none)
+        "settings", "cost", "feasible", "constraints", "objectives", "study", "storage",
+        "trial", "sampler", "objective", "scenarios", "laws", "axis", "paper_cost",
+    ]  # fmt: skip
+    summary = yaml.safe_load((run / "summary.yaml").read_text())
+    assert summary["best"] == best and [r["settings"] for r in summary["comparison"]["set"]] == [
+        "paper",
+        "tuned",
+    ]
     paper = evaluate(PAPER_SETTINGS, ["short-move", "paper-step"])
     assert best["paper_cost"] == pytest.approx(float(paper.mean_cost[0]))
     # The baseline is feasible and in the study, so the best is no worse than it.
@@ -83,8 +92,7 @@ def test_constraints_are_the_worst_over_scenarios(tmp_path):
         ev = evaluate(tuning.trial_settings(t), ["short-move", "reversal"])
         worst = ev.constraints[0].max(axis=0)
         assert t.user_attrs["constraints"] == pytest.approx(worst.tolist())
-        names = ("accel", "torque", "overshoot")
-        assert t.constraints == pytest.approx(dict(zip(names, worst, strict=True)))
+        assert t.constraints == pytest.approx(dict(zip(CONSTRAINTS, worst, strict=True)))
         assert t.value == pytest.approx(float(ev.mean_cost[0]))
 
 
@@ -177,6 +185,8 @@ def test_nsga2_pareto_form(tmp_path):
     assert float(t["values_time_ratio"]) == pytest.approx(float(ev.objectives[0, 0, 1]))
     assert (run / "pareto_front.png").stat().st_size > 1000
     assert yaml.safe_load((run / "best.yaml").read_text())["objective"] == "pareto"
+    plots = yaml.safe_load((run / "summary.yaml").read_text())["plots"]
+    assert plots == {n: f"{n}.png" for n in ("history", "importances", "pareto_front")}
 
 
 def test_config_file_then_command_line(tmp_path):
@@ -261,6 +271,50 @@ def test_gap_and_best_trial_prefers_feasible():
         )
     assert tuning.best_trial(study).user_attrs["cost"] == 2.0
     assert tuning.best_trial(optuna.create_study()) is None
+
+
+def test_best_trial_without_a_feasible_one_prefers_one_that_arrives():
+    study = optuna.create_study()
+    dist = space.distributions()
+    arrival = CONSTRAINTS.index("arrival")
+    for cost, c_arrival in ((1.0, 5.0), (2.0, -0.5), (3.0, -0.9)):
+        cons = [0.5] * len(CONSTRAINTS)  # infeasible everywhere
+        cons[arrival] = c_arrival
+        study.add_trial(
+            optuna.trial.create_trial(
+                params=tuning.baseline_params(("rise",)),
+                distributions=dist,
+                value=cost,
+                user_attrs={"cost": cost, "feasible": False, "constraints": cons},
+            )
+        )
+    assert tuning.best_trial(study).user_attrs["cost"] == 2.0
+
+
+def test_a_pareto_sweep_returns_a_best_that_arrives(tmp_path, repo_root):
+    """The Pareto sweep of the issue: 12 NSGA-II trials on four scenarios, none feasible,
+    some stopping short; the best is the cheapest of those that arrive everywhere.
+
+    Before the servo followed its load the cheapest of these 12 trials stopped short (a
+    363-window overshoot on heavy-load priced every arriving trial above it); now the
+    cheapest arrives, so this run no longer tells the preference from plain cheapness:
+    ``test_best_trial_without_a_feasible_one_prefers_one_that_arrives`` does."""
+    cfg = str(repo_root / "experiments" / "pareto.yaml")
+    args = ["sweep", "--config", cfg, "--trials", "12", "--runs-dir", str(tmp_path)]
+    assert cli.main([*args, "--study", "p", "--no-progress", "--no-plots"]) == 0
+    run = tmp_path / "sweep" / "p"
+    best = yaml.safe_load((run / "best.yaml").read_text())
+    ev = evaluate(load_settings(str(run / "best.yaml")), best["scenarios"])
+    assert all(m["arrived"] for m in ev.metrics[0])
+    assert ev.metrics[0][0]["pulse_count"] > 0
+    rows = trials_csv(tmp_path, "p")
+    arrival = CONSTRAINTS.index("arrival")
+    arrives = [yaml.safe_load(r["user_attrs_constraints"])[arrival] <= 0.0 for r in rows]
+    assert not any(r["user_attrs_feasible"] == "True" for r in rows)
+    assert not all(arrives)  # the sweep did try settings that stop short
+    arriving = [i for i in range(len(rows)) if arrives[i]]
+    cheapest = min(arriving, key=lambda i: float(rows[i]["user_attrs_cost"]))
+    assert best["trial"] == int(rows[cheapest]["number"])
 
 
 def test_timeout_stops_starting_trials(tmp_path, capsys):

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from vfgym.io.runs import read_yaml
-from vfgym.moves.scenarios import Scenario, get_scenario
+from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 
 
@@ -45,8 +45,12 @@ def load_model(model_path: str | Path) -> tuple[Any, dict[str, Any]]:
     raise ValueError(f"--model {path}: not a stable-baselines3 PPO, SAC or TD3 model")
 
 
-def policy_settings(model_path: str | Path) -> Callable[[Scenario | str], Settings]:
-    """A VFTune-v0 agent as a function: scenario → the settings it picks (deterministic)."""
+def policy_settings(
+    model_path: str | Path, axis: str | None = None
+) -> Callable[[Scenario | str], Settings]:
+    """A VFTune-v0 agent as a function: scenario → the settings it picks (deterministic).
+    ``axis``: an axis file the moves belong to (default: the one the agent was trained
+    on, if any), which the observations describe and names resolve on."""
     from vfgym.agents.training import make_env
     from vfgym.envs.tune import action_settings
 
@@ -58,11 +62,13 @@ def policy_settings(model_path: str | Path) -> Callable[[Scenario | str], Settin
             "come from vfgym/VFTune-v0 agents"
         )
     env_kwargs = dict((cfg.get("hyperparams") or {}).get("env_kwargs") or {})
+    if axis is not None:
+        env_kwargs["axis"] = axis
     env = make_env(env_id, env_kwargs)
     law = env.unwrapped.accel_law
 
     def settings_for(scenario: Scenario | str) -> Settings:
-        obs, _ = env.reset(options={"scenario": get_scenario(scenario)})
+        obs, _ = env.reset(options={"scenario": scenario})
         action, _ = model.predict(obs, deterministic=True)
         return action_settings(action, law)
 

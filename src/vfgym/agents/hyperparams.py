@@ -1,20 +1,22 @@
 """Hyperparameters in YAML, rl-baselines3-zoo style: one file per algorithm under
 ``agents/hyperparams/``, one section per environment id, overridable from the command line.
 
-Everything is checked before any training starts: unknown keys, values of the wrong type,
-unknown algorithms and environments raise ``ValueError`` naming the file, the key and what
-is allowed.
+Everything is checked before any training starts: unknown keys, values of the wrong type
+or outside the range stable-baselines3 documents for them (:data:`RANGES`: a discount in
+[0, 1], a learning rate > 0, ...), unknown algorithms and environments raise
+``ValueError`` naming the file, the key and what is allowed. Numbers may be written in any
+notation (``n_timesteps: 1e5``); a whole-valued float is taken where a count is expected.
 """
 
 from __future__ import annotations
 
 import inspect
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from vfgym.io.runs import read_yaml
+from vfgym._validate import check_choice, check_int, check_real
+from vfgym.io.runs import parse_yaml, read_yaml
 
 ALGOS = ("ppo", "sac", "td3")
 ENV_IDS = ("vfgym/VFTune-v0", "vfgym/VFServo-v0")
@@ -22,7 +24,7 @@ ENV_IDS = ("vfgym/VFTune-v0", "vfgym/VFServo-v0")
 # keys that are not constructor arguments of the algorithm
 RUN_KEYS: dict[str, tuple[type, ...]] = {
     "n_envs": (int,),
-    "n_timesteps": (int, float),
+    "n_timesteps": (int,),
     "policy": (str,),
     "policy_kwargs": (dict,),
     "env_kwargs": (dict,),
@@ -43,6 +45,8 @@ RESERVED = {
     "_init_setup_model",
     "action_noise",
     "policy_kwargs",
+    "rollout_buffer_class",  # classes cannot be written in YAML
+    "replay_buffer_class",
 }
 POLICY_KWARGS = {
     "net_arch": (list, dict),
@@ -53,6 +57,100 @@ POLICY_KWARGS = {
     "n_critics": (int,),
 }
 ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu")
+MIXED_TYPES = {"ent_coef", "target_entropy", "train_freq"}
+"""Keys that take a number or a string/list (SAC's ``ent_coef='auto'``, ``train_freq=[4,
+'episode']``); their check in :data:`RANGES` decides, not the type of the default."""
+POLICIES = ("MlpPolicy",)
+"""Policies for the vfgym environments (flat Box observations)."""
+
+
+def _count(lo: int, hi: int | None = None) -> Callable[[str, Any], int]:
+    return lambda name, v: check_int(name, v, lo, hi)
+
+
+def _real(
+    lo: float | None = None, hi: float | None = None, lo_open: bool = False, none: bool = False
+) -> Callable[[str, Any], Any]:
+    def check(name: str, v: Any) -> Any:
+        return None if (none and v is None) else check_real(name, v, lo, hi, lo_open=lo_open)
+
+    return check
+
+
+def _minus_one_or_count(name: str, v: Any) -> int:
+    n = check_int(name, v, -1)
+    if n == 0:
+        raise ValueError(f"{name}=0 is not allowed: -1 (as many as collected) or >= 1")
+    return n
+
+
+def _train_freq(name: str, v: Any) -> Any:
+    if isinstance(v, (list, tuple)):
+        if len(v) != 2:
+            raise ValueError(f"{name}={v!r} is not allowed: N or [N, step|episode]")
+        return [check_int(name, v[0], 1), check_choice(name, v[1], ("step", "episode"))]
+    return check_int(name, v, 1)
+
+
+def _entropy(name: str, v: Any) -> Any:
+    """SAC's ent_coef: a number >= 0, 'auto', or 'auto_X' (X > 0: the initial value)."""
+    if isinstance(v, str):
+        if v == "auto":
+            return v
+        if v.startswith("auto_"):
+            check_real(f"{name} initial value", v[5:], 0.0, lo_open=True)
+            return v
+        raise ValueError(f"{name}={v!r} is not allowed: a number >= 0, 'auto' or 'auto_X'")
+    return check_real(name, v, 0.0)
+
+
+def _target_entropy(name: str, v: Any) -> Any:
+    return v if v == "auto" else check_real(name, v)
+
+
+RANGES: dict[str, Callable[[str, Any], Any]] = {
+    # run keys
+    "n_envs": _count(1, 1024),
+    "n_timesteps": _count(1),
+    "eval_freq": _count(1),
+    "n_eval_scenarios": _count(1),
+    "checkpoint_freq": _count(1),
+    "action_noise_std": _real(0.0),
+    "policy": lambda name, v: check_choice(name, v, POLICIES),
+    # constructor arguments (stable-baselines3's documentation of PPO, SAC and TD3)
+    "learning_rate": _real(0.0, lo_open=True),
+    "n_steps": _count(1),
+    "batch_size": _count(1),
+    "n_epochs": _count(1),
+    "gamma": _real(0.0, 1.0),
+    "gae_lambda": _real(0.0, 1.0),
+    "clip_range": _real(0.0, lo_open=True),
+    "clip_range_vf": _real(0.0, lo_open=True, none=True),
+    "ent_coef": _entropy,
+    "vf_coef": _real(0.0),
+    "max_grad_norm": _real(0.0, lo_open=True),
+    "sde_sample_freq": _count(-1),
+    "target_kl": _real(0.0, lo_open=True, none=True),
+    "stats_window_size": _count(1),
+    "buffer_size": _count(1),
+    "learning_starts": _count(0),
+    "tau": _real(0.0, 1.0, lo_open=True),
+    "train_freq": _train_freq,
+    "gradient_steps": _minus_one_or_count,
+    "target_update_interval": _count(1),
+    "target_entropy": _target_entropy,
+    "policy_delay": _count(1),
+    "target_policy_noise": _real(0.0),
+    "target_noise_clip": _real(0.0),
+    "log_std_init": _real(),
+    "n_critics": _count(1, 16),
+}
+"""The allowed values of each hyperparameter, as stable-baselines3 documents them: a
+discount ``gamma`` and GAE's ``gae_lambda`` in [0, 1], ``tau`` (Polyak) in (0, 1], rates,
+clip ranges and gradient norms > 0, coefficients and noises >= 0, counts >= 1
+(``learning_starts`` >= 0; ``gradient_steps`` -1 for "as many as collected";
+``sde_sample_freq`` -1 for "once per rollout"). Each check returns the value normalised
+(a whole float as an int)."""
 HYPERPARAMS_DIR = Path(__file__).resolve().parents[3] / "agents" / "hyperparams"
 
 
@@ -90,35 +188,136 @@ def _check_type(where: str, key: str, value: Any, types: tuple[type, ...] | None
         raise ValueError(f"{where}: {key}={value!r} has the wrong type: expected {names}")
 
 
-def validate(algo: str, params: dict[str, Any], where: str) -> dict[str, Any]:
-    """Check keys and value types of one environment's hyperparameters."""
+def validate(
+    algo: str, params: dict[str, Any], where: str, env_id: str | None = None
+) -> dict[str, Any]:
+    """Check the keys, value types and ranges (:data:`RANGES`) of one environment's
+    hyperparameters; returns them normalised (``n_timesteps: 1e5`` as the int 100000).
+
+    Parameters
+    ----------
+    algo
+        ``ppo``, ``sac`` or ``td3``.
+    params
+        The hyperparameters (run keys, constructor arguments, ``policy_kwargs``,
+        ``env_kwargs``).
+    where
+        Names the source in messages (file, section).
+    env_id
+        The environment whose constructor ``env_kwargs`` must fit (default: either).
+
+    Returns
+    -------
+    dict
+        The checked hyperparameters.
+    """
     cls = algo_class(algo)
     sig = inspect.signature(cls.__init__).parameters
+    out: dict[str, Any] = {}
     for key, value in params.items():
+        types: tuple[type, ...] | None
         if key in RUN_KEYS:
-            _check_type(where, key, value, RUN_KEYS[key])
+            types = RUN_KEYS[key]
         elif key in sig and key not in RESERVED:
-            _check_type(where, key, value, _allowed_types(sig[key].default))
+            default = sig[key].default
+            mixed = key in MIXED_TYPES and not isinstance(default, float)
+            types = None if mixed else _allowed_types(default)
         else:
             allowed = sorted(set(RUN_KEYS) | (set(sig) - RESERVED))
             raise ValueError(
                 f"{where}: unknown key {key!r} for {algo}; allowed: {', '.join(allowed)}"
             )
-    for key, value in (params.get("policy_kwargs") or {}).items():
+        out[key] = _checked(where, key, value, types)
+    if "policy_kwargs" in out:
+        out["policy_kwargs"] = _policy_kwargs(where, out["policy_kwargs"] or {})
+    if "env_kwargs" in out:
+        _env_kwargs(where, out["env_kwargs"] or {}, env_id)
+    if algo == "ppo" and out.get("normalize_advantage", True) and out.get("batch_size", 2) < 2:
+        raise ValueError(
+            f"{where}: batch_size={out['batch_size']!r} is out of range for ppo with "
+            "normalize_advantage: allowed >= 2"
+        )
+    return out
+
+
+def _checked(
+    where: str, key: str, value: Any, types: tuple[type, ...] | None, prefix: str = ""
+) -> Any:
+    """``value`` of the right type (a whole float taken as an int) and in its range."""
+    if types is not None and int in types and float not in types and isinstance(value, float):
+        types = (*types, float)  # 1e5, 2.0: check_int takes whole floats and refuses 2.5
+    _check_type(where, prefix + key, value, types)
+    check = RANGES.get(key)
+    if check is None:
+        return value
+    try:
+        return check(prefix + key, value)
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}") from None
+
+
+def _policy_kwargs(where: str, kwargs: dict[str, Any]) -> dict[str, Any]:
+    out = {}
+    for key, value in kwargs.items():
         if key not in POLICY_KWARGS:
             raise ValueError(
                 f"{where}: unknown policy_kwargs key {key!r}; allowed: {', '.join(POLICY_KWARGS)}"
             )
-        _check_type(where, f"policy_kwargs.{key}", value, POLICY_KWARGS[key])
+        out[key] = _checked(where, key, value, POLICY_KWARGS[key], prefix="policy_kwargs.")
         if key == "activation_fn" and value not in ACTIVATIONS:
             raise ValueError(
                 f"{where}: policy_kwargs.activation_fn={value!r} is not known: "
                 f"choose one of {', '.join(ACTIVATIONS)}"
             )
-    for key in ("n_envs", "n_timesteps", "eval_freq", "n_eval_scenarios", "checkpoint_freq"):
-        if key in params and params[key] < 1:
-            raise ValueError(f"{where}: {key}={params[key]!r} is out of range: allowed >= 1")
-    return params
+        if key == "net_arch":
+            _net_arch(where, value)
+    return out
+
+
+def _net_arch(where: str, arch: Any) -> None:
+    """A list of layer widths, or a mapping of such lists per network (pi, vf, qf)."""
+    lists = arch.items() if isinstance(arch, dict) else [("", arch)]
+    for part, widths in lists:
+        name = f"policy_kwargs.net_arch{'.' + str(part) if part else ''}"
+        ok = isinstance(widths, list) and all(
+            isinstance(w, int) and not isinstance(w, bool) and 1 <= w <= 65536 for w in widths
+        )
+        if not ok or (part and part not in ("pi", "vf", "qf")):
+            raise ValueError(
+                f"{where}: {name}={widths!r} is not allowed: a list of layer widths "
+                "(whole numbers >= 1), or a mapping of such lists under pi, vf, qf"
+            )
+
+
+def _env_kwargs(where: str, kwargs: dict[str, Any], env_id: str | None) -> None:
+    """Keys of the env's constructor that YAML can give (numbers, strings, booleans)."""
+    import dataclasses
+
+    from vfgym.envs._common import EnvConfig
+    from vfgym.envs.servo import ServoConfig, VFServoEnv
+    from vfgym.envs.tune import VFTuneEnv
+
+    # the env's own arguments, then its options: the fields of its frozen config
+    classes = {
+        "vfgym/VFTune-v0": (VFTuneEnv, EnvConfig),
+        "vfgym/VFServo-v0": (VFServoEnv, ServoConfig),
+    }
+    plain = (str, int, float, bool, tuple)
+    allowed: set[str] = set()
+    for cls, config in [classes[env_id]] if env_id in classes else classes.values():
+        for name, par in inspect.signature(cls.__init__).parameters.items():
+            named = par.kind in (par.KEYWORD_ONLY, par.POSITIONAL_OR_KEYWORD) and name != "self"
+            if named and (par.default is None or isinstance(par.default, plain)):
+                allowed.add(name)
+        for f in dataclasses.fields(config):
+            if f.default is None or isinstance(f.default, plain):
+                allowed.add(f.name)
+    unknown = sorted(set(kwargs) - allowed)
+    if unknown:
+        raise ValueError(
+            f"{where}: unknown env_kwargs key(s) {', '.join(map(str, unknown))}; "
+            f"allowed: {', '.join(sorted(allowed))}"
+        )
 
 
 def parse_overrides(items: list[str] | None) -> dict[str, Any]:
@@ -128,10 +327,7 @@ def parse_overrides(items: list[str] | None) -> dict[str, Any]:
         key, sep, text = item.partition("=")
         if not sep or not key:
             raise ValueError(f"--hyperparams {item!r} is not allowed: give key=value")
-        try:
-            out[key.strip()] = yaml.safe_load(text)
-        except yaml.YAMLError:
-            raise ValueError(f"--hyperparams {item!r}: the value is not valid YAML") from None
+        out[key.strip()] = parse_yaml(text, f"--hyperparams {item!r}")
     return out
 
 
@@ -155,7 +351,9 @@ def load(
         )
     if env_id not in data:
         raise ValueError(f"{file}: no hyperparameters for {env_id}")
-    params = dict(data[env_id] or {})
-    validate(algo, params, f"{file} [{env_id}]")
+    params = data[env_id] or {}
+    if not isinstance(params, dict):
+        raise ValueError(f"{file} [{env_id}]: expected a mapping of hyperparameters")
+    params = validate(algo, dict(params), f"{file} [{env_id}]", env_id)
     params |= overrides or {}
-    return validate(algo, params, f"{file} [{env_id}] with --hyperparams")
+    return validate(algo, params, f"{file} [{env_id}] with --hyperparams", env_id)

@@ -31,9 +31,15 @@ VALIDATION_SEED0 = 2**40
 """First train-split seed of the held-out validation scenarios."""
 
 
-def validation_scenarios(n: int) -> list[Scenario]:
-    """The held-out scenarios the evaluation callback scores (never drawn in training)."""
-    return [random_scenario(VALIDATION_SEED0 + i, "train") for i in range(n)]
+def validation_scenarios(n: int, axis: Any = None) -> list[Scenario]:
+    """The held-out scenarios the evaluation callback scores (never drawn in training);
+    on an axis (an :class:`~vfgym.moves.axis.Axis` or its file), its train move set's."""
+    if axis is None:
+        return [random_scenario(VALIDATION_SEED0 + i, "train") for i in range(n)]
+    from vfgym.moves.axis import load_axis
+
+    axis = load_axis(axis) if isinstance(axis, (str, Path)) else axis
+    return [axis.moves.train.pick(VALIDATION_SEED0 + i, "train", axis.plant) for i in range(n)]
 
 
 def _activation(name: str) -> Any:
@@ -134,7 +140,8 @@ def _callbacks(
             self.bar.close()
 
     evaluator = HeldOutEval(
-        params.get("eval_freq", 10_000), validation_scenarios(params.get("n_eval_scenarios", 16))
+        params.get("eval_freq", 10_000),
+        validation_scenarios(params.get("n_eval_scenarios", 16), env_kwargs.get("axis")),
     )
     ckpt = CheckpointCallback(
         save_freq=max(1, params.get("checkpoint_freq", 20_000) // n_envs),
@@ -182,6 +189,22 @@ def _save_checkpoint(model: Any, run: Path) -> None:
         model.save_replay_buffer(run / "checkpoints" / f"model_replay_buffer_{steps}_steps.pkl")
 
 
+def check_same_run(run: Path, algo: str, env_id: str, seed: int) -> None:
+    """A run folder that already holds a run must hold one of the same algorithm, env and
+    seed (it is continued); otherwise ``ValueError``."""
+    old = Path(run) / "config.yaml"
+    if not old.is_file():
+        return
+    prev = read_yaml(old)
+    prev = prev if isinstance(prev, dict) else {}
+    for key, value in (("algo", algo), ("env", env_id), ("seed", seed)):
+        if prev.get(key) != value:
+            raise ValueError(
+                f"{run}: holds a run with {key}={prev.get(key)!r}, not {value!r}; "
+                "choose another --name"
+            )
+
+
 def train(
     algo: str,
     env_id: str,
@@ -204,16 +227,8 @@ def train(
 
     cls = algo_class(algo)
     config = {"algo": algo, "env": env_id, "seed": seed, "device": device, "hyperparams": params}
-    old = run / "config.yaml"
-    if old.is_file():
-        prev = read_yaml(old) or {}
-        for key in ("algo", "env", "seed"):
-            if prev.get(key) != config[key]:
-                raise ValueError(
-                    f"{run}: holds a run with {key}={prev.get(key)!r}, not "
-                    f"{config[key]!r}; choose another --name"
-                )
-    write_yaml(old, config)
+    check_same_run(run, algo, env_id, seed)
+    write_yaml(run / "config.yaml", config)
 
     n_envs = int(params.get("n_envs", 1))
     total = int(params.get("n_timesteps", 10_000))

@@ -3,21 +3,38 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from typing import Any
 
+from vfgym._validate import check_int, check_real
 from vfgym.io.runs import read_yaml
 from vfgym.moves.baselines import Baseline
 from vfgym.params import Settings
-from vfgym.space import settings_from_dict
+from vfgym.space import NAMES, settings_from_dict
+
+
+class Interrupted(KeyboardInterrupt):
+    """An interrupt (Ctrl-C) caught by a command that saved its work; the message says
+    where it is and how to continue (:func:`vfgym.cli.main` prints it, exit status 130)."""
 
 
 def load_settings(path: str) -> Settings:
     """Settings from a YAML file: a mapping of the tuned settings, or one under the key
-    ``settings`` (as ``best.yaml`` of a sweep and ``vfgym predict`` write)."""
-    data = read_yaml(path)
-    if isinstance(data, dict) and "settings" in data and isinstance(data["settings"], dict):
-        data = data["settings"]
-    return settings_from_dict(data, source=path)
+    ``settings`` (as ``best.yaml`` of a sweep and ``vfgym predict`` write). Any problem
+    raises a one-line ``ValueError`` that names the file."""
+    try:
+        data = read_yaml(path)
+        if isinstance(data, dict) and "settings" in data:
+            data = data["settings"]
+            if not isinstance(data, dict):
+                raise ValueError(
+                    f"settings={data!r} is not allowed: give a mapping of "
+                    f"{', '.join(NAMES)} (and accel_law)"
+                )
+        return settings_from_dict(data, source=path)
+    except ValueError as exc:
+        msg = str(exc)
+        raise ValueError(msg if msg.startswith(str(path)) else f"{path}: {msg}") from None
 
 
 def controller_from_args(args: argparse.Namespace) -> Any:
@@ -27,12 +44,66 @@ def controller_from_args(args: argparse.Namespace) -> Any:
     return Baseline(getattr(args, "baseline", None) or "paper")
 
 
-def positive_int(text: str) -> int:
-    """argparse type: a whole number ≥ 1."""
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"{n} is out of range: allowed whole numbers >= 1")
-    return n
+def whole(lo: int | None = None, hi: int | None = None) -> Callable[[str], int]:
+    """argparse type: a whole number in ``[lo, hi]``, checked by
+    :func:`vfgym._validate.check_int` (so ``1e3`` is 1000 and ``2.5`` is refused)."""
+
+    def parse(text: str) -> int:
+        try:
+            return check_int("", text, lo, hi)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    parse.__name__ = "whole number"
+    return parse
+
+
+def real(
+    lo: float | None = None, hi: float | None = None, *, lo_open: bool = False
+) -> Callable[[str], float]:
+    """argparse type: a finite real number in the interval, checked by
+    :func:`vfgym._validate.check_real` (``nan`` and ``inf`` are refused)."""
+
+    def parse(text: str) -> float:
+        try:
+            return check_real("", text, lo, hi, lo_open=lo_open)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    parse.__name__ = "real number"
+    return parse
+
+
+positive_int = whole(1)
+"""argparse type: a whole number ≥ 1."""
+SEED = whole(0, 2**32 - 1)
+"""argparse type of a seed (numpy's and torch's range)."""
+
+
+AXIS_HELP = (
+    "an axis file (e.g. experiments/axes/belt.yaml): its plant, measures and train/test "
+    "moves (default: the paper's axis, experiments/axes/paper.yaml)"
+)
+
+
+def add_axis_option(p: argparse.ArgumentParser) -> None:
+    """The ``--axis FILE`` option every command takes."""
+    p.add_argument("--axis", metavar="FILE.yaml", help=AXIS_HELP)
+
+
+def axis_from_args(args: argparse.Namespace) -> Any:
+    """The :class:`~vfgym.moves.axis.Axis` of ``--axis FILE`` (a bad file: one-line
+    ``ValueError`` naming it), or ``None`` without the option (the paper's axis, as
+    before axes existed)."""
+    from vfgym.moves.axis import load_axis
+
+    path = getattr(args, "axis", None)
+    return load_axis(path) if path else None
+
+
+def scenario_from_args(args: argparse.Namespace, axis: Any) -> Any:
+    """``--scenario NAME`` on the axis (its listed moves, the named scenarios, or
+    ``<split>-<seed>`` of its random moves), or as :func:`vfgym.get_scenario` without one."""
+    from vfgym.moves.scenarios import get_scenario
+
+    return get_scenario(args.scenario) if axis is None else axis.scenario(args.scenario)

@@ -16,7 +16,7 @@ AGENTS_HINT = 'pip install -c constraints.txt -e ".[agents]"'
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from vfgym.commands._common import positive_int
+    from vfgym.commands._common import SEED, add_axis_option, positive_int, whole
 
     p = sub.add_parser(
         "evaluate",
@@ -49,19 +49,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--scenarios",
         default="test",
         metavar="SPEC",
-        help="a scenario name, 'named', 'train', 'test' or a comma list (default: test)",
+        help="a scenario name, 'named', 'train', 'test' or a comma list (default: test; "
+        "with --axis, the axis's test moves)",
     )
     p.add_argument(
         "--count",
         type=positive_int,
-        default=32,
-        help="random scenarios drawn for train/test (default: 32)",
+        help="random scenarios drawn for train/test (default: 32; an axis sets its own)",
     )
     p.add_argument(
         "--first-seed",
-        type=int,
-        default=0,
-        help="seed of the first random scenario (default: 0)",
+        type=whole(0),
+        help="seed of the first random scenario (default: 0; an axis sets its own)",
     )
     p.add_argument(
         "--bootstrap",
@@ -70,9 +69,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="N",
         help="bootstrap resamples for the 95%% interval of means (default: 2000)",
     )
-    p.add_argument("--seed", type=int, default=0, help="bootstrap seed (default: 0)")
+    p.add_argument("--seed", type=SEED, default=0, help="bootstrap seed (default: 0)")
     p.add_argument("--name", help="run folder name (default: a timestamp)")
     p.add_argument("--runs-dir", default="runs", help="root of run folders (default: runs)")
+    add_axis_option(p)
     p.set_defaults(func=run)
 
 
@@ -85,20 +85,10 @@ def _labels(paths: list[str], taken: set[str]) -> list[str]:
     return out
 
 
-def load_settings_file(path: str) -> Any:
-    """Settings from a file; any problem raises a one-line ``ValueError`` naming the file."""
-    from vfgym.commands._common import load_settings
-
-    try:
-        return load_settings(path)
-    except ValueError as exc:
-        msg = str(exc)
-        raise ValueError(msg if msg.startswith(str(path)) else f"{path}: {msg}") from None
-
-
-def load_policy(model_path: str) -> Any:
-    """The per-scenario settings policy of a trained agent (``vfgym.agents``), imported
-    only when asked for; without the agents extra this is a one-line ``ValueError``."""
+def load_policy(model_path: str, axis: str | None = None) -> Any:
+    """The per-scenario settings policy of a trained agent (``vfgym.agents``), on an axis
+    file if given, imported only when asked for; without the agents extra this is a
+    one-line ``ValueError``."""
     p = Path(model_path)
     if not p.is_file():
         raise ValueError(f"{model_path}: no such file")
@@ -109,13 +99,16 @@ def load_policy(model_path: str) -> Any:
             f"--model {model_path}: agent support is not installed ({exc}); install the "
             f"agents extra: {AGENTS_HINT}"
         ) from None
-    return policy_settings(str(p))
+    return policy_settings(str(p)) if axis is None else policy_settings(str(p), axis)
 
 
 def run(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
+    from vfgym._validate import check_name, check_output_path
+    from vfgym.commands._common import axis_from_args, load_settings
     from vfgym.io.runs import new_run_dir, record_command, write_yaml
+    from vfgym.moves.axis import AXIS_FILE, axis_kwargs, write_axis
     from vfgym.moves.baselines import BASELINE_NAMES
     from vfgym.moves.scenarios import scenario_set
     from vfgym.report import Candidate, baseline_candidates, compare, format_table, write_report
@@ -124,18 +117,36 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.settings and not args.model:
         raise ValueError("nothing to evaluate: give --settings FILE.yaml and/or --model MODEL.zip")
-    if args.first_seed < 0:
-        raise ValueError(f"--first-seed={args.first_seed} is out of range: allowed >= 0")
+    axis = axis_from_args(args)
+    for opt, v in (("--count", args.count), ("--first-seed", args.first_seed)):
+        if axis is not None and v is not None:
+            raise ValueError(
+                f"{opt}={v} is not allowed with --axis {args.axis}: the axis file sets its "
+                "move sets (moves.train, moves.test)"
+            )
+    count = 32 if args.count is None else args.count
+    first_seed = 0 if args.first_seed is None else args.first_seed
+    if args.name is not None:
+        check_name("--name", args.name)
+    check_output_path(
+        "--runs-dir",
+        Path(args.runs_dir) / "evaluate" / (args.name or ""),
+        folder=True,
+        shown=args.runs_dir,
+    )
     against = args.against.strip()
     if against in ("all", ""):
         against = ",".join(BASELINE_NAMES)
     base = [] if against == "none" else baseline_candidates(against)
-    settings = [load_settings_file(f) for f in args.settings]
+    settings = [load_settings(f) for f in args.settings]
     taken = {b.label for b in base}
     s_labels = _labels(args.settings, taken)
     m_labels = [f"agent:{lab}" for lab in _labels(args.model, taken)]
-    policies = [load_policy(m) for m in args.model]
-    scenarios = scenario_set(args.scenarios, args.count, args.first_seed)
+    policies = [load_policy(m, args.axis) for m in args.model]
+    if axis is None:
+        scenarios = scenario_set(args.scenarios, count, first_seed)
+    else:
+        scenarios = axis.scenario_set(args.scenarios)
     cands = [
         Candidate(lab, s, source=f)
         for lab, s, f in zip(s_labels, settings, args.settings, strict=True)
@@ -150,6 +161,7 @@ def run(args: argparse.Namespace) -> int:
         scenarios,
         resamples=args.bootstrap,
         seed=args.seed,
+        **axis_kwargs(axis),
     )
     report.scenario_spec = args.scenarios
     run_dir = new_run_dir(args.runs_dir, "evaluate", args.name)
@@ -166,17 +178,23 @@ def run(args: argparse.Namespace) -> int:
             ],
             "against": [b.label for b in base],
             "scenarios": args.scenarios,
-            "count": args.count,
-            "first_seed": args.first_seed,
+            "count": count if axis is None else None,
+            "first_seed": first_seed if axis is None else None,
             "scenario_names": [s.name for s in scenarios],
             "bootstrap": {"resamples": args.bootstrap, "seed": args.seed, "level": 0.95},
-            "plant": "PAPER_PLANT (each scenario applies its load)",
+            "plant": "PAPER_PLANT (each scenario applies its load)"
+            if axis is None
+            else f"the axis's ({AXIS_FILE}; each scenario adds its load)",
+            "axis": None if axis is None else {"file": args.axis, "name": axis.name},
             "weights": asdict(DEFAULT_WEIGHTS),
             "bounds": asdict(DEFAULT_BOUNDS),
         },
     )
     record_command(run_dir)
+    if axis is not None:
+        write_axis(axis, run_dir / AXIS_FILE)
     paths = write_report(report, run_dir)
     print(format_table(report), end="")
-    print(f"\nwrote {run_dir}/ ({', '.join(paths)}, config.yaml, command.txt)")
+    extra = f", {AXIS_FILE}" if axis is not None else ""
+    print(f"\nwrote {run_dir}/ ({', '.join(paths)}, config.yaml{extra}, command.txt)")
     return 0

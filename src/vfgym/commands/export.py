@@ -3,6 +3,7 @@
 ``--format vcd`` writes the pulse and direction signals and the encoder's A/B channels as a
 Value Change Dump (GTKWave, PulseView; see :mod:`vfgym.io.vcd`); ``--format csv`` writes the
 per-tick trace (every ``--decimation``-th tick; see :data:`vfgym.io.trace_csv.TRACE_FIELDS`).
+Without ``--out`` the file is ``SCENARIO-CONTROLLER.FORMAT`` in the current folder.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ FORMATS = ("vcd", "csv")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from vfgym.commands._common import positive_int
+    from vfgym.commands._common import add_axis_option, positive_int
 
     p = sub.add_parser(
         "export",
@@ -26,7 +27,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g = p.add_mutually_exclusive_group()
     g.add_argument("--settings", metavar="FILE.yaml", help="settings file of the V-F controller")
     g.add_argument("--baseline", help="a baseline instead: paper (default), rule-of-thumb, ...")
-    p.add_argument("--out", required=True, metavar="FILE", help="output file")
+    p.add_argument(
+        "--out",
+        metavar="FILE",
+        help="output file (default: SCENARIO-CONTROLLER.vcd or .csv in the current folder)",
+    )
     p.add_argument(
         "--decimation",
         type=positive_int,
@@ -36,31 +41,31 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--timescale", default="1 ns", help="vcd: time unit, e.g. '1 ns' (default) or '1 ps'"
     )
+    add_axis_option(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from vfgym.commands.plot import _controller
+    from vfgym._validate import check_output_path
+    from vfgym.commands._common import axis_from_args, scenario_from_args
+    from vfgym.commands.plot import _controller, own_trace
     from vfgym.io.trace_csv import write_trace_csv
     from vfgym.io.vcd import parse_timescale, write_vcd
-    from vfgym.moves.scenarios import get_scenario
+    from vfgym.moves.axis import axis_kwargs
     from vfgym.scoring import evaluate
 
-    scenario = get_scenario(args.scenario)
+    axis = axis_from_args(args)
+    scenario = scenario_from_args(args, axis)
     if args.format == "vcd":
         parse_timescale(args.timescale)
         if args.decimation != 1:
             raise ValueError(f"--decimation={args.decimation} is not allowed for vcd: every tick")
-    ctrl, _ = _controller(args)
+    ctrl, label = _controller(args)
+    out = args.out if args.out is not None else f"{scenario.name}-{Path(label).stem}.{args.format}"
+    out = check_output_path("--out", out)
     dec = args.decimation if args.format == "csv" else 1
-    ev = evaluate(ctrl, [scenario], keep_traces=True, decimation=dec)
-    trace = ev.traces[0][0]
-    if trace is None:
-        raise ValueError(
-            f"{ev.labels()[0]} does not apply to scenario {scenario.name!r} (a moving "
-            "reference): choose a point-to-point scenario or V-F settings"
-        )
-    out = Path(args.out)
+    ev = evaluate(ctrl, [scenario], keep_traces=True, decimation=dec, **axis_kwargs(axis))
+    trace = own_trace(ev, scenario)
     if args.format == "vcd":
         comment = f"scenario {scenario.name}: {scenario.description}\ncontroller {ev.labels()[0]}"
         write_vcd(trace, out, timescale=args.timescale, comment=comment)

@@ -11,10 +11,13 @@ from __future__ import annotations
 import argparse
 
 OPTIONS = (
-    ("--scenarios", "scenario set (default paper-step): a name, 'named', 'train', 'test' or "
-     "a comma-separated list"),
-    ("--scenario-count", "number of scenarios in a 'train'/'test' set (default 16)"),
-    ("--first-seed", "first seed of a 'train'/'test' set (default 0)"),
+    ("--scenarios", "scenario set (default paper-step; with --axis, its train moves): a "
+     "name, 'named', 'train', 'test' or a comma-separated list"),
+    ("--scenario-count", "number of scenarios in a 'train'/'test' set (default 16; not with "
+     "--axis)"),
+    ("--first-seed", "first seed of a 'train'/'test' set (default 0; not with --axis)"),
+    ("--axis", "an axis file (e.g. experiments/axes/belt.yaml): its plant, measures and "
+     "train/test moves"),
     ("--laws", "acceleration laws: rise, slew or rise,slew (default rise)"),
     ("--points", "values per dimension, over the whole space and in each refinement "
      "(default 12)"),
@@ -50,7 +53,10 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from vfgym import tuning
+    from vfgym._validate import check_output_path
     from vfgym.io.runs import read_yaml, record_command, write_text, write_yaml
+    from vfgym.moves.axis import AXIS_FILE, axis_kwargs, write_axis
+    from vfgym.report import format_compact
 
     keys = [f.lstrip("-").replace("-", "_") for f, _ in OPTIONS] + ["progress"]
     file_data = read_yaml(args.config) if args.config else None
@@ -60,8 +66,12 @@ def run(args: argparse.Namespace) -> int:
     scenarios = cfg.scenario_list()
     name = cfg.name or _default_name(cfg)
     run_dir = Path(cfg.runs_dir) / "grid" / name
+    check_output_path("runs_dir", run_dir, folder=True, shown=cfg.runs_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
     write_yaml(run_dir / "config.yaml", {"command": "grid", **cfg.to_dict(), "name": name})
+    axis = cfg.load_axis()
+    if axis is not None:
+        write_axis(axis, run_dir / AXIS_FILE)
     record_command(run_dir)
     n0 = cfg.points**4 * len(cfg.laws)
     print(
@@ -83,23 +93,23 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     elapsed = time.monotonic() - t0
-    tuning.write_grid_csv(result["rows"], run_dir / "grid.csv")
+    tuning.write_grid_csv(result.rows, run_dir / "grid.csv")
     ref = tuning.grid_reference(cfg, result)
     ref["elapsed_s"] = round(elapsed, 3)
     write_yaml(run_dir / "reference.yaml", ref)
-    cmp = tuning.compare(result["best"]["settings"], scenarios, label="grid")
+    cmp = tuning.compare(result.best.settings, scenarios, label="grid", **axis_kwargs(axis))
     s = ref["settings"]
-    n = len(result["rows"])
+    n = len(result.rows)
     text = "\n".join(
         [
             f"{n} settings evaluated in {elapsed:.1f} s ({n * len(scenarios) / elapsed:.0f} "
             "runs/s)",
             f"reference: cost {ref['cost']:.4f} ({'feasible' if ref['feasible'] else 'INFEASIBLE'})"
-            f" against the paper's {cmp['set'][0]['cost']:.4f}",
+            f" against the paper's {cmp.column('paper').mean_cost:.4f}",
             f"settings: value {s['value_rad']:.6g} rad, error limit {s['error_limit_rad']:.6g} "
             f"rad, k {s['k']:.6g}, Ts/Tf {s['ts_over_tf']:.4g}, law {s['accel_law']}",
             "",
-            tuning.format_comparison(cmp),
+            format_compact(cmp),
         ]
     )
     write_text(run_dir / "report.txt", text + "\n")
@@ -109,7 +119,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _default_name(cfg) -> str:
     slug = "".join(c if c.isalnum() or c in "._-" else "_" for c in cfg.scenarios)[:60]
-    if cfg.scenarios in ("train", "test"):
+    if cfg.axis is not None:
+        slug = f"{cfg.load_axis().name}-{slug}"[:60]
+    elif cfg.scenarios in ("train", "test"):
         slug += f"{cfg.scenario_count}s{cfg.first_seed}"
     laws = "" if cfg.laws == ("rise",) else "-" + "_".join(cfg.laws)
     return f"{slug}{laws}-p{cfg.points}-r{cfg.refine}k{cfg.keep}"

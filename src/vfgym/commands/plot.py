@@ -7,8 +7,9 @@ Kinds:
   scurve     S-curve speed profile of a short move with and without triangle form
              prevention, and of a long move reaching the drive speed (MCX514 Fig. 2.2-9)
   frequency  pulse frequency against time: the V-F controller against --against
-             (default: fixed-frequency)
-  compare    the settings against --against (default: paper) on the same move, overlaid
+             (default: fixed-frequency; paper when the controller is fixed-frequency)
+  compare    the controller against --against on the same move, overlaid (default: paper;
+             rule-of-thumb when the controller is the paper's)
   history    optimisation history of a sweep (--sweep RUN_DIR)
   pareto     Pareto front of a sweep (--sweep RUN_DIR)
 
@@ -20,12 +21,24 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from optuna import Study
 
 KINDS = ("response", "scurve", "frequency", "compare", "history", "pareto")
 
 
+DEFAULT_AGAINST = {
+    "compare": ("paper", "rule-of-thumb"),
+    "frequency": ("fixed-frequency", "paper"),
+}
+"""Baselines compared with by default: the first that is not the controller itself."""
+
+
 def add_parser(sub: argparse._SubParsersAction) -> None:
+    from vfgym.commands._common import add_axis_option, real, whole
+
     p = sub.add_parser(
         "plot",
         help="draw a figure (response, scurve, frequency, compare, history, pareto) as PNG",
@@ -40,34 +53,47 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--against",
         metavar="NAMES",
-        help="baselines to compare with (compare: paper; frequency: fixed-frequency)",
+        help="baselines to compare with (default: compare: paper, frequency: fixed-frequency; "
+        "the next one when that is the controller itself)",
     )
     p.add_argument("--sweep", metavar="RUN_DIR", help="sweep run folder (history, pareto)")
     p.add_argument(
         "--storage",
-        help="history, pareto: the study's storage URL, if not the one in the folder's config.yaml",
+        help="history, pareto: the study's storage (sqlite:///FILE, journal:FILE, a database "
+        "URL), if not the one in the folder's config.yaml",
     )
     p.add_argument("--x", help="pareto: objective on the x axis (default: the first)")
     p.add_argument("--y", help="pareto: objective on the y axis (default: the second)")
     p.add_argument(
-        "--short-rad", type=float, default=1.0, help="scurve: the short move (default 1 rad)"
+        "--short-rad",
+        type=real(0.0, lo_open=True),
+        default=1.0,
+        help="scurve: the short move, > 0 (default 1 rad)",
     )
     p.add_argument(
-        "--long-rad", type=float, default=10.0, help="scurve: the long move (default 10 rad)"
+        "--long-rad",
+        type=real(0.0, lo_open=True),
+        default=10.0,
+        help="scurve: the long move, > 0 (default 10 rad)",
     )
     p.add_argument("--out", metavar="PNG", help="output file (default: <kind>-<scenario>.png)")
-    p.add_argument("--dpi", type=int, default=120, help="resolution (default: 120)")
+    p.add_argument(
+        "--dpi", type=whole(10, 1200), default=120, help="resolution, 10..1200 (default: 120)"
+    )
+    add_axis_option(p)
     p.set_defaults(func=run)
 
 
-def load_study(run_dir: str, storage: str | None = None) -> Any:
+def load_study(run_dir: str, storage: str | None = None) -> Study:
     """The Optuna study of a sweep run folder. ``config.yaml`` names the study
-    (``study_name`` or ``study``) and its ``storage``: ``sqlite:///FILE`` (if the file has
-    moved, the folder's own ``study.db``), a journal file, or a database URL. A URL whose
-    password was masked in the file needs ``storage`` given again."""
+    (``study_name`` or ``study``) and its ``storage``, found by
+    :func:`vfgym.tuning.find_storage` (a file moved with the folder is found in it); a URL
+    whose password was masked in the file needs ``storage`` given again. A ``storage``
+    given is used as it is: a file it names must exist (no fallback to the folder's own)."""
     import optuna
 
     from vfgym.io.runs import read_yaml
+    from vfgym.tuning import find_storage, open_storage
 
     d = Path(run_dir)
     if not d.is_dir():
@@ -76,54 +102,71 @@ def load_study(run_dir: str, storage: str | None = None) -> Any:
     name = cfg.get("study_name") or cfg.get("study") if isinstance(cfg, dict) else None
     if not name:
         raise ValueError(f"{d / 'config.yaml'}: no study name (is this a sweep folder?)")
-    url = str(storage or cfg.get("storage") or f"sqlite:///{d / 'study.db'}")
-    if "***" in url:
-        raise ValueError(f"--sweep {run_dir}: the storage password is masked; give --storage URL")
-    if url.startswith("sqlite:///"):
-        path = Path(url.removeprefix("sqlite:///"))
-        if not path.is_file() and (d / "study.db").is_file():
-            path = d / "study.db"
-        if not path.is_file():
-            raise ValueError(f"--sweep {run_dir}: study storage {path} not found")
-        store: Any = f"sqlite:///{path}"
-    elif "://" in url:
-        store = url
-    else:  # a journal file
-        path = Path(url)
-        if not path.is_file() and (d / path.name).is_file():
-            path = d / path.name
-        if not path.is_file():
-            raise ValueError(f"--sweep {run_dir}: study journal {path} not found")
-        from optuna.storages.journal import JournalFileBackend, JournalStorage
-
-        store = JournalStorage(JournalFileBackend(str(path)))
+    if storage is not None:
+        return _load_given(str(name), storage, d)
+    spec = find_storage(cfg.get("storage") or "sqlite", d)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     try:
-        return optuna.load_study(study_name=str(name), storage=store)
+        return optuna.load_study(study_name=str(name), storage=open_storage(spec))
     except KeyError:
         raise ValueError(f"--sweep {run_dir}: no study named {name!r} in its storage") from None
 
 
+def _load_given(name: str, storage: str, run_dir: Path) -> Any:
+    """The study ``name`` in the storage given with --storage (a plain path: a journal)."""
+    import optuna
+
+    from vfgym.tuning import open_storage, resolve_storage
+
+    text = storage.strip()
+    plain = "://" not in text and not text.startswith("journal:")
+    spec = resolve_storage(
+        f"journal:{text}" if plain and text not in ("sqlite", "journal") else text, run_dir
+    )
+    if spec.path is not None and not Path(spec.path).is_file():
+        raise ValueError(f"--storage {storage}: {spec.path}: no such file")
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    try:
+        return optuna.load_study(study_name=name, storage=open_storage(spec))
+    except KeyError:
+        raise ValueError(f"--storage {spec.display}: no study named {name!r} in it") from None
+
+
 def _controller(args: argparse.Namespace) -> tuple[Any, str]:
-    from vfgym.commands.evaluate import load_settings_file
-    from vfgym.moves.baselines import Baseline
+    """The controller and its label (a settings file's stem; its path if the stem is a
+    baseline's name, so that the two never share a label)."""
+    from vfgym.commands._common import load_settings
+    from vfgym.moves.baselines import BASELINE_NAMES, Baseline
 
     if args.settings:
-        return load_settings_file(args.settings), Path(args.settings).stem
+        stem = Path(args.settings).stem
+        return load_settings(args.settings), (args.settings if stem in BASELINE_NAMES else stem)
     name = args.baseline or "paper"
     return Baseline(name), name
 
 
-def _against(args: argparse.Namespace, default: str, own: str) -> list[Any]:
+def _against(args: argparse.Namespace, own: str) -> list[Any]:
+    """The baselines to draw beside the controller: --against without the controller
+    itself, or the kind's first default that is not the controller."""
     from vfgym.report import baseline_candidates
 
-    cands = baseline_candidates(args.against or default)
-    return [c for c in cands if c.label != own] or cands
+    if args.against is None:
+        name = next(n for n in DEFAULT_AGAINST[args.kind] if n != own)
+        return baseline_candidates(name)
+    cands = [c for c in baseline_candidates(args.against) if c.label != own]
+    if not cands:
+        raise ValueError(
+            f"--against={args.against!r} is not allowed: it names only the controller itself "
+            f"({own}); give another baseline"
+        )
+    return cands
 
 
 def build_figure(args: argparse.Namespace) -> Any:
     """The figure the arguments ask for."""
-    from vfgym.moves.scenarios import get_scenario
+    from vfgym.commands._common import axis_from_args, scenario_from_args
+    from vfgym.moves.axis import axis_kwargs
+    from vfgym.params import PAPER_PLANT
     from vfgym.report import figures as plots
     from vfgym.scoring import evaluate
 
@@ -134,32 +177,38 @@ def build_figure(args: argparse.Namespace) -> Any:
         if args.kind == "history":
             return plots.history_figure(study)
         return plots.pareto_figure(study, x=args.x, y=args.y)
-    scenario = get_scenario(args.scenario)
-    plant = scenario.plant()
+    axis = axis_from_args(args)
+    scenario = scenario_from_args(args, axis)
+    plant = scenario.plant(PAPER_PLANT if axis is None else axis.plant)
     if args.kind == "scurve":
         return plots.scurve_figure(plant, short_rad=args.short_rad, long_rad=args.long_rad)
     ctrl, label = _controller(args)
+    on_axis = axis_kwargs(axis)
     if args.kind == "response":
-        ev = evaluate(ctrl, [scenario], keep_traces=True)
+        ev = evaluate(ctrl, [scenario], keep_traces=True, **on_axis)
+        trace = own_trace(ev, scenario)
         title = f"{scenario.name}: {scenario.description}\n{ev.labels()[0]}"
         return plots.response_figure(
-            ev.traces[0][0], title=title, metrics=ev.metrics[0][0], tracking=scenario.tracking
+            trace, title=title, metrics=ev.metrics[0][0], tracking=scenario.tracking
         )
-    default = "fixed-frequency" if args.kind == "frequency" else "paper"
-    others = _against(args, default, label)
-    ev = evaluate([ctrl, *(c.controller for c in others)], [scenario], keep_traces=True)
+    others = _against(args, label)
+    ev = evaluate([ctrl, *(c.controller for c in others)], [scenario], keep_traces=True, **on_axis)
+    own_trace(ev, scenario)
+    kept = ev.traces
+    assert kept is not None  # keep_traces=True
     names = [label, *(c.label for c in others)]
-    traces = {}
+    traces, skipped = {}, []
     for i, name in enumerate(names):
-        tr = ev.traces[i][0]
+        tr = kept[i][0]
         if tr is None:  # a pulse source on a moving reference
+            skipped.append(name)
             continue
-        cost = ev.cost[i, 0]
-        traces[f"{name} (cost {cost:.3g})"] = tr
-    if len(traces) < 2:
+        traces[f"{name} (cost {ev.cost[i, 0]:.3g})"] = tr
+    if skipped:
         raise ValueError(
-            f"scenario {scenario.name!r} is a moving reference: the pulse-source baselines "
-            "do not apply; choose a point-to-point scenario or other baselines"
+            f"scenario {scenario.name!r} is a moving reference: {', '.join(skipped)} (pulse "
+            "sources) do not apply to it; choose a point-to-point scenario or --against "
+            "paper,rule-of-thumb"
         )
     title = f"{scenario.name}: {scenario.description}"
     if args.kind == "frequency":
@@ -167,17 +216,30 @@ def build_figure(args: argparse.Namespace) -> Any:
     return plots.compare_figure(traces, title=title, tracking=scenario.tracking)
 
 
+def own_trace(ev: Any, scenario: Any) -> Any:
+    """The first controller's trace on the scenario; a pulse source on a moving reference
+    (it has none) raises ``ValueError``."""
+    trace = ev.traces[0][0]
+    if trace is None:
+        raise ValueError(
+            f"{ev.labels()[0]} does not apply to scenario {scenario.name!r} (a moving "
+            "reference): choose a point-to-point scenario or V-F settings"
+        )
+    return trace
+
+
 def run(args: argparse.Namespace) -> int:
-    if args.dpi < 10 or args.dpi > 1200:
-        raise ValueError(f"--dpi={args.dpi} is out of range: allowed 10..1200")
-    fig = build_figure(args)
+    from vfgym._validate import check_output_path
+
     out = args.out
-    if not out:
+    if out is None:
         tail = "" if args.kind in ("scurve", "history", "pareto") else f"-{args.scenario}"
         out = f"{args.kind}{tail}.png"
     out_path = Path(out)
     if out_path.suffix.lower() != ".png":
-        raise ValueError(f"--out={out}: give a .png file")
+        raise ValueError(f"--out={out!r} is not allowed: give a .png file")
+    check_output_path("--out", out_path)
+    fig = build_figure(args)
     out_path.parent.mkdir(parents=True, exist_ok=True)
     tmp = out_path.with_name(f".{out_path.name}.tmp.png")
     fig.savefig(tmp, dpi=args.dpi)

@@ -13,12 +13,20 @@ from __future__ import annotations
 import argparse
 
 OPTIONS = (
-    ("--scenarios", "scenario set: a name, 'named', 'train', 'test' or a comma-separated list"),
-    ("--scenario-count", "number of scenarios in a 'train'/'test' set (default 16)"),
-    ("--first-seed", "first seed of a 'train'/'test' set (default 0)"),
+    ("--scenarios", "scenario set: a name, 'named', 'train', 'test' or a comma-separated list "
+     "(default paper-step; with --axis, the axis's train moves)"),
+    ("--scenario-count", "number of scenarios in a 'train'/'test' set (default 16; not with "
+     "--axis, whose file sets its own)"),
+    ("--first-seed", "first seed of a 'train'/'test' set (default 0; not with --axis)"),
+    ("--axis", "an axis file (e.g. experiments/axes/belt.yaml): its plant, measures and "
+     "train/test moves; the sweep tunes on its train moves"),
     ("--laws", "acceleration laws searched: rise, slew or rise,slew (default rise)"),
     ("--sampler", "tpe (default), cmaes, gp, nsga2, grid or random"),
     ("--objective", "cost (default) or pareto (overshoot, move time, accel violation)"),
+    ("--aggregate", "the cost minimised over the scenarios: mean (default), cvar (mean of the "
+     "costliest --cvar-alpha share) or worst"),
+    ("--cvar-alpha", "the share of the costliest scenarios cvar averages, in (0, 1] "
+     "(default 0.25)"),
     ("--trials", "completed trials the study ends with, all workers together (default 100)"),
     ("--timeout", "seconds after which workers start no new trial"),
     ("--workers", "worker processes on the study (default 1: this process)"),
@@ -65,12 +73,14 @@ def _cli_values(args: argparse.Namespace) -> dict:
 
 def run(args: argparse.Namespace) -> int:
     import signal
-    import sys
     import time
     from pathlib import Path
 
     from vfgym import tuning
+    from vfgym._validate import check_output_path
+    from vfgym.commands._common import Interrupted
     from vfgym.io.runs import read_yaml
+    from vfgym.moves.axis import axis_digest
 
     file_data = read_yaml(args.config) if args.config else None
     cfg = tuning.SweepConfig.resolve(file_data, _cli_values(args), source=str(args.config))
@@ -78,21 +88,22 @@ def run(args: argparse.Namespace) -> int:
     tuning.check_sampler(cfg)
     name = cfg.study or _default_name(args.config, cfg.runs_dir)
     run_dir = Path(cfg.runs_dir) / "sweep" / name
+    check_output_path("runs_dir", run_dir, folder=True, shown=cfg.runs_dir)
     spec = tuning.resolve_storage(cfg.storage, run_dir)
-    reference = tuning.find_reference(cfg.reference, cfg.runs_dir, scenarios, cfg.laws)
-    storage = None
-    if spec.kind == "postgresql":  # reach the server before making a run folder
-        storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
-    run_dir.mkdir(parents=True, exist_ok=True)
+    _check_storage_file(cfg.storage, spec)
+    axis = cfg.load_axis()
+    reference = (
+        tuning.find_reference(cfg.reference, cfg.runs_dir, scenarios, cfg.laws, axis_digest(axis))
+        if cfg.aggregate == "mean"
+        else None
+    )  # a grid's reference is a mean cost
+    study, created = _open_study(cfg, spec, name, run_dir, scenarios)
     _record(run_dir, args, cfg, name, spec)
-    if storage is None:
-        storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
-    study, created = tuning.create_or_load(storage, name, cfg, scenarios)
     budget = tuning.trial_budget(cfg)
     n0 = tuning.counts(study)
     print(
         f"vfgym sweep: study {name} ({'new' if created else 'continued'}: "
-        f"{n0['complete']}/{budget} trials done) on {spec.display}\n"
+        f"{_done(n0['complete'], budget)}) on {spec.display}\n"
         f"  {cfg.sampler} sampler, {cfg.objective} objective, {cfg.workers} worker(s), "
         f"laws {','.join(cfg.laws)}, scenarios {', '.join(s.name for s in scenarios)}\n"
         f"  run folder {run_dir}",
@@ -125,14 +136,67 @@ def run(args: argparse.Namespace) -> int:
     elapsed = time.monotonic() - t0
     code = _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapsed, reports)
     if interrupted:
-        print(
-            f"interrupted: completed trials are kept in {spec.display}; continue with the "
-            f"same command and --study {name}",
-            file=sys.stderr,
-        )
         signal.signal(signal.SIGINT, signal.default_int_handler)
-        raise KeyboardInterrupt
+        raise Interrupted(
+            f"completed trials are kept in {spec.display}; continue with the same command "
+            f"and --study {name}"
+        )
     return code
+
+
+def _done(complete: int, budget: int) -> str:
+    """How far the study is: ``3/10 trials done``, or that it already has its trials."""
+    if complete < budget:
+        return f"{complete}/{budget} trials done"
+    return (
+        f"{complete} trials done, --trials {budget} asked: nothing to run; give --trials "
+        f"above {complete} to continue it"
+    )
+
+
+def _check_storage_file(text: str, spec) -> None:
+    """A storage file named by the user (sqlite:///FILE, journal:FILE) must go in an
+    existing folder: a typo must not make folders silently. The defaults ``sqlite`` and
+    ``journal`` live in the run folder, which the sweep makes."""
+    from pathlib import Path
+
+    from vfgym._validate import check_output_path
+
+    if spec.path is None or str(text).strip() in ("sqlite", "journal"):
+        return
+    folder = Path(spec.path).parent
+    check_output_path("storage", spec.path, shown=text)  # a file in the way, read-only, ...
+    if not folder.is_dir():
+        raise ValueError(
+            f"storage={text!r} is not allowed: folder {folder} does not exist; create it "
+            "first, or give storage 'sqlite' to keep the study in the run folder"
+        )
+
+
+def _open_study(cfg, spec, name, run_dir, scenarios):
+    """Open the storage and create or load the study; a run folder made here is removed
+    again if that fails (a refused sweep leaves nothing behind)."""
+    import json
+    import shutil
+
+    from vfgym import tuning
+
+    storage = None
+    if spec.kind == "postgresql":  # reach the server before making a run folder
+        storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
+    made = not run_dir.exists()
+    run_dir.mkdir(parents=True, exist_ok=True)
+    try:
+        if storage is None:
+            storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
+        try:
+            return tuning.create_or_load(storage, name, cfg, scenarios)
+        except (UnicodeDecodeError, json.JSONDecodeError) as exc:  # a file, not a journal
+            raise ValueError(f"storage={spec.display!r} cannot be opened: {exc}") from None
+    except BaseException:
+        if made:
+            shutil.rmtree(run_dir, ignore_errors=True)
+        raise
 
 
 def _default_name(config: str | None, runs_dir: str) -> str:
@@ -149,16 +213,24 @@ def _default_name(config: str | None, runs_dir: str) -> str:
 
 
 def _record(run_dir, args, cfg, name, spec) -> None:
-    """config.yaml (resolved, password masked) and command.txt (every invocation)."""
+    """config.yaml (resolved, password masked) and command.txt (every invocation that
+    opened the study: a refused one is not recorded)."""
     import shlex
     import sys
 
-    from vfgym.io.runs import write_text, write_yaml
+    from vfgym.io.runs import command_args, write_text, write_yaml
     from vfgym.tuning import mask_url
 
     conf = cfg.to_dict() | {"study": name, "storage": spec.display}
     write_yaml(run_dir / "config.yaml", {"command": "sweep", **conf})
-    if len(sys.argv) > 1 and "sweep" in sys.argv[1:]:
+    axis = cfg.load_axis()
+    if axis is not None:  # the axis as tuned on, beside the config that names its file
+        from vfgym.moves.axis import AXIS_FILE, write_axis
+
+        write_axis(axis, run_dir / AXIS_FILE)
+    if command_args() is not None:  # run by vfgym.cli.main
+        argv = command_args() or []
+    elif len(sys.argv) > 1 and "sweep" in sys.argv[1:]:
         argv = sys.argv[sys.argv.index("sweep") :]
     else:  # called as a function: the options it resolved to
         argv = ["sweep"] + [f"--{k.replace('_', '-')}={v}" for k, v in _cli_values(args).items()
@@ -253,13 +325,21 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     and summary.yaml. Returns the exit status."""
     from vfgym import tuning
     from vfgym.io.runs import write_text, write_yaml
+    from vfgym.moves.axis import axis_kwargs
+    from vfgym.params import PAPER_SETTINGS
+    from vfgym.report import axis_verdict, compact_rows, format_compact, format_verdict
 
     tuning.write_trials_csv(study, run_dir / "trials.csv")
     n = tuning.counts(study)
     budget = tuning.trial_budget(cfg)
     stops = sorted({r.get("stopped", "") for r in reports})
+    done = (
+        f"{n['complete']}/{budget} completed trials"
+        if n["complete"] <= budget
+        else f"{n['complete']} completed trials (--trials {budget} asked)"
+    )
     lines = [
-        f"study {study.study_name}: {n['complete']}/{budget} completed trials "
+        f"study {study.study_name}: {done} "
         f"({n['fail']} failed, {n['running']} running, {n['waiting']} waiting) "
         f"in {elapsed:.1f} s"
     ]
@@ -287,32 +367,30 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         lines.append("no completed trial yet")
     else:
         settings = tuning.trial_settings(best)
-        rec = tuning.best_record(study, best, cfg, spec, scenarios)
-        cmp = tuning.compare(settings, scenarios)
-        paper_cost = cmp["set"][0]["cost"]
-        rec["paper_cost"] = paper_cost
+        cmp = tuning.compare(settings, scenarios, **axis_kwargs(cfg.load_axis()))
+        paper_cost = tuning.set_cost(PAPER_SETTINGS, scenarios, cfg)  # as the sweep scores
+        record = tuning.best_record(study, best, cfg, spec, scenarios, paper_cost)
         lines.append(
-            f"best: trial {best.number}, cost {rec['cost']:.4f} "
-            f"({'feasible' if rec['feasible'] else 'INFEASIBLE'}) against the paper's "
-            f"{paper_cost:.4f} ({tuning.gap_pct(rec['cost'], paper_cost):+.1f} %)"
+            f"best: trial {best.number}, {tuning.describe(cfg)} cost {record.cost:.4f} "
+            f"({'feasible' if record.feasible else 'INFEASIBLE'}) against the paper's "
+            f"{paper_cost:.4f} ({tuning.gap_pct(record.cost, paper_cost):+.1f} %)"
         )
         if reference is not None:
-            ref, ref_path = reference
-            gap = tuning.gap_pct(rec["cost"], float(ref["cost"]))
-            rec["reference"] = {"path": str(ref_path), "cost": ref["cost"], "gap_pct": gap}
+            gap = tuning.ReferenceGap.between(record.cost, reference)
+            record = record.with_reference(gap)
             lines.append(
-                f"gap to the grid reference {ref_path} (cost {float(ref['cost']):.4f}): "
-                f"{gap:+.2f} %"
+                f"gap to the grid reference {reference.path} (cost {reference.cost:.4f}): "
+                f"{gap.gap_pct:+.2f} %"
             )
-        s = rec["settings"]
+        s = record.settings
         lines.append(
             f"settings: value {s['value_rad']:.6g} rad, error limit {s['error_limit_rad']:.6g} "
             f"rad, k {s['k']:.6g}, Ts/Tf {s['ts_over_tf']:.4g}, law {s['accel_law']}"
         )
-        write_yaml(run_dir / "best.yaml", rec)
-        summary["best"] = rec
-        summary["comparison"] = cmp
-        lines += ["", tuning.format_comparison(cmp)]
+        write_yaml(run_dir / "best.yaml", record.as_dict())
+        summary["best"] = record.as_dict()
+        summary["comparison"] = compact_rows(cmp).as_dict()
+        lines += ["", format_compact(cmp)]
     if cfg.plots and not interrupted and best is not None:
         plots = tuning.write_plots(study, run_dir, cfg.objective)
         summary["plots"] = plots
@@ -323,6 +401,10 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
             f"({', '.join(stops) or 'no report'}); run the same command again to continue"
         )
         code = 1
+    if best is not None and not interrupted:  # the report ends with the held-out verdict
+        v = axis_verdict(tuning.trial_settings(best), cfg.load_axis(), tuned_on=scenarios)
+        summary["verdict"] = v.to_dict()
+        lines += ["", format_verdict(v)]
     text = "\n".join(lines)
     write_text(run_dir / "report.txt", text + "\n")
     write_yaml(run_dir / "summary.yaml", summary)

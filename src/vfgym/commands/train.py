@@ -7,6 +7,8 @@ from pathlib import Path
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
+    from vfgym.commands._common import SEED, add_axis_option
+
     p = sub.add_parser(
         "train",
         help="train a PPO, SAC or TD3 agent (agents extra)",
@@ -26,7 +28,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="KEY=VALUE",
         help="overrides, values as YAML (e.g. n_timesteps=2000 n_envs=4)",
     )
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=SEED, default=0, help="seed (default 0)")
     p.add_argument("--runs-dir", default="runs", help="root of the run folders (default runs)")
     p.add_argument(
         "--name",
@@ -34,11 +36,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "run of that name is continued",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_axis_option(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from vfgym._validate import check_name, check_output_path
     from vfgym.agents import hyperparams as hp
+    from vfgym.commands._common import Interrupted
 
     if args.hyperparams_file is None:
         local = Path("agents/hyperparams") / f"{args.algo}.yml"
@@ -46,13 +51,44 @@ def run(args: argparse.Namespace) -> int:
     else:
         file = args.hyperparams_file
     params = hp.load(args.algo, args.env, file, hp.parse_overrides(args.hyperparams))
-    from vfgym.agents.training import train
+    if args.axis:  # the envs draw their moves from the axis (env_kwargs: axis=FILE)
+        from vfgym.commands._common import axis_from_args
+
+        axis_from_args(args)  # a bad file fails before a run folder is made
+        params["env_kwargs"] = {**(params.get("env_kwargs") or {}), "axis": args.axis}
+    if args.name is not None:
+        check_name("--name", args.name)
+    name = args.name or f"{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}"
+    check_output_path(
+        "--runs-dir", Path(args.runs_dir) / "train" / name, folder=True, shown=args.runs_dir
+    )
+    from vfgym.agents.training import check_same_run, train
     from vfgym.io.runs import new_run_dir, record_command
 
-    name = args.name or f"{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}"
+    check_same_run(Path(args.runs_dir) / "train" / name, args.algo, args.env, args.seed)
+    _check_env_kwargs(args.env, params.get("env_kwargs") or {})
     run_dir = new_run_dir(args.runs_dir, "train", name)
     record_command(run_dir)
     print(f"run folder: {run_dir}")
-    train(args.algo, args.env, params, run_dir, seed=args.seed, progress=not args.no_progress)
+    try:
+        train(args.algo, args.env, params, run_dir, seed=args.seed, progress=not args.no_progress)
+    except KeyboardInterrupt:
+        raise Interrupted(
+            f"the steps trained are saved in {run_dir / 'checkpoints'}; the same command "
+            "continues from the last checkpoint"
+        ) from None
     print(f"best model: {run_dir / 'best_model.zip'}")
     return 0
+
+
+def _check_env_kwargs(env_id: str, env_kwargs: dict) -> None:
+    """Make the environment once with ``env_kwargs``, so that a value it refuses stops the
+    command before a run folder is made (the env's own checks say what is allowed)."""
+    from vfgym.agents.training import make_env
+
+    if not env_kwargs:
+        return
+    try:
+        make_env(env_id, env_kwargs).close()
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"env_kwargs={env_kwargs!r} is not allowed for {env_id}: {exc}") from None

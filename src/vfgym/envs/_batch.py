@@ -1,8 +1,9 @@
 """Compiled stepping of VFServo-v0: one control interval of one env, or of a batch of envs.
 
 Each env keeps everything it needs in one float64 *workspace* row (layout below): the
-kernel's parameter row and loop state (:mod:`vfgym.plant._layout`), the episode's constants, the
-running cost, the final accumulators and the observation. :func:`env_step` maps the action
+kernel's parameter row and loop state (:mod:`vfgym.plant._layout`), the cost's constants
+(:mod:`vfgym.scoring._cost_compiled`), the episode's constants, the running cost, the final
+accumulators and the observation. :func:`env_step` maps the action
 onto the four settings (the search space's own scaling, read from the row), advances the
 stateful kernel (:func:`vfgym.plant._kernel.run_segment`) by one interval, and writes the reward
 terms, the end-of-episode flags and the observation. :func:`step_one` (one env, no threads)
@@ -10,9 +11,10 @@ and :func:`step_batch` (numba ``prange`` over envs) call the same :func:`env_ste
 single env and a batched one produce the same numbers bit for bit.
 
 Reward terms (see :class:`vfgym.envs.servo.VFServoEnv`): the running cost C(s) is the
-scoring path's cost formula (:func:`vfgym.scoring.score`) evaluated on the measures
-streamed so far, without the "unsettled" term, which is known only at the end; each
-interval's reward is C before minus C after, minus an optional tracking-error shaping
+scoring path's cost formula evaluated on the measures streamed so far
+(:func:`vfgym.scoring._cost_compiled.running_cost`, the compiled copy that sits beside
+:func:`vfgym.scoring.score`), without the arrival term, which is known only at the end;
+each interval's reward is C before minus C after, minus an optional tracking-error shaping
 term. The last interval's reward is finished in Python with the scoring path's own cost of
 the whole move.
 """
@@ -24,16 +26,20 @@ import math
 import numba
 import numpy as np
 
+from vfgym.plant import _jit as J
 from vfgym.plant import _kernel as K
 from vfgym.plant import _lanes as LN
 from vfgym.plant import _layout as L
+from vfgym.plant import _tick as TK
+from vfgym.plant._threads import keeps_torch_threads
+from vfgym.scoring import _cost_compiled as CC
 
-_jit = numba.njit(cache=True, fastmath=False, nogil=True)
+from ._common import clip_feature
+
+_jit = J.jit
 
 ACTION_TOL = 1e-6
 """Actions may exceed [-1, 1] by this much (float rounding), as :func:`vfgym.space.from_action`."""
-OBS_BOUND = 10.0
-"""Every observation feature is clipped to [-OBS_BOUND, OBS_BOUND]."""
 
 # flags returned by env_step
 TERMINATED = 1
@@ -46,30 +52,21 @@ ENDED = TERMINATED | TRUNCATED
 # --- workspace row ----------------------------------------------------------------------
 W_PRM = 0
 W_ST = W_PRM + L.N_PARAMS
-_c = W_ST + L.N_STATE
+W_COST = W_ST + L.N_STATE  # the cost's constants (vfgym.scoring._cost_compiled.constants)
+C_IDEAL = W_COST + CC.K_IDEAL  # ideal move time (s), the cost's yardstick
+C_WIN = W_COST + CC.K_WIN  # in-position half-width (rad)
+C_LIMIT = W_COST + CC.K_LIMIT  # the acceleration limit: Motor.usable_accel_rad_s2 (rad/s²)
+_c = W_COST + CC.N_CONST
 # episode constants
 C_N = _c + 0  # ticks of the move (the command's length): the time limit
 C_I = _c + 1  # ticks per control interval
 C_END = _c + 2  # tick from which the command is at its final value
 C_HOLD = _c + 3  # ticks the motor must stay in position to count as settled
-C_IDEAL = _c + 4  # ideal move time (s), the cost's yardstick
-C_WIN = _c + 5  # in-position half-width (rad)
-C_SCALE = _c + 6  # the move's size (rad): observation scale
-C_LIMIT = _c + 7  # motor acceleration limit (rad/s²)
-C_VMAX = _c + 8  # pulse train top speed δ·f (rad/s)
-C_TRACKING = _c + 9  # 1: moving reference (scored by tracking error)
-C_TRK_SCALE = _c + 10  # 10 % of the amplitude (rad): the tracking term's yardstick
-C_W_TIME = _c + 11  # CostWeights
-C_W_TRACK = _c + 12
-C_W_OV = _c + 13
-C_W_ACC = _c + 14
-C_W_TQ = _c + 15
-C_W_UNS = _c + 16
-C_B_OV = _c + 17  # Bounds.overshoot_windows
-C_B_TQ = _c + 18  # Bounds.torque_limit_time_s
-C_SHAPE = _c + 19  # tracking-error shaping weight
-C_VIOL = _c + 20  # 1: end the episode on a constraint violation
-C_DIMS = _c + 21  # 4 × (action index, low, high, log) for value, error limit, k, Ts/Tf;
+C_SCALE = _c + 4  # the move's size (rad): observation scale
+C_VMAX = _c + 5  # pulse train top speed δ·f (rad/s)
+C_SHAPE = _c + 6  # tracking-error shaping weight
+C_VIOL = _c + 7  # 1: end the episode on a constraint violation
+C_DIMS = _c + 8  # 4 × (action index, low, high, log) for value, error limit, k, Ts/Tf;
 # for a log dimension low and high are stored as log(low), log(high)
 _x = C_DIMS + 16
 # per-step results and running values
@@ -116,13 +113,7 @@ def width(n_obs: int) -> int:
     return W_OBS + n_obs
 
 
-@_jit
-def _clip(x: float) -> float:
-    if x > OBS_BOUND:
-        return OBS_BOUND
-    if x < -OBS_BOUND:
-        return -OBS_BOUND
-    return x
+_clip = _jit(clip_feature)  # the observation clip, compiled (tests/envs: equal on random x)
 
 
 @_jit
@@ -173,48 +164,6 @@ def apply_action(act, w) -> bool:
     w[W_PRM + L.P_STEP] = x0 / x2
     w[W_PRM + L.P_A] = x3
     return True
-
-
-@_jit
-def accel_excess(w) -> float:
-    """The scoring path's accel constraint on the peak so far: ratio − 1 − quantum/limit."""
-    scale = w[W_PRM + L.P_ACC_SCALE]
-    limit = w[C_LIMIT]
-    return w[W_ST + L.S_D2MX] * scale / limit - 1.0 - 2.0 * scale / limit
-
-
-@_jit
-def running_cost(w) -> float:
-    """:func:`vfgym.scoring.score`'s cost on the measures streamed so far, without the
-    unsettled term (see the module docstring)."""
-    T = w[W_PRM + L.P_TICK_S]
-    ideal = w[C_IDEAL]
-    if w[C_TRACKING] != 0.0:
-        main = 0.0
-        if w[C_TRK_SCALE] > 0.0:
-            main = w[C_W_TRACK] * (math.sqrt(w[W_ST + L.S_TSQM] / w[C_N]) / w[C_TRK_SCALE])
-    else:
-        main = w[C_W_TIME] * (((w[W_ST + L.S_LOM] + 1.0) * T) / ideal)
-    win = w[C_WIN]
-    ov_w = w[W_ST + L.S_OVM] / win if win > 0.0 else 0.0
-    return (
-        main
-        + w[C_W_OV] * ov_w
-        + w[C_W_ACC] * max(0.0, accel_excess(w))
-        + w[C_W_TQ] * (w[W_ST + L.S_SAT] * T) / ideal
-    )
-
-
-@_jit
-def violated(w) -> bool:
-    """A constraint of the scoring path (accel, torque, overshoot) is already violated."""
-    if accel_excess(w) > 0.0:
-        return True
-    if w[W_ST + L.S_SAT] * w[W_PRM + L.P_TICK_S] - w[C_B_TQ] > 0.0:
-        return True
-    win = w[C_WIN]
-    ov_w = w[W_ST + L.S_OVM] / win if win > 0.0 else 0.0
-    return ov_w - w[C_B_OV] > 0.0
 
 
 @_jit
@@ -291,14 +240,16 @@ def interval_flags(w, cmd, i0: int) -> int:
     n = int(w[C_N])
     i1 = int(st[L.S_TICK])
     w[X_COST_PREV] = w[X_COST]
-    w[X_COST] = running_cost(w)
+    prm = w[W_PRM : W_PRM + L.N_PARAMS]
+    cost_k = w[W_COST : W_COST + CC.N_CONST]
+    w[X_COST] = CC.running_cost(st, prm, cost_k)
     w[X_STEPS] += 1.0
     w[X_TICK_END] = i1
     write_obs(w, cmd, w[X_OMEGA0], w[X_SAT0], i1 - i0)
     flags = 0
     if i1 >= w[C_END] and (i1 - 1) - st[L.S_LOM] >= w[C_HOLD]:
         flags = TERMINATED | SETTLED
-    if w[C_VIOL] != 0.0 and violated(w):
+    if w[C_VIOL] != 0.0 and CC.violated(st, prm, cost_k):
         flags |= TERMINATED | VIOLATION
     if flags == 0 and i1 >= n:
         flags = TRUNCATED
@@ -362,12 +313,12 @@ def step_one(act, w, ring, cmd, obs):
 
 LANE_MIN = LN.LANES // 2
 """A block runs in SIMD lanes when at least this many of its envs can; else env by env."""
-PARALLEL_MIN_ENVS = 32 if K.SPINNING_WORKERS else 512
+PARALLEL_MIN_ENVS = 32 if J.SPINNING_WORKERS else 512
 """From this many envs a step spreads its blocks over numba's threads; below, it stays on
 the calling thread. A step of 64 envs takes ~150 us on one core. Waking numba's sleeping
 workers (vfgym's default, OMP_WAIT_POLICY=PASSIVE) costs ~55 us a call, so on the 2-core
 VM measured (benchmarks/bench_envs.py) the second thread only paid from ~512 envs; with
-spinning workers (opt-in, :data:`vfgym.plant._kernel.SPINNING_WORKERS`) it paid from 32."""
+spinning workers (opt-in, :data:`vfgym.plant._jit.SPINNING_WORKERS`) it paid from 32."""
 
 
 @_jit
@@ -458,7 +409,7 @@ def _end_block(b: int, W, RING, CMD, active, flags, I0, H, G, m: int) -> None:
             flags[r] = f
 
 
-@numba.njit(cache=True, fastmath=False, nogil=True, parallel=True)
+@J.jit(parallel=True)
 def step_batch(
     act, W, RING, CMD, active, flags, Z, CB, H, G, lane_min=LANE_MIN, parallel_min=PARALLEL_MIN_ENVS
 ) -> int:
@@ -502,6 +453,7 @@ def lane_scratch(num_envs: int, interval_ticks: int, acc_window: int) -> tuple[n
     return (*LN.scratch(blocks, interval_ticks, acc_window), np.zeros(blocks, dtype=np.int64))
 
 
+@keeps_torch_threads
 def step_batch_balanced(
     act, W, RING, CMD, active, flags, scratch, lane_min: int = LANE_MIN, parallel_min=None
 ) -> int:
@@ -522,5 +474,6 @@ def ring_size(prm: np.ndarray) -> int:
     return int(K.ring_size(prm))
 
 
-# The functions here compile the kernel and the lane kernel into themselves.
-K.guard_cache(step_one, (K, L, LN))
+# The functions here compile the kernel, its tick, the lane kernel and the compiled cost
+# into themselves.
+J.guard_cache(step_one, (K, TK, LN, L, CC))

@@ -5,15 +5,31 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from os import PathLike, fspath
 from typing import Any
 
 import numpy as np
 
 from vfgym._validate import check_choice, check_int
 from vfgym.moves import profiles
+from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.scenarios import SPLITS, Scenario, get_scenario, random_scenario
-from vfgym.params import Measures, Plant, in_position_rad
-from vfgym.scoring import CONSTRAINTS, Bounds, CostWeights
+from vfgym.params import (
+    ACCEL_LAWS,
+    DEFAULT_MEASURES,
+    PAPER_PLANT,
+    Measures,
+    Plant,
+)
+from vfgym.scoring import (
+    CONSTRAINTS,
+    DEFAULT_BOUNDS,
+    DEFAULT_WEIGHTS,
+    Bounds,
+    CostWeights,
+    Yardsticks,
+    yardsticks,
+)
 
 SEED_LIMIT = 2**63 - 1
 """Scenario seeds are whole numbers in [0, SEED_LIMIT) (as :func:`vfgym.random_scenario`)."""
@@ -55,8 +71,31 @@ SCENARIO_FEATURES = (
 """The features describing a move and its plant (definitions in :func:`scenario_features`)."""
 
 
-def _clip(x: float, bound: float = 10.0) -> float:
-    return min(max(float(x), -bound), bound)
+OBS_BOUND = 10.0
+"""Every observation feature of both envs is clipped to [-OBS_BOUND, OBS_BOUND]."""
+
+
+def clip_feature(x: float) -> float:
+    """An observation feature clipped to [-OBS_BOUND, OBS_BOUND] (NaN passes through).
+
+    Plain comparisons, so that the envs' compiled step (``_batch._clip``, this function
+    compiled by numba) computes the same numbers.
+
+    Parameters
+    ----------
+    x : float
+        The feature.
+
+    Returns
+    -------
+    float
+        ``x`` clipped.
+    """
+    if x > OBS_BOUND:
+        return OBS_BOUND
+    if x < -OBS_BOUND:
+        return -OBS_BOUND
+    return x
 
 
 def main_move(sc: Scenario, plant: Plant) -> float:
@@ -69,7 +108,7 @@ def main_move(sc: Scenario, plant: Plant) -> float:
 
 
 def scenario_features(sc: Scenario, base: Plant, plant: Plant | None = None) -> np.ndarray:
-    """The move and its plant, normalised (float64, each clipped to [-10, 10]).
+    """The move and its plant, normalised (float64, each clipped by :func:`clip_feature`).
 
     direction: sign of :func:`main_move`; log_distance: log10(|move| / 1 rad) / 2;
     log_ideal_time: log10(ideal time / 1 ms) / 2; time_budget: duration / ideal time / 10;
@@ -100,7 +139,7 @@ def scenario_features(sc: Scenario, base: Plant, plant: Plant | None = None) -> 
         m.load_torque_nm / LOAD_SCALE_NM,
         m.peak_torque_nm / (m.inertia_kgm2 * m.accel_limit_rad_s2),
     ]
-    return np.array([_clip(x) for x in out], dtype=np.float64)
+    return np.array([clip_feature(x) for x in out], dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -118,6 +157,8 @@ class Episode:
     window_rad: float
     scale_rad: float
     features: np.ndarray
+    yardsticks: Yardsticks
+    """What the scoring path judges the move against (ideal time, window, ...)."""
 
     @classmethod
     def make(cls, sc: Scenario, base: Plant, measures: Measures) -> Episode:
@@ -128,7 +169,8 @@ class Episode:
             )
         cmd = sc.command(plant)
         target = float(cmd[-1])
-        window = in_position_rad(measures, plant, target)
+        y = yardsticks(sc, plant, measures)
+        window = y.window_rad
         scale = max(abs(main_move(sc, plant)), abs(target), window, 1e-9)
         # the last change of the command: the first tick of its final run of equal values
         # (the plant is at 0 before tick 0); as vfgym.simulate.command_end_s finds it
@@ -141,16 +183,66 @@ class Episode:
             target_rad=target,
             command_end_s=float(last) / plant.tick_hz if last >= 0 else 0.0,
             command_end_tick=last + 1,
-            ideal_time_s=sc.ideal_time_s(plant),
+            ideal_time_s=y.ideal_time_s,
             window_rad=window,
             scale_rad=scale,
             features=scenario_features(sc, base, plant),
+            yardsticks=y,
         )
+
+
+def resolve_axis(
+    axis: Axis | str | PathLike[str] | None, plant: Plant, measures: Measures
+) -> tuple[Axis | None, Plant, Measures]:
+    """An env's ``axis`` argument with its ``plant`` and ``measures``.
+
+    An axis brings its own plant and measures, so giving other ones beside it is an error
+    (the paper's defaults, or the axis's own, are no conflict).
+
+    Parameters
+    ----------
+    axis : Axis, str, os.PathLike or None
+        An :class:`~vfgym.moves.axis.Axis` or an axis file's path; ``None`` for none.
+    plant : Plant
+        The plant given beside it.
+    measures : Measures
+        The measures given beside it.
+
+    Returns
+    -------
+    tuple of (Axis or None, Plant, Measures)
+        The axis (loaded from its file), and the plant and measures to use: the axis's,
+        or the ones given when there is no axis.
+
+    Raises
+    ------
+    ValueError
+        If ``axis`` is neither, its file is bad, or ``plant`` / ``measures`` differ from
+        the axis's.
+    """
+    if axis is None:
+        return None, plant, measures
+    if isinstance(axis, (str, PathLike)):
+        axis = load_axis(fspath(axis))
+    if not isinstance(axis, Axis):
+        raise ValueError(f"axis={axis!r} is not allowed: give an axis file's path or a vfgym Axis")
+    for name, value, default in (
+        ("plant", plant, PAPER_PLANT),
+        ("measures", measures, DEFAULT_MEASURES),
+    ):
+        if value != default and value != getattr(axis, name):
+            raise ValueError(
+                f"{name}={value!r} is not allowed with axis={axis.name!r}: the axis gives "
+                f"its own {name}; give one or the other"
+            )
+    return axis, axis.plant, axis.measures
 
 
 class ScenarioSource:
     """Where each episode's scenario comes from: a fixed one, or seeded draws from one
-    split (train or test) of the random distribution, seeds in ``seed_range`` = [lo, hi)."""
+    split (train or test) of the random distribution, seeds in ``seed_range`` = [lo, hi);
+    on an ``axis``, from that split's move set (:meth:`vfgym.moves.axis.MoveSet.pick`)
+    and names resolved by :meth:`vfgym.moves.axis.Axis.scenario`."""
 
     def __init__(
         self,
@@ -159,6 +251,7 @@ class ScenarioSource:
         seed_range: tuple[int, int] | None,
         base: Plant,
         measures: Measures,
+        axis: Axis | None = None,
     ) -> None:
         check_choice("split", split, SPLITS)
         lo, hi = DEFAULT_SEED_RANGE if seed_range is None else _check_range(seed_range)
@@ -166,7 +259,8 @@ class ScenarioSource:
         self.seed_range = (lo, hi)
         self.base = base
         self.measures = measures
-        self.fixed = None if scenario is None else get_scenario(_check_scenario(scenario))
+        self.axis = axis
+        self.fixed = None if scenario is None else self._named(scenario)
         self._cache: dict[Scenario, Episode] = {}
         if self.fixed is not None:
             self.episode(self.fixed)  # a bad scenario fails here, not at reset
@@ -184,14 +278,102 @@ class ScenarioSource:
         """The next episode: from ``options`` if they name one, else fixed, else drawn."""
         opts = check_options(options)
         if "scenario" in opts:
-            return self.episode(get_scenario(_check_scenario(opts["scenario"])))
+            return self.episode(self._named(opts["scenario"]))
         if "scenario_seed" in opts:
             seed = check_int("scenario_seed", opts["scenario_seed"], 0, SEED_LIMIT - 1)
-            return self.episode(random_scenario(seed, self.split))
+            return self.episode(self._seeded(seed))
         if self.fixed is not None:
             return self.episode(self.fixed)
         seed = int(rng.integers(self.seed_range[0], self.seed_range[1]))
-        return self.episode(random_scenario(seed, self.split))
+        return self.episode(self._seeded(seed))
+
+    def _named(self, scenario: Any) -> Scenario:
+        sc = _check_scenario(scenario)
+        return get_scenario(sc) if self.axis is None else self.axis.scenario(sc)
+
+    def _seeded(self, seed: int) -> Scenario:
+        if self.axis is None:
+            return random_scenario(seed, self.split)
+        return self.axis.moves.of(self.split).pick(seed, self.split, self.base)
+
+
+@dataclass(frozen=True)
+class EnvConfig:
+    """The arguments both envs take (VFTune-v0's all of them), every default here.
+
+    Validated on construction, except the scenario and its draws, which
+    :meth:`scenario_source` checks. An ``axis`` is resolved here, once, by
+    :func:`resolve_axis`: afterwards ``axis`` is the loaded
+    :class:`~vfgym.moves.axis.Axis` and ``plant`` and ``measures`` are its own.
+
+    Parameters
+    ----------
+    scenario : str, Scenario or None
+        A fixed scenario (a name such as ``"paper-step"`` or ``"test-7"``, or a
+        :class:`vfgym.Scenario`); ``None`` draws one per episode.
+    split : str
+        ``"train"`` or ``"test"``, the random distribution's split (on an axis, its move
+        set) to draw from.
+    seed_range : tuple of (int, int) or None
+        (low, high): scenario seeds drawn in [low, high) (default [0, 2³¹)).
+    accel_law : str
+        ``"rise"`` (the paper's reading) or ``"slew"``.
+    axis : Axis, str, os.PathLike or None
+        An axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant and measures,
+        and the moves of each split come from its move sets (a random set's draws, or a
+        listed set's move ``seed mod len``); names resolve on the axis.
+    plant : Plant
+        The base plant (each scenario applies its load); with an axis, the axis's.
+    measures : Measures
+        Windows and bands of the measures; with an axis, the axis's.
+    weights : CostWeights
+        Weights of the cost.
+    bounds : Bounds
+        Bounds of the constraints.
+
+    Raises
+    ------
+    ValueError
+        If an argument is of the wrong type or out of its range, or an axis is given
+        with another plant or measures.
+    """
+
+    scenario: str | Scenario | None = None
+    split: str = "train"
+    seed_range: tuple[int, int] | None = None
+    accel_law: str = "rise"
+    axis: Axis | str | PathLike[str] | None = None
+    plant: Plant = PAPER_PLANT
+    measures: Measures = DEFAULT_MEASURES
+    weights: CostWeights = DEFAULT_WEIGHTS
+    bounds: Bounds = DEFAULT_BOUNDS
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        axis, plant, measures = resolve_axis(self.axis, self.plant, self.measures)
+        s(self, "axis", axis)
+        s(self, "plant", plant)
+        s(self, "measures", measures)
+        check_scoring(self.weights, self.bounds, self.measures, self.plant)
+        s(self, "accel_law", check_choice("accel_law", self.accel_law, ACCEL_LAWS))
+
+    def scenario_source(self) -> ScenarioSource:
+        """Where the episodes' scenarios come from.
+
+        Returns
+        -------
+        ScenarioSource
+            On the axis's move sets if there is one.
+
+        Raises
+        ------
+        ValueError
+            If the scenario, split or seed range is bad (raised by :class:`ScenarioSource`).
+        """
+        axis = self.axis if isinstance(self.axis, Axis) else None  # resolved on construction
+        return ScenarioSource(
+            self.scenario, self.split, self.seed_range, self.plant, self.measures, axis
+        )
 
 
 def _check_scenario(sc: Any) -> str | Scenario:

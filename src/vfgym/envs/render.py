@@ -47,7 +47,7 @@ def move_picture(
     FigureCanvasAgg(fig)
     ax_p, ax_v, ax_a = fig.subplots(3, 1, sharex=True)
     ax_p.plot(t_ms, command_rad[::step], color="0.5", lw=1.0, ls="--", label="command P")
-    limit = plant.motor.accel_limit_rad_s2
+    limit = plant.motor.usable_accel_rad_s2
     if motor_rad is not None and pulse_rad is not None and speed_rad_s is not None:
         ws = max(1, round(SPEED_WINDOW_S * f))
         wa = max(1, round(accel_window_s * f))

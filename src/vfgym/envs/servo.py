@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -12,32 +13,28 @@ from gymnasium import spaces
 from vfgym._validate import check_choice, check_real
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import (
-    ACCEL_LAWS,
-    DEFAULT_MEASURES,
-    PAPER_PLANT,
     PAPER_SETTINGS,
-    Measures,
-    Plant,
     Settings,
 )
 from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import pack
 from vfgym.plant.measures import from_acc
-from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights, score
+from vfgym.scoring import _cost_compiled as CC
+from vfgym.scoring import score
 from vfgym.space import SPACE, from_action, to_action
 
 from . import _batch as B
 from ._common import (
+    OBS_BOUND,
     SCENARIO_FEATURES,
     SERVO_INTERVAL_S,
     SERVO_SETTLE_TIME_S,
     SERVO_TRACKING_WEIGHT,
     SERVO_VIOLATION_PENALTY,
+    EnvConfig,
     Episode,
-    ScenarioSource,
     as_action,
-    check_scoring,
 )
 from ._common import scored_info as _scored_info
 
@@ -53,7 +50,7 @@ SETTING_FIELDS = ("value_rad", "error_limit_rad", "k", "ts_over_tf")
 
 def servo_spaces() -> tuple[spaces.Box, spaces.Box]:
     """(observation space, action space) of VFServo-v0."""
-    obs = spaces.Box(-B.OBS_BOUND, B.OBS_BOUND, shape=(len(SERVO_FEATURES),), dtype=np.float32)
+    obs = spaces.Box(-OBS_BOUND, OBS_BOUND, shape=(len(SERVO_FEATURES),), dtype=np.float32)
     act = spaces.Box(-1.0, 1.0, shape=(len(SPACE),), dtype=np.float32)
     return obs, act
 
@@ -85,91 +82,111 @@ def raise_bad_action(action: np.ndarray, accel_law: str, index: int | None = Non
     raise ValueError(f"action={np.asarray(action).tolist()} is not allowed")
 
 
+@dataclass(frozen=True)
+class ServoConfig(EnvConfig):
+    """VFServo-v0's arguments, every default here: :class:`EnvConfig`'s and the online
+    tuning's own; validated on construction.
+
+    Parameters
+    ----------
+    scenario, split, seed_range, accel_law, axis, plant, measures, weights, bounds
+        As :class:`vfgym.envs._common.EnvConfig` (an axis resolved there).
+    interval_s : float
+        The control interval (s), a whole number of ticks (:meth:`vfgym.Plant.whole_ticks`).
+    settle_time_s : float
+        How long the motor must stay in position to end the episode (s), 0 to 1.
+    initial_settings : Settings
+        The settings in force before the first action (its law is replaced by
+        ``accel_law``).
+    tracking_weight : float
+        Weight of the tracking-error shaping term (0: none), ≥ 0.
+    terminate_on_violation : bool
+        End the episode on a constraint violation.
+    violation_penalty : float
+        The extra negative reward of such an end, ≥ 0.
+
+    Raises
+    ------
+    ValueError
+        If an argument is of the wrong type or out of its range.
+    """
+
+    interval_s: float = SERVO_INTERVAL_S
+    settle_time_s: float = SERVO_SETTLE_TIME_S
+    initial_settings: Settings = PAPER_SETTINGS
+    tracking_weight: float = SERVO_TRACKING_WEIGHT
+    terminate_on_violation: bool = False
+    violation_penalty: float = SERVO_VIOLATION_PENALTY
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        s = object.__setattr__
+        if not isinstance(self.initial_settings, Settings):
+            raise ValueError(f"initial_settings={self.initial_settings!r} must be a vfgym.Settings")
+        s(self, "initial_settings", self.initial_settings.replace(accel_law=self.accel_law))
+        self.plant.whole_ticks("interval_s", self.interval_s)
+        s(self, "settle_time_s", check_real("settle_time_s", self.settle_time_s, 0.0, 1.0))
+        s(self, "tracking_weight", check_real("tracking_weight", self.tracking_weight, 0.0))
+        if not isinstance(self.terminate_on_violation, bool):
+            raise ValueError(
+                f"terminate_on_violation={self.terminate_on_violation!r} must be a bool"
+            )
+        s(self, "violation_penalty", check_real("violation_penalty", self.violation_penalty, 0.0))
+
+    @property
+    def interval_ticks(self) -> int:
+        """Ticks per control interval."""
+        return self.plant.whole_ticks("interval_s", self.interval_s)
+
+    @property
+    def hold_ticks(self) -> int:
+        """Ticks the motor must stay in position to count as settled."""
+        return round(self.settle_time_s * self.plant.tick_hz)
+
+
 class ServoCore:
     """VFServo-v0's configuration and the Python half of its step, shared by the single env
     and the vector env so that both compute the same numbers: filling a workspace row at
     reset, and the end-of-episode scoring."""
 
-    def __init__(
-        self,
-        scenario: str | Scenario | None,
-        split: str,
-        seed_range: tuple[int, int] | None,
-        accel_law: str,
-        interval_s: float,
-        settle_time_s: float,
-        initial_settings: Settings,
-        tracking_weight: float,
-        terminate_on_violation: bool,
-        violation_penalty: float,
-        plant: Plant,
-        measures: Measures,
-        weights: CostWeights,
-        bounds: Bounds,
-    ) -> None:
-        check_scoring(weights, bounds, measures, plant)
-        self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
-        if not isinstance(initial_settings, Settings):
-            raise ValueError(f"initial_settings={initial_settings!r} must be a vfgym.Settings")
-        self.initial_settings = initial_settings.replace(accel_law=self.accel_law)
-        f = plant.tick_hz
-        ticks = check_real("interval_s", interval_s, 0.0, lo_open=True) * f
-        if abs(ticks - round(ticks)) > 1e-9 * max(1.0, ticks) or round(ticks) < 1:
-            raise ValueError(
-                f"interval_s={interval_s!r} is not a whole number of ticks "
-                f"(T = {plant.tick_s:.6g} s): allowed whole multiples of T"
-            )
-        self.interval_ticks = round(ticks)
-        self.hold_ticks = round(check_real("settle_time_s", settle_time_s, 0.0, 1.0) * f)
-        self.tracking_weight = check_real("tracking_weight", tracking_weight, 0.0)
-        if not isinstance(terminate_on_violation, bool):
-            raise ValueError(f"terminate_on_violation={terminate_on_violation!r} must be a bool")
-        self.terminate_on_violation = terminate_on_violation
-        self.violation_penalty = check_real("violation_penalty", violation_penalty, 0.0)
-        self.plant = plant
-        self.measures = measures
-        self.weights = weights
-        self.bounds = bounds
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+    def __init__(self, config: ServoConfig) -> None:
+        if not isinstance(config, ServoConfig):
+            raise ValueError(f"config={config!r} must be a vfgym.envs.servo.ServoConfig")
+        self.config = config
+        self.interval_ticks = config.interval_ticks
+        self.hold_ticks = config.hold_ticks
+        self.source = config.scenario_source()
         self.n_obs = len(SERVO_FEATURES)
         self.width = B.width(self.n_obs)
-        prm = pack(PAPER_SETTINGS, plant, measures, 1.0, 1)
+        prm = pack(PAPER_SETTINGS, config.plant, config.measures, 1.0, 1)
         self.ring_len = B.ring_size(prm)
         self.acc_window = int(prm[L.P_ACC_W])
         self._dims = _space_table()
-        self._set0 = to_action(self.initial_settings).astype(np.float64)
+        self._set0 = to_action(config.initial_settings).astype(np.float64)
+
+    @property
+    def accel_law(self) -> str:
+        """The acceleration law the actions' settings use."""
+        return self.config.accel_law
 
     def start(self, w: np.ndarray, ring: np.ndarray, cmd: np.ndarray, ep: Episode) -> None:
         """Fill workspace row ``w`` for a new episode on ``ep`` whose command is ``cmd``."""
         n = ep.command.size
         w[:] = 0.0
+        c = self.config
         w[B.W_PRM : B.W_PRM + L.N_PARAMS] = pack(
-            self.initial_settings, ep.plant, self.measures, ep.target_rad, n
+            c.initial_settings, ep.plant, c.measures, ep.target_rad, n
         )
-        wt, bd = self.weights, self.bounds
-        sc = ep.scenario
+        w[B.W_COST : B.W_COST + CC.N_CONST] = CC.constants(ep.yardsticks, n, c.weights, c.bounds)
         cfg = {
             B.C_N: n,
             B.C_I: self.interval_ticks,
             B.C_END: ep.command_end_tick,
             B.C_HOLD: self.hold_ticks,
-            B.C_IDEAL: ep.ideal_time_s,
-            B.C_WIN: ep.window_rad,
             B.C_SCALE: ep.scale_rad,
-            B.C_LIMIT: ep.plant.motor.accel_limit_rad_s2,
             B.C_VMAX: ep.plant.pulse_top_speed_rad_s,
-            B.C_TRACKING: 1.0 if sc.tracking else 0.0,
-            B.C_TRK_SCALE: 0.1 * abs(sc.distance_rad),
-            B.C_W_TIME: wt.time,
-            B.C_W_TRACK: wt.tracking,
-            B.C_W_OV: wt.overshoot,
-            B.C_W_ACC: wt.accel,
-            B.C_W_TQ: wt.torque,
-            B.C_W_UNS: wt.unsettled,
-            B.C_B_OV: bd.overshoot_windows,
-            B.C_B_TQ: bd.torque_limit_time_s,
-            B.C_SHAPE: self.tracking_weight,
-            B.C_VIOL: 1.0 if self.terminate_on_violation else 0.0,
+            B.C_SHAPE: c.tracking_weight,
+            B.C_VIOL: 1.0 if c.terminate_on_violation else 0.0,
         }
         for k, v in cfg.items():
             w[k] = v
@@ -181,16 +198,15 @@ class ServoCore:
     def finish(self, w: np.ndarray, ep: Episode, flags: int) -> tuple[float, dict[str, Any]]:
         """The last interval's reward and the episode's info: the scoring path's measures
         and cost of the whole move (the settings held after the episode's end)."""
+        c = self.config
         acc = w[B.W_ACC : B.W_ACC + L.N_ACC]
-        m = from_acc(acc, ep.plant, self.measures, ep.target_rad, ep.command_end_s)
-        cost, cons, _objs, extra = score(
-            m, ep.scenario, ep.plant, self.measures, self.weights, self.bounds
-        )
+        m = from_acc(acc, ep.plant, c.measures, ep.target_rad, ep.command_end_s)
+        s = score(m, ep.scenario, ep.plant, c.measures, c.weights, c.bounds)
         violation = bool(flags & B.VIOLATION)
-        reward = float(w[B.X_COST_PREV] - cost) - float(w[B.X_SHAPE])
+        reward = float(w[B.X_COST_PREV] - s.cost) - float(w[B.X_SHAPE])
         if violation:
-            reward -= self.violation_penalty
-        info = _scored_info(ep, m | extra, cost, cons)
+            reward -= c.violation_penalty
+        info = _scored_info(ep, s.metrics, s.cost, s.constraints)
         info["ended_settled"] = bool(flags & B.SETTLED)
         info["ended_violation"] = violation
         info["control_ticks"] = int(w[B.X_TICK_END])
@@ -203,7 +219,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Description
 
-    One episode is one move of the plant of MODEL.md (V-F controller → digital servo →
+    One episode is one move of the plant of docs/model.md (V-F controller → digital servo →
     motor). Each step is one control interval (default 1 ms = 140 ticks): the action sets
     the four settings for that interval, and the compiled, stateful kernel
     (:func:`vfgym.plant._kernel.run_segment`) advances the plant through it; its state (the V-F
@@ -247,14 +263,16 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     ## Rewards
 
     Per interval, ``r = C(before) − C(after) − tracking_weight · ΔISE · T / (D² · t_ideal)``
-    where C is the scoring path's cost formula (:func:`vfgym.scoring.score`) on the
-    measures streamed so far: time out of the in-position window / ideal time (or RMS
-    tracking error for a moving reference), + 0.1 × overshoot in windows, + 5 × the
-    acceleration over the limit (so a violation shades the reward by its degree), + time at
-    the torque limit / ideal time (weights from ``weights``); ΔISE is the interval's sum of
-    squared tracking error (P − θ)². On the last step C(after) is the scoring path's cost
-    of the whole move, including the unsettled penalty, ΔISE runs to the end of the move,
-    and ``violation_penalty`` is subtracted on a violation. So the return of an episode is
+    where C is the scoring path's cost formula (:func:`vfgym.scoring.score`, compiled in
+    :mod:`vfgym.scoring._cost_compiled`) on the measures streamed so far: time out of the
+    in-position window / ideal time (or RMS tracking error for a moving reference), + 0.1 ×
+    overshoot in windows, + 5 × the acceleration over the limit (so a violation shades the
+    reward by its degree), + time at the torque limit / ideal time (weights from
+    ``weights``); ΔISE is the interval's sum of squared tracking error (P − θ)². On the last
+    step C(after) is the scoring path's cost of the whole move, including its arrival term
+    (a move not settled in the in-position window at its end, or a sine not followed, pays
+    a penalty growing with the distance left), ΔISE runs to the end of the move, and
+    ``violation_penalty`` is subtracted on a violation. So the return of an episode is
     minus the cost of its move (to rounding) when ``tracking_weight=0``; C(before) = 0.
 
     ## Starting State
@@ -267,8 +285,9 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
 
     Terminated when the motor has settled: the command is at its final value and the motor
     has stayed in the in-position window for ``settle_time_s``; or, with
-    ``terminate_on_violation``, as soon as a constraint (acceleration, torque, overshoot)
-    is violated. Truncated at the end of the scenario's command (its duration). When an
+    ``terminate_on_violation``, as soon as a constraint that can be known while the move
+    runs (acceleration, torque, overshoot) is violated; arrival is judged at the move's
+    end, in ``info``. Truncated at the end of the scenario's command (its duration). When an
     episode ends early the rest of the move is simulated with the last settings held, so
     that the end-of-episode measures cover the whole command, as ``evaluate``'s do.
 
@@ -278,18 +297,8 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     accel_law="rise", interval_s=1e-3, settle_time_s=5e-3,
     initial_settings=PAPER_SETTINGS, tracking_weight=0.0, terminate_on_violation=False,
     violation_penalty=5.0, plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
-    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``
-
-    * ``scenario``, ``split``, ``seed_range``, ``accel_law``, ``plant``, ``measures``,
-      ``weights``, ``bounds``: as VFTune-v0.
-    * ``interval_s``: the control interval, a whole number of ticks.
-    * ``settle_time_s``: how long the motor must stay in position to end the episode.
-    * ``initial_settings``: the settings in force before the first action.
-    * ``tracking_weight``: weight of the tracking-error shaping term (0: none).
-    * ``terminate_on_violation``, ``violation_penalty``: end on a constraint violation,
-      with this extra negative reward.
-    * ``render_mode``: ``"rgb_array"`` draws the episode's move so far (position, speed,
-      acceleration, command against motor) as an (480, 640, 3) uint8 array.
+    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None, axis=None)``; see
+    Parameters.
 
     ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)`` gives
     :class:`vfgym.envs.vector.VFServoVectorEnv`, which steps all N envs in one compiled
@@ -298,6 +307,30 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     ## Version History
 
     * v0: Initial version.
+
+    Parameters
+    ----------
+    scenario : str, Scenario or None
+        As :class:`vfgym.envs.tune.VFTuneEnv`.
+    render_mode : str or None
+        ``"rgb_array"`` draws the episode's move so far (position, speed, acceleration,
+        command against motor) as an (480, 640, 3) uint8 array.
+    **options
+        The other fields of :class:`ServoConfig`, where their defaults live and are
+        checked: VFTune-v0's (``split``, ``seed_range``, ``accel_law``, ``axis``,
+        ``plant``, ``measures``, ``weights``, ``bounds``), and ``interval_s`` (the control
+        interval, a whole number of ticks), ``settle_time_s`` (how long the motor must stay
+        in position to end the episode), ``initial_settings`` (the settings in force
+        before the first action), ``tracking_weight`` (weight of the tracking-error
+        shaping term; 0: none), ``terminate_on_violation`` and ``violation_penalty`` (end
+        on a constraint violation, with this extra negative reward).
+
+    Raises
+    ------
+    ValueError
+        If an argument is out of its range or of the wrong type.
+    TypeError
+        If an option is not a field of :class:`ServoConfig`.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 30}
@@ -306,37 +339,10 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         self,
         scenario: str | Scenario | None = None,
         *,
-        split: str = "train",
-        seed_range: tuple[int, int] | None = None,
-        accel_law: str = "rise",
-        interval_s: float = SERVO_INTERVAL_S,
-        settle_time_s: float = SERVO_SETTLE_TIME_S,
-        initial_settings: Settings = PAPER_SETTINGS,
-        tracking_weight: float = SERVO_TRACKING_WEIGHT,
-        terminate_on_violation: bool = False,
-        violation_penalty: float = SERVO_VIOLATION_PENALTY,
-        plant: Plant = PAPER_PLANT,
-        measures: Measures = DEFAULT_MEASURES,
-        weights: CostWeights = DEFAULT_WEIGHTS,
-        bounds: Bounds = DEFAULT_BOUNDS,
         render_mode: str | None = None,
+        **options: Any,
     ) -> None:
-        self.core = ServoCore(
-            scenario,
-            split,
-            seed_range,
-            accel_law,
-            interval_s,
-            settle_time_s,
-            initial_settings,
-            tracking_weight,
-            terminate_on_violation,
-            violation_penalty,
-            plant,
-            measures,
-            weights,
-            bounds,
-        )
+        self.core = ServoCore(ServoConfig(scenario, **options))
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
         self.render_mode = render_mode
@@ -364,6 +370,18 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode at rest, before the move's first control interval.
+
+        Parameters
+        ----------
+        seed, options
+            As :meth:`vfgym.envs.tune.VFTuneEnv.reset`.
+
+        Returns
+        -------
+        tuple
+            ``(observation, info)``: the interval's observation and ``{"scenario": name}``.
+        """
         super().reset(seed=seed)
         ep = self.core.source.draw(self.np_random, options)
         self._ep = ep
@@ -376,6 +394,26 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._w[self._obs].astype(np.float32), {"scenario": ep.scenario.name}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Hold the settings the action maps to for one control interval of the move.
+
+        Parameters
+        ----------
+        action : numpy.ndarray
+            A point of ``[-1, 1]⁴``: value, L, k, Ts/Tf on the search space.
+
+        Returns
+        -------
+        tuple
+            ``(observation, reward, terminated, truncated, info)``; ``info`` is empty until
+            the episode ends, then holds the scored move's info.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            After the episode has ended (or before ``reset()``).
+        ValueError
+            If the action is not finite or outside the box.
+        """
         if self._ended or self._cmd is None:
             raise gym.error.ResetNeeded(
                 "call reset() before step(): "
@@ -399,7 +437,18 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         return obs, reward, bool(flags & B.TERMINATED), bool(flags & B.TRUNCATED), info
 
     def render(self) -> np.ndarray | None:
-        """The episode's move so far (the whole move once it has ended) as an RGB array."""
+        """The episode's move so far (the whole move once it has ended) as an RGB array.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            (480, 640, 3) uint8, or ``None`` (with a warning) without a render mode.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            Before the first ``reset()``.
+        """
         if self.render_mode is None:
             gym.logger.warn(
                 "VFServo-v0.render() without a render_mode: make the env with "
@@ -415,7 +464,13 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         title = f"VFServo-v0, {ep.scenario.name}, {len(self._record)} steps"
         if rec.shape[1] == 0:
             return move_picture(
-                ep.plant, ep.command, None, None, None, self.core.measures.accel_window_s, title
+                ep.plant,
+                ep.command,
+                None,
+                None,
+                None,
+                self.core.config.measures.accel_window_s,
+                title,
             )
         return move_picture(
             ep.plant,
@@ -423,7 +478,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
             rec[L.R_PULSE],
             rec[L.R_THETA],
             rec[L.R_OMEGA],
-            self.core.measures.accel_window_s,
+            self.core.config.measures.accel_window_s,
             title,
         )
 

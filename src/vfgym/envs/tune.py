@@ -11,28 +11,25 @@ from gymnasium import spaces
 
 from vfgym._validate import check_choice
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import ACCEL_LAWS, DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.params import Measures, Settings
 from vfgym.plant import simulate
 from vfgym.scoring import (
-    DEFAULT_BOUNDS,
-    DEFAULT_WEIGHTS,
     Bounds,
     CostWeights,
+    Score,
     evaluate,
     score_pairs,
 )
 from vfgym.space import SPACE, from_action, settings_to_dict
 
 from ._common import (
+    OBS_BOUND,
     SCENARIO_FEATURES,
+    EnvConfig,
     Episode,
-    ScenarioSource,
     as_action,
-    check_scoring,
     scored_info,
 )
-
-OBS_BOUND = 10.0
 
 
 def tune_spaces() -> tuple[spaces.Box, spaces.Box]:
@@ -54,7 +51,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Description
 
-    Each episode is one move of the plant of MODEL.md (V-F controller → digital servo →
+    Each episode is one move of the plant of docs/model.md (V-F controller → digital servo →
     motor): ``reset`` picks a scenario (a command profile and the load on the motor), the
     agent answers with the four settings, and ``step`` simulates the whole move tick by tick
     and scores it through :func:`vfgym.evaluate`, the one scoring path, so the reward is
@@ -94,17 +91,20 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     ``-cost`` of the move from :func:`vfgym.evaluate` (lower cost is better; a perfect
     point-to-point move costs about 1): move time / ideal time (or RMS tracking error for a
     moving reference) plus weighted overshoot, acceleration over the limit, time at the
-    torque limit and not settling (:class:`vfgym.CostWeights`). ``info`` carries every
-    measure of :mod:`vfgym.plant.measures`, ``ideal_time_s``, ``time_ratio``, ``window_rad``,
-    ``cost``, the constraint values ``constraint_accel``, ``constraint_torque``,
-    ``constraint_overshoot`` (feasible when ≤ 0), ``feasible``, ``scenario`` and the
-    settings used.
+    torque limit and, for a move that does not arrive (not settled in the in-position
+    window at its end, or a sine not followed), a penalty growing with the distance left
+    (:class:`vfgym.CostWeights`, :mod:`vfgym.scoring`). ``info`` carries every measure of
+    :mod:`vfgym.plant.measures`, ``ideal_time_s``, ``time_ratio``, ``window_rad``,
+    ``arrived``, ``cost``, the constraint values ``constraint_accel``,
+    ``constraint_torque``, ``constraint_overshoot``, ``constraint_arrival`` (feasible when
+    ≤ 0), ``feasible``, ``scenario`` and the settings used.
 
     ## Starting State
 
     A scenario: the ``scenario`` argument or ``options={"scenario": name}`` if given,
     ``options={"scenario_seed": s}`` for a seed of the split, else a seed drawn from the
-    env's ``np_random`` in ``seed_range`` and the move ``random_scenario(seed, split)``.
+    env's ``np_random`` in ``seed_range`` and the move ``random_scenario(seed, split)`` (on
+    an ``axis``, that split's move set's).
     Train and test scenarios never coincide. The plant starts at rest at 0.
 
     ## Episode End
@@ -115,16 +115,8 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ``gymnasium.make("vfgym/VFTune-v0", scenario=None, split="train", seed_range=None,
     accel_law="rise", plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
-    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``
-
-    * ``scenario``: a fixed scenario (name such as ``"paper-step"`` or ``"test-7"``, or a
-      :class:`vfgym.Scenario`); None draws one per episode.
-    * ``split``: ``"train"`` or ``"test"``, the random distribution's split to draw from.
-    * ``seed_range``: (low, high), scenario seeds drawn in [low, high) (default [0, 2³¹)).
-    * ``accel_law``: ``"rise"`` (the paper's reading) or ``"slew"``.
-    * ``plant``, ``measures``, ``weights``, ``bounds``: the scoring path's inputs.
-    * ``render_mode``: ``"rgb_array"`` draws the last move (position, speed, acceleration,
-      command against motor) as an (480, 640, 3) uint8 array.
+    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None, axis=None)``; see
+    Parameters.
 
     ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)`` gives
     :class:`vfgym.envs.vector.VFTuneVectorEnv`, which scores all N moves in one compiled
@@ -133,6 +125,29 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     ## Version History
 
     * v0: Initial version.
+
+    Parameters
+    ----------
+    scenario : str, Scenario or None
+        A fixed scenario (name such as ``"paper-step"`` or ``"test-7"``, or a
+        :class:`vfgym.Scenario`); ``None`` draws one per episode.
+    render_mode : str or None
+        ``"rgb_array"`` draws the last move (position, speed, acceleration, command
+        against motor) as an (480, 640, 3) uint8 array.
+    **options
+        The other fields of :class:`vfgym.envs._common.EnvConfig`, where their defaults
+        live and are checked: ``split`` (``"train"`` or ``"test"``), ``seed_range``
+        ((low, high) of the scenario seeds), ``accel_law`` (``"rise"`` or ``"slew"``),
+        ``axis`` (an axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant,
+        measures and move sets), and the scoring path's inputs ``plant``, ``measures``,
+        ``weights``, ``bounds`` (:func:`vfgym.evaluate`).
+
+    Raises
+    ------
+    ValueError
+        If an argument is out of its range or of the wrong type.
+    TypeError
+        If an option is not a field of :class:`vfgym.envs._common.EnvConfig`.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}
@@ -141,25 +156,15 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         self,
         scenario: str | Scenario | None = None,
         *,
-        split: str = "train",
-        seed_range: tuple[int, int] | None = None,
-        accel_law: str = "rise",
-        plant: Plant = PAPER_PLANT,
-        measures: Measures = DEFAULT_MEASURES,
-        weights: CostWeights = DEFAULT_WEIGHTS,
-        bounds: Bounds = DEFAULT_BOUNDS,
         render_mode: str | None = None,
+        **options: Any,
     ) -> None:
-        check_scoring(weights, bounds, measures, plant)
-        self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
+        self.config = EnvConfig(scenario, **options)
+        self.accel_law = self.config.accel_law
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
         self.render_mode = render_mode
-        self.plant = plant
-        self.measures = measures
-        self.weights = weights
-        self.bounds = bounds
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.source = self.config.scenario_source()
         self.observation_space, self.action_space = tune_spaces()
         self._ep: Episode | None = None
         self._settings: Settings | None = None
@@ -173,6 +178,22 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode: draw (or take) the scenario of the move.
+
+        Parameters
+        ----------
+        seed : int or None
+            Seeds the env's ``np_random`` (the scenario draws), as Gymnasium does.
+        options : dict or None
+            ``{"scenario": name or Scenario}`` for a given scenario, or
+            ``{"scenario_seed": s}`` for a seed of the env's split.
+
+        Returns
+        -------
+        tuple
+            ``(observation, info)``: the move's features (float32) and
+            ``{"scenario": name}``.
+        """
         super().reset(seed=seed)
         self._ep = self.source.draw(self.np_random, options)
         self._settings = None
@@ -180,19 +201,40 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._ep.features.astype(np.float32), {"scenario": self._ep.scenario.name}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Simulate the whole move with the settings the action maps to, and score it.
+
+        Parameters
+        ----------
+        action : numpy.ndarray
+            A point of ``[-1, 1]⁴``: value, L, k, Ts/Tf on the search space.
+
+        Returns
+        -------
+        tuple
+            ``(observation, reward, terminated, truncated, info)``: the same features,
+            minus the move's cost, ``True``, ``False``, and the scored move's info.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            When the episode's one step has been taken (or before ``reset()``).
+        ValueError
+            If the action is not finite or outside the box.
+        """
         if self._ep is None or self._done:
             raise gym.error.ResetNeeded(
                 "VFTune-v0 episodes are one step long: call reset() before step()"
             )
         ep = self._ep
         settings = action_settings(action, self.accel_law)
+        c = self.config
         ev = evaluate(
             settings,
             ep.scenario,
-            plant=self.plant,
-            measures=self.measures,
-            weights=self.weights,
-            bounds=self.bounds,
+            plant=c.plant,
+            measures=c.measures,
+            weights=c.weights,
+            bounds=c.bounds,
         )
         cost = float(ev.cost[0, 0])
         info = scored_info(ep, ev.metrics[0][0], cost, ev.constraints[0, 0])
@@ -202,7 +244,18 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         return ep.features.astype(np.float32), -cost, True, False, info
 
     def render(self) -> np.ndarray | None:
-        """The last move (or, before a step, the command) as an RGB array."""
+        """The last move (or, before a step, the command) as an RGB array.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            (480, 640, 3) uint8, or ``None`` (with a warning) without a render mode.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            Before the first ``reset()``.
+        """
         if self.render_mode is None:
             gym.logger.warn(
                 "VFTune-v0.render() without a render_mode: make the env with "
@@ -217,9 +270,9 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         title = f"VFTune-v0, {ep.scenario.name}"
         if self._settings is None:
             return move_picture(
-                ep.plant, ep.command, None, None, None, self.measures.accel_window_s, title
+                ep.plant, ep.command, None, None, None, self.config.measures.accel_window_s, title
             )
-        tr = simulate(ep.command, self._settings, ep.plant, measures=self.measures)
+        tr = simulate(ep.command, self._settings, ep.plant, measures=self.config.measures)
         s = self._settings
         title += f": value {s.value_rad:.3g}, L {s.error_limit_rad:.3g}, k {s.k:.3g}, "
         title += f"Ts/Tf {s.ts_over_tf:.3g}"
@@ -229,7 +282,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
             tr.pulse_rad,
             tr.motor_rad,
             tr.speed_rad_s,
-            self.measures.accel_window_s,
+            self.config.measures.accel_window_s,
             title,
         )
 
@@ -241,11 +294,16 @@ def evaluate_pairs(
     measures: Measures,
     weights: CostWeights,
     bounds: Bounds,
-) -> list[tuple[float, dict[str, Any], np.ndarray]]:
+) -> list[Score]:
     """Score ``settings[i]`` on ``episodes[i]`` for every i in one compiled, multi-threaded
     call: :func:`vfgym.scoring.score_pairs`, the pairwise core of :func:`vfgym.evaluate`.
-    Returns (cost, metrics, constraints) per pair."""
+
+    Returns
+    -------
+    list of Score
+        One per pair (V-F settings run every move).
+    """
     results = score_pairs(
         list(settings), list(episodes), measures=measures, weights=weights, bounds=bounds
     )
-    return [(cost, m, cons) for cost, cons, _objs, m in results]
+    return [r for r in results if r is not None]

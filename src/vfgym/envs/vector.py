@@ -19,33 +19,14 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from vfgym._validate import check_choice, check_int
+from vfgym._validate import check_int
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import (
-    ACCEL_LAWS,
-    DEFAULT_MEASURES,
-    PAPER_PLANT,
-    PAPER_SETTINGS,
-    Measures,
-    Plant,
-    Settings,
-)
 from vfgym.plant import _layout as L
-from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights
 from vfgym.space import settings_to_dict
 
 from . import _batch as B
-from ._common import (
-    SERVO_INTERVAL_S,
-    SERVO_SETTLE_TIME_S,
-    SERVO_TRACKING_WEIGHT,
-    SERVO_VIOLATION_PENALTY,
-    Episode,
-    ScenarioSource,
-    check_scoring,
-    scored_info,
-)
-from .servo import ServoCore, raise_bad_action, servo_spaces
+from ._common import EnvConfig, Episode, scored_info
+from .servo import ServoConfig, ServoCore, raise_bad_action, servo_spaces
 from .tune import action_settings, evaluate_pairs, tune_spaces
 
 Infos = dict[str, Any]
@@ -293,32 +274,38 @@ class VFTuneVectorEnv(_BatchVectorEnv):
     """N VFTune-v0 envs; each ``step`` scores all N moves in one compiled, multi-threaded
     kernel call (:func:`vfgym.envs.tune.evaluate_pairs`).
 
-    Made by ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)``; takes VFTune-v0's
-    arguments plus ``autoreset_mode`` (``"NextStep"``, ``"SameStep"`` or ``"Disabled"``).
-    Its numbers equal those of N single envs reset with seeds s, s+1, ... (tested)."""
+    Made by ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)``. Its numbers equal those
+    of N single envs reset with seeds s, s+1, ... (tested).
+
+    Parameters
+    ----------
+    num_envs : int
+        N, the sub-envs.
+    scenario : str, Scenario or None
+        As :class:`vfgym.envs.tune.VFTuneEnv`.
+    autoreset_mode : str or gymnasium.vector.AutoresetMode
+        ``"NextStep"``, ``"SameStep"`` or ``"Disabled"``.
+    render_mode : str or None
+        As :class:`vfgym.envs.tune.VFTuneEnv`, for each sub-env.
+    **options
+        As :class:`vfgym.envs.tune.VFTuneEnv` (:class:`vfgym.envs._common.EnvConfig`'s
+        fields: ``split``, ``seed_range``, ``accel_law``, ``axis``, ``plant``,
+        ``measures``, ``weights``, ``bounds``).
+    """
 
     def __init__(
         self,
         num_envs: int = 1,
         scenario: str | Scenario | None = None,
         *,
-        split: str = "train",
-        seed_range: tuple[int, int] | None = None,
-        accel_law: str = "rise",
-        plant: Plant = PAPER_PLANT,
-        measures: Measures = DEFAULT_MEASURES,
-        weights: CostWeights = DEFAULT_WEIGHTS,
-        bounds: Bounds = DEFAULT_BOUNDS,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         render_mode: str | None = None,
+        **options: Any,
     ) -> None:
         super().__init__(num_envs, autoreset_mode, render_mode)
-        check_scoring(weights, bounds, measures, plant)
-        self.accel_law = check_choice("accel_law", accel_law, ACCEL_LAWS)
-        self.measures = measures
-        self.weights = weights
-        self.bounds = bounds
-        self.source = ScenarioSource(scenario, split, seed_range, plant, measures)
+        self.config = EnvConfig(scenario, **options)
+        self.accel_law = self.config.accel_law
+        self.source = self.config.scenario_source()
         self.single_observation_space, self.single_action_space = tune_spaces()
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -350,12 +337,16 @@ class VFTuneVectorEnv(_BatchVectorEnv):
         ends: dict[int, Infos] = {}
         if idx.size:
             results = evaluate_pairs(
-                settings, eps, measures=self.measures, weights=self.weights, bounds=self.bounds
+                settings,
+                eps,
+                measures=self.config.measures,
+                weights=self.config.weights,
+                bounds=self.config.bounds,
             )
-            for i, s, ep, (cost, metrics, cons) in zip(idx, settings, eps, results, strict=True):
-                rew[i] = -cost
+            for i, s, ep, res in zip(idx, settings, eps, results, strict=True):
+                rew[i] = -res.cost
                 term[i] = True
-                info = scored_info(ep, metrics, cost, cons)
+                info = scored_info(ep, res.metrics, res.cost, res.constraints)
                 info.update(settings_to_dict(s))
                 ends[int(i)] = info
         return rew, term, np.zeros(self.num_envs, dtype=np.bool_), ends
@@ -366,48 +357,35 @@ class VFServoVectorEnv(_BatchVectorEnv):
     compiled call: the envs' plants tick together in SIMD lanes, blocks of lanes on numba
     threads from 512 envs (:func:`vfgym.envs._batch.step_batch`).
 
-    Made by ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)``; takes VFServo-v0's
-    arguments plus ``autoreset_mode``. Its numbers equal those of N single envs reset with
-    seeds s, s+1, ... (tested)."""
+    Made by ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)``. Its numbers equal those
+    of N single envs reset with seeds s, s+1, ... (tested).
+
+    Parameters
+    ----------
+    num_envs : int
+        N, the sub-envs.
+    scenario : str, Scenario or None
+        As :class:`vfgym.envs.servo.VFServoEnv`.
+    autoreset_mode : str or gymnasium.vector.AutoresetMode
+        ``"NextStep"``, ``"SameStep"`` or ``"Disabled"``.
+    render_mode : str or None
+        As :class:`vfgym.envs.servo.VFServoEnv`, for each sub-env.
+    **options
+        As :class:`vfgym.envs.servo.VFServoEnv` (:class:`vfgym.envs.servo.ServoConfig`'s
+        fields, ``axis`` among them).
+    """
 
     def __init__(
         self,
         num_envs: int = 1,
         scenario: str | Scenario | None = None,
         *,
-        split: str = "train",
-        seed_range: tuple[int, int] | None = None,
-        accel_law: str = "rise",
-        interval_s: float = SERVO_INTERVAL_S,
-        settle_time_s: float = SERVO_SETTLE_TIME_S,
-        initial_settings: Settings = PAPER_SETTINGS,
-        tracking_weight: float = SERVO_TRACKING_WEIGHT,
-        terminate_on_violation: bool = False,
-        violation_penalty: float = SERVO_VIOLATION_PENALTY,
-        plant: Plant = PAPER_PLANT,
-        measures: Measures = DEFAULT_MEASURES,
-        weights: CostWeights = DEFAULT_WEIGHTS,
-        bounds: Bounds = DEFAULT_BOUNDS,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         render_mode: str | None = None,
+        **options: Any,
     ) -> None:
         super().__init__(num_envs, autoreset_mode, render_mode)
-        self.core = ServoCore(
-            scenario,
-            split,
-            seed_range,
-            accel_law,
-            interval_s,
-            settle_time_s,
-            initial_settings,
-            tracking_weight,
-            terminate_on_violation,
-            violation_penalty,
-            plant,
-            measures,
-            weights,
-            bounds,
-        )
+        self.core = ServoCore(ServoConfig(scenario, **options))
         n = self.num_envs
         self.single_observation_space, self.single_action_space = servo_spaces()
         self.observation_space = batch_space(self.single_observation_space, n)

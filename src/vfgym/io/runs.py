@@ -9,6 +9,7 @@ never leaves a half-written result behind.
 from __future__ import annotations
 
 import os
+import re
 import shlex
 import sys
 import tempfile
@@ -57,15 +58,71 @@ def write_yaml(path: str | Path, data: Any) -> Path:
     return write_text(path, yaml.safe_dump(_plain(data), sort_keys=False))
 
 
-def read_yaml(path: str | Path) -> Any:
-    """Read a YAML file; a missing or malformed file raises ``ValueError`` naming it."""
-    p = Path(path)
-    if not p.is_file():
-        raise ValueError(f"{p}: no such file")
+class YamlLoader(yaml.SafeLoader):
+    """PyYAML's safe loader that also reads ``1e3``, ``1E-5`` and ``+2e4`` as numbers.
+
+    YAML 1.1 (PyYAML) takes a float only with a dot (``1.0e3``), so ``n_timesteps: 1e3``
+    would arrive as the string ``'1e3'``; YAML 1.2 and every other reader take it as a
+    number, and so does vfgym."""
+
+
+YamlLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+
+def parse_yaml(text: str, source: str = "<text>") -> Any:
+    """YAML text as Python data (numbers in any notation); bad YAML raises ``ValueError``
+    naming ``source`` and the line.
+
+    Parameters
+    ----------
+    text
+        The YAML document.
+    source
+        Names the text in messages (a file, ``--hyperparams 'k=v'``).
+
+    Returns
+    -------
+    Any
+        The data (``None`` for an empty document).
+    """
     try:
-        return yaml.safe_load(p.read_text(encoding="utf-8"))
+        return yaml.load(text, Loader=YamlLoader)  # YamlLoader is a SafeLoader
     except yaml.YAMLError as exc:
-        raise ValueError(f"{p}: not valid YAML ({exc.__class__.__name__})") from None
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(exc, "problem", None) or exc.__class__.__name__
+        if isinstance(exc, yaml.reader.ReaderError):  # a control character: binary data
+            ch = exc.character if isinstance(exc.character, int) else ord(exc.character)
+            problem = f"character 0x{ch:02x} at offset {exc.position} is not text"
+        raise ValueError(f"{source}: not valid YAML ({problem}{where})") from None
+
+
+def read_yaml(path: str | Path) -> Any:
+    """Read a YAML file; a missing, unreadable, binary or malformed file raises
+    ``ValueError`` naming it."""
+    p = Path(path)
+    if p.is_dir():
+        raise ValueError(f"{p}: is a folder; give a YAML file")
+    if not p.is_file():
+        raise ValueError(
+            f"{p}: not a regular file; give a YAML file" if p.exists() else f"{p}: no such file"
+        )
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise ValueError(f"{p}: cannot be read ({exc.strerror or exc})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(
+            f"{p}: not a text file (byte 0x{raw[exc.start]:02x} at offset {exc.start} is not "
+            "UTF-8); give a YAML text file"
+        ) from None
+    return parse_yaml(text, str(p))
 
 
 _UMASK = os.umask(0o022)
@@ -78,6 +135,12 @@ def set_command_line(args: list[str] | None) -> None:
     command called as ``main([...])`` records those, not the caller's ``sys.argv``)."""
     global _COMMAND_LINE
     _COMMAND_LINE = None if args is None else list(args)
+
+
+def command_args() -> list[str] | None:
+    """The arguments of the running ``vfgym`` command (after ``vfgym``), or None when no
+    command runs through :func:`vfgym.cli.main`."""
+    return None if _COMMAND_LINE is None else list(_COMMAND_LINE)
 
 
 def record_command(run_dir: str | Path, argv: list[str] | None = None) -> None:

@@ -7,6 +7,9 @@ from typing import Any
 
 import numpy as np
 
+# The traces written here are vfgym.Trace, typed as Any: io sits below plant
+# (docs/architecture.md) and imports nothing of vfgym, not even for type checking.
+
 TRACE_FIELDS = (
     "tick",
     "time_s",

@@ -32,6 +32,9 @@ from typing import Any
 
 import numpy as np
 
+# The traces written here are vfgym.Trace, typed as Any: io sits below plant
+# (docs/architecture.md) and imports nothing of vfgym, not even for type checking.
+
 SIGNALS = (("pulse", "!"), ("dir", "%"), ("enc_a", "&"), ("enc_b", "'"))
 """(name, VCD identifier) of the wires, in declaration order."""
 

@@ -21,9 +21,21 @@ BASELINE_NAMES = ("paper", "rule-of-thumb", "fixed-frequency", "scurve")
 
 @dataclass(frozen=True)
 class FixedFrequency:
-    """A constant pulse frequency for the whole move (PLC practice), in pps.
+    """A constant pulse frequency for the whole move (PLC practice).
 
-    The servo's filter ratio ``ts_over_tf`` stays the paper's 1/4.
+    Parameters
+    ----------
+    frequency_hz : float
+        The pulse frequency (pps), > 0; capped at the tick rate when run.
+    ts_over_tf : float
+        The servo's filter ratio, in (0, 1]; the paper's 1/4 by default.
+    name : str
+        A label for tables.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range.
     """
 
     frequency_hz: float
@@ -35,18 +47,66 @@ class FixedFrequency:
         check_real("ts_over_tf", self.ts_over_tf, 0.0, 1.0, lo_open=True)
 
     def move(self, pulses: int, plant: Plant) -> np.ndarray:
+        """The source's pulse train for one move of ``pulses`` pulses, forward.
+
+        Parameters
+        ----------
+        pulses : int
+            Pulses of the move, ≥ 1.
+        plant : Plant
+            Gives the tick rate (and δ).
+
+        Returns
+        -------
+        numpy.ndarray
+            int8, 0 or +1 per tick, summing to ``pulses``.
+        """
         return fixed_frequency_pulses(
             pulses, frequency_hz=min(self.frequency_hz, plant.tick_hz), tick_hz=plant.tick_hz
         )
 
     def pulses(self, scenario, plant: Plant) -> np.ndarray | None:
+        """The source's train over a scenario's point-to-point moves.
+
+        Parameters
+        ----------
+        scenario : Scenario
+            The scenario; a move still running at the end of its command is cut off there.
+        plant : Plant
+            The scenario's plant.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            int8, −1, 0 or +1 per tick of the scenario's command; ``None`` for a moving
+            reference, which a fixed-pulse source cannot follow.
+        """
         return _train(self, scenario, plant)
 
 
 @dataclass(frozen=True)
 class SCurveSource:
-    """MCX514 S-curve fixed-pulse driving: top speed (rad/s) and peak acceleration (rad/s²)
-    mapped to DV, SV = 1 % of DV and jerk by :func:`vfgym.moves.profiles.scurve_source_args`."""
+    """MCX514 S-curve fixed-pulse driving (docs/model.md §4).
+
+    The top speed and peak acceleration are mapped to DV, SV = 1 % of DV and the jerk by
+    :func:`vfgym.moves.profiles.scurve_source_args`.
+
+    Parameters
+    ----------
+    speed_rad_s : float
+        Top speed (rad/s), > 0.
+    accel_rad_s2 : float
+        Peak acceleration (rad/s²), > 0.
+    ts_over_tf : float
+        The servo's filter ratio, in (0, 1]; the paper's 1/4 by default.
+    name : str
+        A label for tables.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range.
+    """
 
     speed_rad_s: float
     accel_rad_s2: float
@@ -59,12 +119,41 @@ class SCurveSource:
         check_real("ts_over_tf", self.ts_over_tf, 0.0, 1.0, lo_open=True)
 
     def move(self, pulses: int, plant: Plant) -> np.ndarray:
+        """The source's pulse train for one move of ``pulses`` pulses, forward.
+
+        Parameters
+        ----------
+        pulses : int
+            Pulses of the move, ≥ 1.
+        plant : Plant
+            Gives the tick rate (and δ).
+
+        Returns
+        -------
+        numpy.ndarray
+            int8, 0 or +1 per tick, summing to ``pulses``.
+        """
         args = scurve_source_args(
             self.speed_rad_s, self.accel_rad_s2, plant.tick_hz, plant.pulse_rad
         )
         return scurve_pulses(pulses, **args)
 
     def pulses(self, scenario, plant: Plant) -> np.ndarray | None:
+        """The source's train over a scenario's point-to-point moves.
+
+        Parameters
+        ----------
+        scenario : Scenario
+            The scenario; a move still running at the end of its command is cut off there.
+        plant : Plant
+            The scenario's plant.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            int8, −1, 0 or +1 per tick of the scenario's command; ``None`` for a moving
+            reference, which a fixed-pulse source cannot follow.
+        """
         return _train(self, scenario, plant)
 
 
@@ -93,14 +182,36 @@ def _train(source: PulseSource, scenario, plant: Plant) -> np.ndarray | None:
 
 
 def usable_accel(plant: Plant) -> float:
-    """The acceleration a move may ask of the loaded motor: the smaller of its stated limit
-    and peak torque over total inertia (rad/s²)."""
-    m = plant.motor
-    return min(m.accel_limit_rad_s2, m.peak_torque_nm / m.inertia_kgm2)
+    """The acceleration a move may ask of the loaded motor (docs/model.md §3).
+
+    Parameters
+    ----------
+    plant : Plant
+        Gives the motor's limit, peak torque and total inertia.
+
+    Returns
+    -------
+    float
+        :attr:`vfgym.Motor.usable_accel_rad_s2`: peak torque over total inertia, capped
+        by the stated limit (rad/s²); the paper's method applied to the axis uses it.
+    """
+    return plant.motor.usable_accel_rad_s2
 
 
 def paper(plant: Plant = PAPER_PLANT) -> Settings:
-    """The paper's settings: value = L = 1 rad, k = f²δ/140e3, Ts/Tf = 1/4."""
+    """The paper's settings: value = L = 1 rad, k = f²δ/140e3, Ts/Tf = 1/4.
+
+    Parameters
+    ----------
+    plant : Plant
+        The plant the baseline runs on.
+        Not used: the paper's settings are the same on every plant.
+
+    Returns
+    -------
+    Settings
+        :data:`vfgym.PAPER_SETTINGS`.
+    """
     return PAPER_SETTINGS
 
 
@@ -112,6 +223,16 @@ def rule_of_thumb(plant: Plant = PAPER_PLANT) -> Settings:
     - value so that the tail's deceleration at top speed, Kv·v_max = δ²f²/value, stays
       within a: value = δ²f²/a (Kv = δ/(value·T));
     - L = value (the paper: most efficient when equal); Ts/Tf = 1/4 (the patent).
+
+    Parameters
+    ----------
+    plant : Plant
+        The plant the baseline runs on.
+
+    Returns
+    -------
+    Settings
+        The derived settings.
     """
     a = usable_accel(plant)
     f, d = plant.tick_hz, plant.pulse_rad
@@ -125,14 +246,36 @@ def rule_of_thumb(plant: Plant = PAPER_PLANT) -> Settings:
 
 
 def fixed_frequency(plant: Plant = PAPER_PLANT) -> FixedFrequency:
-    """The fixed-frequency train at half the top pulse rate (f/2 = 70 kHz, 215 rad/s): the
-    PLC practice of a safe constant speed; the servo alone shapes the acceleration."""
+    """The fixed-frequency train at half the top pulse rate (f/2 = 70 kHz, 215 rad/s).
+
+    The PLC practice of a safe constant speed; the servo alone shapes the acceleration.
+
+    Parameters
+    ----------
+    plant : Plant
+        The plant the baseline runs on.
+
+    Returns
+    -------
+    FixedFrequency
+        The source at f/2.
+    """
     return FixedFrequency(frequency_hz=plant.tick_hz / 2.0)
 
 
 def scurve(plant: Plant = PAPER_PLANT) -> SCurveSource:
-    """The S-curve source set to the motor's limits: top speed δ·f, peak acceleration
-    :func:`usable_accel`."""
+    """The S-curve source set to the loaded motor's limits.
+
+    Parameters
+    ----------
+    plant : Plant
+        The plant the baseline runs on.
+
+    Returns
+    -------
+    SCurveSource
+        Top speed δ·f, peak acceleration :func:`usable_accel`.
+    """
     return SCurveSource(speed_rad_s=plant.pulse_top_speed_rad_s, accel_rad_s2=usable_accel(plant))
 
 
@@ -146,8 +289,20 @@ _FACTORIES = {
 
 @dataclass(frozen=True)
 class Baseline:
-    """A named baseline, derived from each scenario's own plant when evaluated (the rule
-    of thumb and the S-curve follow the load's usable acceleration)."""
+    """A named baseline, derived from each scenario's own plant when evaluated.
+
+    The rule of thumb and the S-curve follow the load's usable acceleration.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`BASELINE_NAMES`.
+
+    Raises
+    ------
+    ValueError
+        If the name is not known.
+    """
 
     name: str
 
@@ -158,24 +313,73 @@ class Baseline:
             )
 
     def resolve(self, plant: Plant) -> Settings | FixedFrequency | SCurveSource:
-        """The concrete controller for this plant."""
+        """The concrete controller for this plant.
+
+        Parameters
+        ----------
+        plant : Plant
+            The plant it runs on.
+
+        Returns
+        -------
+        Settings, FixedFrequency or SCurveSource
+            The baseline derived from ``plant``.
+        """
         return _FACTORIES[self.name](plant)
 
 
 def baseline(name: str, plant: Plant | None = None) -> Baseline | Controller:
-    """A baseline by name (paper, rule-of-thumb, fixed-frequency, scurve): resolved for
-    ``plant`` if given, else a :class:`Baseline` that follows each scenario's plant."""
+    """A baseline by name.
+
+    Parameters
+    ----------
+    name : str
+        ``paper``, ``rule-of-thumb``, ``fixed-frequency`` or ``scurve``.
+    plant : Plant or None
+        Resolve for this plant; ``None`` keeps the baseline unresolved.
+
+    Returns
+    -------
+    Baseline, Settings, FixedFrequency or SCurveSource
+        The controller for ``plant`` if given, else a :class:`Baseline` that follows each
+        scenario's plant.
+    """
     b = Baseline(name)
     return b if plant is None else b.resolve(plant)
 
 
 def resolve(c: Controller | Baseline, plant: Plant) -> Controller:
-    """A controller as it runs on ``plant``."""
+    """A controller as it runs on ``plant``.
+
+    Parameters
+    ----------
+    c : Settings, FixedFrequency, SCurveSource or Baseline
+        The controller; a :class:`Baseline` is resolved, the others are returned as they
+        are.
+    plant : Plant
+        The plant it runs on.
+
+    Returns
+    -------
+    Settings, FixedFrequency or SCurveSource
+        The concrete controller.
+    """
     return c.resolve(plant) if isinstance(c, Baseline) else c
 
 
 def controller_label(c: Controller | Baseline) -> str:
-    """A short name for tables."""
+    """A short name for tables.
+
+    Parameters
+    ----------
+    c : Settings, FixedFrequency, SCurveSource or Baseline
+        The controller.
+
+    Returns
+    -------
+    str
+        The baseline's or source's name, or the V-F settings in one line.
+    """
     if isinstance(c, Baseline):
         return c.name
     if isinstance(c, Settings):

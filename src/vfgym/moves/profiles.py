@@ -27,20 +27,69 @@ def _time(n: int, tick_hz: float) -> np.ndarray:
 
 
 def step(distance_rad: float, duration_s: float, tick_hz: float) -> np.ndarray:
-    """A step to ``distance_rad`` at tick 0 (paper Fig. 4: 10 rad)."""
+    """A step to ``distance_rad`` at tick 0 (the paper's Fig. 4: 10 rad).
+
+    Parameters
+    ----------
+    distance_rad : float
+        The step (rad).
+    duration_s : float
+        Length of the command (s), > 0.
+    tick_hz : float
+        Controller tick rate f (Hz): one value per tick.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, the position (rad) at each tick, from tick 0 at time 0.
+    """
     d = check_real("distance_rad", distance_rad)
     return np.full(_ticks(duration_s, tick_hz), d)
 
 
 def sine(amplitude_rad: float, freq_hz: float, duration_s: float, tick_hz: float) -> np.ndarray:
-    """A·sin(2π·f·t) from t = 0 (paper Fig. 5; the text gives neither A nor f)."""
+    """A·sin(2π·f·t) from t = 0 (the paper's Fig. 5; the text gives neither A nor f).
+
+    Parameters
+    ----------
+    amplitude_rad : float
+        A (rad).
+    freq_hz : float
+        f (Hz), > 0.
+    duration_s : float
+        Length of the command (s), > 0.
+    tick_hz : float
+        Controller tick rate f (Hz): one value per tick.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, the position (rad) at each tick, from tick 0 at time 0.
+    """
     a = check_real("amplitude_rad", amplitude_rad)
     f = check_real("freq_hz", freq_hz, 0.0, lo_open=True)
     return a * np.sin(2.0 * math.pi * f * _time(_ticks(duration_s, tick_hz), tick_hz))
 
 
 def ramp(distance_rad: float, speed_rad_s: float, duration_s: float, tick_hz: float) -> np.ndarray:
-    """Constant speed from 0 until ``distance_rad`` is reached, then hold."""
+    """Constant speed from 0 until ``distance_rad`` is reached, then hold.
+
+    Parameters
+    ----------
+    distance_rad : float
+        The move (rad); negative moves go backwards.
+    speed_rad_s : float
+        The speed (rad/s), > 0.
+    duration_s : float
+        Length of the command (s), > 0.
+    tick_hz : float
+        Controller tick rate f (Hz): one value per tick.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, the position (rad) at each tick, from tick 0 at time 0.
+    """
     d = check_real("distance_rad", distance_rad)
     v = check_real("speed_rad_s", speed_rad_s, 0.0, lo_open=True)
     t = _time(_ticks(duration_s, tick_hz), tick_hz)
@@ -61,7 +110,27 @@ def _trapezoid_phases(distance: float, v: float, a: float) -> tuple[float, float
 
 
 def trapezoid_position(t: np.ndarray, distance: float, v: float, a: float) -> np.ndarray:
-    """Position of a symmetric trapezoidal (or triangular) speed profile over |distance|."""
+    """Position of a symmetric trapezoidal (or triangular) speed profile over ``distance``.
+
+    The move accelerates at ``a`` to ``v``, cruises and decelerates at ``a``; when it is too
+    short to reach ``v`` the speed profile is a triangle.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Times from the start of the move (s).
+    distance : float
+        The move (rad), ≥ 0.
+    v : float
+        Cruise speed (rad/s), > 0.
+    a : float
+        Acceleration and deceleration (rad/s²), > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        The position (rad) at each time; ``distance`` from the end of the move on.
+    """
     ta, tc, t_end, v = _trapezoid_phases(distance, v, a)
     p = np.where(
         t < ta,
@@ -78,7 +147,26 @@ def trapezoid_position(t: np.ndarray, distance: float, v: float, a: float) -> np
 def trapezoid(
     distance_rad: float, speed_rad_s: float, accel_rad_s2: float, duration_s: float, tick_hz: float
 ) -> np.ndarray:
-    """Trapezoidal speed (constant acceleration, cruise, deceleration) to ``distance_rad``."""
+    """Trapezoidal speed (constant acceleration, cruise, deceleration) to ``distance_rad``.
+
+    Parameters
+    ----------
+    distance_rad : float
+        The move (rad); negative moves go backwards.
+    speed_rad_s : float
+        Cruise speed (rad/s), > 0.
+    accel_rad_s2 : float
+        Acceleration and deceleration (rad/s²), > 0.
+    duration_s : float
+        Length of the command (s), > 0.
+    tick_hz : float
+        Controller tick rate f (Hz): one value per tick.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, the position (rad) at each tick, from tick 0 at time 0.
+    """
     d = check_real("distance_rad", distance_rad)
     v = check_real("speed_rad_s", speed_rad_s, 0.0, lo_open=True)
     a = check_real("accel_rad_s2", accel_rad_s2, 0.0, lo_open=True)
@@ -109,9 +197,32 @@ def scurve(
     tick_hz: float,
     pulse_rad: float,
 ) -> np.ndarray:
-    """The MCX514 S-curve fixed-pulse drive used as a position command: jerk chosen so the
-    peak acceleration when reaching ``speed_rad_s`` is ``accel_rad_s2`` (see
-    :func:`scurve_source_args`); triangle form prevention on."""
+    """The MCX514 S-curve fixed-pulse drive used as a position command (docs/model.md §4).
+
+    The jerk is chosen so that the peak acceleration when reaching ``speed_rad_s`` is
+    ``accel_rad_s2`` (see :func:`scurve_source_args`); triangle form prevention is on.
+
+    Parameters
+    ----------
+    distance_rad : float
+        The move (rad), rounded to whole pulses; negative moves go backwards.
+    speed_rad_s : float
+        Drive speed (rad/s), > 0 (at most one pulse a tick).
+    accel_rad_s2 : float
+        Peak acceleration (rad/s²), > 0.
+    duration_s : float
+        Length of the command (s), > 0.
+    tick_hz : float
+        Controller tick rate f (Hz): one value per tick.
+    pulse_rad : float
+        Pulse equivalent δ (rad per pulse).
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, the position (rad) at each tick, from tick 0 at time 0.
+        The position is the pulse count times δ.
+    """
     from vfgym.moves.pulse_sources import scurve_pulses
 
     d = check_real("distance_rad", distance_rad)
@@ -140,6 +251,25 @@ def scurve_source_args(
 
     DV = speed/δ (at most one pulse a tick), SV = 1 % of DV by default (the IC cannot start
     from 0), jerk JK = a_peak²/(DV − SV) so that the S-curve reaching DV peaks at a_peak.
+
+    Parameters
+    ----------
+    speed_rad_s : float
+        Top speed (rad/s), > 0.
+    accel_rad_s2 : float
+        Peak acceleration (rad/s²), > 0.
+    tick_hz : float
+        Controller tick rate f (Hz); DV is at most f.
+    pulse_rad : float
+        Pulse equivalent δ (rad per pulse).
+    initial_speed_rad_s : float or None
+        Initial speed SV (rad/s), in (0, speed]; default 1 % of the drive speed.
+
+    Returns
+    -------
+    dict
+        Keyword arguments of :func:`vfgym.scurve_pulses`: ``initial_speed_pps``,
+        ``drive_speed_pps``, ``jerk_pps3``, ``tick_hz``.
     """
     v = check_real("speed_rad_s", speed_rad_s, 0.0, lo_open=True)
     a = check_real("accel_rad_s2", accel_rad_s2, 0.0, lo_open=True)
@@ -159,8 +289,29 @@ def scurve_source_args(
 def multi(
     moves: Sequence[tuple[float, float]], tick_hz: float, settle_s: float = 0.0
 ) -> np.ndarray:
-    """Steps by the relative distances of ``moves``, each held for its dwell (s): e.g.
-    ((5.0, 0.05), (-8.0, 0.06), (3.0, 0.08)) goes to 5, then −3, then 0 rad."""
+    """Steps by the relative distances of ``moves``, each held for its dwell.
+
+    E.g. ``((5.0, 0.05), (-8.0, 0.06), (3.0, 0.08))`` goes to 5, then −3, then 0 rad.
+
+    Parameters
+    ----------
+    moves : sequence of (float, float)
+        (relative distance rad, dwell s) pairs; dwells > 0.
+    tick_hz : float
+        Controller tick rate f (Hz): one value per tick.
+    settle_s : float
+        Time (s) to hold the last position after the last dwell.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, the position (rad) at each tick.
+
+    Raises
+    ------
+    ValueError
+        If ``moves`` is empty or a distance or dwell is out of range.
+    """
     if not moves:
         raise ValueError("moves=() is not allowed: give at least one (distance_rad, dwell_s)")
     parts = []

@@ -7,7 +7,7 @@ movement command, exactly as it takes the V-F controller's output.
 
 - :func:`scurve_pulses`: what a motion-control IC such as the NOVA MCX514 outputs in
   *S-curve fixed-pulse driving* with acceleration and deceleration symmetric (MCX514
-  manual p.26, MODEL.md section 4). The speed starts at the initial speed ``SV``, rises
+  manual p.26, docs/model.md §4). The speed starts at the initial speed ``SV``, rises
   along an S-curve at constant jerk to the drive speed ``DV``, cruises, falls back along
   the mirror image and stops exactly on the requested pulse count. With *triangle form
   prevention* (the "rule of 1/12") a move too short to reach ``DV``, or a decelerating
@@ -73,28 +73,46 @@ class ScurveProfile:
     ``[t_dec_start, t_end)`` that is the time mirror of the acceleration phase:
     ``v(t_end - s) = v(s)``. Times in seconds.
 
-    Attributes:
-        total_pulses: pulses requested.
-        output_pulses: pulses actually output; equals ``total_pulses`` unless a
-            decelerating stop cut the move short: then ``round(end_position)``.
-        end_position: exact position at the end of the move, pulses; ``total_pulses``
-            unless a decelerating stop cut the move short.
-        initial_speed_pps, drive_speed_pps, jerk_pps3, tick_hz: the settings (pps,
-            pps, pps/s², Hz).
-        triangle_prevention: whether the rule of 1/12 was applied.
-        stop_tick: tick at which a decelerating stop was issued, or ``None``.
-        stopped: True when that stop changed the move (issued before deceleration).
-        reached_drive_speed: True when the speed reaches ``drive_speed_pps``.
-        t_acc_increase: end of the acceleration-increasing (jerk ``+J``) section, s.
-        t_acc_end: end of the acceleration phase, s (acceleration back to zero, or
-            the corner of a triangle profile).
-        t_dec_start: start of the deceleration phase, s.
-        t_end: end of the move, s.
-        peak_speed_pps: highest speed of the move, pps.
-        accel_pulses: pulses output during the acceleration phase (exact, not whole);
-            the deceleration phase uses the same number.
-        n_ticks: ticks of the move, ``ceil(t_end * tick_hz)``: the length of the train.
-        segments: the acceleration-phase segments ``(t0, p0, v0, a0, jerk)``.
+    Built by :func:`scurve_profile`, which checks the settings.
+
+    Attributes
+    ----------
+    total_pulses : int
+        Pulses requested.
+    output_pulses : int
+        Pulses actually output; equals ``total_pulses`` unless a decelerating stop cut
+        the move short: then ``round(end_position)``.
+    end_position : float
+        Exact position at the end of the move, pulses; ``total_pulses`` unless a
+        decelerating stop cut the move short.
+    initial_speed_pps, drive_speed_pps, jerk_pps3, tick_hz : float
+        The settings (pps, pps, pps/s², Hz).
+    triangle_prevention : bool
+        Whether the rule of 1/12 was applied.
+    stop_tick : int or None
+        Tick at which a decelerating stop was issued, or ``None``.
+    stopped : bool
+        True when that stop changed the move (issued before deceleration).
+    reached_drive_speed : bool
+        True when the speed reaches ``drive_speed_pps``.
+    t_acc_increase : float
+        End of the acceleration-increasing (jerk ``+J``) section, s.
+    t_acc_end : float
+        End of the acceleration phase, s (acceleration back to zero, or the corner of a
+        triangle profile).
+    t_dec_start : float
+        Start of the deceleration phase, s.
+    t_end : float
+        End of the move, s.
+    peak_speed_pps : float
+        Highest speed of the move, pps.
+    accel_pulses : float
+        Pulses output during the acceleration phase (exact, not whole); the deceleration
+        phase uses the same number.
+    n_ticks : int
+        Ticks of the move, ``ceil(t_end * tick_hz)``: the length of the train.
+    segments : tuple of (float, float, float, float, float)
+        The acceleration-phase segments ``(t0, p0, v0, a0, jerk)``.
     """
 
     total_pulses: int
@@ -123,7 +141,13 @@ class ScurveProfile:
         return self.peak_speed_pps * (self.t_dec_start - self.t_acc_end)
 
     def tick_times(self) -> np.ndarray:
-        """Tick boundaries ``t_i = i / tick_hz`` for ``i = 0 .. n_ticks``, s."""
+        """Tick boundaries of the move.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``t_i = i / tick_hz`` (s) for ``i = 0 .. n_ticks``.
+        """
         return np.arange(self.n_ticks + 1, dtype=np.float64) / self.tick_hz
 
     def _at_segments(self, s: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -175,13 +199,36 @@ class ScurveProfile:
         return pos.reshape(shape), vel.reshape(shape), acc.reshape(shape)
 
     def position(self, t: np.ndarray | float) -> np.ndarray:
-        """Exact position at times ``t`` (s), in pulses (not rounded to whole pulses)."""
+        """Exact position at times ``t``.
+
+        Parameters
+        ----------
+        t : numpy.ndarray or float
+            Times (s).
+
+        Returns
+        -------
+        numpy.ndarray
+            Position in pulses (not rounded to whole pulses).
+        """
         return self._evaluate(t)[0]
 
     def position_rising(self, t: np.ndarray) -> np.ndarray:
-        """:meth:`position` at rising times ``t >= 0`` (1-D), value for value: each phase
-        is then a run of ``t`` and is computed on its slice, without masks and without
-        speed and acceleration (the pulse train needs positions only)."""
+        """:meth:`position` at rising times, value for value, faster.
+
+        Each phase is a run of ``t`` and is computed on its slice, without masks and
+        without speed and acceleration (the pulse train needs positions only).
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Rising times ``t >= 0`` (s), one-dimensional.
+
+        Returns
+        -------
+        numpy.ndarray
+            Position in pulses, as :meth:`position` gives it.
+        """
 
         def acc_position(s: np.ndarray) -> np.ndarray:
             return self._segment_position(*self._at_segments(s))
@@ -196,14 +243,35 @@ class ScurveProfile:
         return pos
 
     def speed(self, t: np.ndarray | float) -> np.ndarray:
-        """Speed at times ``t`` (s), pps; 0 before the start and after the end."""
+        """Speed at times ``t``.
+
+        Parameters
+        ----------
+        t : numpy.ndarray or float
+            Times (s).
+
+        Returns
+        -------
+        numpy.ndarray
+            Speed (pps); 0 before the start and after the end.
+        """
         return self._evaluate(t)[1]
 
     def acceleration(self, t: np.ndarray | float) -> np.ndarray:
-        """Acceleration at times ``t`` (s), pps/s; 0 outside the move and while cruising.
+        """Acceleration at times ``t``.
 
         At a phase boundary the value from the right is returned (so at ``t_dec_start``
         of a triangle profile the jump to deceleration is already taken).
+
+        Parameters
+        ----------
+        t : numpy.ndarray or float
+            Times (s).
+
+        Returns
+        -------
+        numpy.ndarray
+            Acceleration (pps/s); 0 outside the move and while cruising.
         """
         return self._evaluate(t)[2]
 
@@ -292,9 +360,9 @@ def scurve_profile(
     triangle_prevention: bool = True,
     stop_tick: int | None = None,
 ) -> ScurveProfile:
-    """Exact continuous-time S-curve fixed-pulse move (MCX514 manual p.26).
+    """Exact continuous-time S-curve fixed-pulse move (MCX514 manual p.26, docs/model.md §4).
 
-    Parameters are those of :func:`scurve_pulses`. The acceleration phase, with
+    The acceleration phase, with
     ``T = sqrt((DV - SV) / J)``, is one of:
 
     - **Reaches drive speed** (``P >= 2 Pa``, ``Pa = (DV + SV) T``): jerk ``+J`` for
@@ -333,9 +401,23 @@ def scurve_profile(
     position as always, so the profile is exactly mirror symmetric and the train is
     within half a pulse of it.
 
-    Raises:
-        ValueError: a setting out of range (see :func:`scurve_pulses`), or a move longer
-            than :data:`MAX_TICKS` ticks.
+    Parameters
+    ----------
+    total_pulses, initial_speed_pps, drive_speed_pps, jerk_pps3, tick_hz
+        As in :func:`scurve_pulses`.
+    triangle_prevention, stop_tick
+        As in :func:`scurve_pulses`.
+
+    Returns
+    -------
+    ScurveProfile
+        The exact move: its phases, times and positions.
+
+    Raises
+    ------
+    ValueError
+        A setting out of range (see :func:`scurve_pulses`), or a move longer than
+        :data:`MAX_TICKS` ticks.
     """
     P, SV, DV, J, f, prevention, stop = _check_scurve_args(
         total_pulses,
@@ -443,32 +525,43 @@ def scurve_pulses(
 ) -> np.ndarray:
     """Pulse train of an MCX514-style S-curve fixed-pulse move, one entry per tick.
 
-    Args:
-        total_pulses: pulses to output, a whole number >= 1.
-        initial_speed_pps: initial speed ``SV``, pps, in ``(0, drive_speed_pps]`` (the IC
-            cannot start from speed 0).
-        drive_speed_pps: drive speed ``DV``, pps, in ``(0, tick_hz]`` (one pulse per tick
-            at most).
-        jerk_pps3: jerk ``J``, pps/s², > 0; the same jerk raises and lowers the
-            acceleration and deceleration.
-        tick_hz: controller tick frequency, Hz (> 0).
-        triangle_prevention: apply the rule of 1/12 (default, as the IC does).
-        stop_tick: tick at which a decelerating stop is issued (>= 1), or ``None``. The
-            move then ends early, with fewer than ``total_pulses`` pulses.
-
-    Returns:
-        ``int8`` array of length ``n_ticks`` (see :func:`scurve_profile`), each entry 0
-        or 1, summing to ``total_pulses`` (or the stopped move's pulse count). Tick ``i``
-        holds ``round(p(t_{i+1})) - round(p(t_i))`` of the exact position ``p`` (pulses,
-        ``round(x) = floor(x + 1/2)``), so the count never strays half a pulse from ``p``.
-
-    Raises:
-        ValueError: naming the parameter, its value and the allowed range.
-
     The acceleration phase takes ``ta = 2 sqrt((DV - SV) / J)`` seconds and
     ``Pa = (DV + SV) sqrt((DV - SV) / J)`` pulses when the move reaches the drive speed;
     the deceleration is its mirror image. See :func:`scurve_profile` for the short-move
-    and stop cases.
+    and stop cases, and docs/model.md §4.
+
+    Parameters
+    ----------
+    total_pulses : int
+        Pulses to output, a whole number >= 1.
+    initial_speed_pps : float
+        Initial speed ``SV``, pps, in ``(0, drive_speed_pps]`` (the IC cannot start from
+        speed 0).
+    drive_speed_pps : float
+        Drive speed ``DV``, pps, in ``(0, tick_hz]`` (one pulse per tick at most).
+    jerk_pps3 : float
+        Jerk ``J``, pps/s², > 0; the same jerk raises and lowers the acceleration and
+        deceleration.
+    tick_hz : float
+        Controller tick frequency, Hz (> 0).
+    triangle_prevention : bool
+        Apply the rule of 1/12 (default, as the IC does).
+    stop_tick : int or None
+        Tick at which a decelerating stop is issued (>= 1), or ``None``. The move then
+        ends early, with fewer than ``total_pulses`` pulses.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``int8`` array of length ``n_ticks`` (see :func:`scurve_profile`), each entry 0 or
+        1, summing to ``total_pulses`` (or the stopped move's pulse count). Tick ``i``
+        holds ``round(p(t_{i+1})) - round(p(t_i))`` of the exact position ``p`` (pulses,
+        ``round(x) = floor(x + 1/2)``), so the count never strays half a pulse from ``p``.
+
+    Raises
+    ------
+    ValueError
+        Naming the parameter, its value and the allowed range.
     """
     prof = scurve_profile(
         total_pulses,
@@ -499,16 +592,25 @@ def fixed_frequency_pulses(total_pulses: int, *, frequency_hz: float, tick_hz: f
     from 0 to ``frequency_hz`` and back, which is what the V-F controller and the S-curve
     source improve on.
 
-    Args:
-        total_pulses: pulses to output, a whole number >= 1.
-        frequency_hz: pulse frequency, pps, in ``(0, tick_hz]``.
-        tick_hz: controller tick frequency, Hz (> 0).
+    Parameters
+    ----------
+    total_pulses : int
+        Pulses to output, a whole number >= 1.
+    frequency_hz : float
+        Pulse frequency, pps, in ``(0, tick_hz]``.
+    tick_hz : float
+        Controller tick frequency, Hz (> 0).
 
-    Returns:
+    Returns
+    -------
+    numpy.ndarray
         ``int8`` array, one entry per tick, each 0 or 1, summing to ``total_pulses``.
 
-    Raises:
-        ValueError: naming the parameter, its value and the allowed range.
+    Raises
+    ------
+    ValueError
+        Naming the parameter, its value and the allowed range, or when the move would be
+        longer than :data:`MAX_TICKS` ticks.
     """
     P = check_int("total_pulses", total_pulses, 1)
     f = check_real("tick_hz", tick_hz, 0.0, lo_open=True)

@@ -14,8 +14,11 @@ _jit
     The one numba policy (cache, error model, inlining) of every compiled function.
 _layout
     The kernel's plain-array layout: parameter row, state, accumulators, trace rows.
+_tick
+    The blocks of one tick (V-F controller, servo, torque, motor, encoder, measures),
+    inlined into the kernel's loop.
 _kernel, _lanes
-    The compiled tick, for one move and for SIMD lanes of moves.
+    The compiled loop, for one move (and a batch over threads) and for SIMD lanes of moves.
 _simulate
     The public entry points (:func:`simulate`, :func:`vf_pulses`).
 measures

@@ -15,9 +15,10 @@ What makes the loops vectorise, and must stay so:
 * one flat block array ``Z`` of rows of ``LANES`` numbers, indexed with unsigned
   (:func:`_u`) constant-row offsets, so that LLVM sees fixed distances between rows (no
   negative-index wrap-around, no symbolic row);
-* ``error_model="numpy"`` (no zero-division branch; every divisor is validated > 0);
+* ``error_model="numpy"`` (``simd=True`` in the package's policy, :mod:`vfgym.plant._jit`:
+  no zero-division branch; every divisor is validated > 0);
 * no calls and no reductions across lanes in the vectorised loops; the rare tick in which
-  Coulomb friction stops the motor (:func:`vfgym.plant._kernel.stop_within_tick`, which calls
+  Coulomb friction stops the motor (:func:`vfgym.plant._tick.stop_within_tick`, which calls
   ``log1p``/``expm1``) is flagged and done per lane in a scalar pass between them;
 * the pulse-count history for the acceleration measure is kept per block (``H``) and
   its maximum taken after the ticks (a maximum does not depend on the order).
@@ -30,16 +31,19 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
+from vfgym.plant import _tick as TK
+from vfgym.plant._jit import guard_cache, jit
 
 LANES = 16
 """Moves per block: two AVX-512 vectors (four AVX2 ones) of float64."""
 
-_jit = numba.njit(cache=K.CACHE, fastmath=False, nogil=True, error_model="numpy")
+_jit = jit(simd=True)
+"""The lanes' compile policy: ``error_model="numpy"``, so that the loops over lanes vectorise."""
+_inline = jit(inline=True, simd=True)
+"""The same, for the blocks compiled into those loops."""
 
 # --- block rows (each LANES numbers) -----------------------------------------------------
 Z_PRM = 0  # the kernel's parameter row, transposed
@@ -53,17 +57,17 @@ Z_NOUT = Z_P + 5  # pulse count after this tick
 N_ROWS = Z_P + 6
 
 
-@numba.njit(inline="always")
+@_inline
 def _u(x):
     return np.uint64(x)
 
 
-@numba.njit(inline="always")
+@_inline
 def _r(row, lane):
     return row * LANES + lane
 
 
-@numba.njit(inline="always", error_model="numpy")
+@_inline
 def _source_servo_motor(Z, e, sampling, friction):
     """Steps 1-4 of the tick (pulse source, servo, torque, motor) in lane ``e``; returns
     1 if the lane needs the friction stop (left unmoved, flagged in ``Z_SLOW``), else 0.
@@ -72,116 +76,115 @@ def _source_servo_motor(Z, e, sampling, friction):
     what cannot happen: sampling 0 / 1: no lane / every lane latches its speed counter
     this tick (the lanes' sample periods are in step), 2: each lane as its counter says;
     friction False: no lane has Coulomb friction."""
-    if True:
-        P = Z[_u(_r(Z_CMD, e))]
-        # 1. V-F controller (vfgym.plant._kernel.vf_tick as selects)
-        delta = Z[_u(_r(Z_PRM + L.P_DELTA, e))]
-        limit = Z[_u(_r(Z_PRM + L.P_LIMIT, e))]
-        step = Z[_u(_r(Z_PRM + L.P_STEP, e))]
-        value = Z[_u(_r(Z_PRM + L.P_VALUE, e))]
-        slew = Z[_u(_r(Z_PRM + L.P_LAW, e))] != 0.0
-        n = Z[_u(_r(Z_ST + L.S_N, e))]
-        e_prev = Z[_u(_r(Z_ST + L.S_EPREV, e))]
-        err = P - n * delta
-        err = limit if err > limit else err
-        err = -limit if err < -limit else err
-        up = e_prev + step
-        dn = e_prev - step
-        c_up = err > up and (slew or e_prev >= 0.0)
-        err = up if c_up else err
-        c_dn = err < dn and ((slew and not c_up) or (not slew and e_prev <= 0.0))
-        err = dn if c_dn else err
-        s = Z[_u(_r(Z_ST + L.S_SUM, e))] + err
-        plus = s >= value
-        minus = (not plus) and s <= -value
-        p = 1.0 if plus else (-1.0 if minus else 0.0)
-        s = s - value if plus else (s + value if minus else s)
-        Z[_u(_r(Z_ST + L.S_SUM, e))] = s
-        Z[_u(_r(Z_ST + L.S_EPREV, e))] = err
-        n = n + p
-        Z[_u(_r(Z_ST + L.S_N, e))] = n
-        Z[_u(_r(Z_P, e))] = p
-        Z[_u(_r(Z_NOUT, e))] = n
-        # 2. servo counters and sampled filter
-        c = Z[_u(_r(Z_ST + L.S_C, e))]
-        dc = c - Z[_u(_r(Z_ST + L.S_CPREV, e))]
-        Z[_u(_r(Z_ST + L.S_CPREV, e))] = c
-        pc = Z[_u(_r(Z_ST + L.S_PC, e))] + (Z[_u(_r(Z_PRM + L.P_GEAR, e))] * p - dc)
-        Z[_u(_r(Z_ST + L.S_PC, e))] = pc
-        sc = Z[_u(_r(Z_ST + L.S_SC, e))] + dc
-        ns_left = Z[_u(_r(Z_ST + L.S_NSLEFT, e))] - 1.0
-        latch = (ns_left == 0.0) if sampling == 2 else (sampling == 1)
-        ns = Z[_u(_r(Z_PRM + L.P_NS, e))]
-        y = Z[_u(_r(Z_ST + L.S_Y, e))]
-        x_new = Z[_u(_r(Z_PRM + L.P_B, e))] * sc
-        y_new = y + Z[_u(_r(Z_PRM + L.P_A, e))] * (x_new - y)
-        theta = Z[_u(_r(Z_ST + L.S_THETA, e))]
-        ths0 = Z[_u(_r(Z_ST + L.S_THS0, e))]
-        v0 = (theta - ths0) / (ns * Z[_u(_r(Z_PRM + L.P_TICK_S, e))])
-        nsamp = Z[_u(_r(Z_ST + L.S_NSAMP, e))] + 1.0
-        v1 = Z[_u(_r(Z_ST + L.S_V1, e))]
-        v2 = Z[_u(_r(Z_ST + L.S_V2, e))]
-        d2 = v0 - 2.0 * v1 + v2
-        ripple = latch and nsamp >= 3.0
-        rip_sq = Z[_u(_r(Z_ST + L.S_RIPSQ, e))]
-        rip_n = Z[_u(_r(Z_ST + L.S_RIPN, e))]
-        Z[_u(_r(Z_ST + L.S_RIPSQ, e))] = rip_sq + d2 * d2 if ripple else rip_sq
-        Z[_u(_r(Z_ST + L.S_RIPN, e))] = rip_n + 1.0 if ripple else rip_n
-        Z[_u(_r(Z_ST + L.S_V2, e))] = v1 if latch else v2
-        Z[_u(_r(Z_ST + L.S_V1, e))] = v0 if latch else v1
-        Z[_u(_r(Z_ST + L.S_NSAMP, e))] = nsamp if latch else nsamp - 1.0
-        Z[_u(_r(Z_ST + L.S_THS0, e))] = theta if latch else ths0
-        x = Z[_u(_r(Z_ST + L.S_X, e))]
-        Z[_u(_r(Z_ST + L.S_X, e))] = x_new if latch else x
-        y = y_new if latch else y
-        Z[_u(_r(Z_ST + L.S_Y, e))] = y
-        Z[_u(_r(Z_ST + L.S_SC, e))] = 0.0 if latch else sc
-        Z[_u(_r(Z_ST + L.S_NSLEFT, e))] = ns if latch else ns_left
-        # 3. torque command and the torque–speed limit
-        u = pc - y
-        Z[_u(_r(Z_ST + L.S_U, e))] = u
-        tau = Z[_u(_r(Z_PRM + L.P_K3, e))] * u
-        omega = Z[_u(_r(Z_ST + L.S_OMEGA, e))]
-        tpeak = Z[_u(_r(Z_PRM + L.P_TPEAK, e))]
-        wknee = Z[_u(_r(Z_PRM + L.P_WKNEE, e))]
-        aw = abs(omega)
-        sloped = tpeak + Z[_u(_r(Z_PRM + L.P_SLOPE, e))] * (aw - wknee)
-        curve = tpeak if aw <= wknee else (sloped if aw < Z[_u(_r(Z_PRM + L.P_WMAX, e))] else 0.0)
-        lim = curve if tau * omega > 0.0 else tpeak
-        hi = tau > lim
-        lo = (not hi) and tau < -lim
-        sat = Z[_u(_r(Z_ST + L.S_SAT, e))]
-        Z[_u(_r(Z_ST + L.S_SAT, e))] = sat + 1.0 if (hi or lo) else sat
-        tau = lim if hi else (-lim if lo else tau)
-        Z[_u(_r(Z_ST + L.S_TAU, e))] = tau
-        # 4. motor over the tick, torque held
-        net = tau - Z[_u(_r(Z_PRM + L.P_TLOAD, e))]
-        Z[_u(_r(Z_NET, e))] = net
-        Z[_u(_r(Z_WOLD, e))] = omega
-        tc = Z[_u(_r(Z_PRM + L.P_TC, e))]
-        cww = Z[_u(_r(Z_PRM + L.P_CWW, e))]
-        cwf = Z[_u(_r(Z_PRM + L.P_CWF, e))]
-        ctw = Z[_u(_r(Z_PRM + L.P_CTW, e))]
-        ctf = Z[_u(_r(Z_PRM + L.P_CTF, e))]
-        free = (tc == 0.0) if friction else True
-        stuck = (not free) and omega == 0.0
-        th_free = theta + (ctw * omega + ctf * net)
-        w_free = cww * omega + cwf * net
-        breaks = net > tc or net < -tc
-        f1 = net - tc if net > 0.0 else net + tc
-        th_stuck = theta + ctf * f1 if breaks else theta
-        w_stuck = cwf * f1 if breaks else omega
-        sgn = 1.0 if omega > 0.0 else -1.0
-        f2 = net - sgn * tc
-        w_move = cww * omega + cwf * f2
-        keeps = w_move * sgn > 0.0
-        th_move = theta + (ctw * omega + ctf * f2)
-        slow = (not free) and (not stuck) and (not keeps)
-        Z[_u(_r(Z_SLOW, e))] = 1.0 if slow else 0.0
-        theta = th_free if free else (th_stuck if stuck else (th_move if keeps else theta))
-        omega = w_free if free else (w_stuck if stuck else (w_move if keeps else omega))
-        Z[_u(_r(Z_ST + L.S_THETA, e))] = theta
-        Z[_u(_r(Z_ST + L.S_OMEGA, e))] = omega
+    P = Z[_u(_r(Z_CMD, e))]
+    # 1. V-F controller (vfgym.plant._tick.vf_tick as selects)
+    delta = Z[_u(_r(Z_PRM + L.P_DELTA, e))]
+    limit = Z[_u(_r(Z_PRM + L.P_LIMIT, e))]
+    step = Z[_u(_r(Z_PRM + L.P_STEP, e))]
+    value = Z[_u(_r(Z_PRM + L.P_VALUE, e))]
+    slew = Z[_u(_r(Z_PRM + L.P_LAW, e))] != 0.0
+    n = Z[_u(_r(Z_ST + L.S_N, e))]
+    e_prev = Z[_u(_r(Z_ST + L.S_EPREV, e))]
+    err = P - n * delta
+    err = limit if err > limit else err
+    err = -limit if err < -limit else err
+    up = e_prev + step
+    dn = e_prev - step
+    c_up = err > up and (slew or e_prev >= 0.0)
+    err = up if c_up else err
+    c_dn = err < dn and ((slew and not c_up) or (not slew and e_prev <= 0.0))
+    err = dn if c_dn else err
+    s = Z[_u(_r(Z_ST + L.S_SUM, e))] + err
+    plus = s >= value
+    minus = (not plus) and s <= -value
+    p = 1.0 if plus else (-1.0 if minus else 0.0)
+    s = s - value if plus else (s + value if minus else s)
+    Z[_u(_r(Z_ST + L.S_SUM, e))] = s
+    Z[_u(_r(Z_ST + L.S_EPREV, e))] = err
+    n = n + p
+    Z[_u(_r(Z_ST + L.S_N, e))] = n
+    Z[_u(_r(Z_P, e))] = p
+    Z[_u(_r(Z_NOUT, e))] = n
+    # 2. servo counters and sampled filter
+    c = Z[_u(_r(Z_ST + L.S_C, e))]
+    dc = c - Z[_u(_r(Z_ST + L.S_CPREV, e))]
+    Z[_u(_r(Z_ST + L.S_CPREV, e))] = c
+    pc = Z[_u(_r(Z_ST + L.S_PC, e))] + (Z[_u(_r(Z_PRM + L.P_GEAR, e))] * p - dc)
+    Z[_u(_r(Z_ST + L.S_PC, e))] = pc
+    sc = Z[_u(_r(Z_ST + L.S_SC, e))] + dc
+    ns_left = Z[_u(_r(Z_ST + L.S_NSLEFT, e))] - 1.0
+    latch = (ns_left == 0.0) if sampling == 2 else (sampling == 1)
+    ns = Z[_u(_r(Z_PRM + L.P_NS, e))]
+    y = Z[_u(_r(Z_ST + L.S_Y, e))]
+    x_new = Z[_u(_r(Z_PRM + L.P_B, e))] * sc
+    y_new = y + Z[_u(_r(Z_PRM + L.P_A, e))] * (x_new - y)
+    theta = Z[_u(_r(Z_ST + L.S_THETA, e))]
+    ths0 = Z[_u(_r(Z_ST + L.S_THS0, e))]
+    v0 = (theta - ths0) / (ns * Z[_u(_r(Z_PRM + L.P_TICK_S, e))])
+    nsamp = Z[_u(_r(Z_ST + L.S_NSAMP, e))] + 1.0
+    v1 = Z[_u(_r(Z_ST + L.S_V1, e))]
+    v2 = Z[_u(_r(Z_ST + L.S_V2, e))]
+    d2 = v0 - 2.0 * v1 + v2
+    ripple = latch and nsamp >= 3.0
+    rip_sq = Z[_u(_r(Z_ST + L.S_RIPSQ, e))]
+    rip_n = Z[_u(_r(Z_ST + L.S_RIPN, e))]
+    Z[_u(_r(Z_ST + L.S_RIPSQ, e))] = rip_sq + d2 * d2 if ripple else rip_sq
+    Z[_u(_r(Z_ST + L.S_RIPN, e))] = rip_n + 1.0 if ripple else rip_n
+    Z[_u(_r(Z_ST + L.S_V2, e))] = v1 if latch else v2
+    Z[_u(_r(Z_ST + L.S_V1, e))] = v0 if latch else v1
+    Z[_u(_r(Z_ST + L.S_NSAMP, e))] = nsamp if latch else nsamp - 1.0
+    Z[_u(_r(Z_ST + L.S_THS0, e))] = theta if latch else ths0
+    x = Z[_u(_r(Z_ST + L.S_X, e))]
+    Z[_u(_r(Z_ST + L.S_X, e))] = x_new if latch else x
+    y = y_new if latch else y
+    Z[_u(_r(Z_ST + L.S_Y, e))] = y
+    Z[_u(_r(Z_ST + L.S_SC, e))] = 0.0 if latch else sc
+    Z[_u(_r(Z_ST + L.S_NSLEFT, e))] = ns if latch else ns_left
+    # 3. torque command and the torque–speed limit
+    u = pc - y
+    Z[_u(_r(Z_ST + L.S_U, e))] = u
+    tau = Z[_u(_r(Z_PRM + L.P_K3, e))] * u
+    omega = Z[_u(_r(Z_ST + L.S_OMEGA, e))]
+    tpeak = Z[_u(_r(Z_PRM + L.P_TPEAK, e))]
+    wknee = Z[_u(_r(Z_PRM + L.P_WKNEE, e))]
+    aw = abs(omega)
+    sloped = tpeak + Z[_u(_r(Z_PRM + L.P_SLOPE, e))] * (aw - wknee)
+    curve = tpeak if aw <= wknee else (sloped if aw < Z[_u(_r(Z_PRM + L.P_WMAX, e))] else 0.0)
+    lim = curve if tau * omega > 0.0 else tpeak
+    hi = tau > lim
+    lo = (not hi) and tau < -lim
+    sat = Z[_u(_r(Z_ST + L.S_SAT, e))]
+    Z[_u(_r(Z_ST + L.S_SAT, e))] = sat + 1.0 if (hi or lo) else sat
+    tau = lim if hi else (-lim if lo else tau)
+    Z[_u(_r(Z_ST + L.S_TAU, e))] = tau
+    # 4. motor over the tick, torque held
+    net = tau - Z[_u(_r(Z_PRM + L.P_TLOAD, e))]
+    Z[_u(_r(Z_NET, e))] = net
+    Z[_u(_r(Z_WOLD, e))] = omega
+    tc = Z[_u(_r(Z_PRM + L.P_TC, e))]
+    cww = Z[_u(_r(Z_PRM + L.P_CWW, e))]
+    cwf = Z[_u(_r(Z_PRM + L.P_CWF, e))]
+    ctw = Z[_u(_r(Z_PRM + L.P_CTW, e))]
+    ctf = Z[_u(_r(Z_PRM + L.P_CTF, e))]
+    free = (tc == 0.0) if friction else True
+    stuck = (not free) and omega == 0.0
+    th_free = theta + (ctw * omega + ctf * net)
+    w_free = cww * omega + cwf * net
+    breaks = net > tc or net < -tc
+    f1 = net - tc if net > 0.0 else net + tc
+    th_stuck = theta + ctf * f1 if breaks else theta
+    w_stuck = cwf * f1 if breaks else omega
+    sgn = 1.0 if omega > 0.0 else -1.0
+    f2 = net - sgn * tc
+    w_move = cww * omega + cwf * f2
+    keeps = w_move * sgn > 0.0
+    th_move = theta + (ctw * omega + ctf * f2)
+    slow = (not free) and (not stuck) and (not keeps)
+    Z[_u(_r(Z_SLOW, e))] = 1.0 if slow else 0.0
+    theta = th_free if free else (th_stuck if stuck else (th_move if keeps else theta))
+    omega = w_free if free else (w_stuck if stuck else (w_move if keeps else omega))
+    Z[_u(_r(Z_ST + L.S_THETA, e))] = theta
+    Z[_u(_r(Z_ST + L.S_OMEGA, e))] = omega
     return 1 if slow else 0
 
 
@@ -194,7 +197,7 @@ def _friction_stops(Z) -> None:
             net = Z[_r(Z_NET, e)]
             tc = Z[_r(Z_PRM + L.P_TC, e)]
             sgn = 1.0 if omega > 0.0 else -1.0
-            theta, omega = K.stop_within_tick(
+            theta, omega = TK.stop_within_tick(
                 Z[_r(Z_ST + L.S_THETA, e)],
                 omega,
                 net - sgn * tc,
@@ -208,84 +211,83 @@ def _friction_stops(Z) -> None:
             Z[_r(Z_ST + L.S_OMEGA, e)] = omega
 
 
-@numba.njit(inline="always", error_model="numpy")
+@_inline
 def _encoder_measures(Z, e, k):
     """Step 5 of tick ``k`` of the block (encoder) and the streamed measures, lane ``e``."""
-    if True:
-        i = Z[_u(_r(Z_ST + L.S_TICK, e))] + k
-        P = Z[_u(_r(Z_CMD, e))]
-        theta = Z[_u(_r(Z_ST + L.S_THETA, e))]
-        omega = Z[_u(_r(Z_ST + L.S_OMEGA, e))]
-        Z[_u(_r(Z_ST + L.S_C, e))] = math.floor(theta / Z[_u(_r(Z_PRM + L.P_COUNT_RAD, e))])
-        n = Z[_u(_r(Z_ST + L.S_N, e))]
-        pos = n * Z[_u(_r(Z_PRM + L.P_DELTA, e))]
-        # overshoot while the command is at rest, after its last change
-        p_prev = Z[_u(_r(Z_ST + L.S_PPREV, e))]
-        last_dir = Z[_u(_r(Z_ST + L.S_LASTDIR, e))]
-        changed = p_prev != P
-        at_rest = (not changed) and last_dir != 0.0
-        o_m = last_dir * (theta - P)
-        o_p = last_dir * (pos - P)
-        ov_m = Z[_u(_r(Z_ST + L.S_OVM, e))]
-        ov_p = Z[_u(_r(Z_ST + L.S_OVP, e))]
-        Z[_u(_r(Z_ST + L.S_OVM, e))] = o_m if (at_rest and o_m > ov_m) else ov_m
-        Z[_u(_r(Z_ST + L.S_OVP, e))] = o_p if (at_rest and o_p > ov_p) else ov_p
-        new_dir = 1.0 if p_prev < P else -1.0
-        Z[_u(_r(Z_ST + L.S_LASTDIR, e))] = new_dir if changed else last_dir
-        Z[_u(_r(Z_ST + L.S_PPREV, e))] = P
-        # in-position window and steady state
-        target = Z[_u(_r(Z_PRM + L.P_TARGET, e))]
-        win = Z[_u(_r(Z_PRM + L.P_WIN_RAD, e))]
-        lom = Z[_u(_r(Z_ST + L.S_LOM, e))]
-        lop = Z[_u(_r(Z_ST + L.S_LOP, e))]
-        Z[_u(_r(Z_ST + L.S_LOM, e))] = i if abs(theta - target) > win else lom
-        Z[_u(_r(Z_ST + L.S_LOP, e))] = i if abs(pos - target) > win else lop
-        steady = i >= Z[_u(_r(Z_PRM + L.P_SS_START, e))]
-        ss_m = Z[_u(_r(Z_ST + L.S_SSM, e))]
-        ss_p = Z[_u(_r(Z_ST + L.S_SSP, e))]
-        ss_n = Z[_u(_r(Z_ST + L.S_SSN, e))]
-        Z[_u(_r(Z_ST + L.S_SSM, e))] = ss_m + (theta - target) if steady else ss_m
-        Z[_u(_r(Z_ST + L.S_SSP, e))] = ss_p + (pos - target) if steady else ss_p
-        Z[_u(_r(Z_ST + L.S_SSN, e))] = ss_n + 1.0 if steady else ss_n
-        # motor acceleration, tracking errors
-        dw = abs(omega - Z[_u(_r(Z_WOLD, e))])
-        dw_max = Z[_u(_r(Z_ST + L.S_DWMX, e))]
-        Z[_u(_r(Z_ST + L.S_DWMX, e))] = dw if dw > dw_max else dw_max
-        d = P - theta
-        Z[_u(_r(Z_ST + L.S_TSQM, e))] = Z[_u(_r(Z_ST + L.S_TSQM, e))] + d * d
-        mx = Z[_u(_r(Z_ST + L.S_TMXM, e))]
-        Z[_u(_r(Z_ST + L.S_TMXM, e))] = abs(d) if abs(d) > mx else mx
-        d = P - pos
-        Z[_u(_r(Z_ST + L.S_TSQP, e))] = Z[_u(_r(Z_ST + L.S_TSQP, e))] + d * d
-        mx = Z[_u(_r(Z_ST + L.S_TMXP, e))]
-        Z[_u(_r(Z_ST + L.S_TMXP, e))] = abs(d) if abs(d) > mx else mx
-        # pulse statistics
-        p = Z[_u(_r(Z_P, e))]
-        has = p != 0.0
-        last_p = Z[_u(_r(Z_ST + L.S_LASTP, e))]
-        seen = has and last_p >= 0.0
-        iv = i - last_p
-        min_iv = Z[_u(_r(Z_ST + L.S_MINIV, e))]
-        shorter = seen and (min_iv == 0.0 or iv < min_iv)
-        Z[_u(_r(Z_ST + L.S_MINIV, e))] = iv if shorter else min_iv
-        last_sign = Z[_u(_r(Z_ST + L.S_LASTSIGN, e))]
-        rev = Z[_u(_r(Z_ST + L.S_REV, e))]
-        Z[_u(_r(Z_ST + L.S_REV, e))] = rev + 1.0 if (seen and p != last_sign) else rev
-        first_p = Z[_u(_r(Z_ST + L.S_FIRSTP, e))]
-        Z[_u(_r(Z_ST + L.S_FIRSTP, e))] = i if (has and not seen) else first_p
-        Z[_u(_r(Z_ST + L.S_LASTP, e))] = i if has else last_p
-        Z[_u(_r(Z_ST + L.S_LASTSIGN, e))] = p if has else last_sign
-        pulses = Z[_u(_r(Z_ST + L.S_PULSES, e))]
-        Z[_u(_r(Z_ST + L.S_PULSES, e))] = pulses + 1.0 if has else pulses
-        # peaks
-        tau = Z[_u(_r(Z_ST + L.S_TAU, e))]
-        pc = Z[_u(_r(Z_ST + L.S_PC, e))]
-        mx = Z[_u(_r(Z_ST + L.S_TQMX, e))]
-        Z[_u(_r(Z_ST + L.S_TQMX, e))] = abs(tau) if abs(tau) > mx else mx
-        mx = Z[_u(_r(Z_ST + L.S_PCMX, e))]
-        Z[_u(_r(Z_ST + L.S_PCMX, e))] = abs(pc) if abs(pc) > mx else mx
-        mx = Z[_u(_r(Z_ST + L.S_WMX, e))]
-        Z[_u(_r(Z_ST + L.S_WMX, e))] = abs(omega) if abs(omega) > mx else mx
+    i = Z[_u(_r(Z_ST + L.S_TICK, e))] + k
+    P = Z[_u(_r(Z_CMD, e))]
+    theta = Z[_u(_r(Z_ST + L.S_THETA, e))]
+    omega = Z[_u(_r(Z_ST + L.S_OMEGA, e))]
+    Z[_u(_r(Z_ST + L.S_C, e))] = math.floor(theta / Z[_u(_r(Z_PRM + L.P_COUNT_RAD, e))])
+    n = Z[_u(_r(Z_ST + L.S_N, e))]
+    pos = n * Z[_u(_r(Z_PRM + L.P_DELTA, e))]
+    # overshoot while the command is at rest, after its last change
+    p_prev = Z[_u(_r(Z_ST + L.S_PPREV, e))]
+    last_dir = Z[_u(_r(Z_ST + L.S_LASTDIR, e))]
+    changed = p_prev != P
+    at_rest = (not changed) and last_dir != 0.0
+    o_m = last_dir * (theta - P)
+    o_p = last_dir * (pos - P)
+    ov_m = Z[_u(_r(Z_ST + L.S_OVM, e))]
+    ov_p = Z[_u(_r(Z_ST + L.S_OVP, e))]
+    Z[_u(_r(Z_ST + L.S_OVM, e))] = o_m if (at_rest and o_m > ov_m) else ov_m
+    Z[_u(_r(Z_ST + L.S_OVP, e))] = o_p if (at_rest and o_p > ov_p) else ov_p
+    new_dir = 1.0 if p_prev < P else -1.0
+    Z[_u(_r(Z_ST + L.S_LASTDIR, e))] = new_dir if changed else last_dir
+    Z[_u(_r(Z_ST + L.S_PPREV, e))] = P
+    # in-position window and steady state
+    target = Z[_u(_r(Z_PRM + L.P_TARGET, e))]
+    win = Z[_u(_r(Z_PRM + L.P_WIN_RAD, e))]
+    lom = Z[_u(_r(Z_ST + L.S_LOM, e))]
+    lop = Z[_u(_r(Z_ST + L.S_LOP, e))]
+    Z[_u(_r(Z_ST + L.S_LOM, e))] = i if abs(theta - target) > win else lom
+    Z[_u(_r(Z_ST + L.S_LOP, e))] = i if abs(pos - target) > win else lop
+    steady = i >= Z[_u(_r(Z_PRM + L.P_SS_START, e))]
+    ss_m = Z[_u(_r(Z_ST + L.S_SSM, e))]
+    ss_p = Z[_u(_r(Z_ST + L.S_SSP, e))]
+    ss_n = Z[_u(_r(Z_ST + L.S_SSN, e))]
+    Z[_u(_r(Z_ST + L.S_SSM, e))] = ss_m + (theta - target) if steady else ss_m
+    Z[_u(_r(Z_ST + L.S_SSP, e))] = ss_p + (pos - target) if steady else ss_p
+    Z[_u(_r(Z_ST + L.S_SSN, e))] = ss_n + 1.0 if steady else ss_n
+    # motor acceleration, tracking errors
+    dw = abs(omega - Z[_u(_r(Z_WOLD, e))])
+    dw_max = Z[_u(_r(Z_ST + L.S_DWMX, e))]
+    Z[_u(_r(Z_ST + L.S_DWMX, e))] = dw if dw > dw_max else dw_max
+    d = P - theta
+    Z[_u(_r(Z_ST + L.S_TSQM, e))] = Z[_u(_r(Z_ST + L.S_TSQM, e))] + d * d
+    mx = Z[_u(_r(Z_ST + L.S_TMXM, e))]
+    Z[_u(_r(Z_ST + L.S_TMXM, e))] = abs(d) if abs(d) > mx else mx
+    d = P - pos
+    Z[_u(_r(Z_ST + L.S_TSQP, e))] = Z[_u(_r(Z_ST + L.S_TSQP, e))] + d * d
+    mx = Z[_u(_r(Z_ST + L.S_TMXP, e))]
+    Z[_u(_r(Z_ST + L.S_TMXP, e))] = abs(d) if abs(d) > mx else mx
+    # pulse statistics
+    p = Z[_u(_r(Z_P, e))]
+    has = p != 0.0
+    last_p = Z[_u(_r(Z_ST + L.S_LASTP, e))]
+    seen = has and last_p >= 0.0
+    iv = i - last_p
+    min_iv = Z[_u(_r(Z_ST + L.S_MINIV, e))]
+    shorter = seen and (min_iv == 0.0 or iv < min_iv)
+    Z[_u(_r(Z_ST + L.S_MINIV, e))] = iv if shorter else min_iv
+    last_sign = Z[_u(_r(Z_ST + L.S_LASTSIGN, e))]
+    rev = Z[_u(_r(Z_ST + L.S_REV, e))]
+    Z[_u(_r(Z_ST + L.S_REV, e))] = rev + 1.0 if (seen and p != last_sign) else rev
+    first_p = Z[_u(_r(Z_ST + L.S_FIRSTP, e))]
+    Z[_u(_r(Z_ST + L.S_FIRSTP, e))] = i if (has and not seen) else first_p
+    Z[_u(_r(Z_ST + L.S_LASTP, e))] = i if has else last_p
+    Z[_u(_r(Z_ST + L.S_LASTSIGN, e))] = p if has else last_sign
+    pulses = Z[_u(_r(Z_ST + L.S_PULSES, e))]
+    Z[_u(_r(Z_ST + L.S_PULSES, e))] = pulses + 1.0 if has else pulses
+    # peaks
+    tau = Z[_u(_r(Z_ST + L.S_TAU, e))]
+    pc = Z[_u(_r(Z_ST + L.S_PC, e))]
+    mx = Z[_u(_r(Z_ST + L.S_TQMX, e))]
+    Z[_u(_r(Z_ST + L.S_TQMX, e))] = abs(tau) if abs(tau) > mx else mx
+    mx = Z[_u(_r(Z_ST + L.S_PCMX, e))]
+    Z[_u(_r(Z_ST + L.S_PCMX, e))] = abs(pc) if abs(pc) > mx else mx
+    mx = Z[_u(_r(Z_ST + L.S_WMX, e))]
+    Z[_u(_r(Z_ST + L.S_WMX, e))] = abs(omega) if abs(omega) > mx else mx
 
 
 @_jit
@@ -446,5 +448,5 @@ def scratch(blocks: int, m: int, w: int) -> tuple[np.ndarray, np.ndarray, np.nda
     )
 
 
-# The functions here compile the kernel's stop_within_tick into themselves.
-K.guard_cache(run_block, (K, L))
+# The functions here compile the tick's stop_within_tick and the slot numbers into themselves.
+guard_cache(run_block, (TK, L))

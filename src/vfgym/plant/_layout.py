@@ -1,132 +1,136 @@
 """Index layout of the plain arrays the compiled kernel reads and writes.
 
-The kernel takes one float64 row of parameters per run and writes one float64 row of
-streamed accumulators per run; these constants name the slots. Both the kernel and the
-plain-Python reference use them, so the two read the same numbers.
+The kernel takes one float64 row of parameters per run (``P_``), keeps a move's loop
+state in one float64 row (``S_``), writes one float64 row of streamed accumulators per run
+(``A_``) and, when asked, a trace of rows (``R_``); these constants name the slots. Each
+family is numbered 0 … N−1 without gaps or repeats, N being its ``N_`` constant (tested).
+Both the kernel and the plain-Python reference use them, so the two read the same
+numbers. "Whole" slots hold whole numbers (counts, ticks), exact in a float64 up to 2**53;
+"tick" means a tick's index within the move (0 at the first tick).
 """
 
-# --- parameter row -----------------------------------------------------------------------
-P_TICK_S = 0  # T (s)
-P_DELTA = 1  # pulse equivalent δ (rad)
-P_VALUE = 2  # V-F threshold value (rad)
-P_LIMIT = 3  # error limit L (rad)
-P_STEP = 4  # value/k (rad per tick), one division done once
-P_LAW = 5  # 0 = rise, 1 = slew
-P_GEAR = 6  # encoder counts per command pulse (whole)
-P_NS = 7  # servo sample period in ticks (whole)
-P_B = 8  # speed counter multiplier
-P_A = 9  # filter ratio Ts/Tf
-P_K3 = 10  # N·m per count of servo error
-P_COUNT_RAD = 11  # angle of one encoder count (rad)
-P_INV_J = 12  # 1/J (1/(kg·m²))
-P_DAMP = 13  # b/J (1/s)
-P_CWW = 14  # ω(T) = CWW·ω + CWF·F
-P_CWF = 15
-P_CTW = 16  # θ(T) = θ + CTW·ω + CTF·F
-P_CTF = 17
-P_TC = 18  # Coulomb friction (N·m)
-P_TLOAD = 19  # load torque (N·m)
-P_TPEAK = 20  # peak torque (N·m)
+# --- parameter row (written by vfgym.plant.pack, read by the kernel) --------------------
+P_TICK_S = 0  # T: duration of one tick (s)
+P_DELTA = 1  # pulse equivalent δ: command angle of one pulse (rad)
+P_VALUE = 2  # V-F threshold value: the accumulator's pulse threshold (rad)
+P_LIMIT = 3  # error limit L of the V-F controller (rad)
+P_STEP = 4  # value/k: the acceleration law's largest change of error a tick (rad), divided once
+P_LAW = 5  # acceleration law, index in params.ACCEL_LAWS: 0 = rise, 1 = slew (whole)
+P_GEAR = 6  # electronic gear: encoder counts per command pulse (whole)
+P_NS = 7  # Ns: servo sample period (ticks, whole)
+P_B = 8  # B: speed counter multiplier, x = B·count (counts per count)
+P_A = 9  # A = Ts/Tf: speed filter ratio, y += A·(x − y) (dimensionless)
+P_K3 = 10  # K3: torque per count of servo error (N·m/count)
+P_COUNT_RAD = 11  # q: angle of one encoder count (rad)
+P_INV_J = 12  # 1/J: inverse of motor plus load inertia (1/(kg·m²))
+P_DAMP = 13  # b/J: viscous friction over inertia (1/s)
+P_CWW = 14  # ω(T) = CWW·ω + CWF·F: speed kept over a tick, e^(−bT/J) (dimensionless)
+P_CWF = 15  # speed gained over a tick per net torque F held ((rad/s)/(N·m))
+P_CTW = 16  # θ(T) = θ + CTW·ω + CTF·F: angle over a tick per starting speed (s)
+P_CTF = 17  # angle over a tick per net torque F held (rad/(N·m))
+P_TC = 18  # τc: Coulomb friction (N·m, ≥ 0)
+P_TLOAD = 19  # τ_load: load torque, signed (N·m)
+P_TPEAK = 20  # peak torque of the torque–speed curve (N·m)
 P_WKNEE = 21  # end of the flat part of the torque–speed curve (rad/s)
 P_WMAX = 22  # maximum speed: no motoring torque above (rad/s)
 P_SLOPE = 23  # dτ/dω between knee and max speed (N·m·s/rad, ≤ 0)
 P_TARGET = 24  # final command (rad): the in-position target
 P_WIN_RAD = 25  # in-position half-width (rad)
-P_SS_START = 26  # first tick of the steady-state window
-P_ACC_W = 27  # pulse-acceleration window (ticks, whole)
-P_ACC_SCALE = 28  # δ/(w·T)²: converts a second difference of counts to rad/s²
-P_USE_EXT = 29  # 1: pulses come from the external source array, 0: V-F controller
+P_SS_START = 26  # first tick of the steady-state window (tick, whole)
+P_ACC_W = 27  # w: pulse-acceleration window (ticks, whole)
+P_ACC_SCALE = 28  # δ/(w·T)²: converts a second difference of counts to rad/s² (rad/s²)
+P_USE_EXT = 29  # pulse source: 1 = the external pulse array, 0 = the V-F controller
 N_PARAMS = 30
 
-# --- accumulator row (streamed measures; see vfgym.plant.measures for the definitions) -----------
+# --- accumulator row (streamed measures; see vfgym.plant.measures for the definitions) --
 A_OV_MOTOR = 0  # max over at-rest ticks of dir·(θ − P) (rad), ≥ 0
-A_OV_PULSE = 1  # the same for the pulse position n·δ
-A_LAST_OUT_MOTOR = 2  # last tick with |θ − target| > window (−1: never)
-A_LAST_OUT_PULSE = 3  # the same for n·δ
-A_SS_SUM_MOTOR = 4  # Σ (θ − target) over the steady window
-A_SS_SUM_PULSE = 5
-A_SS_COUNT = 6
+A_OV_PULSE = 1  # the same for the pulse position n·δ (rad)
+A_LAST_OUT_MOTOR = 2  # last tick with |θ − target| > window (tick; −1: never)
+A_LAST_OUT_PULSE = 3  # the same for n·δ (tick; −1: never)
+A_SS_SUM_MOTOR = 4  # Σ (θ − target) over the steady-state window (rad)
+A_SS_SUM_PULSE = 5  # Σ (n·δ − target) over the steady-state window (rad)
+A_SS_COUNT = 6  # ticks in the steady-state window (whole)
 A_ACC_PULSE = 7  # max |second difference of n over w| · δ/(wT)² (rad/s²)
 A_ACC_MOTOR = 8  # max |ω_{i+1} − ω_i| / T (rad/s²)
-A_SAT_TICKS = 9  # ticks with the torque command clipped
-A_TRK_SQ_MOTOR = 10  # Σ (P − θ)²
-A_TRK_MAX_MOTOR = 11  # max |P − θ|
-A_TRK_SQ_PULSE = 12  # Σ (P − nδ)²
-A_TRK_MAX_PULSE = 13
-A_RIPPLE_SQ = 14  # Σ over servo samples of (second difference of mean speed)²
-A_RIPPLE_N = 15
-A_PULSES = 16  # pulses output (either sign)
-A_REVERSALS = 17  # sign changes between consecutive pulses
+A_SAT_TICKS = 9  # ticks with the torque command clipped (whole)
+A_TRK_SQ_MOTOR = 10  # Σ (P − θ)² over all ticks (rad²)
+A_TRK_MAX_MOTOR = 11  # max |P − θ| (rad)
+A_TRK_SQ_PULSE = 12  # Σ (P − n·δ)² over all ticks (rad²)
+A_TRK_MAX_PULSE = 13  # max |P − n·δ| (rad)
+A_RIPPLE_SQ = 14  # Σ over servo samples of (second difference of mean speed)² ((rad/s)²)
+A_RIPPLE_N = 15  # servo samples in that sum (whole)
+A_PULSES = 16  # pulses output, either sign (whole)
+A_REVERSALS = 17  # sign changes between consecutive pulses (whole)
 A_MIN_INTERVAL = 18  # shortest interval between consecutive pulses (ticks; 0: < 2 pulses)
-A_FIRST_PULSE = 19  # tick of the first pulse (−1: none)
-A_LAST_PULSE = 20  # tick of the last pulse (−1: none)
+A_FIRST_PULSE = 19  # tick of the first pulse (tick; −1: none)
+A_LAST_PULSE = 20  # tick of the last pulse (tick; −1: none)
 A_TORQUE_MAX = 21  # max |τ| (N·m)
 A_PC_MAX = 22  # max |position counter| (counts)
 A_THETA = 23  # final θ (rad)
 A_OMEGA = 24  # final ω (rad/s)
-A_N = 25  # final pulse count
-A_PC = 26  # final position counter
+A_N = 25  # final pulse count n, signed (pulses)
+A_PC = 26  # final position counter (counts)
 A_SPEED_MAX = 27  # max |ω| (rad/s)
-A_TICKS = 28  # ticks simulated
+A_TICKS = 28  # ticks simulated (whole)
 N_ACC = 29
 
-# --- trace rows -----------------------------------------------------------------------------
-R_COMMAND = 0  # P (rad)
-R_PULSE = 1  # n·δ (rad)
-R_THETA = 2  # motor angle (rad)
-R_OMEGA = 3  # motor speed (rad/s)
-R_TORQUE = 4  # torque applied (N·m)
+# --- trace rows (one column per recorded tick) ------------------------------------------
+R_COMMAND = 0  # command P (rad)
+R_PULSE = 1  # pulse position n·δ (rad)
+R_THETA = 2  # motor angle θ (rad)
+R_OMEGA = 3  # motor speed ω (rad/s)
+R_TORQUE = 4  # torque applied τ (N·m)
 R_ERROR = 5  # servo error u = pc − y (counts)
-R_PC = 6  # position counter (counts)
+R_PC = 6  # position counter pc (counts)
 R_FEEDBACK = 7  # filtered speed feedback y (counts)
 R_SPEED_COUNT = 8  # latched speed counter output x = B·count (counts)
 N_ROWS = 9
 
-# --- loop state (one float64 row; whole numbers are exact up to 2**53) ------------------
-S_N = 0  # pulses output (signed)
-S_SUM = 1  # V-F accumulator
-S_EPREV = 2  # limited error of the last tick
-S_CPREV = 3  # encoder count the servo saw last
-S_C = 4  # encoder count now
-S_PC = 5  # position counter
-S_SC = 6  # speed counter (counts this sample)
-S_NSLEFT = 7  # ticks left in this sample period
-S_Y = 8  # filtered speed feedback
-S_X = 9  # latched speed counter output
-S_THETA = 10  # motor angle
-S_OMEGA = 11  # motor speed
-S_TAU = 12  # torque applied last tick
-S_U = 13  # servo error last tick
-S_PPREV = 14  # command on the last tick
-S_LASTDIR = 15  # sign of the command's last change
-S_OVM = 16
-S_OVP = 17
-S_LOM = 18
-S_LOP = 19
-S_SSM = 20
-S_SSP = 21
-S_SSN = 22
-S_SAT = 23
-S_TSQM = 24
-S_TMXM = 25
-S_TSQP = 26
-S_TMXP = 27
-S_RIPSQ = 28
-S_RIPN = 29
-S_THS0 = 30
-S_V1 = 31
-S_V2 = 32
-S_NSAMP = 33
-S_PULSES = 34
-S_REV = 35
-S_MINIV = 36
-S_FIRSTP = 37
-S_LASTP = 38
-S_LASTSIGN = 39
-S_TQMX = 40
-S_PCMX = 41
-S_WMX = 42
-S_D2MX = 43
-S_DWMX = 44
-S_TICK = 45  # next tick to simulate
+# --- loop state (one float64 row per move; read and written by run_segment) -------------
+S_N = 0  # pulses output n, signed (pulses)
+S_SUM = 1  # V-F accumulator: Σ limited error since the last pulse (rad)
+S_EPREV = 2  # limited error of the last tick (rad)
+S_CPREV = 3  # encoder count the servo read on the last tick (counts)
+S_C = 4  # encoder count now, floor(θ/q) (counts)
+S_PC = 5  # position counter pc (counts)
+S_SC = 6  # speed counter: encoder change in this sample period so far (counts)
+S_NSLEFT = 7  # ticks left in this sample period (ticks, whole)
+S_Y = 8  # filtered speed feedback y (counts)
+S_X = 9  # latched speed counter output x = B·count (counts)
+S_THETA = 10  # motor angle θ (rad)
+S_OMEGA = 11  # motor speed ω (rad/s)
+S_TAU = 12  # torque applied on the last tick (N·m)
+S_U = 13  # servo error u = pc − y on the last tick (counts)
+S_PPREV = 14  # command P on the last tick (rad)
+S_LASTDIR = 15  # sign of the command's last change (+1, −1; 0: never changed)
+S_OVM = 16  # running A_OV_MOTOR: motor overshoot so far (rad)
+S_OVP = 17  # running A_OV_PULSE: pulse overshoot so far (rad)
+S_LOM = 18  # running A_LAST_OUT_MOTOR (tick; −1: never)
+S_LOP = 19  # running A_LAST_OUT_PULSE (tick; −1: never)
+S_SSM = 20  # running A_SS_SUM_MOTOR (rad)
+S_SSP = 21  # running A_SS_SUM_PULSE (rad)
+S_SSN = 22  # running A_SS_COUNT (ticks, whole)
+S_SAT = 23  # running A_SAT_TICKS (ticks, whole)
+S_TSQM = 24  # running A_TRK_SQ_MOTOR (rad²)
+S_TMXM = 25  # running A_TRK_MAX_MOTOR (rad)
+S_TSQP = 26  # running A_TRK_SQ_PULSE (rad²)
+S_TMXP = 27  # running A_TRK_MAX_PULSE (rad)
+S_RIPSQ = 28  # running A_RIPPLE_SQ ((rad/s)²)
+S_RIPN = 29  # running A_RIPPLE_N (samples, whole)
+S_THS0 = 30  # θ at the last servo sample, start of this period's mean speed (rad)
+S_V1 = 31  # mean speed over the last sample period (rad/s)
+S_V2 = 32  # mean speed over the period before it (rad/s)
+S_NSAMP = 33  # servo samples taken (whole)
+S_PULSES = 34  # running A_PULSES (whole)
+S_REV = 35  # running A_REVERSALS (whole)
+S_MINIV = 36  # running A_MIN_INTERVAL (ticks; 0: < 2 pulses)
+S_FIRSTP = 37  # running A_FIRST_PULSE (tick; −1: none)
+S_LASTP = 38  # tick of the last pulse so far (tick; −1: none)
+S_LASTSIGN = 39  # sign of the last pulse (+1, −1; 0: none)
+S_TQMX = 40  # running A_TORQUE_MAX (N·m)
+S_PCMX = 41  # running A_PC_MAX (counts)
+S_WMX = 42  # running A_SPEED_MAX (rad/s)
+S_D2MX = 43  # max |n_i − 2·n_(i−w) + n_(i−2w)| so far, before scaling to A_ACC_PULSE (pulses)
+S_DWMX = 44  # max |ω_{i+1} − ω_i| so far, before dividing by T for A_ACC_MOTOR (rad/s)
+S_TICK = 45  # next tick to simulate (tick, whole)
 N_STATE = 46

@@ -28,6 +28,7 @@ from vfgym.params import (
 )
 from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
+from vfgym.plant import _tick as TK
 from vfgym.plant.measures import command_end_s, from_acc
 
 
@@ -42,8 +43,27 @@ def vf_pulses(
 ) -> np.ndarray:
     """The V-F controller's pulse train for a position command given per tick.
 
-    Returns an int8 array, one entry per tick: +1, −1 or 0 (at most one pulse a tick).
-    The controller's position feedback is its own pulse counter (MODEL.md §1).
+    The controller alone (docs/model.md §1): its position feedback is its own pulse
+    counter, so no servo or motor is simulated.
+
+    Parameters
+    ----------
+    command_rad : numpy.ndarray
+        Position command P (rad), one finite value per controller tick.
+    value_rad, error_limit_rad, k, accel_law
+        The controller's settings, as in :class:`vfgym.Settings` (validated the same way).
+    pulse_rad : float
+        Pulse equivalent δ (rad per pulse), > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        int8, one entry per tick: +1, −1 or 0 (at most one pulse a tick).
+
+    Raises
+    ------
+    ValueError
+        If the command is not finite or a setting is out of its range.
     """
     cmd = check_finite_array("command_rad", command_rad)
     s = Settings(value_rad=value_rad, error_limit_rad=error_limit_rad, k=k, accel_law=accel_law)
@@ -62,16 +82,25 @@ def vf_pulses(
 
 
 def motor_coefficients(plant: Plant) -> tuple[float, float, float, float]:
-    """Exact one-tick zero-order-hold coefficients of J·dω/dt = F − b·ω.
+    """Exact one-tick zero-order-hold coefficients of J·dω/dt = F − b·ω (docs/model.md §3).
 
-    ω(T) = cww·ω + cwf·F and θ(T) = θ + ctw·ω + ctf·F for a net torque F held over T.
+    Parameters
+    ----------
+    plant : Plant
+        Gives the tick T, the total inertia J and the viscous friction b.
+
+    Returns
+    -------
+    tuple of float
+        ``(cww, cwf, ctw, ctf)`` such that ω(T) = cww·ω + cwf·F and
+        θ(T) = θ + ctw·ω + ctf·F for a net torque F held over the tick.
     """
     m = plant.motor
     inv_j = 1.0 / m.inertia_kgm2
     T = plant.tick_s
     x = m.viscous_nm_s_rad * inv_j * T
-    h = K.phi_h.py_func(x)
-    g = K.phi_g.py_func(x)
+    h = TK.phi_h.py_func(x)
+    g = TK.phi_g.py_func(x)
     return math.exp(-x), T * h * inv_j, T * h, T * T * g * inv_j
 
 
@@ -83,7 +112,28 @@ def pack(
     n_ticks: int,
     use_ext: bool = False,
 ) -> np.ndarray:
-    """The kernel's parameter row for one run (see :mod:`vfgym.plant._layout`)."""
+    """The kernel's parameter row for one run (see :mod:`vfgym.plant._layout`).
+
+    Parameters
+    ----------
+    settings : Settings
+        The tuned settings.
+    plant : Plant
+        The plant.
+    measures : Measures
+        Windows and bands of the streamed measures.
+    target_rad : float
+        The command's final value: the in-position target (rad).
+    n_ticks : int
+        Ticks of the run (places the steady-state window at its end).
+    use_ext : bool
+        True when an external pulse train replaces the V-F controller.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, ``_layout.N_PARAMS`` entries.
+    """
     m, sv = plant.motor, plant.servo
     prm = np.zeros(L.N_PARAMS, dtype=np.float64)
     T = plant.tick_s
@@ -99,7 +149,7 @@ def pack(
     prm[L.P_NS] = sv.sample_ticks
     prm[L.P_B] = sv.speed_gain_b
     prm[L.P_A] = settings.ts_over_tf
-    prm[L.P_K3] = sv.torque_per_count_nm
+    prm[L.P_K3] = plant.torque_per_count_nm  # K3 in force (follows the load by default)
     prm[L.P_COUNT_RAD] = m.count_rad
     prm[L.P_INV_J] = 1.0 / m.inertia_kgm2
     prm[L.P_DAMP] = m.viscous_nm_s_rad / m.inertia_kgm2
@@ -122,7 +172,26 @@ def pack(
 
 
 def check_pulses(pulses: np.ndarray, n_ticks: int) -> np.ndarray:
-    """An external pulse train: int8, one entry per tick, each −1, 0 or +1."""
+    """Check an external pulse train and return it as the kernel reads it.
+
+    Parameters
+    ----------
+    pulses : numpy.ndarray
+        One entry per tick, each −1, 0 or +1.
+    n_ticks : int
+        Ticks of the command the train goes with.
+
+    Returns
+    -------
+    numpy.ndarray
+        The train as contiguous int8.
+
+    Raises
+    ------
+    ValueError
+        If the train is not one-dimensional with ``n_ticks`` entries, or holds a value
+        other than −1, 0, +1.
+    """
     arr = np.asarray(pulses)
     if arr.ndim != 1 or arr.shape[0] != n_ticks:
         raise ValueError(
@@ -138,11 +207,30 @@ def check_pulses(pulses: np.ndarray, n_ticks: int) -> np.ndarray:
 def run_move(
     cmd: np.ndarray, ext: np.ndarray, prm: np.ndarray, rec: np.ndarray, dec: int = 1
 ) -> np.ndarray:
-    """One whole move through the compiled segment kernel; returns its accumulator row.
+    """One whole move through the compiled segment kernel.
 
     Equivalent to ``_kernel.run_one``, but the state set-up and the final read-out run as
     plain Python (the kernel functions' own ``py_func``), so a first simulation compiles
     only the hot loop: this is most of vfgym's cold-start time.
+
+    Parameters
+    ----------
+    cmd : numpy.ndarray
+        Position command per tick (rad), float64.
+    ext : numpy.ndarray
+        External pulse train (int8 per tick), or empty when the V-F controller runs.
+    prm : numpy.ndarray
+        The parameter row (:func:`pack`).
+    rec : numpy.ndarray
+        Trace rows to fill, ``(_layout.N_ROWS, n_ticks // dec)`` float64; may have no
+        columns, for the measures alone.
+    dec : int
+        Keep every ``dec``-th tick in ``rec``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The accumulator row the measures are decoded from (:mod:`vfgym.plant.measures`).
     """
     st = np.empty(L.N_STATE, dtype=np.float64)
     ring = np.empty(K.ring_size.py_func(prm), dtype=np.int64)
@@ -155,35 +243,67 @@ def run_move(
 
 @dataclass(frozen=True)
 class Trace:
-    """What the plant did, tick by tick (every ``decimation``-th tick).
+    """What the plant did, tick by tick (every ``decimation``-th tick), as :func:`simulate`
+    returns it.
 
     Sample j is the state at the end of tick i = (j+1)·decimation − 1, time (i+1)·T.
-    ``acc`` holds the measures streamed over every tick (see :mod:`vfgym.plant.measures`).
+    The per-tick arrays all have one entry per kept sample.
+
+    Attributes
+    ----------
+    time_s : numpy.ndarray
+        Time of each sample (s).
+    command_rad : numpy.ndarray
+        The position command P (rad).
+    pulse_rad : numpy.ndarray
+        Pulse position n·δ: the V-F controller's own position feedback (rad).
+    motor_rad : numpy.ndarray
+        Motor angle θ (rad).
+    speed_rad_s : numpy.ndarray
+        Motor speed ω (rad/s).
+    torque_nm : numpy.ndarray
+        Torque applied, after the torque–speed limit (N·m).
+    servo_error_counts : numpy.ndarray
+        u = pc − y, the error calculator's output (counts).
+    position_counter : numpy.ndarray
+        pc, the servo's position counter (counts).
+    feedback_counts : numpy.ndarray
+        y, the filtered speed feedback (counts).
+    speed_count : numpy.ndarray
+        x = B·count, the speed counter's latched output (counts).
+    acc : numpy.ndarray
+        The measures streamed over every tick, undecoded (see :attr:`metrics`).
+    settings : Settings
+        The settings simulated.
+    plant : Plant
+        The plant simulated.
+    measures : Measures
+        Windows and bands of the measures.
+    decimation : int
+        Every ``decimation``-th tick is kept.
+    target_rad : float
+        The command's final value: the in-position target (rad).
+    command_end_s : float
+        Time at which the command reached its final value (s).
     """
 
     time_s: np.ndarray
     command_rad: np.ndarray
     pulse_rad: np.ndarray
-    """Pulse position n·δ: the V-F controller's own position feedback (rad)."""
     motor_rad: np.ndarray
     speed_rad_s: np.ndarray
     torque_nm: np.ndarray
     servo_error_counts: np.ndarray
-    """u = pc − y, the error calculator's output (counts)."""
     position_counter: np.ndarray
     feedback_counts: np.ndarray
-    """y, the filtered speed feedback (counts)."""
     speed_count: np.ndarray
-    """x = B·count, the speed counter's latched output (counts)."""
     acc: np.ndarray = field(repr=False)
     settings: Settings
     plant: Plant
     measures: Measures
     decimation: int = 1
     target_rad: float = 0.0
-    """The command's final value: the in-position target."""
     command_end_s: float = 0.0
-    """Time at which the command reached its final value."""
 
     @property
     def metrics(self) -> dict[str, Any]:
@@ -217,12 +337,40 @@ def simulate(
     measures: Measures = DEFAULT_MEASURES,
     decimation: int = 1,
 ) -> Trace:
-    """Simulate the plant for a position command given per tick (rad).
+    """Simulate the plant for a position command given per tick (docs/model.md §1–§3).
 
-    pulses: an external pulse train (int8 per tick) that replaces the V-F controller,
-        e.g. :func:`vfgym.moves.pulse_sources.scurve_pulses`; the command is then only the
-        reference the measures compare against.
-    decimation: keep every ``decimation``-th tick in the trace (measures always see all).
+    ``params → simulate → trace``: the V-F controller (or an external pulse train) drives
+    the digital servo, the motor and the encoder, tick by tick, in one compiled call.
+
+    Parameters
+    ----------
+    command_rad : numpy.ndarray
+        Position command P (rad), one finite value per controller tick; its last value is
+        the in-position target.
+    settings : Settings
+        The tuned settings (V-F controller and the servo's filter ratio).
+    plant : Plant
+        The plant.
+    pulses : numpy.ndarray or None
+        An external pulse train (−1, 0, +1 per tick) that replaces the V-F controller,
+        e.g. :func:`vfgym.moves.pulse_sources.scurve_pulses`; the command is then only
+        the reference the measures compare against.
+    measures : Measures
+        Windows and bands of the measures.
+    decimation : int
+        Keep every ``decimation``-th tick in the trace (the measures always see every
+        tick), from 1 to the command's length.
+
+    Returns
+    -------
+    Trace
+        The per-tick signals and, in :attr:`Trace.metrics`, the measures of the move.
+
+    Raises
+    ------
+    ValueError
+        If the command is not finite, ``decimation`` is out of range, ``settings`` or
+        ``plant`` has the wrong type, or ``pulses`` does not fit the command.
     """
     cmd = check_finite_array("command_rad", command_rad)
     dec = check_int("decimation", decimation, 1, cmd.shape[0])
@@ -258,7 +406,20 @@ def simulate(
 
 
 def step_command(distance_rad: float, n_ticks: int) -> np.ndarray:
-    """A step of ``distance_rad`` at tick 0, held for ``n_ticks`` ticks."""
+    """A step of ``distance_rad`` at tick 0, held for ``n_ticks`` ticks.
+
+    Parameters
+    ----------
+    distance_rad : float
+        The step (rad), finite.
+    n_ticks : int
+        Length of the command in controller ticks, ≥ 1.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, ``n_ticks`` entries all equal to ``distance_rad``.
+    """
     d = check_real("distance_rad", distance_rad)
     n = check_int("n_ticks", n_ticks, 1)
     return np.full(n, d, dtype=np.float64)

@@ -1,4 +1,4 @@
-"""The measures of a move (MODEL.md §5), each with one written definition.
+"""The measures of a move (docs/model.md §5), each with one written definition.
 
 The kernel streams raw accumulators over every tick (:mod:`vfgym.plant._layout`);
 :func:`from_acc` turns them into the named measures below. The tests recompute the same
@@ -113,7 +113,7 @@ def from_acc(
     T = plant.tick_s
     n = int(acc[L.A_TICKS])
     q = plant.motor.count_rad
-    limit = plant.motor.accel_limit_rad_s2
+    limit = plant.motor.usable_accel_rad_s2
     w = accel_window_ticks(measures, plant)
     ov = float(acc[L.A_OV_MOTOR])
     last_out = int(acc[L.A_LAST_OUT_MOTOR])
@@ -161,8 +161,21 @@ def from_acc(
 
 
 def command_end_s(command: np.ndarray, tick_hz: float) -> float:
-    """Time at which the command reached its final value: tick of its last change × T
-    (the plant starts at rest at 0, so a step at tick 0 ends at 0)."""
+    """Time at which the command reached its final value.
+
+    Parameters
+    ----------
+    command : numpy.ndarray
+        Position command per tick (rad).
+    tick_hz : float
+        Controller tick rate f (Hz).
+
+    Returns
+    -------
+    float
+        The tick of the command's last change times T (s). The plant starts at rest at
+        0, so a step at tick 0 ends at 0, and a command that is 0 throughout at 0.
+    """
     c = np.concatenate([[0.0], np.asarray(command, dtype=np.float64)])
     changes = np.flatnonzero(c[1:] != c[:-1])
     return float(changes[-1]) / tick_hz if changes.size else 0.0

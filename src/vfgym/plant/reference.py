@@ -29,7 +29,7 @@ def _g(x: float) -> float:
 
 
 class VFController:
-    """MODEL.md §1: error, error limit, acceleration law, accumulator against value."""
+    """docs/model.md §1: error, error limit, acceleration law, accumulator against value."""
 
     def __init__(self, prm: np.ndarray) -> None:
         self.delta = float(prm[L.P_DELTA])
@@ -67,7 +67,7 @@ class VFController:
 
 
 class DigitalServo:
-    """MODEL.md §2: position counter, speed counter, filter, error calculator, amplifier."""
+    """docs/model.md §2: position counter, speed counter, filter, error calculator, amplifier."""
 
     def __init__(self, prm: np.ndarray) -> None:
         self.gear = int(prm[L.P_GEAR])
@@ -98,7 +98,7 @@ class DigitalServo:
 
 
 class MotorLoad:
-    """MODEL.md §3: J·dω/dt = τ − b·ω − τc·sign(ω) − τ_load, exact for τ held over a tick."""
+    """docs/model.md §3: J·dω/dt = τ − b·ω − τc·sign(ω) − τ_load, exact for τ held over a tick."""
 
     def __init__(self, prm: np.ndarray) -> None:
         self.T = float(prm[L.P_TICK_S])

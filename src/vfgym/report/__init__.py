@@ -11,9 +11,12 @@ _comparison
 _stats
     Spreads (median, IQR, bootstrap interval) and win / loss / tie.
 _tables
-    Text and Markdown tables.
+    Text and Markdown tables, and the compact table of sweeps and the grid.
 _files
     CSV and JSON files of a report in a run folder.
+_verdict
+    The held-out verdict a sweep ends with: the tuned setting against the baselines on
+    the test moves, read off a :class:`Report`.
 figures
     The paper's figures, S-curve and frequency plots, overlays, sweep history and Pareto
     front (matplotlib, imported only when a figure is drawn).
@@ -24,6 +27,7 @@ from vfgym.report._comparison import (
     Candidate,
     Column,
     Policy,
+    PolicyRun,
     Report,
     baseline_candidates,
     compare,
@@ -41,10 +45,23 @@ from vfgym.report._files import (
 from vfgym.report._stats import DEFAULT_RESAMPLES, TIE_RTOL, Spread, WinLoss, outcome, spread
 from vfgym.report._tables import (
     TABLE_COLUMNS,
+    CompactRow,
+    CompactTable,
     TableColumn,
+    compact_rows,
+    format_compact,
     format_table,
     markdown_costs,
     markdown_table,
+)
+from vfgym.report._verdict import (
+    VERDICT_BASELINES,
+    Verdict,
+    VerdictRow,
+    axis_verdict,
+    format_verdict,
+    held_out_verdict,
+    verdict,
 )
 
 __all__ = [
@@ -52,17 +69,28 @@ __all__ = [
     "EXTRA_METRICS",
     "TABLE_COLUMNS",
     "TIE_RTOL",
+    "VERDICT_BASELINES",
     "Candidate",
     "Column",
+    "CompactRow",
+    "CompactTable",
     "Policy",
+    "PolicyRun",
     "Report",
     "Spread",
     "TableColumn",
+    "Verdict",
+    "VerdictRow",
     "WinLoss",
+    "axis_verdict",
     "baseline_candidates",
+    "compact_rows",
     "compare",
     "evaluate_policy",
+    "format_compact",
     "format_table",
+    "format_verdict",
+    "held_out_verdict",
     "markdown_costs",
     "markdown_table",
     "outcome",
@@ -72,6 +100,7 @@ __all__ = [
     "spread",
     "summary_csv",
     "summary_rows",
+    "verdict",
     "win_loss_rows",
     "write_report",
 ]

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -32,21 +32,37 @@ from vfgym.scoring import (
 
 Policy = Callable[[Scenario], Settings]
 """A per-scenario controller: the settings an agent picks for a scenario."""
-EXTRA_METRICS = ("ideal_time_s", "time_ratio", "window_rad")
+EXTRA_METRICS = ("ideal_time_s", "time_ratio", "window_rad", "arrived")
 """Measures :func:`vfgym.evaluate` adds to :data:`vfgym.plant.measures.NAMES`."""
 
 
 @dataclass
 class Column:
-    """One candidate's results on every scenario (arrays indexed by scenario)."""
+    """One candidate's results on every scenario (arrays indexed by scenario).
+
+    Attributes
+    ----------
+    label : str
+        The candidate's name in tables.
+    role : str
+        ``tuned`` or ``baseline``.
+    source : str
+        Where it came from: a settings file, a baseline name, a model file.
+    controllers : list
+        The controller as it ran on each scenario (baselines resolved per plant).
+    cost : numpy.ndarray
+        Cost per scenario (NaN where the candidate does not apply).
+    constraints : numpy.ndarray
+        Constraint values per scenario, (scenarios, len(CONSTRAINTS)), in the order of
+        :data:`~vfgym.scoring.CONSTRAINTS`.
+    metrics : list of dict
+        The measures per scenario, as :func:`vfgym.evaluate` returns them.
+    """
 
     label: str
     role: str
-    """``tuned`` or ``baseline``."""
     source: str
-    """Where it came from: a settings file, a baseline name, a model file."""
     controllers: list[Controller | None]
-    """The controller as it ran on each scenario (baselines resolved per plant)."""
     cost: np.ndarray
     constraints: np.ndarray
     metrics: list[dict[str, Any]]
@@ -58,9 +74,26 @@ class Column:
         ok[np.isnan(self.cost)] = np.nan
         return ok
 
+    @property
+    def mean_cost(self) -> float:
+        """The set's cost: the mean over the scenarios where the candidate applies (as
+        :attr:`vfgym.Evaluation.mean_cost`)."""
+        return float(np.nanmean(self.cost))
+
     def values(self, key: str) -> np.ndarray:
-        """One measure per scenario as floats: ``cost``, ``feasible``, a constraint
-        (``constraint_<name>``) or any measure :func:`vfgym.evaluate` returns."""
+        """One measure per scenario as floats.
+
+        Parameters
+        ----------
+        key : str
+            ``cost``, ``feasible``, a constraint (``constraint_<name>``) or any measure
+            :func:`vfgym.evaluate` returns.
+
+        Returns
+        -------
+        numpy.ndarray
+            float, one per scenario (NaN where not defined).
+        """
         if key == "cost":
             return self.cost.astype(float)
         if key == "feasible":
@@ -72,7 +105,27 @@ class Column:
 
 @dataclass(frozen=True)
 class Candidate:
-    """A controller to report on: fixed settings, a baseline, or a per-scenario policy."""
+    """A controller to report on: fixed settings, a baseline, or a per-scenario policy.
+
+    Parameters
+    ----------
+    label : str
+        Its name in tables (unique within a report).
+    controller : Settings, Baseline or None
+        Fixed settings or a baseline; give this or ``policy``.
+    policy : Policy or None
+        A callable ``scenario -> Settings`` (an agent); give this or ``controller``.
+    source : str
+        Where it came from: a settings file, a baseline name, a model file.
+    role : str
+        ``tuned`` or ``baseline``.
+
+    Raises
+    ------
+    ValueError
+        If neither or both of ``controller`` and ``policy`` are given, or the role is
+        not known.
+    """
 
     label: str
     controller: Settings | Baseline | None = None
@@ -88,7 +141,24 @@ class Candidate:
 
 
 def baseline_candidates(names: str | Sequence[str]) -> list[Candidate]:
-    """Baselines by name (a comma-separated string or a list); unknown names raise."""
+    """Baselines by name, as candidates.
+
+    Parameters
+    ----------
+    names : str or sequence of str
+        Baseline names (:data:`vfgym.moves.baselines.BASELINE_NAMES`), as a
+        comma-separated string or a list.
+
+    Returns
+    -------
+    list of Candidate
+        One baseline candidate per name.
+
+    Raises
+    ------
+    ValueError
+        If a name is not known.
+    """
     if isinstance(names, str):
         names = [n.strip() for n in names.split(",") if n.strip()]
     out = []
@@ -103,7 +173,23 @@ def baseline_candidates(names: str | Sequence[str]) -> list[Candidate]:
 
 @dataclass
 class Report:
-    """Candidates' results on a scenario set, with spreads and win/loss."""
+    """Candidates' results on a scenario set, with spreads and win/loss.
+
+    What :func:`compare` returns.
+
+    Attributes
+    ----------
+    scenarios : list of Scenario
+        The scenarios, in order (the columns' arrays are indexed by them).
+    columns : list of Column
+        One per candidate, tuned ones first.
+    resamples : int
+        Bootstrap draws for the spreads.
+    seed : int
+        Seed of the bootstrap, so that a report is reproducible.
+    scenario_spec : str
+        The scenario set as given on the command line (empty for a list).
+    """
 
     scenarios: list[Scenario]
     columns: list[Column]
@@ -113,31 +199,82 @@ class Report:
 
     @property
     def tuned(self) -> list[Column]:
+        """The tuned candidates' columns."""
         return [c for c in self.columns if c.role == "tuned"]
 
     @property
     def baselines(self) -> list[Column]:
+        """The baselines' columns."""
         return [c for c in self.columns if c.role == "baseline"]
 
     def column(self, label: str) -> Column:
+        """A candidate's column by label.
+
+        Parameters
+        ----------
+        label : str
+            The candidate's label.
+
+        Returns
+        -------
+        Column
+            Its results.
+
+        Raises
+        ------
+        ValueError
+            If no candidate has that label.
+        """
         for c in self.columns:
             if c.label == label:
                 return c
         raise ValueError(f"controller={label!r} is not in this report")
 
     def spread(self, label: str, key: str) -> Spread:
-        """Spread of one measure of one candidate over the scenarios."""
+        """Spread of one measure of one candidate over the scenarios.
+
+        Parameters
+        ----------
+        label : str
+            The candidate's label.
+        key : str
+            The measure, as :meth:`Column.values` takes it.
+
+        Returns
+        -------
+        Spread
+            Over the scenarios where the measure is defined.
+        """
         return spread(self.column(label).values(key), resamples=self.resamples, seed=self.seed)
 
     def win_loss(self, tuned: str, baseline: str) -> WinLoss:
-        """Per-scenario outcomes and the paired cost difference."""
+        """Per-scenario outcomes and the paired cost difference of two candidates.
+
+        Parameters
+        ----------
+        tuned : str
+            The tuned candidate's label.
+        baseline : str
+            The baseline's label.
+
+        Returns
+        -------
+        WinLoss
+            Outcomes per scenario and the spread of tuned − baseline cost.
+        """
         a, b = self.column(tuned).cost, self.column(baseline).cost
         outs = tuple(outcome(float(x), float(y)) for x, y in zip(a, b, strict=True))
         diff = spread(a - b, resamples=self.resamples, seed=self.seed)
         return WinLoss(tuned, baseline, outs, diff)
 
     def win_losses(self) -> list[WinLoss]:
-        """Every tuned candidate against every baseline."""
+        """Every tuned candidate against every baseline.
+
+        Returns
+        -------
+        list of WinLoss
+            One per (tuned, baseline) pair.
+        """
         return [self.win_loss(t.label, b.label) for t in self.tuned for b in self.baselines]
 
 
@@ -161,6 +298,29 @@ def _column_from_rows(
     )
 
 
+class PolicyRun(NamedTuple):
+    """A policy's settings and scores on each scenario (arrays indexed by scenario).
+
+    What :func:`evaluate_policy` returns.
+
+    Attributes
+    ----------
+    settings : list of Settings
+        The settings the policy picked, per scenario.
+    cost : numpy.ndarray
+        Cost per scenario, (S,).
+    constraints : numpy.ndarray
+        Constraint values per scenario, (S, 3).
+    metrics : list of dict
+        The measures :func:`vfgym.evaluate` returned, per scenario.
+    """
+
+    settings: list[Settings]
+    cost: np.ndarray
+    constraints: np.ndarray
+    metrics: list[dict[str, Any]]
+
+
 def evaluate_policy(
     policy: Policy,
     scenarios: str | Scenario | Sequence[str | Scenario],
@@ -169,11 +329,36 @@ def evaluate_policy(
     measures: Measures = DEFAULT_MEASURES,
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
-) -> tuple[list[Settings], np.ndarray, np.ndarray, list[dict[str, Any]]]:
-    """Each scenario scored with the settings ``policy`` picks for it, through
-    :func:`vfgym.evaluate` (scenarios that get identical settings share one call).
+) -> PolicyRun:
+    """Each scenario scored with the settings ``policy`` picks for it.
 
-    Returns the settings, costs (S,), constraints (S, 3) and measures per scenario.
+    Through :func:`vfgym.evaluate`; scenarios that get identical settings share one call.
+
+    Parameters
+    ----------
+    policy : Policy
+        A callable ``scenario -> Settings``.
+    scenarios : str, Scenario, or a sequence of these
+        The scenario set (see :func:`vfgym.scenario_set`).
+    plant : Plant
+        The base plant; each scenario applies its load to it.
+    measures : Measures
+        Windows and bands of the measures.
+    weights : CostWeights
+        Weights of the cost.
+    bounds : Bounds
+        Bounds of the constraints.
+
+    Returns
+    -------
+    PolicyRun
+        The settings picked per scenario, the costs (S,), the constraints
+        (S, len(CONSTRAINTS)) and the measures per scenario.
+
+    Raises
+    ------
+    ValueError
+        If the policy returns something other than :class:`~vfgym.Settings`.
     """
     scens = scenario_set(scenarios)
     chosen: list[Settings] = []
@@ -203,7 +388,7 @@ def evaluate_policy(
             cost[i] = ev.cost[0, j]
             cons[i] = ev.constraints[0, j]
             metrics[i] = ev.metrics[0][j]
-    return chosen, cost, cons, metrics
+    return PolicyRun(chosen, cost, cons, metrics)
 
 
 def compare(
@@ -220,9 +405,46 @@ def compare(
     resamples: int = DEFAULT_RESAMPLES,
     seed: int = 0,
 ) -> Report:
-    """Score tuned candidates and baselines on the same scenarios (one batched
-    :func:`vfgym.evaluate` call for every fixed controller, one per settings group for
-    each policy) and return the :class:`Report`."""
+    """Score tuned candidates and baselines on the same scenarios.
+
+    One batched :func:`vfgym.evaluate` call for every fixed controller, one per settings
+    group for each policy.
+
+    Parameters
+    ----------
+    candidates : sequence of Candidate
+        The tuned candidates.
+    baselines : str, sequence of str, or sequence of Candidate
+        Baseline names (a comma-separated string or a list) or candidates.
+    scenarios : str, Scenario, or a sequence of these
+        The scenario set (see :func:`vfgym.scenario_set`).
+    count : int
+        Random draws for ``train`` / ``test``.
+    first_seed : int
+        Seed of the first random draw.
+    plant : Plant
+        The base plant; each scenario applies its load to it.
+    measures : Measures
+        Windows and bands of the measures.
+    weights : CostWeights
+        Weights of the cost.
+    bounds : Bounds
+        Bounds of the constraints.
+    resamples : int
+        Bootstrap draws for the spreads, 1 to 1 000 000.
+    seed : int
+        Seed of the bootstrap, ≥ 0.
+
+    Returns
+    -------
+    Report
+        Every candidate's results on every scenario.
+
+    Raises
+    ------
+    ValueError
+        If there is no candidate, two share a label, or an argument is out of range.
+    """
     resamples = check_int("resamples", resamples, 1, 1_000_000)
     seed = check_int("seed", seed, 0)
     if isinstance(baselines, str) or (

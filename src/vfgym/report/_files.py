@@ -55,8 +55,19 @@ SUMMARY_FIELDS = ("controller", "measure", *(f.name for f in Spread.__dataclass_
 
 
 def result_rows(report: Report) -> list[dict[str, Any]]:
-    """One row per (scenario, controller): every measure, constraint and the settings as
-    run, plus the outcome against each baseline (tuned rows)."""
+    """Per-scenario results as rows (``results.csv``).
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+
+    Returns
+    -------
+    list of dict
+        One per (scenario, controller): every measure, constraint and the settings as
+        run, plus the outcome against each baseline (tuned rows).
+    """
     wl = {(w.tuned, w.baseline): w for w in report.win_losses()}
     out = []
     for si, sc in enumerate(report.scenarios):
@@ -85,9 +96,20 @@ def result_rows(report: Report) -> list[dict[str, Any]]:
 
 
 def summary_rows(report: Report) -> list[dict[str, Any]]:
-    """One row per (controller, measure) with its spread; then the cost differences of
-    each tuned candidate against each baseline (controller ``A - B``, measure
-    ``cost_diff``) and its win/loss counts (``wins`` ... as measures with n only)."""
+    """Aggregate results as rows (``summary.csv``).
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+
+    Returns
+    -------
+    list of dict
+        One per (controller, measure) with its spread; then the cost differences of
+        each tuned candidate against each baseline (controller ``A - B``, measure
+        ``cost_diff``).
+    """
     keys = ["cost", "feasible", *(f"constraint_{c}" for c in CONSTRAINTS)]
     keys += [*METRIC_NAMES, *EXTRA_METRICS]
     out = []
@@ -105,7 +127,18 @@ def summary_rows(report: Report) -> list[dict[str, Any]]:
 
 
 def win_loss_rows(report: Report) -> list[dict[str, Any]]:
-    """One row per (tuned, baseline)."""
+    """Win / loss as rows (``results.json``).
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+
+    Returns
+    -------
+    list of dict
+        One per (tuned, baseline): counts, win rate, cost difference, outcomes.
+    """
     return [
         {
             "tuned": w.tuned,
@@ -149,18 +182,51 @@ def _json_safe(x: Any) -> Any:
 
 
 def results_csv(report: Report) -> str:
-    """``results.csv``: :func:`result_rows` as CSV (NaN as an empty cell)."""
+    """``results.csv``: :func:`result_rows` as CSV.
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+
+    Returns
+    -------
+    str
+        The CSV text (NaN as an empty cell).
+    """
     fields = [*RESULT_FIELDS, *(f"vs_{b.label}" for b in report.baselines)]
     return _csv(result_rows(report), fields)
 
 
 def summary_csv(report: Report) -> str:
-    """``summary.csv``: :func:`summary_rows` as CSV."""
+    """``summary.csv``: :func:`summary_rows` as CSV.
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+
+    Returns
+    -------
+    str
+        The CSV text.
+    """
     return _csv(summary_rows(report), SUMMARY_FIELDS)
 
 
 def results_json(report: Report) -> str:
-    """``results.json``: scenarios, controllers, per-scenario rows, spreads, win/loss."""
+    """``results.json``: scenarios, controllers, per-scenario rows, spreads, win/loss.
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+
+    Returns
+    -------
+    str
+        The JSON text (NaN and infinities as null).
+    """
     data = {
         "scenario_spec": report.scenario_spec,
         "scenarios": [
@@ -179,8 +245,20 @@ def results_json(report: Report) -> str:
 
 
 def write_report(report: Report, run_dir: str | Path) -> dict[str, Path]:
-    """Write ``results.csv``, ``summary.csv``, ``results.json`` and ``table.txt`` into
-    ``run_dir`` (atomically); returns their paths."""
+    """Write ``results.csv``, ``summary.csv``, ``results.json`` and ``table.txt``.
+
+    Parameters
+    ----------
+    report : Report
+        The comparison, as :func:`compare` returns it.
+    run_dir : str or pathlib.Path
+        The run folder; each file is written atomically.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The path of each file, by name.
+    """
     from vfgym.io.runs import write_text
 
     d = Path(run_dir)

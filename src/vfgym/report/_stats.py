@@ -28,7 +28,19 @@ DEFAULT_RESAMPLES = 2000
 
 @dataclass(frozen=True)
 class Spread:
-    """n, median with interquartile range, mean with a bootstrap 95 % interval."""
+    """n, median with interquartile range, mean with a bootstrap interval (see :func:`spread`).
+
+    Attributes
+    ----------
+    n : int
+        Finite values the spread is over.
+    median, q1, q3 : float
+        Median and the 25th and 75th percentiles (NaN when n = 0).
+    mean : float
+        Mean of the values.
+    ci_low, ci_high : float
+        Percentile bootstrap interval of the mean.
+    """
 
     n: int
     median: float
@@ -41,33 +53,48 @@ class Spread:
 
 @dataclass(frozen=True)
 class WinLoss:
-    """A tuned candidate against a baseline over the scenarios."""
+    """A tuned candidate against a baseline over the scenarios.
+
+    Attributes
+    ----------
+    tuned : str
+        The tuned candidate's label.
+    baseline : str
+        The baseline's label.
+    outcomes : tuple of str
+        Per scenario: ``win``, ``loss``, ``tie`` or ``n/a`` (see :func:`outcome`).
+    cost_diff : Spread
+        Tuned cost − baseline cost (negative: tuned better), over the comparable scenarios.
+    """
 
     tuned: str
     baseline: str
     outcomes: tuple[str, ...]
-    """Per scenario: ``win``, ``loss``, ``tie`` or ``n/a``."""
     cost_diff: Spread
-    """Tuned cost − baseline cost (negative: tuned better), over the comparable scenarios."""
 
     @property
     def wins(self) -> int:
+        """Scenarios where the tuned candidate costs less."""
         return self.outcomes.count("win")
 
     @property
     def losses(self) -> int:
+        """Scenarios where it costs more."""
         return self.outcomes.count("loss")
 
     @property
     def ties(self) -> int:
+        """Scenarios where the costs are equal within :data:`TIE_RTOL`."""
         return self.outcomes.count("tie")
 
     @property
     def not_applicable(self) -> int:
+        """Scenarios where either has no cost (a pulse source on a moving reference)."""
         return self.outcomes.count("n/a")
 
     @property
     def win_rate(self) -> float:
+        """wins / (wins + losses + ties); NaN with no comparable scenario."""
         n = self.wins + self.losses + self.ties
         return self.wins / n if n else math.nan
 
@@ -79,7 +106,25 @@ def spread(
     seed: int = 0,
     level: float = 0.95,
 ) -> Spread:
-    """Spread of the finite values (NaN dropped; see the module docstring)."""
+    """Spread of the finite values (NaN dropped; see the module docstring).
+
+    Parameters
+    ----------
+    values : sequence of float or numpy.ndarray
+        The values, one per scenario.
+    resamples : int
+        Bootstrap draws with replacement.
+    seed : int
+        Seed of the draws, so that a report is reproducible.
+    level : float
+        Coverage of the bootstrap interval.
+
+    Returns
+    -------
+    Spread
+        n, median, quartiles, mean and its interval; all NaN (n = 0) without a finite
+        value.
+    """
     x = np.asarray(values, dtype=float)
     x = x[np.isfinite(x)]
     n = int(x.size)
@@ -99,7 +144,21 @@ def spread(
 
 
 def outcome(tuned_cost: float, baseline_cost: float) -> str:
-    """``win`` / ``loss`` / ``tie`` for one scenario, ``n/a`` when either cost is NaN."""
+    """The outcome of one scenario for a tuned candidate against a baseline.
+
+    Parameters
+    ----------
+    tuned_cost : float
+        The tuned candidate's cost.
+    baseline_cost : float
+        The baseline's cost.
+
+    Returns
+    -------
+    str
+        ``win`` (lower cost), ``loss`` or ``tie`` (equal within :data:`TIE_RTOL`); ``n/a``
+        when either cost is not finite.
+    """
     if not (math.isfinite(tuned_cost) and math.isfinite(baseline_cost)):
         return "n/a"
     if math.isclose(tuned_cost, baseline_cost, rel_tol=TIE_RTOL, abs_tol=1e-12):

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -31,27 +31,38 @@ from matplotlib.ticker import NullLocator
 from vfgym.moves.baselines import usable_accel
 from vfgym.params import PAPER_PLANT, Plant, in_position_rad
 from vfgym.plant.measures import accel_window_ticks
+from vfgym.report._style import COLORS
+from vfgym.report._sweep_figures import (
+    history_figure,
+    importances_figure,
+    objective_points,
+    pareto_figure,
+    pareto_mask,
+)
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from vfgym.plant import Trace
 
 MAX_POINTS = 4000
 """Points drawn per curve at most (longer curves are thinned by a stride)."""
-
-COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
 
 
 # --- derived signals --------------------------------------------------------------------
 
 
-def _window_samples(trace: Any, window_s: float) -> int:
+def _window_samples(trace: Trace, window_s: float) -> int:
     """The window in trace samples (at least one): w ticks rounded to the decimation."""
     w_ticks = max(1, round(window_s * trace.plant.tick_hz))
     return max(1, round(w_ticks / trace.decimation))
 
 
-def _padded_counts(trace: Any, pad: int) -> np.ndarray:
+def _padded_counts(trace: Trace, pad: int) -> np.ndarray:
     return np.concatenate([np.zeros(pad, dtype=np.int64), trace.pulse_count])
 
 
-def pulse_speed(trace: Any, window_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+def pulse_speed(trace: Trace, window_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Pulse-train speed (rad/s) over a window, at the window's centre time (s)."""
     window_s = trace.measures.accel_window_s if window_s is None else window_s
     ws = _window_samples(trace, window_s)
@@ -61,7 +72,7 @@ def pulse_speed(trace: Any, window_s: float | None = None) -> tuple[np.ndarray, 
     return trace.time_s - 0.5 * ws * dt, v
 
 
-def pulse_accel(trace: Any, window_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+def pulse_accel(trace: Trace, window_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Pulse-train acceleration (rad/s²): windowed second difference at the centre time.
 
     With the default window (the measures' ``accel_window_s``) and an undecimated trace,
@@ -77,7 +88,7 @@ def pulse_accel(trace: Any, window_s: float | None = None) -> tuple[np.ndarray, 
     return trace.time_s - ws * dt, d2 * trace.plant.pulse_rad / (ws * dt) ** 2
 
 
-def pulse_frequency(trace: Any, window_s: float = 0.5e-3) -> tuple[np.ndarray, np.ndarray]:
+def pulse_frequency(trace: Trace, window_s: float = 0.5e-3) -> tuple[np.ndarray, np.ndarray]:
     """Pulse frequency (Hz, pulses of either sign) over a window, at its centre time (s).
 
     Undecimated traces count every pulse; a decimated one counts |Δn| per window (a
@@ -94,7 +105,7 @@ def pulse_frequency(trace: Any, window_s: float = 0.5e-3) -> tuple[np.ndarray, n
     return trace.time_s - 0.5 * ws * dt, k / (ws * dt)
 
 
-def motor_accel(trace: Any, stride: int = 1) -> tuple[np.ndarray, np.ndarray]:
+def motor_accel(trace: Trace, stride: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Motor acceleration (rad/s²): Δω/Δt over every ``stride`` samples (the exact mean
     acceleration over each interval), at the interval's centre; ω = 0 before tick 0."""
     stride = max(1, int(stride))
@@ -125,7 +136,7 @@ def _fmt_metrics(m: Mapping[str, Any] | None, tracking: bool) -> str:
     )
 
 
-def _symlog(ax: Any, lin: float, data: Sequence[np.ndarray]) -> None:
+def _symlog(ax: Axes, lin: float, data: Sequence[np.ndarray]) -> None:
     """Symmetric log y axis, linear inside ±lin (the in-position window), ticked at 0 and
     at the decades beyond the window (matplotlib's own ticks crowd the linear part)."""
     lin = max(float(lin), 1e-12)
@@ -139,7 +150,7 @@ def _symlog(ax: Any, lin: float, data: Sequence[np.ndarray]) -> None:
     ax.yaxis.set_minor_locator(NullLocator())
 
 
-def _limit_lines(ax: Any, plant: Plant, scale: float) -> None:
+def _limit_lines(ax: Axes, plant: Plant, scale: float) -> None:
     lim = plant.motor.accel_limit_rad_s2
     for sgn in (1, -1):
         ax.axhline(
@@ -165,7 +176,7 @@ def _limit_lines(ax: Any, plant: Plant, scale: float) -> None:
 
 
 def response_figure(
-    trace: Any,
+    trace: Trace,
     *,
     title: str = "",
     metrics: Mapping[str, Any] | None = None,
@@ -328,7 +339,7 @@ def scurve_figure(
 
 
 def frequency_figure(
-    traces: Mapping[str, Any],
+    traces: Mapping[str, Trace],
     *,
     window_s: float = 0.5e-3,
     title: str = "",
@@ -360,7 +371,7 @@ def frequency_figure(
 
 
 def compare_figure(
-    traces: Mapping[str, Any],
+    traces: Mapping[str, Trace],
     *,
     title: str = "",
     tracking: bool = False,
@@ -406,213 +417,12 @@ def compare_figure(
     return fig
 
 
-# --- sweeps: optimisation history and Pareto front ------------------------------------------
-
-
-def _feasible(trial: Any) -> bool:
-    cons = getattr(trial, "constraints", None)
-    if isinstance(cons, Mapping):
-        vals = list(cons.values())
-    elif cons is not None:
-        vals = list(cons)
-    else:
-        vals = list(trial.system_attrs.get("constraints", []) or [])
-    return all(float(c) <= 0.0 for c in vals)
-
-
-def _complete(study: Any) -> list[Any]:
-    import optuna
-
-    return [t for t in study.trials if t.state == optuna.trial.TrialState.COMPLETE]
-
-
-def _attr_objectives(trial: Any, names: Sequence[str]) -> list[float] | None:
-    """A trial's objectives from its user attributes: one attribute per name, or
-    ``objectives`` as a list in that order or a mapping by name (as vfgym sweeps store)."""
-    ua = trial.user_attrs
-    if all(n in ua for n in names):
-        return [float(ua[n]) for n in names]
-    obj = ua.get("objectives")
-    if isinstance(obj, Mapping) and all(n in obj for n in names):
-        return [float(obj[n]) for n in names]
-    if isinstance(obj, (list, tuple)) and len(obj) == len(names):
-        return [float(x) for x in obj]
-    return None
-
-
-def objective_points(
-    study: Any, names: Sequence[str] | None = None
-) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray]:
-    """Objective values of a study's complete trials: (names, values (n, k), feasible (n,),
-    trial numbers (n,)).
-
-    A multi-objective study gives its values (named by ``study.metric_names``, else
-    :data:`vfgym.scoring.OBJECTIVES` when there are three, else ``objective i``). A
-    single-objective study (a cost sweep) gives the objectives its trials stored as user
-    attributes, named ``names`` (default :data:`vfgym.scoring.OBJECTIVES`; see
-    :func:`_attr_objectives`), if every complete trial has them.
-    """
-    from vfgym.scoring import OBJECTIVES
-
-    trials = _complete(study)
-    if not trials:
-        raise ValueError(f"study {study.study_name!r} has no complete trials")
-    if len(study.directions) > 1:
-        k = len(study.directions)
-        metric = getattr(study, "metric_names", None)
-        labels = (
-            list(metric)
-            if metric
-            else (
-                list(OBJECTIVES) if k == len(OBJECTIVES) else [f"objective {i}" for i in range(k)]
-            )
-        )
-        vals = np.array([t.values for t in trials], dtype=float)
-    else:
-        labels = list(names or OBJECTIVES)
-        rows = [_attr_objectives(t, labels) for t in trials]
-        if any(r is None for r in rows):
-            raise ValueError(
-                f"study {study.study_name!r} has one objective and its trials lack the "
-                f"objectives {', '.join(labels)} among their user attributes: no Pareto "
-                "front to draw"
-            )
-        vals = np.array(rows, dtype=float)
-    feas = np.array([_feasible(t) for t in trials])
-    nums = np.array([t.number for t in trials])
-    return labels, vals, feas, nums
-
-
-def pareto_mask(points: np.ndarray) -> np.ndarray:
-    """Rows not dominated by any other row (all objectives minimised)."""
-    p = np.asarray(points, dtype=float)
-    keep = np.ones(len(p), dtype=bool)
-    for i in range(len(p)):
-        dominated = np.all(p <= p[i], axis=1) & np.any(p < p[i], axis=1)
-        keep[i] = not dominated.any()
-    return keep
-
-
-def _auto_scale(setter: Any, v: np.ndarray) -> None:
-    """Log scale for positive values spanning more than 20×, symlog when they reach 0."""
-    v = v[np.isfinite(v)]
-    pos = v[v > 0]
-    if not pos.size or v.min() < 0 or v.max() / pos.min() <= 20:
-        return
-    if v.min() > 0:
-        setter("log")
-    else:
-        setter("symlog", linthresh=max(float(pos.min()), float(v.max()) * 1e-4))
-
-
-def history_figure(study: Any, *, title: str = "") -> Figure:
-    """Optimisation history: each complete trial's objective value(s) by trial number,
-    feasible trials filled, infeasible hollow, and the best feasible value so far."""
-    import optuna
-
-    trials = _complete(study)
-    if not trials:
-        raise ValueError(f"study {study.study_name!r} has no complete trials")
-    k = len(study.directions)
-    if k > 1:
-        labels, vals, feas, nums = objective_points(study)
-    else:
-        labels = list(getattr(study, "metric_names", None) or ["objective"])
-        vals = np.array([[t.value] for t in trials], dtype=float)
-        feas = np.array([_feasible(t) for t in trials])
-        nums = np.array([t.number for t in trials])
-    fig = Figure(figsize=(8.0, 2.2 + 2.0 * k), layout="constrained")
-    axs = np.atleast_1d(fig.subplots(k, 1, sharex=True))
-    for j, ax in enumerate(axs):
-        y = vals[:, j]
-        ax.plot(nums[feas], y[feas], "o", ms=3.5, color=COLORS[0], label="feasible trial")
-        ax.plot(
-            nums[~feas], y[~feas], "o", ms=3.5, mfc="none", color="gray", label="infeasible trial"
-        )
-        maximise = study.directions[j] == optuna.study.StudyDirection.MAXIMIZE
-        yy = np.where(feas, y, -np.inf if maximise else np.inf)
-        best = np.maximum.accumulate(yy) if maximise else np.minimum.accumulate(yy)
-        ok = np.isfinite(best)
-        if ok.any():
-            ax.step(
-                nums[ok],
-                best[ok],
-                where="post",
-                color=COLORS[3],
-                lw=1.5,
-                label="best feasible so far",
-            )
-        _auto_scale(ax.set_yscale, y)
-        ax.set_ylabel(labels[j])
-        ax.legend(fontsize=8, loc="best")
-    axs[-1].set_xlabel("trial")
-    fig.suptitle(title or f"optimisation history: study {study.study_name}", fontsize=10)
-    return fig
-
-
-def pareto_figure(
-    study: Any, *, x: str | None = None, y: str | None = None, title: str = ""
-) -> Figure:
-    """Trials in the plane of two objectives (default: the first two), the feasible
-    Pareto front in that plane as a staircase, colour = a third objective if any."""
-    labels, vals, feas, nums = objective_points(study)
-    if len(labels) < 2:
-        raise ValueError("a Pareto front needs at least two objectives")
-    for name in (x, y):
-        if name and name not in labels:
-            raise ValueError(f"objective={name!r} is not known: choose one of {', '.join(labels)}")
-    xi = labels.index(x) if x else 0
-    yi = labels.index(y) if y else 1
-    fig = Figure(figsize=(7.0, 5.5), layout="constrained")
-    ax = fig.subplots()
-    rest = [i for i in range(len(labels)) if i not in (xi, yi)]
-    X, Y = vals[:, xi], vals[:, yi]
-    third = vals[feas, rest[0]] if rest else np.zeros(0)
-    if third.size and np.ptp(third) > 0:
-        sc = ax.scatter(X[feas], Y[feas], c=third, s=18, cmap="viridis", label="feasible trial")
-        fig.colorbar(sc, ax=ax, label=labels[rest[0]])
-    elif third.size:
-        ax.scatter(
-            X[feas],
-            Y[feas],
-            s=18,
-            color=COLORS[0],
-            label=f"feasible trial ({labels[rest[0]]} = {third[0]:.3g})",
-        )
-    else:
-        ax.scatter(X[feas], Y[feas], s=18, color=COLORS[0], label="feasible trial")
-    ax.scatter(
-        X[~feas], Y[~feas], s=14, facecolors="none", edgecolors="gray", label="infeasible trial"
-    )
-    if feas.any():
-        pts = np.column_stack([X[feas], Y[feas]])
-        front = pts[pareto_mask(pts)]
-        front = front[np.argsort(front[:, 0])]
-        ax.step(
-            front[:, 0],
-            front[:, 1],
-            where="post",
-            color=COLORS[3],
-            lw=1.5,
-            label=f"Pareto front ({len(front)} trials)",
-        )
-        ax.plot(front[:, 0], front[:, 1], "s", mfc="none", color=COLORS[3], ms=7)
-    ax.set_xlabel(labels[xi])
-    ax.set_ylabel(labels[yi])
-    _auto_scale(ax.set_xscale, X)
-    _auto_scale(ax.set_yscale, Y)
-    ax.legend(fontsize=8, loc="best")
-    ax.set_title(
-        title or f"Pareto front: study {study.study_name} ({len(nums)} trials)", fontsize=10
-    )
-    return fig
-
-
 __all__ = [
     "MAX_POINTS",
     "compare_figure",
     "frequency_figure",
     "history_figure",
+    "importances_figure",
     "motor_accel",
     "objective_points",
     "pareto_figure",

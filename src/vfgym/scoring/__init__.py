@@ -2,9 +2,11 @@
 
 ``params → simulate → trace → metrics → cost``: the plant (:mod:`vfgym.plant`) streams
 the measures of a move; :func:`score` turns them into the constraint values, the
-objectives and the scalar cost (``_cost``); :func:`evaluate` runs every
-(controller, scenario) pair in one compiled call and scores each (``_evaluate``). The
-Gymnasium envs' rewards, the Optuna objective and the reports all call it.
+objectives and the scalar cost (``_cost``), as a :class:`Score`; :func:`evaluate` runs
+every (controller, scenario) pair in one compiled call and scores each (``_evaluate``).
+The Gymnasium envs' rewards, the Optuna objective and the reports all call it. The one
+compiled copy of the cost, the VFServo-v0 env's running cost, sits beside it
+(``_cost_compiled``), tested against :func:`score`.
 """
 
 from vfgym.scoring._cost import (
@@ -13,8 +15,14 @@ from vfgym.scoring._cost import (
     DEFAULT_WEIGHTS,
     OBJECTIVES,
     Bounds,
+    CostTerms,
     CostWeights,
+    Score,
+    Yardsticks,
+    arrival_constraint,
+    arrival_term,
     score,
+    yardsticks,
 )
 from vfgym.scoring._evaluate import Evaluation, Move, evaluate, score_pairs
 
@@ -24,10 +32,16 @@ __all__ = [
     "DEFAULT_WEIGHTS",
     "OBJECTIVES",
     "Bounds",
+    "CostTerms",
     "CostWeights",
     "Evaluation",
     "Move",
+    "Score",
+    "Yardsticks",
+    "arrival_constraint",
+    "arrival_term",
     "evaluate",
     "score",
     "score_pairs",
+    "yardsticks",
 ]

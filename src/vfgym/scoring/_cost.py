@@ -7,23 +7,46 @@ source) and a list of scenarios, runs every pair in one compiled, multi-threaded
 that keeps only the streamed measures, and returns them with the constraint values, the
 objectives and the scalar cost.
 
-Cost of one run (lower is better; weights in :class:`CostWeights`)::
+Cost of one run (lower is better; weights in :class:`CostWeights`; :class:`CostTerms`)::
 
     cost = time · move_time / ideal_time          (point-to-point moves)
          | tracking · rms_tracking / (10 % of |amplitude|)  (a moving reference)
          + overshoot · overshoot / in-position window
          + accel · max(0, accel constraint)
          + torque · time at the torque limit / ideal_time
-         + unsettled · [not settled at the end]
+         + [not arrived] · (unsettled + arrival · arrival constraint)
 
-ideal_time is the bang–coast–bang time at δ·f and the motor's acceleration limit, so a
-perfect move costs about 1 whatever its length, and scenarios average fairly.
+ideal_time is the bang–coast–bang time at δ·f and the loaded motor's usable acceleration
+(:func:`vfgym.moves.scenarios.ideal_move_time_s`), so a perfect move costs about 1
+whatever its length, and scenarios average fairly.
+
+The first four terms can be known while the move runs: the VFServo-v0 env's running cost
+is the same formula, compiled, on the measures streamed so far
+(:mod:`vfgym.scoring._cost_compiled`). The last one, the *arrival term*, is known only at
+the scenario's end, and is added in one place, :func:`arrival_term`.
+
+Arrival. A point-to-point move *arrives* when the motor is in the in-position window at
+the scenario's end (the measure ``settled``); a moving reference arrives when the motor
+follows it: the RMS tracking error is at most 1/√2 of the reference's own RMS (the error
+of a motor that never moves), i.e. the error's power at most half the reference's, the
+reference within the −3 dB bandwidth of the loop's sensitivity. A run that does not
+arrive is infeasible, and costs more than any feasible run that arrives on the same move:
+its main term is already the largest any run can have (its move time is the run's whole
+duration; its tracking error exceeds any follower's), and its arrival term (``unsettled``
+plus ``arrival`` per in-position window still to go) exceeds what a feasible run pays for
+overshoot and torque (at most overshoot · ``overshoot_windows`` + torque ·
+``torque_limit_time_s`` / ideal_time: 0.1 with the defaults, against 5). A controller that
+never moves is the extreme case: on the paper's 10 rad step it ends 1,630 windows short.
 
 Constraints (feasible when ≤ 0; :class:`Bounds`):
 
-- ``accel``: peak pulse-train acceleration / limit − 1 − its one-pulse quantisation / limit
+- ``accel``: peak pulse-train acceleration / limit − 1 − its one-pulse quantisation / limit,
+  the limit being the loaded motor's usable acceleration (:attr:`vfgym.Motor.usable_accel_rad_s2`)
 - ``torque``: time at the torque limit − ``Bounds.torque_limit_time_s``
 - ``overshoot``: overshoot − ``Bounds.overshoot_windows`` in-position windows
+- ``arrival``: point-to-point, (|final error| − window) / window, the in-position windows
+  beyond the window at the scenario's end (in encoder counts if the window is zero); a
+  moving reference, √2 · RMS tracking error / RMS of the reference − 1
 
 Objectives (all minimised): overshoot in in-position windows, move time / ideal time
 (tracking ratio for a moving reference), acceleration violation max(0, accel constraint).
@@ -31,8 +54,10 @@ Objectives (all minimised): overshoot in in-position windows, move time / ideal 
 
 from __future__ import annotations
 
+import functools
+import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -43,13 +68,37 @@ from vfgym.params import (
     in_position_rad,
 )
 
-CONSTRAINTS = ("accel", "torque", "overshoot")
+CONSTRAINTS = ("accel", "torque", "overshoot", "arrival")
 OBJECTIVES = ("overshoot_windows", "time_ratio", "accel_violation")
+TRACKING_SCALE = 0.1
+"""The tracking term's yardstick: this share of the reference's amplitude."""
+FOLLOW_RATIO = 1.0 / math.sqrt(2.0)
+"""A moving reference is followed when RMS error ≤ this × the reference's RMS (−3 dB)."""
 
 
 @dataclass(frozen=True)
 class CostWeights:
-    """Weights of the scalar cost (see the module docstring)."""
+    """Weights of the scalar cost (the formula: the module docstring, docs/model.md §6).
+
+    Parameters
+    ----------
+    time : float
+        Weight of move time / ideal time (point-to-point moves).
+    tracking : float
+        Weight of RMS tracking error / 10 % of the amplitude (a moving reference).
+    overshoot : float
+        Weight of the overshoot in in-position windows.
+    accel : float
+        Weight of the acceleration violation max(0, accel constraint).
+    torque : float
+        Weight of the time at the torque limit / ideal time.
+    unsettled : float
+        The arrival term's fixed part: added when the run does not arrive.
+    arrival : float
+        The arrival term's price per unit of the arrival constraint (per in-position
+        window still to go; for a moving reference, per unit of the tracking
+        constraint): the same price per window as an overshoot.
+    """
 
     time: float = 1.0
     tracking: float = 1.0
@@ -57,11 +106,20 @@ class CostWeights:
     accel: float = 5.0
     torque: float = 1.0
     unsettled: float = 5.0
+    arrival: float = 0.1
 
 
 @dataclass(frozen=True)
 class Bounds:
-    """Constraint bounds: overshoot in in-position windows, time at the torque limit (s)."""
+    """Bounds of the constraints (feasible when each constraint ≤ 0; docs/model.md §6).
+
+    Parameters
+    ----------
+    overshoot_windows : float
+        Overshoot allowed, in in-position windows.
+    torque_limit_time_s : float
+        Time allowed at the torque limit (s).
+    """
 
     overshoot_windows: float = 1.0
     torque_limit_time_s: float = 0.0
@@ -71,6 +129,178 @@ DEFAULT_WEIGHTS = CostWeights()
 DEFAULT_BOUNDS = Bounds()
 
 
+class Yardsticks(NamedTuple):
+    """What a move's measures are judged against (fixed by the move, not the run).
+
+    What :func:`yardsticks` returns; :func:`score` and the compiled running cost
+    (:mod:`vfgym.scoring._cost_compiled`) both read them.
+
+    Attributes
+    ----------
+    ideal_time_s : float
+        Bang–coast–bang time of the moves (:meth:`vfgym.Scenario.ideal_time_s`; the
+        sine's duration for a moving reference).
+    window_rad : float
+        In-position half-width around the final command.
+    accel_limit_rad_s2 : float
+        The loaded motor's usable acceleration
+        (:attr:`vfgym.Motor.usable_accel_rad_s2`), the accel constraint's yardstick.
+    tracking : bool
+        A moving reference, judged by tracking error.
+    tracking_scale_rad : float
+        :data:`TRACKING_SCALE` × |amplitude|, the tracking term's unit.
+    reference_rms_rad : float
+        RMS of the command over the move: the tracking error of a motor that never moves.
+    arrival_unit_rad : float
+        The point-to-point arrival constraint's unit: the window, or one count if it is 0.
+    """
+
+    ideal_time_s: float
+    window_rad: float
+    accel_limit_rad_s2: float
+    tracking: bool
+    tracking_scale_rad: float
+    reference_rms_rad: float
+    arrival_unit_rad: float
+
+
+@functools.lru_cache(maxsize=256)
+def yardsticks(scenario: Scenario, plant: Plant, measures: Measures) -> Yardsticks:
+    """The yardsticks of ``scenario`` on ``plant`` (its loaded plant), cached.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The move.
+    plant : Plant
+        The plant it runs on (the scenario's load applied).
+    measures : Measures
+        The in-position window's definition.
+
+    Returns
+    -------
+    Yardsticks
+        The move's ideal time, in-position window, usable acceleration and tracking and
+        arrival units.
+    """
+    cmd = scenario.command(plant)
+    window = in_position_rad(measures, plant, float(cmd[-1]))
+    return Yardsticks(
+        ideal_time_s=scenario.ideal_time_s(plant),
+        window_rad=window,
+        accel_limit_rad_s2=plant.motor.usable_accel_rad_s2,
+        tracking=scenario.tracking,
+        tracking_scale_rad=TRACKING_SCALE * abs(scenario.distance_rad),
+        reference_rms_rad=math.sqrt(float(np.dot(cmd, cmd)) / cmd.size),
+        arrival_unit_rad=window if window > 0.0 else plant.motor.count_rad,
+    )
+
+
+class CostTerms(NamedTuple):
+    """The cost's terms, in the order they are summed (see the module docstring).
+
+    Attributes
+    ----------
+    main : float
+        time · move time / ideal, or tracking · RMS error / its yardstick.
+    overshoot : float
+        overshoot · overshoot in in-position windows.
+    accel : float
+        accel · max(0, accel constraint).
+    torque : float
+        torque · time at the torque limit / ideal time.
+    arrival : float
+        0 for a run that arrives, else unsettled + arrival · arrival constraint
+        (:func:`arrival_term`).
+    """
+
+    main: float
+    overshoot: float
+    accel: float
+    torque: float
+    arrival: float
+
+    @property
+    def running(self) -> float:
+        """The four terms the compiled running cost also computes, summed in its order."""
+        return self.main + self.overshoot + self.accel + self.torque
+
+    @property
+    def total(self) -> float:
+        """The cost: the running terms, then the arrival term."""
+        return self.running + self.arrival
+
+
+class Score(NamedTuple):
+    """One run scored: what :func:`score` returns.
+
+    Attributes
+    ----------
+    cost : float
+        The scalar cost (:attr:`CostTerms.total`).
+    constraints : numpy.ndarray
+        float, in the order of :data:`CONSTRAINTS`; feasible when each ≤ 0.
+    objectives : numpy.ndarray
+        float, in the order of :data:`OBJECTIVES`.
+    metrics : dict
+        The run's measures plus ``ideal_time_s``, ``time_ratio``, ``window_rad`` and
+        ``arrived``.
+    terms : CostTerms
+        The cost's terms.
+    """
+
+    cost: float
+    constraints: np.ndarray
+    objectives: np.ndarray
+    metrics: dict[str, Any]
+    terms: CostTerms
+
+
+def arrival_constraint(m: dict[str, Any], y: Yardsticks) -> float:
+    """How far a run is from arriving (> 0: it did not; see the module docstring).
+
+    Parameters
+    ----------
+    m : dict
+        The run's measures (:mod:`vfgym.plant.measures`).
+    y : Yardsticks
+        The move's yardsticks.
+
+    Returns
+    -------
+    float
+        Point-to-point: the in-position windows beyond the window at the end, whose sign
+        is exactly that of "not settled"; a moving reference: √2 · RMS error / RMS of the
+        reference − 1.
+    """
+    if y.tracking:
+        if y.reference_rms_rad <= 0.0:
+            return 0.0
+        return m["tracking_rms_rad"] / (FOLLOW_RATIO * y.reference_rms_rad) - 1.0
+    return (abs(m["final_error_rad"]) - y.window_rad) / y.arrival_unit_rad
+
+
+def arrival_term(c_arrival: float, weights: CostWeights) -> float:
+    """The end-of-move cost term: 0 for a run that arrives (``c_arrival`` ≤ 0), else
+    ``unsettled + arrival · c_arrival``.
+
+    Parameters
+    ----------
+    c_arrival : float
+        The arrival constraint (:func:`arrival_constraint`).
+    weights : CostWeights
+        Weights of the cost (``unsettled`` and ``arrival``).
+
+    Returns
+    -------
+    float
+        The term, ≥ 0.
+    """
+    if c_arrival <= 0.0:
+        return 0.0
+    return weights.unsettled + weights.arrival * c_arrival
+
+
 def score(
     m: dict[str, Any],
     scenario: Scenario,
@@ -78,26 +308,65 @@ def score(
     measures: Measures,
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
-) -> tuple[float, np.ndarray, np.ndarray, dict[str, float]]:
-    """Cost, constraints and objectives of one run's measures."""
-    ideal = scenario.ideal_time_s(plant)
-    window = in_position_rad(measures, plant, scenario.command(plant)[-1])
-    limit = plant.motor.accel_limit_rad_s2
-    c_acc = m["accel_ratio_pulse"] - 1.0 - m["accel_quantum_rad_s2"] / limit
+) -> Score:
+    """Cost, constraints and objectives of one run's measures (docs/model.md §6).
+
+    Parameters
+    ----------
+    m : dict
+        The run's measures, as :attr:`vfgym.Trace.metrics` gives them
+        (:func:`vfgym.plant.measures.from_acc`).
+    scenario : Scenario
+        The scenario run (point-to-point or a moving reference; its ideal time).
+    plant : Plant
+        The plant it ran on, the scenario's load applied (usable acceleration, encoder
+        count).
+    measures : Measures
+        Windows and bands the measures were taken with (the in-position window).
+    weights : CostWeights
+        Weights of the cost.
+    bounds : Bounds
+        Bounds of the constraints.
+
+    Returns
+    -------
+    Score
+        The scalar cost; the constraint values in the order of :data:`CONSTRAINTS` and
+        the objectives in the order of :data:`OBJECTIVES` (float arrays of 4 and 3); the
+        measures merged with ``ideal_time_s``, ``time_ratio``, ``window_rad`` and
+        ``arrived``; and the cost's terms.
+    """
+    y = yardsticks(scenario, plant, measures)
+    ideal, window, limit = y.ideal_time_s, y.window_rad, y.accel_limit_rad_s2
+    c_acc = m["peak_accel_pulse_rad_s2"] / limit - 1.0 - m["accel_quantum_rad_s2"] / limit
     c_tq = m["torque_limit_time_s"] - bounds.torque_limit_time_s
-    ov_w = m["overshoot_rad"] / window if window > 0 else 0.0
+    ov_w = m["overshoot_rad"] / window if window > 0.0 else 0.0
     c_ov = ov_w - bounds.overshoot_windows
-    if scenario.tracking:
-        ratio = m["tracking_rms_rad"] / (0.1 * abs(scenario.distance_rad))
+    c_arr = arrival_constraint(m, y)
+    if y.tracking:
+        rms = m["tracking_rms_rad"]
+        ratio = rms / y.tracking_scale_rad if y.tracking_scale_rad > 0.0 else 0.0
         main = weights.tracking * ratio
     else:
         ratio = m["move_time_s"] / ideal
-        main = weights.time * ratio + (0.0 if m["settled"] else weights.unsettled)
-    cost = (
-        main
-        + weights.overshoot * ov_w
-        + weights.accel * max(0.0, c_acc)
-        + weights.torque * m["torque_limit_time_s"] / ideal
+        main = weights.time * ratio
+    terms = CostTerms(
+        main=main,
+        overshoot=weights.overshoot * ov_w,
+        accel=weights.accel * max(0.0, c_acc),
+        torque=weights.torque * m["torque_limit_time_s"] / ideal,
+        arrival=arrival_term(c_arr, weights),
     )
-    extra = {"ideal_time_s": ideal, "time_ratio": ratio, "window_rad": window}
-    return cost, np.array([c_acc, c_tq, c_ov]), np.array([ov_w, ratio, max(0.0, c_acc)]), extra
+    extra = {
+        "ideal_time_s": ideal,
+        "time_ratio": ratio,
+        "window_rad": window,
+        "arrived": bool(c_arr <= 0.0),
+    }
+    return Score(
+        cost=float(terms.total),
+        constraints=np.array([c_acc, c_tq, c_ov, c_arr]),
+        objectives=np.array([ov_w, ratio, max(0.0, c_acc)]),
+        metrics=m | extra,
+        terms=terms,
+    )

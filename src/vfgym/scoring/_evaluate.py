@@ -28,6 +28,7 @@ from vfgym.params import (
 )
 from vfgym.plant import Trace, command_end_s, pack, simulate
 from vfgym.plant import _kernel as K
+from vfgym.plant._threads import keeps_torch_threads
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.plant.measures import from_acc
 from vfgym.scoring._cost import (
@@ -37,6 +38,7 @@ from vfgym.scoring._cost import (
     OBJECTIVES,
     Bounds,
     CostWeights,
+    Score,
     score,
 )
 
@@ -45,10 +47,28 @@ from vfgym.scoring._cost import (
 class Evaluation:
     """Measures, constraints, objectives and cost of each (controller, scenario) pair.
 
-    ``metrics[c][s]`` is a dict of the named measures (:mod:`vfgym.plant.measures`) plus
-    ``ideal_time_s``, ``time_ratio`` and ``window_rad``; arrays are shaped
-    (controllers, scenarios[, 3]). A pulse source on a moving reference is not applicable:
-    its entries are NaN.
+    What :func:`evaluate` returns. Arrays are shaped (controllers, scenarios), constraints
+    and objectives with a last axis in the order of :data:`~vfgym.scoring.CONSTRAINTS`
+    (4) and :data:`~vfgym.scoring.OBJECTIVES` (3). A pulse source on a moving reference
+    is not applicable: its entries are NaN.
+
+    Attributes
+    ----------
+    controllers : list
+        The controllers, as given (V-F :class:`~vfgym.Settings`, pulse sources, baselines).
+    scenarios : list of Scenario
+        The scenarios.
+    metrics : list of list of dict
+        ``metrics[c][s]``: the named measures (:mod:`vfgym.plant.measures`) plus
+        ``ideal_time_s``, ``time_ratio``, ``window_rad`` and ``arrived``.
+    cost : numpy.ndarray
+        The scalar cost, (controllers, scenarios).
+    constraints : numpy.ndarray
+        (controllers, scenarios, 4), in the order of :data:`CONSTRAINTS`; feasible ≤ 0.
+    objectives : numpy.ndarray
+        (controllers, scenarios, 3), in the order of :data:`OBJECTIVES`.
+    traces : list of list of Trace or None
+        Per-tick traces when asked for (``keep_traces``), else ``None``.
     """
 
     controllers: list[Controller]
@@ -70,10 +90,28 @@ class Evaluation:
         return np.all(self.constraints <= 0.0, axis=-1)
 
     def metric(self, name: str) -> np.ndarray:
-        """One measure as a (controllers, scenarios) float array."""
+        """One measure of every pair.
+
+        Parameters
+        ----------
+        name : str
+            A key of :attr:`metrics` (e.g. ``move_time_s``).
+
+        Returns
+        -------
+        numpy.ndarray
+            float, (controllers, scenarios).
+        """
         return np.array([[float(m[name]) for m in row] for row in self.metrics])
 
     def labels(self) -> list[str]:
+        """Short names of the controllers, for tables.
+
+        Returns
+        -------
+        list of str
+            One per controller (:func:`vfgym.moves.baselines.controller_label`).
+        """
         return [controller_label(c) for c in self.controllers]
 
 
@@ -95,7 +133,19 @@ def _check_controllers(controllers: Any) -> list[Controller]:
 
 @dataclass(frozen=True)
 class Move:
-    """A scenario made ready to simulate: its plant, its command and when that ends."""
+    """A scenario made ready to simulate: its plant, its command and when that ends.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario.
+    plant : Plant
+        The plant with the scenario's load.
+    command : numpy.ndarray
+        The position command per tick (rad).
+    command_end_s : float
+        Time at which the command reached its final value (s).
+    """
 
     scenario: Scenario
     plant: Plant
@@ -104,6 +154,20 @@ class Move:
 
     @classmethod
     def of(cls, scenario: Scenario, base: Plant = PAPER_PLANT) -> Move:
+        """The move of a scenario on a base plant.
+
+        Parameters
+        ----------
+        scenario : Scenario
+            The scenario.
+        base : Plant
+            The plant before the scenario's load.
+
+        Returns
+        -------
+        Move
+            Its plant, command and command end.
+        """
         plant = scenario.plant(base)
         cmd = scenario.command(plant)
         return cls(scenario, plant, cmd, command_end_s(cmd, plant.tick_hz))
@@ -126,11 +190,34 @@ def score_pairs(
     measures: Measures = DEFAULT_MEASURES,
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
-) -> list[tuple[float, np.ndarray, np.ndarray, dict[str, Any]] | None]:
-    """Score ``controllers[i]`` on ``moves[i]`` for every i in one compiled, multi-threaded
-    call: (cost, constraints, objectives, measures) per pair, ``None`` where a pulse source
-    cannot run the move. A move is a :class:`Move` or anything with its attributes (the
-    envs' episodes); moves sharing a command array share it in the batch."""
+) -> list[Score | None]:
+    """Score ``controllers[i]`` on ``moves[i]`` for every i in one compiled, multi-threaded call.
+
+    Parameters
+    ----------
+    controllers : sequence
+        One controller per move (V-F settings, a pulse source or a baseline).
+    moves : sequence
+        :class:`Move` objects, or anything with their attributes (the envs' episodes);
+        moves sharing a command array share it in the batch.
+    measures : Measures
+        Windows and bands of the measures.
+    weights : CostWeights
+        Weights of the cost.
+    bounds : Bounds
+        Bounds of the constraints.
+
+    Returns
+    -------
+    list of Score or None
+        One :class:`~vfgym.scoring.Score` per pair (its ``metrics`` hold the measures),
+        or ``None`` where a pulse source cannot run the move (a moving reference).
+
+    Raises
+    ------
+    ValueError
+        If the two sequences differ in length.
+    """
     if len(controllers) != len(moves):
         raise ValueError(f"{len(controllers)} controllers for {len(moves)} moves")
     slots: dict[int, int] = {}
@@ -154,11 +241,11 @@ def score_pairs(
         cmd_idx.append(j)
         ext_idx.append(e)
         rows.append(r)
-    out: list[tuple[float, np.ndarray, np.ndarray, dict[str, Any]] | None] = [None] * len(moves)
+    out: list[Score | None] = [None] * len(moves)
     if not rows:
         return out
     acc = K.new_acc(len(rows))
-    K.run_batch(
+    keeps_torch_threads(K.run_batch)(
         np.concatenate(cmds),
         np.concatenate([[0], np.cumsum([c.size for c in cmds])]).astype(np.int64),
         np.array(cmd_idx, np.int64),
@@ -171,8 +258,7 @@ def score_pairs(
     for k, r in enumerate(rows):
         mv = moves[r]
         m = from_acc(acc[k], mv.plant, measures, float(mv.command[-1]), mv.command_end_s)
-        cost, cons, objs, extra = score(m, mv.scenario, mv.plant, measures, weights, bounds)
-        out[r] = (float(cost), cons, objs, m | extra)
+        out[r] = score(m, mv.scenario, mv.plant, measures, weights, bounds)
     return out
 
 
@@ -189,12 +275,40 @@ def evaluate(
 ) -> Evaluation:
     """Score every controller on every scenario through one batched kernel call.
 
-    settings: V-F :class:`Settings`, a baseline pulse source, a baseline name or
-        :class:`~vfgym.moves.baselines.Baseline` (derived per scenario plant), or a sequence.
-    scenarios: names, :class:`Scenario` objects, or a set spec (``named``, ``train``, ...).
-    plant: the base plant; each scenario applies its load to it.
-    keep_traces: also return per-tick traces (simulated one by one; the measures are the
-        batch's, and equal the traces' own).
+    The one scoring path, ``params → simulate → trace → metrics → cost``: the Gymnasium
+    envs' rewards, the Optuna objective and the reports all call it.
+
+    Parameters
+    ----------
+    settings : Settings, pulse source, str, Baseline, or a sequence of these
+        V-F :class:`~vfgym.Settings`, a baseline pulse source, a baseline name or
+        :class:`~vfgym.moves.baselines.Baseline` (derived per scenario plant).
+    scenarios : str, Scenario, or a sequence of these
+        Names, :class:`~vfgym.Scenario` objects, or a set spec (``named``, ``train`` …;
+        see :func:`vfgym.scenario_set`).
+    plant : Plant
+        The base plant; each scenario applies its load to it.
+    measures : Measures
+        Windows and bands of the measures.
+    weights : CostWeights
+        Weights of the cost.
+    bounds : Bounds
+        Bounds of the constraints.
+    keep_traces : bool
+        Also return per-tick traces (simulated one by one; the measures are the batch's,
+        and equal the traces' own).
+    decimation : int
+        Keep every ``decimation``-th tick in the traces.
+
+    Returns
+    -------
+    Evaluation
+        Measures, constraints, objectives and cost of every (controller, scenario) pair.
+
+    Raises
+    ------
+    ValueError
+        If a controller or a scenario is not known or not allowed.
     """
     ctrls = _check_controllers(settings)
     scens = scenario_set(scenarios)
@@ -219,7 +333,8 @@ def evaluate(
         ci, si = divmod(r, ns)
         if res is None:
             continue
-        cost[ci, si], cons[ci, si], objs[ci, si], metrics[ci][si] = res
+        cost[ci, si], cons[ci, si], objs[ci, si] = res.cost, res.constraints, res.objectives
+        metrics[ci][si] = res.metrics
         if traces is not None:
             s, ext = _as_run(ctrls[ci], moves[si])
             traces[ci][si] = simulate(

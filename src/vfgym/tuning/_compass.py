@@ -177,8 +177,8 @@ class CompassSampler(optuna.samplers.BaseSampler):
                    default=0)  # fmt: skip
         done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
         obs = [o for o in (self._observe(t) for t in done) if o is not None]
-        pending = [self._x_of(t) for t in trials
-                   if t.state == optuna.trial.TrialState.RUNNING and self._has_params(t)]  # fmt: skip
+        running = optuna.trial.TrialState.RUNNING
+        pending = [self._x_of(t) for t in trials if t.state == running and self._has_params(t)]
         return self._extra(obs, pending, last, len(trials))
 
     # --- the search ---------------------------------------------------------------------
@@ -190,8 +190,11 @@ class CompassSampler(optuna.samplers.BaseSampler):
         n_done = len(obs)
         if last < 0 or not obs:
             return self._sobol(last + 1)
-        mine = [t for t in tagged
-                if t.system_attrs[ATTR]["gen"] == last and t.system_attrs[ATTR]["role"] != "extra"]
+        mine = [
+            t
+            for t in tagged
+            if t.system_attrs[ATTR]["gen"] == last and t.system_attrs[ATTR]["role"] != "extra"
+        ]
         st = mine[0].system_attrs[ATTR]
         steps = np.asarray(st["steps"], dtype=np.float64)
         if st["mode"] == "init":
@@ -287,7 +290,11 @@ class CompassSampler(optuna.samplers.BaseSampler):
         tag = self._tag(gen, "model", role, centre, steps, since)
         out = []
         for p in pts:
-            law = self.laws[int(round(p[4] * (len(self.laws) - 1)))] if len(self.laws) > 1 else self.laws[0]
+            law = (
+                self.laws[round(p[4] * (len(self.laws) - 1))]
+                if len(self.laws) > 1
+                else self.laws[0]
+            )
             out.append({"x": self._from_unit(p[:4]), "law": law, "tag": tag})
         return out
 

@@ -4,13 +4,14 @@ the command line (in that order).
 
 from __future__ import annotations
 
-import re
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-from vfgym._validate import check_choice, check_int, check_real
+from vfgym._validate import check_choice, check_int, check_name, check_real
+from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.scenarios import Scenario, scenario_set
 from vfgym.params import ACCEL_LAWS
+from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, check_aggregate
 
 SAMPLERS = ("compass", "tpe", "cmaes", "gp", "nsga2", "grid", "random")
 """Samplers of ``vfgym sweep --sampler``: the compass search with model checks in the
@@ -19,7 +20,6 @@ Gaussian process for the deterministic objective, NSGA-II (the Pareto form by de
 grid over :func:`vfgym.space.grid`, and uniform random sampling (a control)."""
 FORMS = ("cost", "pareto")
 """``cost``: minimise the mean cost; ``pareto``: minimise the three objectives."""
-NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
 
 
 def _opt_float(name: str, v: Any, lo: float) -> float | None:
@@ -39,6 +39,11 @@ def _laws(v: Any) -> tuple[str, ...]:
 def _check_scenario_fields(cfg: Any) -> None:
     """Normalise and check the scenario-set and law fields a sweep and a grid share."""
     s = object.__setattr__
+    if cfg.axis is not None:
+        s(cfg, "axis", str(cfg.axis))
+        load_axis(cfg.axis)  # a bad axis file fails here, naming itself
+    if cfg.scenarios is None:  # an axis is tuned on its train moves
+        s(cfg, "scenarios", "paper-step" if cfg.axis is None else "train")
     if isinstance(cfg.scenarios, (list, tuple)):
         s(cfg, "scenarios", ",".join(str(x) for x in cfg.scenarios))
     s(cfg, "scenarios", str(cfg.scenarios))
@@ -61,14 +66,36 @@ def _bool(name: str, v: Any) -> bool:
 class _Options:
     """Shared by the sweep and grid configurations: merging sources, plain dicts, scenarios."""
 
-    scenarios: str
+    scenarios: str | None  # None only as given: construction fills in the default
     scenario_count: int
     first_seed: int
     laws: tuple[str, ...]
+    axis: str | None
 
     @classmethod
     def resolve(cls, file_data: Any = None, cli: dict[str, Any] | None = None, source: str = ""):
-        """Defaults, then a config file's values, then the command line's (not None)."""
+        """A configuration from its defaults, then a config file's values, then the
+        command line's.
+
+        Parameters
+        ----------
+        file_data : dict or None
+            A config file's mapping (``-`` in keys read as ``_``); unknown keys raise.
+        cli : dict or None
+            Command-line options; those that are ``None`` (not given) are skipped.
+        source : str
+            Names the file in error messages.
+
+        Returns
+        -------
+        SweepConfig or GridConfig
+            The validated configuration.
+
+        Raises
+        ------
+        ValueError
+            If the file is not a mapping, has an unknown key, or a value is out of range.
+        """
         data: dict[str, Any] = {}
         if file_data is not None:
             if not isinstance(file_data, dict):
@@ -78,36 +105,112 @@ class _Options:
         return cls(**data)
 
     def to_dict(self) -> dict[str, Any]:
+        """The configuration as plain data (for ``config.yaml``).
+
+        Returns
+        -------
+        dict
+            Field name to value, ``laws`` as a list.
+        """
         d = asdict(self)  # type: ignore[call-overload]
         d["laws"] = list(self.laws)
         return d
 
+    def load_axis(self) -> Axis | None:
+        """The axis file's :class:`~vfgym.moves.axis.Axis`, or ``None`` (the paper's)."""
+        return None if self.axis is None else load_axis(self.axis)
+
     def scenario_list(self) -> list[Scenario]:
-        return scenario_set(self.scenarios, self.scenario_count, self.first_seed)
+        """The scenarios the configuration names.
+
+        Returns
+        -------
+        list of Scenario
+            On an axis, ``train`` / ``test`` are its move sets (``scenario_count`` and
+            ``first_seed`` do not apply); else :func:`vfgym.scenario_set` of
+            ``scenarios``, ``scenario_count``, ``first_seed``.
+        """
+        spec = str(self.scenarios)
+        axis = self.load_axis()
+        if axis is not None:
+            return axis.scenario_set(spec)
+        return scenario_set(spec, self.scenario_count, self.first_seed)
 
 
 @dataclass(frozen=True)
 class SweepConfig(_Options):
     """What ``vfgym sweep`` does; every field is a command-line option and a config key.
 
-    scenarios: a scenario set spec (:func:`vfgym.scenario_set`); scenario_count and
-    first_seed size the ``train`` / ``test`` sets. laws: the acceleration laws searched
-    (one law: fixed). objective: ``cost`` or ``pareto`` (default: pareto for nsga2).
-    trials: completed trials the study ends with (all workers together). timeout: seconds
-    after which a worker starts no new trial. storage: see :data:`STORAGE_HELP`.
-    study: the study's name, also the run folder's (default: config name + time).
-    heartbeat, grace: seconds between a running trial's heartbeats, and without one
-    before it is taken as dead (RDB storages). grid_points: values per dimension for the
-    grid sampler. batch: trials a worker claims at once and simulates in one batched call
-    (default: the sampler's own, :func:`vfgym.tuning.batch_size`).
+    Parameters
+    ----------
+    scenarios : str
+        A scenario set spec (:func:`vfgym.scenario_set`; a list is joined with commas);
+        default ``train`` on an axis, else ``paper-step``.
+    scenario_count : int
+        Random draws of a ``train`` / ``test`` set, ≥ 1.
+    first_seed : int
+        Seed of the first draw, ≥ 0.
+    axis : str or None
+        An axis file (:mod:`vfgym.moves.axis`): its plant and measures, and ``train`` /
+        ``test`` its move sets.
+    laws : tuple of str
+        The acceleration laws searched (one law: fixed), from
+        :data:`vfgym.params.ACCEL_LAWS`; a comma-separated string is split.
+    sampler : str
+        One of :data:`SAMPLERS`.
+    objective : str or None
+        ``cost`` or ``pareto`` (:data:`FORMS`); default: pareto for nsga2, else cost.
+    aggregate : str
+        What the cost form minimises over the scenarios: ``mean`` (default), ``cvar``
+        (the mean of the costliest ``cvar_alpha`` share) or ``worst``
+        (:mod:`vfgym.tuning._aggregate`); feasible means feasible on every scenario.
+    cvar_alpha : float
+        The share of the costliest scenarios ``cvar`` averages, in (0, 1]; default 0.25.
+    trials : int
+        Completed trials the study ends with (all workers together), ≥ 1.
+    timeout : float or None
+        Seconds after which a worker starts no new trial.
+    workers : int
+        Worker processes sharing the study, 1 to 256.
+    seed : int or None
+        The sampler's seed (``None``: unseeded).
+    storage : str
+        ``sqlite``, ``journal`` or a ``postgresql://`` URL (see :data:`STORAGE_HELP`).
+    study : str or None
+        The study's name, also the run folder's (default: config name + time).
+    runs_dir : str
+        Folder under which the run folder is made.
+    reference : str or None
+        A grid run (or its ``reference.yaml``) to report the gap to.
+    grid_points : int
+        Values per dimension for the grid sampler, 1 to 64.
+    plots : bool
+        Draw the history and Pareto plots.
+    progress : bool
+        Show a progress bar.
+    batch : int or None
+        Trials a worker claims at once and simulates in one batched call, 1 to 1024
+        (default: the sampler's own, :func:`vfgym.tuning.batch_size`).
+    heartbeat : int
+        Seconds between a running trial's heartbeats (RDB storages), ≥ 1.
+    grace : int or None
+        Seconds without a heartbeat before a trial is taken as dead.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range or the objective does not suit the sampler.
     """
 
-    scenarios: str = "paper-step"
+    scenarios: str | None = None
     scenario_count: int = 16
     first_seed: int = 0
     laws: tuple[str, ...] = ("rise",)
+    axis: str | None = None
     sampler: str = "compass"
     objective: str | None = None
+    aggregate: str = DEFAULT_AGGREGATE
+    cvar_alpha: float = DEFAULT_CVAR_ALPHA
     trials: int = 100
     timeout: float | None = None
     workers: int = 1
@@ -134,6 +237,9 @@ class SweepConfig(_Options):
                 f"objective='pareto' is not allowed with sampler={self.sampler!r}: use nsga2"
             )
         s(self, "objective", form)
+        how, alpha = check_aggregate(self.aggregate, self.cvar_alpha)
+        s(self, "aggregate", how)
+        s(self, "cvar_alpha", alpha)
         s(self, "trials", check_int("trials", self.trials, 1))
         s(self, "timeout", _opt_float("timeout", self.timeout, 0.0))
         s(self, "workers", check_int("workers", self.workers, 1, 256))
@@ -145,7 +251,7 @@ class SweepConfig(_Options):
         s(self, "runs_dir", str(self.runs_dir))
         if self.reference is not None:
             s(self, "reference", str(self.reference))
-        s(self, "grid_points", check_int("grid_points", self.grid_points, 1, 64))
+        s(self, "grid_points", check_int("grid_points", self.grid_points, 2, 64))
         if self.batch is not None:
             s(self, "batch", check_int("batch", self.batch, 1, 1024))
         s(self, "plots", _bool("plots", self.plots))
@@ -165,13 +271,3 @@ def _keys(data: dict, cls: type, source: str) -> dict[str, Any]:
             f"{source}: unknown key(s) {', '.join(unknown)}; allowed: {', '.join(sorted(known))}"
         )
     return out
-
-
-def check_name(option: str, name: Any) -> str:
-    """A study or run name: it names a folder, so letters, digits, '.', '_', '-'."""
-    if not isinstance(name, str) or not NAME_RE.match(name):
-        raise ValueError(
-            f"{option}={name!r} is not allowed: letters, digits, '.', '_' and '-' "
-            "(starting with a letter or digit, at most 100)"
-        )
-    return name

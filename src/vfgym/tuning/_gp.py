@@ -90,8 +90,12 @@ class GaussianProcess:
     def _fit(self, start: np.ndarray, steps: int) -> np.ndarray:
         """Adam on the log hyperparameters, projected onto their bounds; the best seen."""
         dim = self.x.shape[1]
-        lo = np.r_[np.full(dim, math.log(LENGTH_BOUNDS[0])), math.log(0.05), math.log(NOISE_BOUNDS[0])]
-        hi = np.r_[np.full(dim, math.log(LENGTH_BOUNDS[1])), math.log(20.0), math.log(NOISE_BOUNDS[1])]
+        lo = np.r_[
+            np.full(dim, math.log(LENGTH_BOUNDS[0])), math.log(0.05), math.log(NOISE_BOUNDS[0])
+        ]
+        hi = np.r_[
+            np.full(dim, math.log(LENGTH_BOUNDS[1])), math.log(20.0), math.log(NOISE_BOUNDS[1])
+        ]
         theta = np.clip(start, lo, hi)
         m = np.zeros_like(theta)
         v = np.zeros_like(theta)

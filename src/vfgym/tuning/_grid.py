@@ -7,7 +7,7 @@ from __future__ import annotations
 import csv
 import io
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,6 +17,8 @@ import numpy as np
 from vfgym import space
 from vfgym._validate import check_int
 from vfgym.io.runs import write_text
+from vfgym.moves.axis import axis_digest, axis_kwargs
+from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.scoring import CONSTRAINTS, evaluate
 from vfgym.tuning._config import _bool, _check_scenario_fields, _Options, check_name
@@ -25,15 +27,43 @@ from vfgym.tuning._objective import aggregate, settings_key
 
 @dataclass(frozen=True)
 class GridConfig(_Options):
-    """What ``vfgym grid`` does: ``points`` values per dimension over the whole space, then
-    ``refine`` rounds that re-grid (``points`` per dimension) the neighbourhood of the
-    ``keep`` best distinct points, one grid step either side; ``batch`` settings per
-    compiled call."""
+    """What ``vfgym grid`` does; every field is a command-line option and a config key.
 
-    scenarios: str = "paper-step"
+    ``points`` values per dimension over the whole space, then ``refine`` rounds that
+    re-grid (``points`` per dimension) the neighbourhood of the ``keep`` best distinct
+    points, one grid step either side.
+
+    Parameters
+    ----------
+    scenarios, scenario_count, first_seed, laws, axis
+        The scenario set, the acceleration laws searched and the axis file, as in
+        :class:`SweepConfig`.
+    points : int
+        Values per dimension, 2 to 64.
+    refine : int
+        Refinement rounds, 0 to 10.
+    keep : int
+        Best distinct points refined around each round, 1 to 64.
+    batch : int
+        Settings per compiled call.
+    name : str or None
+        The run's name (default: config name + time).
+    runs_dir : str
+        Folder under which the run folder is made.
+    progress : bool
+        Show a progress bar.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range.
+    """
+
+    scenarios: str | None = None
     scenario_count: int = 16
     first_seed: int = 0
     laws: tuple[str, ...] = ("rise",)
+    axis: str | None = None
     points: int = 12
     refine: int = 2
     keep: int = 4
@@ -55,34 +85,102 @@ class GridConfig(_Options):
         s(self, "progress", _bool("progress", self.progress))
 
 
+@dataclass(frozen=True, eq=False)
+class GridRow:
+    """One evaluated setting of the grid.
+
+    Attributes
+    ----------
+    level : int
+        0: the whole space; n: the n-th refinement round.
+    settings : Settings
+        The setting.
+    u : numpy.ndarray
+        The settings as unit coordinates in [-1, 1] (:meth:`vfgym.space.Dim.to_unit`).
+    cost : float
+        Mean cost over the scenarios.
+    constraints : numpy.ndarray
+        Worst of each constraint over the scenarios, (3,).
+    feasible : bool
+        Every constraint ≤ 0 on every scenario.
+    """
+
+    level: int
+    settings: Settings
+    u: np.ndarray
+    cost: float
+    constraints: np.ndarray
+    feasible: bool
+
+    @property
+    def accel_law(self) -> str:
+        """The setting's acceleration law."""
+        return self.settings.accel_law
+
+
+@dataclass(frozen=True, eq=False)
+class GridResult:
+    """What :func:`run_grid` evaluated, and its best row.
+
+    Attributes
+    ----------
+    rows : list of GridRow
+        Every evaluated setting, in the order evaluated.
+    best : GridRow
+        The feasible row of least cost (of least cost, if none is feasible).
+    scenarios : list of Scenario
+        The scenarios each setting was scored on.
+    """
+
+    rows: list[GridRow]
+    best: GridRow
+    scenarios: list[Scenario]
+
+
 def _unit_axes(center: np.ndarray, step: float, points: int) -> list[np.ndarray]:
     return [np.linspace(max(-1.0, c - step), min(1.0, c + step), points) for c in center]
 
 
 def run_grid(
     cfg: GridConfig, progress: Callable[[int, int, float], None] | None = None
-) -> dict[str, Any]:
-    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`, one
-    compiled call per batch. Returns the rows (unit coordinates, law, level, cost,
-    worst constraints, feasible) and the best."""
+) -> GridResult:
+    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`.
+
+    One compiled call per batch, on the config's axis (its plant and measures) if it
+    names one.
+
+    Parameters
+    ----------
+    cfg : GridConfig
+        The grid.
+    progress : callable or None
+        Called after each batch with (settings done, settings in all, best feasible cost).
+
+    Returns
+    -------
+    GridResult
+        ``rows``: one :class:`GridRow` per setting (level, settings, unit coordinates
+        ``u``, mean cost, worst constraints, feasible); ``best``: the feasible row of
+        least cost (or of least cost, if none is feasible); ``scenarios``.
+    """
     scenarios = cfg.scenario_list()
-    evaluate(PAPER_SETTINGS, scenarios)  # compile/load once before timing batches
+    on_axis = axis_kwargs(cfg.load_axis())
+    evaluate(PAPER_SETTINGS, scenarios, **on_axis)  # compile/load once before timing batches
     levels: list[tuple[int, list[Settings]]] = [(0, space.grid(cfg.points, cfg.laws))]
     total = len(levels[0][1]) * (1 + cfg.refine * cfg.keep)
-    rows: dict[tuple, dict[str, Any]] = {}
+    rows: dict[tuple, GridRow] = {}
     done = 0
     best_cost = math.inf
     step = 2.0 / (cfg.points - 1)
     for level in range(cfg.refine + 1):
         if level > 0:
-            pool = sorted(
-                (r for r in rows.values() if r["feasible"]), key=lambda r: r["cost"]
-            ) or sorted(rows.values(), key=lambda r: r["cost"])
-            centers: list[dict[str, Any]] = []
+            pool = sorted((r for r in rows.values() if r.feasible), key=lambda r: r.cost) or sorted(
+                rows.values(), key=lambda r: r.cost
+            )
+            centers: list[GridRow] = []
             for r in pool:
                 if all(
-                    r["accel_law"] != c["accel_law"] or np.max(np.abs(r["u"] - c["u"])) > step
-                    for c in centers
+                    r.accel_law != c.accel_law or np.max(np.abs(r.u - c.u)) > step for c in centers
                 ):
                     centers.append(r)
                 if len(centers) == cfg.keep:
@@ -90,70 +188,101 @@ def run_grid(
             step = step * 2.0 / (cfg.points - 1)
             pts = []
             for c in centers:
-                axes = _unit_axes(c["u"], step * (cfg.points - 1) / 2.0, cfg.points)
+                axes = _unit_axes(c.u, step * (cfg.points - 1) / 2.0, cfg.points)
                 pts += [
-                    space.from_action(np.array(u), c["accel_law"])
+                    space.from_action(np.array(u), c.accel_law)
                     for u in np.array(np.meshgrid(*axes, indexing="ij")).reshape(4, -1).T
                 ]
             levels.append((level, pts))
         todo = [s for s in levels[-1][1] if settings_key(s) not in rows]
         for i in range(0, len(todo), cfg.batch):
             chunk = todo[i : i + cfg.batch]
-            agg = aggregate(evaluate(chunk, scenarios))
+            agg = aggregate(evaluate(chunk, scenarios, **on_axis))
             for j, s in enumerate(chunk):
-                rows[settings_key(s)] = {
-                    "level": level,
-                    "settings": s,
-                    "accel_law": s.accel_law,
-                    "u": np.array([d.to_unit(getattr(s, d.name)) for d in space.SPACE]),
-                    "cost": float(agg["cost"][j]),
-                    "constraints": agg["constraints"][j].astype(float),
-                    "feasible": bool(agg["feasible"][j]),
-                }
-                if agg["feasible"][j]:
-                    best_cost = min(best_cost, float(agg["cost"][j]))
+                rows[settings_key(s)] = GridRow(
+                    level=level,
+                    settings=s,
+                    u=np.array([d.to_unit(getattr(s, d.name)) for d in space.SPACE]),
+                    cost=float(agg.cost[j]),
+                    constraints=agg.constraints[j].astype(float),
+                    feasible=bool(agg.feasible[j]),
+                )
+                if agg.feasible[j]:
+                    best_cost = min(best_cost, float(agg.cost[j]))
             done += len(chunk)
             if progress is not None:
                 progress(done, max(total, done), best_cost)
-    feas = [r for r in rows.values() if r["feasible"]]
-    best = min(feas or rows.values(), key=lambda r: r["cost"])
-    return {"rows": list(rows.values()), "best": best, "scenarios": scenarios}
+    feas = [r for r in rows.values() if r.feasible]
+    best = min(feas or rows.values(), key=lambda r: r.cost)
+    return GridResult(list(rows.values()), best, scenarios)
 
 
-def write_grid_csv(rows: list[dict[str, Any]], path: Path) -> Path:
+def write_grid_csv(rows: Sequence[GridRow], path: Path) -> Path:
+    """Write the grid's rows as CSV (``grid.csv``), floats in full precision.
+
+    Parameters
+    ----------
+    rows : sequence of GridRow
+        The rows of :func:`run_grid`.
+    path : pathlib.Path
+        The file, written atomically.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``: one line per evaluated setting (level, settings, cost, worst
+        constraints, feasible), floats as ``repr`` so they read back exactly.
+    """
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(
         ["level", *space.NAMES, "accel_law", "cost", *[f"c_{c}" for c in CONSTRAINTS], "feasible"]
     )
     for r in rows:
-        s = r["settings"]
+        s = r.settings
         w.writerow(
             [
-                r["level"],
+                r.level,
                 *[repr(float(getattr(s, n))) for n in space.NAMES],
                 s.accel_law,
-                repr(r["cost"]),
-                *[repr(float(x)) for x in r["constraints"]],
-                int(r["feasible"]),
+                repr(r.cost),
+                *[repr(float(x)) for x in r.constraints],
+                int(r.feasible),
             ]
         )
     return write_text(path, buf.getvalue())
 
 
-def grid_reference(cfg: GridConfig, result: dict[str, Any]) -> dict[str, Any]:
-    """``reference.yaml``: the grid's best, in the Settings-YAML format."""
-    b = result["best"]
+def grid_reference(cfg: GridConfig, result: GridResult) -> dict[str, Any]:
+    """``reference.yaml``'s mapping: the grid's best, in the Settings-YAML format.
+
+    What :func:`vfgym.tuning.find_reference` reads back.
+
+    Parameters
+    ----------
+    cfg : GridConfig
+        The grid that ran.
+    result : GridResult
+        What :func:`run_grid` returned.
+
+    Returns
+    -------
+    dict
+        The best settings, its cost, constraints and feasibility, the scenarios, laws
+        and axis (its :func:`~vfgym.moves.axis.axis_digest`), and how the grid ran.
+    """
+    b = result.best
     return {
-        "settings": space.settings_to_dict(b["settings"]),
-        "cost": b["cost"],
-        "feasible": b["feasible"],
-        "constraints": dict(zip(CONSTRAINTS, [float(x) for x in b["constraints"]], strict=True)),
-        "scenarios": [s.name for s in result["scenarios"]],
+        "settings": space.settings_to_dict(b.settings),
+        "cost": b.cost,
+        "feasible": b.feasible,
+        "constraints": dict(zip(CONSTRAINTS, [float(x) for x in b.constraints], strict=True)),
+        "scenarios": [s.name for s in result.scenarios],
         "laws": list(cfg.laws),
+        "axis": axis_digest(cfg.load_axis()),
         "points": cfg.points,
         "refine": cfg.refine,
         "keep": cfg.keep,
-        "evaluated": len(result["rows"]),
+        "evaluated": len(result.rows),
         "source": "vfgym grid",
     }

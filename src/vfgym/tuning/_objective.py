@@ -11,33 +11,91 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from contextlib import nullcontext
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from vfgym import space
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import Settings
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
+from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, aggregate_costs
 from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
+
+if TYPE_CHECKING:
+    from optuna import Study, Trial
 
 _CONSTRAINTS_KEY = "constraints"
 """Optuna's system-attribute prefix of a trial's constraints (``constraints:NAME``)."""
 
 
-def aggregate(ev: Evaluation) -> dict[str, np.ndarray]:
-    """Per controller: mean cost, worst (max) constraint over the scenarios, feasibility
-    (every constraint ≤ 0 on every scenario) and the objectives' means."""
+class Aggregate(NamedTuple):
+    """Each controller's scores over a scenario set (arrays indexed by controller).
+
+    What :func:`aggregate` returns.
+
+    Attributes
+    ----------
+    cost : numpy.ndarray
+        The cost's aggregate over the scenarios (the mean by default), (C,).
+    constraints : numpy.ndarray
+        Worst (max) of each constraint over the scenarios, (C, 3).
+    feasible : numpy.ndarray
+        Every constraint ≤ 0 on every scenario, (C,) bool.
+    objectives : numpy.ndarray
+        The objectives' means over the scenarios, (C, 3).
+    """
+
+    cost: np.ndarray
+    constraints: np.ndarray
+    feasible: np.ndarray
+    objectives: np.ndarray
+
+
+def aggregate(
+    ev: Evaluation, how: str = DEFAULT_AGGREGATE, cvar_alpha: float = DEFAULT_CVAR_ALPHA
+) -> Aggregate:
+    """Each controller's results over the scenarios, as a sweep scores a setting.
+
+    Parameters
+    ----------
+    ev : Evaluation
+        What :func:`vfgym.evaluate` returned.
+    how : str
+        The cost's aggregate over the scenarios: ``mean``, ``cvar`` or ``worst``
+        (:mod:`vfgym.tuning._aggregate`).
+    cvar_alpha : float
+        The share of the costliest scenarios ``cvar`` averages.
+
+    Returns
+    -------
+    Aggregate
+        Per controller: ``cost`` (the aggregate over the scenarios), ``constraints``
+        (worst, max, over the scenarios), ``feasible`` (every constraint ≤ 0 on every scenario) and
+        ``objectives`` (means).
+    """
     cons = np.nanmax(ev.constraints, axis=1)
-    return {
-        "cost": ev.mean_cost,
-        "constraints": cons,
-        "feasible": np.all(cons <= 0.0, axis=1),
-        "objectives": np.nanmean(ev.objectives, axis=1),
-    }
+    return Aggregate(
+        cost=aggregate_costs(ev.cost, how, cvar_alpha),
+        constraints=cons,
+        feasible=np.all(cons <= 0.0, axis=1),
+        objectives=np.nanmean(ev.objectives, axis=1),
+    )
 
 
 def settings_key(s: Settings) -> tuple:
+    """A hashable key of settings, equal for equal settings.
+
+    Parameters
+    ----------
+    s : Settings
+        The settings.
+
+    Returns
+    -------
+    tuple
+        (value_rad, error_limit_rad, k, ts_over_tf, accel_law).
+    """
     return (s.value_rad, s.error_limit_rad, s.k, s.ts_over_tf, s.accel_law)
 
 
@@ -49,15 +107,44 @@ class Result(NamedTuple):
 
 
 class Objective:
-    """Settings from the trial → :func:`vfgym.evaluate` on the scenarios → cost (or the
-    three objectives), with the worst constraints and the settings as user attributes.
+    """Settings from the trial → :func:`vfgym.evaluate` on the scenarios (on ``plant``
+    with ``measures``: an axis's) → cost (or the three objectives), with the worst
+    constraints and the settings as user attributes.
 
     A setting already scored (in this process, or by a completed trial of the study) is
     not simulated again: the trial copies that result and records ``cached_from``.
+
+    Parameters
+    ----------
+    scenarios : list of Scenario
+        The scenarios each setting is scored on.
+    laws : tuple of str
+        The acceleration laws searched.
+    form : str
+        ``cost`` (one objective) or ``pareto`` (the three objectives).
+    plant : Plant
+        The plant the settings run on (an axis's, see :class:`vfgym.moves.axis.Axis`).
+    measures : Measures
+        Windows and bands of the measures (an axis's).
+    aggregate, cvar_alpha : str, float
+        The cost's aggregate over the scenarios (:func:`aggregate`).
     """
 
-    def __init__(self, scenarios: list[Scenario], laws: tuple[str, ...], form: str) -> None:
+    def __init__(
+        self,
+        scenarios: list[Scenario],
+        laws: tuple[str, ...],
+        form: str,
+        *,
+        plant: Plant = PAPER_PLANT,
+        measures: Measures = DEFAULT_MEASURES,
+        aggregate: str = DEFAULT_AGGREGATE,
+        cvar_alpha: float = DEFAULT_CVAR_ALPHA,
+    ) -> None:
         self.scenarios = scenarios
+        self.how = (aggregate, cvar_alpha)
+        self.plant = plant
+        self.measures = measures
         self.laws = laws
         self.form = form
         self.cache: dict[tuple, Result] = {}
@@ -66,7 +153,7 @@ class Objective:
         self.guard: Callable[[], Any] = nullcontext
         self.current: int | None = None
 
-    def __call__(self, trial: Any) -> float | list[float]:
+    def __call__(self, trial: Trial) -> float | list[float]:
         self.current = trial.number
         # Before the claim lock goes: a retried trial inherits its dead worker's attribute,
         # and another worker's recovery must not see this one running under that name.
@@ -78,10 +165,29 @@ class Objective:
         self.record(trial, res)
         return res.values
 
-    def results(self, study: Any, numbers: Sequence[int], settings: list[Settings]) -> list[Result]:
-        """The result of each setting: copied from this process's cache or a completed
-        trial of ``study``, else simulated — all those together in one batched call (the
-        only place a trial may be interrupted). ``numbers`` are the trials' numbers."""
+    def results(
+        self, study: Study, numbers: Sequence[int], settings: list[Settings]
+    ) -> list[Result]:
+        """The result of each setting, simulating only those never scored.
+
+        A setting is copied from this process's cache or from a completed trial of
+        ``study``; the others are simulated together in one batched call (the only place a
+        trial may be interrupted); repeats within the batch copy the first.
+
+        Parameters
+        ----------
+        study : optuna.Study
+            The study whose completed trials may already hold a setting's result.
+        numbers : sequence of int
+            The trials' numbers (recorded as ``cached_from`` of the results they create).
+        settings : list of Settings
+            The settings, one per trial.
+
+        Returns
+        -------
+        list of Result
+            One per setting, in order.
+        """
         out: list[Result | None] = [self.cache.get(settings_key(s)) for s in settings]
         if any(r is None for r in out):
             found = self._completed(study)
@@ -99,44 +205,82 @@ class Objective:
             for (key, i), res in zip(todo.items(), scored, strict=True):
                 self.cache[key] = Result(res.values, res.attrs | {"cached_from": numbers[i]})
                 out[i] = res
-            for i, s in enumerate(settings):  # repeats within the batch copy the first
+            for i, s in enumerate(settings):
                 if out[i] is None:
                     out[i] = self.cache[settings_key(s)]
         return [r for r in out if r is not None]
 
-    def record(self, trial: Any, res: Result) -> None:
-        """Set a result's user attributes and constraints on the trial."""
+    def record(self, trial: Trial, res: Result) -> None:
+        """Set a result's user attributes and constraints on the trial.
+
+        Parameters
+        ----------
+        trial : optuna.Trial
+            The trial.
+        res : Result
+            Its result.
+        """
         for k, v in res.attrs.items():
             trial.set_user_attr(k, v)
         set_constraints(trial, dict(zip(CONSTRAINTS, res.attrs["constraints"], strict=True)))
 
     def score(self, settings: Settings) -> Result:
-        """Values and user attributes of one setting."""
+        """Values and user attributes of one setting (one batched evaluation).
+
+        Parameters
+        ----------
+        settings : Settings
+            The setting.
+
+        Returns
+        -------
+        Result
+            ``(values, attrs)``: the aggregate cost (``cost`` form) or the three
+            objectives' means, and the trial's user attributes (settings, cost, constraints,
+            feasible, objectives).
+        """
         return self.score_many([settings])[0]
 
     def score_many(self, settings: list[Settings]) -> list[Result]:
-        """Values and user attributes of each setting, all in one batched evaluation."""
-        agg = aggregate(evaluate(settings, self.scenarios))
+        """Values and user attributes of each setting, all in one batched evaluation.
+
+        Parameters
+        ----------
+        settings : list of Settings
+            The settings.
+
+        Returns
+        -------
+        list of Result
+            One per setting, as :meth:`score` gives it.
+        """
+        agg = aggregate(
+            evaluate(settings, self.scenarios, plant=self.plant, measures=self.measures),
+            *self.how,
+        )
         out = []
         for i, s in enumerate(settings):
             attrs = {
                 "settings": space.settings_to_dict(s),
-                "cost": float(agg["cost"][i]),
-                "constraints": [float(x) for x in agg["constraints"][i]],
-                "feasible": bool(agg["feasible"][i]),
-                "objectives": [float(x) for x in agg["objectives"][i]],
+                "cost": float(agg.cost[i]),
+                "constraints": [float(x) for x in agg.constraints[i]],
+                "feasible": bool(agg.feasible[i]),
+                "objectives": [float(x) for x in agg.objectives[i]],
             }
             values = attrs["cost"] if self.form == "cost" else list(attrs["objectives"])
             out.append(Result(values, attrs))
         return out
 
-    def _completed(self, study: Any) -> dict[tuple, Result]:
+    def _completed(self, study: Study) -> dict[tuple, Result]:
         """Results of the study's completed trials, by settings (the first trial of each)."""
         import optuna
 
         found: dict[tuple, Result] = {}
         for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,)):
+            cons = t.user_attrs.get("constraints")
             if "cost" not in t.user_attrs or "settings" not in t.user_attrs:
+                continue
+            if len(cons or ()) != len(CONSTRAINTS):  # scored with other constraints
                 continue
             key = settings_key(space.settings_from_dict(t.user_attrs["settings"]))
             if key in found:
@@ -163,4 +307,3 @@ def set_constraints(trial: Any, values: dict[str, float]) -> None:
             if math.isnan(v):
                 raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
             trial.storage.set_trial_system_attr(trial._trial_id, f"{_CONSTRAINTS_KEY}:{name}", v)
-

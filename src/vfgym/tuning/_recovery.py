@@ -8,9 +8,13 @@ import datetime as _dt
 import os
 import socket
 import warnings
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from optuna import Study
+    from optuna.storages import BaseStorage
+    from optuna.trial import FrozenTrial, TrialState
+
     from vfgym.tuning._storage import StorageSpec
 
 
@@ -50,15 +54,26 @@ def _worker_alive(worker: str) -> bool | None:
     return True
 
 
-def counts(study: Any) -> dict[str, int]:
-    """Trials of the study by state (complete, running, waiting, fail)."""
+def counts(study: Study) -> dict[str, int]:
+    """Trials of the study by state.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+
+    Returns
+    -------
+    dict of str to int
+        Counts of ``complete``, ``running``, ``waiting``, ``fail`` and ``pruned`` trials.
+    """
     out = {"complete": 0, "running": 0, "waiting": 0, "fail": 0, "pruned": 0}
     for t in study.get_trials(deepcopy=False):
         out[t.state.name.lower()] += 1
     return out
 
 
-def recover(study: Any, storage: Any, spec: StorageSpec, orphan_s: float) -> list[int]:
+def recover(study: Study, storage: BaseStorage, spec: StorageSpec, orphan_s: float) -> list[int]:
     """Mark the trials of dead workers failed and enqueue them again (same settings);
     returns their numbers.
 
@@ -96,18 +111,18 @@ class RetryStale:
     def __init__(self) -> None:
         self.failed: list[int] = []
 
-    def __call__(self, study: Any, trial: Any) -> None:
+    def __call__(self, study: Study, trial: FrozenTrial) -> None:
         self.failed.append(trial.number)
         _retry(study, trial)
 
 
-def _running() -> tuple:
+def _running() -> tuple[TrialState]:
     import optuna
 
     return (optuna.trial.TrialState.RUNNING,)
 
 
-def _fail_and_retry(study: Any, trial: Any) -> bool:
+def _fail_and_retry(study: Study, trial: FrozenTrial) -> bool:
     """Mark a running trial failed and enqueue its settings again; False if it had ended."""
     import optuna
 
@@ -119,7 +134,7 @@ def _fail_and_retry(study: Any, trial: Any) -> bool:
     return True
 
 
-def _retry(study: Any, trial: Any) -> None:
+def _retry(study: Study, trial: FrozenTrial) -> None:
     import optuna
 
     with warnings.catch_warnings():

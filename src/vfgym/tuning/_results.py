@@ -1,5 +1,6 @@
-"""What a finished sweep reports: its best feasible trial, the trials as CSV, and the gap to
-a grid reference.
+"""What a finished sweep reports: its best feasible trial, the trials as CSV, its figures,
+the tuned settings against the paper's (a :class:`vfgym.report.Report`), and the gap to a
+grid reference.
 """
 
 from __future__ import annotations
@@ -11,23 +12,48 @@ import math
 import os
 import warnings
 from collections.abc import Callable
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
-import numpy as np
-
-from vfgym import space
+from vfgym import report, space
 from vfgym.io.runs import read_yaml, write_text
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_SETTINGS, Settings
-from vfgym.scoring import CONSTRAINTS, OBJECTIVES, evaluate
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, PAPER_SETTINGS, Measures, Plant, Settings
+from vfgym.report import Candidate, Report
+from vfgym.scoring import CONSTRAINTS, OBJECTIVES
 from vfgym.tuning._config import SweepConfig
-from vfgym.tuning._objective import aggregate
 from vfgym.tuning._storage import StorageSpec
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+    from optuna import Study
+    from optuna.trial import FrozenTrial
 
-def best_trial(study: Any) -> Any:
-    """The completed trial with the lowest cost among the feasible ones (any, if none is)."""
+
+def _arrives(trial: FrozenTrial) -> bool:
+    """Whether a trial's settings arrived on every scenario (worst arrival constraint ≤ 0)."""
+    cons = trial.user_attrs.get("constraints") or ()
+    i = CONSTRAINTS.index("arrival")
+    return len(cons) == len(CONSTRAINTS) and cons[i] <= 0.0
+
+
+def best_trial(study: Study) -> FrozenTrial | None:
+    """The sweep's best trial.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+
+    Returns
+    -------
+    optuna.trial.FrozenTrial or None
+        The completed trial with the lowest cost among the feasible ones; if none is, among
+        those that arrive on every scenario (a move that never gets there is no candidate
+        while one that does exists); else among all. Ties go to the earlier trial; ``None``
+        before any completes.
+    """
     import optuna
 
     done = [
@@ -38,16 +64,42 @@ def best_trial(study: Any) -> Any:
     if not done:
         return None
     feas = [t for t in done if t.user_attrs.get("feasible")]
-    return min(feas or done, key=lambda t: (t.user_attrs["cost"], t.number))
+    arrive = [t for t in done if _arrives(t)]
+    return min(feas or arrive or done, key=lambda t: (t.user_attrs["cost"], t.number))
 
 
-def trial_settings(trial: Any) -> Settings:
+def trial_settings(trial: FrozenTrial) -> Settings:
+    """The settings a trial scored.
+
+    Parameters
+    ----------
+    trial : optuna.trial.FrozenTrial
+        A trial with the ``settings`` user attribute :class:`Objective` sets.
+
+    Returns
+    -------
+    Settings
+        Its settings.
+    """
     return space.settings_from_dict(trial.user_attrs["settings"], source=f"trial {trial.number}")
 
 
-def write_trials_csv(study: Any, path: Path) -> Path:
-    """The trials as CSV, one row each, with the columns ``study.trials_dataframe()`` names
-    (number, value(s), times, params_*, user_attrs_*, state), written atomically."""
+def write_trials_csv(study: Study, path: Path) -> Path:
+    """The trials as CSV (``trials.csv``), one row each, written atomically.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+    path : pathlib.Path
+        The file.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``. Its columns are those ``study.trials_dataframe()`` names (number,
+        value(s), times, params_*, user_attrs_*, state); lists and dicts as JSON.
+    """
     trials = study.get_trials(deepcopy=False)
     names = study.metric_names or (
         ["value"] if len(study.directions) == 1 else [str(i) for i in range(len(study.directions))]
@@ -75,142 +127,165 @@ def write_trials_csv(study: Any, path: Path) -> Path:
     return write_text(path, buf.getvalue())
 
 
-def _cell(v: Any) -> Any:
+def _cell(v: object) -> object:
     return json.dumps(v) if isinstance(v, (list, dict)) else v
 
 
-def write_plots(study: Any, run_dir: Path, form: str) -> dict[str, str]:
-    """Optimisation history, parameter importances and (Pareto form) the Pareto front as
-    PNG; a plot Optuna cannot draw (too few trials, ...) is skipped with its reason."""
-    import matplotlib
+def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
+    """The study's figures as PNG in the run folder, drawn by :mod:`vfgym.report.figures`
+    (as ``vfgym plot history|pareto`` draws them).
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+    run_dir : Path
+        Where ``history.png``, ``importances.png`` (for the cost) and, in the Pareto
+        form, ``pareto_front.png`` are written (atomically).
+    form : str
+        The sweep's objective, ``cost`` or ``pareto``.
+
+    Returns
+    -------
+    dict of str to str
+        Each figure's file name, or ``skipped: REASON`` for one that cannot be drawn (too
+        few trials, no spread to rank, ...).
+    """
     import optuna
-    from optuna.visualization import matplotlib as ovm
 
-    def cost(t: Any) -> float:
+    from vfgym.report import figures
+
+    complete = (optuna.trial.TrialState.COMPLETE,)
+
+    def cost(t: FrozenTrial) -> float:
         return float(t.user_attrs.get("cost", math.nan))
 
     target = None if form == "cost" else cost
-    jobs: dict[str, Callable[[], Any]] = {
-        "history": lambda: ovm.plot_optimization_history(study, target=target, target_name="cost"),
-        "importances": lambda: ovm.plot_param_importances(study, target=target, target_name="cost"),
+    jobs: dict[str, Callable[[], Figure]] = {
+        "history": lambda: figures.history_figure(study),
+        "importances": lambda: figures.importances_figure(study, target=target, target_name="cost"),
     }
     if form == "pareto":
-        jobs["pareto_front"] = lambda: ovm.plot_pareto_front(study, target_names=list(OBJECTIVES))
+        jobs["pareto_front"] = lambda: figures.pareto_figure(study)
     out: dict[str, str] = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for name, draw in jobs.items():
             try:
-                if len(study.get_trials(states=(optuna.trial.TrialState.COMPLETE,))) < 2:
+                if len(study.get_trials(deepcopy=False, states=complete)) < 2:
                     raise ValueError("fewer than 2 completed trials")
-                ax = draw()
-                if name == "history":  # costs span decades: the best's progress shows on log
-                    ax.set_yscale("log")
-                fig = ax.figure if hasattr(ax, "figure") else ax.flat[0].figure
-                fig.set_size_inches(8, 5)
-                fig.tight_layout()
+                fig = draw()
                 path = run_dir / f"{name}.png"
                 tmp = run_dir / f".{name}.tmp.png"
                 fig.savefig(tmp, dpi=100)
                 os.replace(tmp, path)
                 out[name] = path.name
-            except Exception as exc:  # Optuna refuses some plots (e.g. no spread to rank)
+            except Exception as exc:  # Optuna refuses some figures (e.g. no spread to rank)
                 out[name] = f"skipped: {str(exc).splitlines()[0] if str(exc) else exc!r}"
-            finally:
-                plt.close("all")
     return out
 
 
-ROW_KEYS = ("settle_ms", "overshoot_mrad", "overshoot_win", "accel_krad_s2", "accel_ratio", "cost")
+def compare(
+    best: Settings,
+    scenarios: list[Scenario],
+    label: str = "tuned",
+    *,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+) -> Report:
+    """The paper's settings against ``best`` on each scenario, through
+    :func:`vfgym.report.compare`.
 
+    Parameters
+    ----------
+    best : Settings
+        The tuned settings.
+    scenarios : list of Scenario
+        The sweep's (or grid's) scenario set.
+    label : str
+        ``best``'s column label (``tuned``; the grid: ``grid``).
+    plant : Plant
+        The plant the scenarios run on (an axis's; each scenario applies its load).
+    measures : Measures
+        Windows and bands of the measures (an axis's).
 
-def compare(best: Settings, scenarios: list[Scenario], label: str = "tuned") -> dict[str, Any]:
-    """The tuned settings against the paper's on each scenario and over the set: settling
-    time, overshoot, peak pulse-train acceleration against the motor's limit, cost."""
-    ev = evaluate([PAPER_SETTINGS, best], scenarios)
-    agg = aggregate(ev)
-    rows: list[dict[str, Any]] = []
-    for si, sc in enumerate(scenarios):
-        for ci, name in enumerate(("paper", label)):
-            m = ev.metrics[ci][si]
-            limit = sc.plant().motor.accel_limit_rad_s2
-            rows.append(
-                {
-                    "scenario": sc.name,
-                    "settings": name,
-                    "settle_ms": math.nan if sc.tracking else 1e3 * m["settling_time_s"],
-                    "settled": bool(m["settled"]) or sc.tracking,
-                    "overshoot_mrad": 1e3 * m["overshoot_rad"],
-                    "overshoot_win": m["overshoot_rad"] / m["window_rad"],
-                    "accel_krad_s2": m["peak_accel_pulse_rad_s2"] / 1e3,
-                    "accel_ratio": m["peak_accel_pulse_rad_s2"] / limit,
-                    "cost": float(ev.cost[ci, si]),
-                    "feasible": bool(ev.feasible[ci, si]),
-                }
-            )
-    sets = []
-    for ci, name in enumerate(("paper", label)):
-        mine = [r for r in rows if r["settings"] == name]
-        settle = [r["settle_ms"] for r in mine if not math.isnan(r["settle_ms"])]
-        sets.append(
-            {
-                "scenario": f"set ({len(scenarios)})",
-                "settings": name,
-                "settle_ms": float(np.mean(settle)) if settle else math.nan,
-                "settled": all(r["settled"] for r in mine),
-                "overshoot_mrad": max(r["overshoot_mrad"] for r in mine),
-                "overshoot_win": max(r["overshoot_win"] for r in mine),
-                "accel_krad_s2": max(r["accel_krad_s2"] for r in mine),
-                "accel_ratio": max(r["accel_ratio"] for r in mine),
-                "cost": float(agg["cost"][ci]),
-                "feasible": bool(agg["feasible"][ci]),
-                "feasible_count": sum(r["feasible"] for r in mine),
-            }
-        )
-    return {"rows": rows, "set": sets}
-
-
-def format_comparison(cmp: dict[str, Any]) -> str:
-    """The comparison as a text table (set rows: mean settling, worst overshoot and
-    acceleration, mean cost)."""
-    head = (
-        f"{'scenario':14s} {'settings':8s} {'settle ms':>10s} {'overshoot mrad':>15s} "
-        f"{'(windows)':>9s} {'peak accel krad/s2':>19s} {'/limit':>7s} {'cost':>7s} feasible"
+    Returns
+    -------
+    vfgym.report.Report
+        Columns ``paper`` (role baseline) then ``label``; :func:`vfgym.report.format_compact`
+        prints it as the sweep's table (peak pulse-train acceleration against the loaded
+        motor's usable acceleration), :func:`vfgym.report.compact_rows` gives its rows.
+    """
+    return report.compare(
+        [
+            Candidate("paper", PAPER_SETTINGS, source="paper", role="baseline"),
+            Candidate(label, best, source=label),
+        ],
+        [],
+        scenarios,
+        plant=plant,
+        measures=measures,
     )
-    lines = [head, "-" * len(head)]
-    rows = cmp["rows"]
-    multi = len({r["scenario"] for r in rows}) > 1
-    for r in rows + (cmp["set"] if multi else []):
-        settle = "-" if math.isnan(r["settle_ms"]) else f"{r['settle_ms']:.2f}"
-        if not r["settled"]:
-            settle += "*"
-        feas = "yes" if r["feasible"] else "no"
-        if "feasible_count" in r:
-            n = int(r["scenario"].split("(")[1].rstrip(")"))
-            feas = f"{r['feasible_count']}/{n}"
-        if r["settings"] == "paper" and r is not rows[0]:
-            lines.append("")
-        lines.append(
-            f"{r['scenario']:14s} {r['settings']:8s} {settle:>10s} {r['overshoot_mrad']:15.3f} "
-            f"{r['overshoot_win']:9.2f} {r['accel_krad_s2']:19.1f} {r['accel_ratio']:7.3f} "
-            f"{r['cost']:7.4f} {feas}"
-        )
-    lines.append(
-        "settle: settling time into the in-position window (* not settled; - a moving "
-        "reference); accel: the pulse train's peak over 1 ms against the motor's limit"
-    )
-    return "\n".join(lines)
+
+
+class FoundReference(NamedTuple):
+    """A grid reference found for a sweep: ``reference.yaml`` as read, and where.
+
+    What :func:`find_reference` returns.
+
+    Attributes
+    ----------
+    record : dict
+        The file's mapping (settings, cost, scenarios, laws, axis, ...: see
+        ``grid_reference``).
+    path : pathlib.Path
+        The ``reference.yaml`` file.
+    """
+
+    record: dict[str, Any]
+    path: Path
+
+    @property
+    def cost(self) -> float:
+        """The reference's cost."""
+        return float(self.record["cost"])
 
 
 def find_reference(
-    cfg_reference: str | None, runs_dir: str, scenarios: list[Scenario], laws: tuple[str, ...]
-) -> tuple[dict[str, Any], Path] | None:
-    """A grid reference for these scenarios and laws: ``--reference PATH`` (a
-    ``reference.yaml`` or a grid run folder), else the best of ``RUNS/grid/*/reference.yaml``
-    that matches."""
+    cfg_reference: str | None,
+    runs_dir: str,
+    scenarios: list[Scenario],
+    laws: tuple[str, ...],
+    axis: str | None = None,
+) -> FoundReference | None:
+    """A grid reference for these scenarios, laws and axis.
+
+    Parameters
+    ----------
+    cfg_reference : str or None
+        ``--reference PATH``: a ``reference.yaml`` or a grid run folder; ``None`` searches
+        ``runs_dir``.
+    runs_dir : str
+        The runs folder whose ``grid/*/reference.yaml`` are searched.
+    scenarios : list of Scenario
+        The sweep's scenarios; a reference must be for the same.
+    laws : tuple of str
+        The sweep's laws; a reference must be for the same.
+    axis : str or None
+        The axis's :func:`~vfgym.moves.axis.axis_digest`; a reference must be for the same.
+
+    Returns
+    -------
+    FoundReference or None
+        The reference's data and file (the best matching one when searching), or ``None``
+        when none matches.
+
+    Raises
+    ------
+    ValueError
+        If the given reference is not a grid reference, or is for other scenarios, laws
+        or axis.
+    """
     names = [s.name for s in scenarios]
     if cfg_reference:
         p = Path(cfg_reference)
@@ -223,7 +298,12 @@ def find_reference(
                 f"reference={str(p)!r} is for scenarios {data.get('scenarios')} and laws "
                 f"{data.get('laws')}, not {names} and {list(laws)}"
             )
-        return data, p
+        if data.get("axis") != axis:
+            raise ValueError(
+                f"reference={str(p)!r} is for axis {data.get('axis')}, not {axis}: give a "
+                "grid reference made with the same --axis"
+            )
+        return FoundReference(data, p)
     found = []
     for p in sorted(Path(runs_dir).glob("grid/*/reference.yaml")):
         try:
@@ -234,36 +314,204 @@ def find_reference(
             isinstance(data, dict)
             and data.get("scenarios") == names
             and list(data.get("laws", [])) == list(laws)
+            and data.get("axis") == axis
             and isinstance(data.get("cost"), (int, float))
         ):
             found.append((float(data["cost"]), str(p), data))
     if not found:
         return None
     _, p, data = min(found, key=lambda x: (x[0], x[1]))
-    return data, Path(p)
+    return FoundReference(data, Path(p))
 
 
 def gap_pct(cost: float, ref_cost: float) -> float:
-    """How far a cost is above the reference's, in % (negative: below it)."""
+    """How far a cost is above the reference's.
+
+    Parameters
+    ----------
+    cost : float
+        The sweep's best cost.
+    ref_cost : float
+        The grid reference's cost.
+
+    Returns
+    -------
+    float
+        100·(cost − ref)/ref, in % (negative: below the reference).
+    """
     return 100.0 * (cost - ref_cost) / ref_cost
 
 
+@dataclass(frozen=True)
+class ReferenceGap:
+    """A sweep's best against a grid reference (``best.yaml``'s ``reference``).
+
+    Attributes
+    ----------
+    path : str
+        The reference's ``reference.yaml``.
+    cost : float
+        The reference's cost.
+    gap_pct : float
+        :func:`gap_pct` of the sweep's best cost to it.
+    """
+
+    path: str
+    cost: float
+    gap_pct: float
+
+    @classmethod
+    def between(cls, cost: float, found: FoundReference) -> ReferenceGap:
+        """The gap of a cost to a reference.
+
+        Parameters
+        ----------
+        cost : float
+            The sweep's best cost.
+        found : FoundReference
+            The reference, as :func:`find_reference` found it.
+
+        Returns
+        -------
+        ReferenceGap
+            Its path, its cost and the gap of ``cost`` to it.
+        """
+        return cls(str(found.path), found.record["cost"], gap_pct(cost, found.cost))
+
+
+@dataclass(frozen=True)
+class BestRecord:
+    """A sweep's best trial as ``best.yaml`` holds it: the settings (what ``vfgym evaluate
+    --settings`` reads), its scores, and where they come from.
+
+    What :func:`best_record` returns.
+
+    Attributes
+    ----------
+    settings : dict
+        As the trial stored them (:func:`vfgym.space.settings_to_dict`).
+    cost : float
+        Its mean cost over the scenarios.
+    feasible : bool
+        Every constraint ≤ 0 on every scenario.
+    constraints : dict of str to float
+        The worst value of each constraint over the scenarios.
+    objectives : dict of str to float
+        The objectives' means over the scenarios.
+    study : str
+        The study's name.
+    storage : str
+        The storage URL, password masked.
+    trial : int
+        The trial's number.
+    sampler : str
+        The sweep's sampler.
+    objective : str or None
+        The sweep's objective (``cost`` or ``pareto``).
+    scenarios : list of str
+        The scenarios' names.
+    laws : list of str
+        The acceleration laws searched.
+    axis : str or None
+        The axis file tuned on (``None``: the paper's axis).
+    paper_cost : float or None
+        The paper's settings' cost on the same scenarios.
+    reference : ReferenceGap or None
+        The gap to a grid reference, if one was found.
+    """
+
+    settings: dict[str, float | str]
+    cost: float
+    feasible: bool
+    constraints: dict[str, float]
+    objectives: dict[str, float]
+    study: str
+    storage: str
+    trial: int
+    sampler: str
+    objective: str | None
+    scenarios: list[str]
+    laws: list[str]
+    axis: str | None
+    paper_cost: float | None = None
+    reference: ReferenceGap | None = None
+
+    def with_reference(self, gap: ReferenceGap) -> BestRecord:
+        """This record with its gap to a grid reference.
+
+        Parameters
+        ----------
+        gap : ReferenceGap
+            The gap.
+
+        Returns
+        -------
+        BestRecord
+            A copy with ``reference`` set.
+        """
+        return replace(self, reference=gap)
+
+    def as_dict(self) -> dict[str, Any]:
+        """The mapping written to ``best.yaml``.
+
+        Returns
+        -------
+        dict
+            The fields in order; ``paper_cost`` and ``reference`` omitted when ``None``
+            (``axis`` is always written, ``None`` for the paper's axis).
+        """
+        out = asdict(self)
+        for k in ("paper_cost", "reference"):
+            if out[k] is None:
+                del out[k]
+        return out
+
+
 def best_record(
-    study: Any, trial: Any, cfg: SweepConfig, spec: StorageSpec, scenarios: list[Scenario]
-) -> dict[str, Any]:
-    """``best.yaml``: the settings (what ``vfgym evaluate --settings`` reads) and where
-    they come from."""
-    return {
-        "settings": trial.user_attrs["settings"],
-        "cost": trial.user_attrs["cost"],
-        "feasible": bool(trial.user_attrs.get("feasible")),
-        "constraints": dict(zip(CONSTRAINTS, trial.user_attrs["constraints"], strict=True)),
-        "objectives": dict(zip(OBJECTIVES, trial.user_attrs["objectives"], strict=True)),
-        "study": study.study_name,
-        "storage": spec.display,
-        "trial": trial.number,
-        "sampler": cfg.sampler,
-        "objective": cfg.objective,
-        "scenarios": [s.name for s in scenarios],
-        "laws": list(cfg.laws),
-    }
+    study: Study,
+    trial: FrozenTrial,
+    cfg: SweepConfig,
+    spec: StorageSpec,
+    scenarios: list[Scenario],
+    paper_cost: float | None = None,
+) -> BestRecord:
+    """A sweep's best trial and where it comes from, as ``best.yaml`` holds it.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The study.
+    trial : optuna.trial.FrozenTrial
+        The best trial (:func:`best_trial`), scored by the sweep's objective.
+    cfg : SweepConfig
+        The sweep's configuration (its sampler, objective, laws and axis are recorded).
+    spec : StorageSpec
+        Where the study lives (shown without a password).
+    scenarios : list of Scenario
+        The sweep's scenarios.
+    paper_cost : float, optional
+        The paper's settings' cost on the same scenarios.
+
+    Returns
+    -------
+    BestRecord
+        The settings, cost, feasibility, constraints, objectives, and the study, storage,
+        trial, sampler, objective, scenarios, laws and axis they come from.
+    """
+    ua = trial.user_attrs
+    return BestRecord(
+        settings=ua["settings"],
+        cost=ua["cost"],
+        feasible=bool(ua.get("feasible")),
+        constraints=dict(zip(CONSTRAINTS, ua["constraints"], strict=True)),
+        objectives=dict(zip(OBJECTIVES, ua["objectives"], strict=True)),
+        study=study.study_name,
+        storage=spec.display,
+        trial=trial.number,
+        sampler=cfg.sampler,
+        objective=cfg.objective,
+        scenarios=[s.name for s in scenarios],
+        laws=list(cfg.laws),
+        axis=cfg.axis,
+        paper_cost=paper_cost,
+    )

@@ -15,17 +15,29 @@ import re
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from vfgym.tuning._recovery import RetryStale
+
+if TYPE_CHECKING:
+    from optuna.storages import BaseStorage, RDBStorage
 
 STORAGE_HELP = "sqlite, journal, sqlite:///FILE, journal:FILE or postgresql://USER:PASS@HOST/DB"
 
 
 @dataclass(frozen=True)
 class StorageSpec:
-    """Where a study lives: kind ``sqlite`` / ``journal`` / ``postgresql``, the URL Optuna
-    opens (the file path for a journal) and the file, if any."""
+    """Where a study lives, as :func:`resolve_storage` reads it.
+
+    Parameters
+    ----------
+    kind : str
+        ``sqlite``, ``journal`` or ``postgresql``.
+    url : str
+        The URL Optuna opens (the file path for a journal).
+    path : str or None
+        The storage's file, if any.
+    """
 
     kind: str
     url: str
@@ -38,30 +50,62 @@ class StorageSpec:
 
 
 def mask_url(url: str) -> str:
-    """``url`` with any password replaced by ``***``."""
+    """A URL fit to show.
+
+    Parameters
+    ----------
+    url : str
+        A storage URL.
+
+    Returns
+    -------
+    str
+        ``url`` with any password replaced by ``***``.
+    """
     return re.sub(r"^([a-z0-9+]+://[^:/@]*):[^@/]*@", r"\1:***@", url)
 
 
+def _file_spec(kind: str, path: Path) -> StorageSpec:
+    """A SQLite or journal storage on the file ``path`` (made absolute)."""
+    p = path.resolve()
+    return StorageSpec(kind, f"sqlite:///{p}" if kind == "sqlite" else str(p), str(p))
+
+
 def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
-    """The storage named by ``--storage`` (see :data:`STORAGE_HELP`); bad input raises."""
+    """The storage named by ``--storage``.
+
+    Parameters
+    ----------
+    text : str
+        ``sqlite``, ``journal``, ``sqlite:///FILE``, ``journal:FILE`` or
+        ``postgresql://USER:PASS@HOST/DB`` (:data:`STORAGE_HELP`).
+    run_dir : pathlib.Path
+        The run folder, where ``sqlite`` and ``journal`` put their file.
+
+    Returns
+    -------
+    StorageSpec
+        The storage, with absolute file paths.
+
+    Raises
+    ------
+    ValueError
+        If the text names no storage, or a driver vfgym does not support.
+    """
     t = str(text).strip()
     if t == "sqlite":
-        p = (run_dir / "study.db").resolve()
-        return StorageSpec("sqlite", f"sqlite:///{p}", str(p))
+        return _file_spec("sqlite", run_dir / "study.db")
     if t == "journal":
-        p = (run_dir / "journal.log").resolve()
-        return StorageSpec("journal", str(p), str(p))
+        return _file_spec("journal", run_dir / "journal.log")
     if t.startswith("journal:"):
         rest = t[len("journal:") :]
         rest = rest[2:] if rest.startswith("//") else rest
         if not rest or rest.endswith("/"):
             raise ValueError(f"storage={text!r} is not allowed: give journal:FILE")
-        p = Path(rest).expanduser().resolve()
-        return StorageSpec("journal", str(p), str(p))
+        return _file_spec("journal", Path(rest).expanduser())
     m = re.match(r"^sqlite:///(.+)$", t)
     if m:
-        p = Path(m.group(1)).expanduser().resolve()
-        return StorageSpec("sqlite", f"sqlite:///{p}", str(p))
+        return _file_spec("sqlite", Path(m.group(1)).expanduser())
     m = re.match(
         r"^postgres(?:ql)?(\+[a-z0-9]+)?://([^:@/\s]+)(:[^@/\s]*)?@([^:/\s]+)(:\d{1,5})?/(\w[\w.-]*)$",
         t,
@@ -79,10 +123,69 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
     raise ValueError(f"storage={mask_url(t)!r} is not allowed: give {STORAGE_HELP}")
 
 
-def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = None) -> Any:
-    """The Optuna storage for ``spec``: RDB (with heartbeat and retry of stale trials) for
-    SQLite and PostgreSQL, JournalStorage on a file. Unreachable storages raise
-    ``ValueError`` naming ``storage``."""
+def find_storage(text: str, run_dir: Path) -> StorageSpec:
+    """The storage a sweep's run folder recorded, found again.
+
+    Parsed by :func:`resolve_storage` (the one parser).
+
+    Parameters
+    ----------
+    text : str
+        The folder's ``config.yaml`` ``storage`` (a :attr:`StorageSpec.display`: a
+        journal shows as its bare path) or what ``--storage`` names.
+    run_dir : Path
+        The run folder; a SQLite or journal file no longer where it was recorded is
+        looked for in it (the folder was moved).
+
+    Returns
+    -------
+    StorageSpec
+        The storage, pointing at the moved file where it was moved.
+
+    Raises
+    ------
+    ValueError
+        Naming ``storage``, for a masked password, an unknown URL or a missing file.
+    """
+    t = str(text).strip()
+    if "***" in t:
+        raise ValueError(f"storage={t!r}: the password is masked; give the storage URL again")
+    known = t in ("sqlite", "journal") or t.startswith(("journal:", "sqlite:")) or "://" in t
+    spec = resolve_storage(t if known else f"journal:{t}", run_dir)  # a journal shows as its path
+    if spec.path is None or Path(spec.path).is_file():
+        return spec
+    moved = run_dir / ("study.db" if spec.kind == "sqlite" else Path(spec.path).name)
+    if not moved.is_file():
+        raise ValueError(f"storage={t!r}: no {spec.kind} file {spec.path} (nor {moved})")
+    return _file_spec(spec.kind, moved)
+
+
+def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = None) -> BaseStorage:
+    """The Optuna storage for ``spec``.
+
+    RDB (with heartbeat and retry of stale trials) for SQLite and PostgreSQL, a SQLite
+    file in write-ahead-log mode; JournalStorage on a file, its appends under ``flock``.
+
+    Parameters
+    ----------
+    spec : StorageSpec
+        The storage.
+    heartbeat : int
+        Seconds between a running trial's heartbeats (RDB).
+    grace : int or None
+        Seconds without a heartbeat before a trial is taken as dead (default twice the
+        heartbeat).
+
+    Returns
+    -------
+    optuna.storages.BaseStorage
+        The opened storage.
+
+    Raises
+    ------
+    ValueError
+        Naming ``storage``, if it cannot be opened or its database driver is missing.
+    """
     import optuna
 
     with warnings.catch_warnings():
@@ -150,7 +253,7 @@ class _JournalFlock:
             self._fd = None
 
 
-def _sqlite_wal(storage: Any) -> None:
+def _sqlite_wal(storage: RDBStorage) -> None:
     """Put the SQLite file in write-ahead-log mode (it stays so) with ``synchronous=NORMAL``
     on every connection: readers never wait for a writer, a worker frozen or killed
     mid-write blocks no reader, and a commit needs no fsync (a crash of the process loses

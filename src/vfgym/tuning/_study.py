@@ -1,30 +1,50 @@
 """Samplers and studies: which sampler a sweep uses, its search space and trial budget, and
-the study created or resumed with the paper's settings enqueued first.
+the study created or resumed with the warm starts (the paper's settings, the rule of thumb)
+enqueued first.
 """
 
 from __future__ import annotations
 
 import warnings
-from typing import Any
+from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from vfgym import space
+from vfgym.moves.axis import axis_digest
 from vfgym.moves.baselines import rule_of_thumb, usable_accel
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Settings, paper_k
+from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings, paper_k
 from vfgym.scoring import OBJECTIVES
+from vfgym.tuning._aggregate import describe
 from vfgym.tuning._config import SweepConfig
+
+if TYPE_CHECKING:
+    from optuna import Study
+    from optuna.samplers import BaseSampler
+    from optuna.storages import BaseStorage
 
 META_KEY = "vfgym"
 """Study user attribute recording what the study optimises (checked when resumed)."""
 
-SAMPLER_NEEDS = {"cmaes": ("cmaes",), "gp": ("torch", "scipy"), "compass": ("scipy",)}
+SAMPLER_NEEDS = {"cmaes": ("cmaes",), "gp": ("torch", "scipy")}
 """Packages a sampler needs beyond Optuna."""
 
 
 def check_sampler(cfg: SweepConfig) -> None:
-    """Raise ``ValueError`` naming ``sampler`` when a package it needs is missing."""
+    """Check that the packages the sampler needs are installed.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+
+    Raises
+    ------
+    ValueError
+        Naming ``sampler``, when a package it needs (:data:`SAMPLER_NEEDS`) is missing.
+    """
     import importlib.util
 
     missing = [m for m in SAMPLER_NEEDS.get(cfg.sampler, ()) if not importlib.util.find_spec(m)]
@@ -36,10 +56,27 @@ def check_sampler(cfg: SweepConfig) -> None:
 
 def make_sampler(
     cfg: SweepConfig, seed: int | None, scenarios: list[Scenario] | None = None
-) -> Any:
-    """The Optuna sampler named by ``cfg.sampler``, seeded. The constraints reach TPE, GP
-    and NSGA-II through the trials (``trial.set_constraint``, Optuna 5's way; its
-    ``constraints_func`` is deprecated); CMA-ES and the grid ignore them."""
+) -> BaseSampler:
+    """The Optuna sampler named by ``cfg.sampler``, seeded; constrained where it can be.
+
+    The constraints reach TPE, GP and NSGA-II through the trials (``trial.set_constraint``,
+    Optuna 5's way; its ``constraints_func`` is deprecated); CMA-ES and the grid ignore them.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+    seed : int or None
+        The sampler's seed (``None``: unseeded).
+    scenarios : list of Scenario or None
+        The sweep's scenarios (the compass sampler's coordinates depend on their plants;
+        default: ``cfg``'s).
+
+    Returns
+    -------
+    optuna.samplers.BaseSampler
+        Compass, TPE (multivariate), CMA-ES, GP, NSGA-II, grid or random.
+    """
     import optuna
 
     s = optuna.samplers
@@ -48,7 +85,9 @@ def make_sampler(
         if cfg.sampler == "compass":
             from vfgym.tuning._compass import CompassSampler
 
-            return CompassSampler(relative_space(scenarios or cfg.scenario_list()), cfg.laws, seed)
+            base = _base_plant(cfg)
+            rel = relative_space(scenarios or cfg.scenario_list(), base)
+            return CompassSampler(rel, cfg.laws, seed)
         if cfg.sampler == "tpe":
             return s.TPESampler(seed=seed, multivariate=True)
         if cfg.sampler == "cmaes":
@@ -60,15 +99,46 @@ def make_sampler(
         if cfg.sampler == "nsga2":
             return s.NSGAIISampler(seed=seed)
         if cfg.sampler == "grid":
-            return s.GridSampler(grid_space(cfg), seed=seed)
+            return _grid_sampler(grid_space(cfg), seed=seed)
         return s.RandomSampler(seed=seed)
 
 
-def relative_space(scenarios: list[Scenario]) -> space.Relative:
-    """The compass sampler's coordinates: ``k`` relative to the acceleration limit's k
-    (:func:`vfgym.params.paper_k`) of the scenarios' plants (their geometric mean: the
-    limit is the motor's, the same for every load)."""
-    ks = [paper_k(sc.plant(PAPER_PLANT)) for sc in scenarios] or [paper_k(PAPER_PLANT)]
+def _base_plant(cfg: SweepConfig) -> Plant:
+    axis = cfg.load_axis()
+    return PAPER_PLANT if axis is None else axis.plant
+
+
+def _grid_sampler(search_space: dict[str, list[Any]], seed: int | None) -> BaseSampler:
+    """Optuna's grid sampler without its ``after_trial`` stop: the worker's trial budget
+    (:func:`trial_budget`) ends the grid, and a batch told out of order would otherwise stop
+    the study outside ``optimize``, or look up the grid point of the enqueued baseline,
+    which has none."""
+    import optuna
+
+    class GridSampler(optuna.samplers.GridSampler):
+        def after_trial(self, study: Study, trial: object, state: object, values: object) -> None:
+            return None
+
+    return GridSampler(search_space, seed=seed)
+
+
+def relative_space(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> space.Relative:
+    """The compass sampler's coordinates for a scenario set.
+
+    Parameters
+    ----------
+    scenarios : list of Scenario
+        The sweep's scenarios.
+    base : Plant
+        The plant their loads are added to (an axis's; default the paper's).
+
+    Returns
+    -------
+    vfgym.space.Relative
+        ``k`` relative to the geometric mean of the acceleration limit's k
+        (:func:`vfgym.params.paper_k`) over the scenarios' plants.
+    """
+    ks = [paper_k(sc.plant(base)) for sc in scenarios] or [paper_k(base)]
     return space.Relative(float(np.exp(np.mean(np.log(ks)))))
 
 
@@ -79,10 +149,24 @@ learn from every trial (TPE, GP: a batch would be asked blind), CMA-ES's populat
 and random sampling, which never look at results."""
 
 
-def batch_size(cfg: SweepConfig, sampler: Any = None, study: Any = None) -> int:
-    """Trials to claim next: ``cfg.batch``, else the sampler's own — what its
-    ``batch_hint(study)`` asks for (the compass sampler: one generation), else
-    :data:`BATCH`'s."""
+def batch_size(cfg: SweepConfig, sampler: object = None, study: Study | None = None) -> int:
+    """Trials a worker claims next.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+    sampler : optuna.samplers.BaseSampler or None
+        The worker's sampler; one with a ``batch_hint(study)`` method (the compass
+        sampler: the rest of its generation) says its own.
+    study : optuna.Study or None
+        The study.
+
+    Returns
+    -------
+    int
+        ``cfg.batch``, else the sampler's hint, else :data:`BATCH`'s.
+    """
     if cfg.batch:
         return cfg.batch
     hint = getattr(sampler, "batch_hint", None)
@@ -105,15 +189,40 @@ def grid_space(cfg: SweepConfig) -> dict[str, list[Any]]:
 
 
 def trial_budget(cfg: SweepConfig) -> int:
-    """Trials the study ends with: ``trials``, but at most the grid (plus the baseline)."""
+    """Trials the study ends with.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+
+    Returns
+    -------
+    int
+        ``cfg.trials``, but for the grid sampler at most the grid plus the baseline.
+    """
     if cfg.sampler == "grid":
         return min(cfg.trials, cfg.grid_points ** len(space.SPACE) * len(cfg.laws) + 1)
     return cfg.trials
 
 
 def baseline_params(laws: tuple[str, ...], settings: Settings = PAPER_SETTINGS) -> dict[str, Any]:
-    """Settings (the paper's by default) as trial parameters: clipped to the search space,
-    with their law if it is searched, else the fixed one."""
+    """Settings (the paper's by default) as trial parameters, clipped to the search space:
+    what the study's first (enqueued) trials try.
+
+    Parameters
+    ----------
+    laws : tuple of str
+        The laws searched.
+    settings : Settings
+        The settings.
+
+    Returns
+    -------
+    dict
+        The parameters; ``accel_law`` only when several laws are searched (the paper's,
+        if among them, else the first).
+    """
     d = space.settings_to_dict(settings)
     law = d.pop("accel_law")
     for dim in space.SPACE:
@@ -123,13 +232,26 @@ def baseline_params(laws: tuple[str, ...], settings: Settings = PAPER_SETTINGS) 
     return d
 
 
-def warm_starts(scenarios: list[Scenario]) -> list[tuple[str, Settings]]:
-    """The settings a study tries first: the paper's, then the rule of thumb
-    (:func:`vfgym.moves.baselines.rule_of_thumb`) for the scenarios' most loaded plant
-    (the one with the least usable acceleration, whose limits bind the set), if it
-    differs. Returned as (baseline name, settings)."""
-    plants = [sc.plant(PAPER_PLANT) for sc in scenarios]
-    loaded = min(plants, key=usable_accel) if plants else PAPER_PLANT
+def warm_starts(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> list[tuple[str, Settings]]:
+    """The settings a study tries first.
+
+    Parameters
+    ----------
+    scenarios : list of Scenario
+        The sweep's scenarios.
+    base : Plant
+        The plant their loads are added to (an axis's; default the paper's).
+
+    Returns
+    -------
+    list of (str, Settings)
+        The paper's settings, then the rule of thumb
+        (:func:`vfgym.moves.baselines.rule_of_thumb`) for the scenarios' most loaded plant
+        (the least usable acceleration, whose limits bind the set) if it differs; each
+        with its baseline's name.
+    """
+    plants = [sc.plant(base) for sc in scenarios]
+    loaded = min(plants, key=usable_accel) if plants else base
     out = [("paper", PAPER_SETTINGS)]
     rot = rule_of_thumb(loaded)
     if rot != PAPER_SETTINGS:
@@ -137,19 +259,88 @@ def warm_starts(scenarios: list[Scenario]) -> list[tuple[str, Settings]]:
     return out
 
 
-def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> dict[str, Any]:
-    return {
-        "scenarios": [s.name for s in scenarios],
-        "laws": list(cfg.laws),
-        "objective": cfg.objective,
-    }
+@dataclass(frozen=True)
+class StudyMeta:
+    """What a study optimises, stored as its ``vfgym`` user attribute and checked when it
+    is resumed.
+
+    Attributes
+    ----------
+    scenarios : list of str
+        The scenarios' names.
+    laws : list of str
+        The acceleration laws searched.
+    objective : str or None
+        ``cost`` or ``pareto``.
+    axis : str or None
+        The axis's :func:`~vfgym.moves.axis.axis_digest` (``None``: the paper's axis).
+    aggregate : str
+        The cost's aggregate over the scenarios (``mean``, ``worst``, ``cvar 0.25``).
+    """
+
+    scenarios: list[str]
+    laws: list[str]
+    objective: str | None
+    axis: str | None
+    aggregate: str = "mean"
+
+
+def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> StudyMeta:
+    """What a sweep optimises.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+    scenarios : list of Scenario
+        The sweep's scenarios.
+
+    Returns
+    -------
+    StudyMeta
+        Its scenarios, laws, objective, axis and aggregate.
+    """
+    return StudyMeta(
+        [s.name for s in scenarios],
+        list(cfg.laws),
+        cfg.objective,
+        axis_digest(cfg.load_axis()),
+        describe(cfg),
+    )
 
 
 def create_or_load(
-    storage: Any, name: str, cfg: SweepConfig, scenarios: list[Scenario], sampler: Any = None
-) -> tuple[Any, bool]:
-    """The study ``name``: created with the baseline enqueued first, or loaded (and
-    checked to optimise the same thing). Returns (study, created)."""
+    storage: BaseStorage,
+    name: str,
+    cfg: SweepConfig,
+    scenarios: list[Scenario],
+    sampler: BaseSampler | None = None,
+) -> tuple[Study, bool]:
+    """The study ``name``: created with the baseline enqueued first, or loaded.
+
+    Parameters
+    ----------
+    storage : optuna.storages.BaseStorage
+        Where it lives (:func:`open_storage`).
+    name : str
+        The study's name.
+    cfg : SweepConfig
+        The sweep's configuration.
+    scenarios : list of Scenario
+        The sweep's scenarios (a loaded study must optimise the same).
+    sampler : optuna.samplers.BaseSampler or None
+        The sampler to attach.
+
+    Returns
+    -------
+    tuple of (optuna.Study, bool)
+        The study, and whether it was created.
+
+    Raises
+    ------
+    ValueError
+        If a study of that name optimises other scenarios, laws, objectives or axis.
+    """
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -164,20 +355,22 @@ def create_or_load(
         study = optuna.load_study(study_name=name, storage=storage, sampler=sampler)
         created = False
     if created:
-        study.set_user_attr(META_KEY, meta)
+        study.set_user_attr(META_KEY, asdict(meta))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             study.set_metric_names(["cost"] if cfg.objective == "cost" else list(OBJECTIVES))
-        for label, settings in warm_starts(scenarios):
+        starts = warm_starts(scenarios, _base_plant(cfg))
+        for label, settings in starts[:1] if cfg.sampler == "grid" else starts:  # grid: exhaustive
             study.enqueue_trial(baseline_params(cfg.laws, settings), user_attrs={"baseline": label})
         return study, True
     old = study.user_attrs.get(META_KEY)
     if old is not None:
-        for key in ("scenarios", "laws", "objective"):
-            if old.get(key) != meta[key]:
+        old = {"aggregate": "mean"} | old  # a study made before the aggregate was recorded
+        for key, want in asdict(meta).items():
+            if old.get(key) != want:
                 raise ValueError(
                     f"study={name!r} already optimises {key}={old.get(key)!r}, not "
-                    f"{meta[key]!r}: give another --study, or the same {key}"
+                    f"{want!r}: give another --study, or the same {key}"
                 )
     if len(study.directions) != len(directions):
         raise ValueError(

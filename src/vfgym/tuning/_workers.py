@@ -23,9 +23,10 @@ import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from vfgym import space
+from vfgym.moves.axis import axis_kwargs
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
@@ -42,6 +43,9 @@ from vfgym.tuning._recovery import (
 from vfgym.tuning._storage import StorageSpec, _claim_lock, open_storage
 from vfgym.tuning._study import batch_size, make_sampler, trial_budget
 
+if TYPE_CHECKING:
+    from optuna import Study
+
 
 class DeferredInterrupt:
     """SIGINT raises KeyboardInterrupt only inside :meth:`allowed` blocks (a trial's
@@ -51,7 +55,13 @@ class DeferredInterrupt:
     The decision is taken by the Python-level handler, which runs in the main thread
     between bytecodes, so there is no window between "the signal arrived" and "the block
     closed" in which an interrupt can escape into Optuna's bookkeeping. Off the main thread
-    (where handlers cannot be installed) the process's handler is left as it is."""
+    (where handlers cannot be installed) the process's handler is left as it is.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        On leaving the ``with`` normally while an interrupt is held back.
+    """
 
     def __init__(self) -> None:
         self.open = False
@@ -80,14 +90,26 @@ class DeferredInterrupt:
         self.pending = True
 
     def check(self) -> None:
-        """Raise an interrupt that was held back."""
+        """Raise an interrupt that was held back.
+
+        Raises
+        ------
+        KeyboardInterrupt
+            If one was held back.
+        """
         if self.pending:
             self.pending = False
             raise KeyboardInterrupt
 
     @contextmanager
     def allowed(self) -> Iterator[None]:
-        """Let an interrupt through here (raising at once one that was held back)."""
+        """Let an interrupt through here (raising at once one that was held back).
+
+        Yields
+        ------
+        None
+            Inside the block, SIGINT raises KeyboardInterrupt.
+        """
         self.check()
         self.open = True
         try:
@@ -98,7 +120,19 @@ class DeferredInterrupt:
 
 @dataclass
 class WorkerReport:
-    """What one worker did: trials it ran, simulations, dead trials it recovered."""
+    """What one worker did.
+
+    Attributes
+    ----------
+    trials : list of int
+        Numbers of the trials it ran.
+    simulated : int
+        Settings it simulated (the others were copied from equal settings).
+    recovered : list of int
+        Trials of dead workers it marked failed and enqueued again.
+    stopped : str
+        Why it stopped: ``done``, ``timeout`` or ``interrupted``.
+    """
 
     trials: list[int] = field(default_factory=list)
     simulated: int = 0
@@ -111,7 +145,7 @@ def run_worker(
     spec: StorageSpec,
     study_name: str,
     index: int = 0,
-    on_trial: Callable[[Any], None] | None = None,
+    on_trial: Callable[[Study], object] | None = None,
     poll_s: float = 0.25,
 ) -> WorkerReport:
     """Run trials of ``study_name`` until it holds the trials asked for (or the timeout).
@@ -120,7 +154,28 @@ def run_worker(
     settings stored, heartbeats started), simulates their settings in one batched call,
     then tells the study each result. SIGINT is held back (:class:`DeferredInterrupt`)
     except inside that simulation and while waiting; the trials of an interrupted batch
-    are marked failed and enqueued again before KeyboardInterrupt propagates."""
+    are marked failed and enqueued again before KeyboardInterrupt propagates.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+    spec : StorageSpec
+        Where the study lives.
+    study_name : str
+        The study.
+    index : int
+        The worker's index, added to the sampler's seed.
+    on_trial : callable or None
+        Called with the study after each trial the worker ran.
+    poll_s : float
+        Seconds between looks at the study while every trial is claimed.
+
+    Returns
+    -------
+    WorkerReport
+        What the worker did.
+    """
     import optuna
 
     # ERROR: an interrupted trial is reported by the sweep, not as Optuna's warning with a
@@ -139,9 +194,17 @@ def run_worker(
         storage = open_storage(spec, cfg.heartbeat, cfg.grace)
         sampler = make_sampler(cfg, seed, scenarios)
         study = optuna.load_study(study_name=study_name, storage=storage, sampler=sampler)
-        objective = Objective(scenarios, cfg.laws, cfg.objective)
+        on_axis = axis_kwargs(cfg.load_axis())
+        objective = Objective(
+            scenarios,
+            cfg.laws,
+            str(cfg.objective),
+            **on_axis,  # type: ignore[arg-type]
+            aggregate=cfg.aggregate,
+            cvar_alpha=cfg.cvar_alpha,
+        )
         # First call compiles/loads the kernel before any trial is claimed.
-        evaluate(PAPER_SETTINGS, scenarios[:1])
+        evaluate(PAPER_SETTINGS, scenarios[:1], **on_axis)
         lock = _claim_lock(spec, study_name)
         beats = Heartbeats(storage)
         objective.guard = interrupts.allowed
@@ -281,9 +344,29 @@ class Heartbeats:
         self._ids = []
 
 
-def spawn_workers(cfg: SweepConfig, spec: StorageSpec, study: str, n: int) -> list[Any]:
-    """Start ``n`` worker processes on the study (their job goes through stdin, so the
-    storage password never shows on a command line)."""
+def spawn_workers(
+    cfg: SweepConfig, spec: StorageSpec, study: str, n: int
+) -> list[subprocess.Popen[str]]:
+    """Start worker processes on the study (``python -m vfgym.tuning``).
+
+    Their job goes through stdin, so the storage password never shows on a command line.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+    spec : StorageSpec
+        Where the study lives.
+    study : str
+        The study's name.
+    n : int
+        Processes to start.
+
+    Returns
+    -------
+    list of subprocess.Popen
+        The processes; each prints its :class:`WorkerReport` as JSON on stdout.
+    """
     procs = []
     for i in range(n):
         p = subprocess.Popen(

@@ -1,0 +1,618 @@
+"""An axis: one machine (its plant and measures) and the moves it is tuned on (train) and
+judged on (test), described by one YAML file.
+
+The file's keys are the dataclasses' own field names, so nothing is named twice and the
+same constructors validate every value::
+
+    name: belt                  # optional (default: the file's stem)
+    description: a heavy belt axis
+    plant:                      # vfgym.Plant fields
+      motor: {preset: SGME-02A, inertia_ratio: 8.0}   # vfgym.Motor fields over a preset
+      servo: {sample_ticks: 70}                       # vfgym.Servo fields
+    measures: {in_position_counts: 8}                 # vfgym.Measures fields
+    moves:                      # vfgym.Scenario fields, or a named scenario
+      train: [{name: a, profile: trapezoid, distance_rad: 6.0, duration_s: 0.3}, paper-step]
+      test: {random: {count: 32, first_seed: 0, inertia_ratio: [0, 0]}}  # MoveDistribution
+
+A move set is a list of moves (:class:`~vfgym.moves.scenarios.Scenario` fields, or the
+name of a named scenario) or ``random:`` a :class:`~vfgym.moves.scenarios.MoveDistribution`.
+A move's load (``inertia_ratio``, friction, ``load_torque_nm``) is added to the axis's own.
+Every problem raises one ``ValueError`` line naming the file, the key, the value and what
+is allowed (the command line turns it into exit status 2).
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+from dataclasses import asdict, dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any
+
+from vfgym._validate import check_choice
+from vfgym.io.runs import read_yaml, write_yaml
+from vfgym.moves.scenarios import (
+    DEFAULT_DISTRIBUTION,
+    SCENARIOS,
+    SPLITS,
+    MoveDistribution,
+    Scenario,
+)
+from vfgym.params import (
+    DEFAULT_MEASURES,
+    MOTOR_PRESETS,
+    PAPER_PLANT,
+    SGME_02A,
+    Measures,
+    Motor,
+    Plant,
+    Servo,
+)
+from vfgym.plant.measures import command_end_s
+
+AXIS_FILE = "axis.yaml"
+"""The axis's copy in a run folder."""
+
+
+@dataclass(frozen=True)
+class MoveSet:
+    """The moves of one split: a list of moves, or a seeded random distribution.
+
+    Parameters
+    ----------
+    moves : tuple of Scenario
+        The moves (names unique within the set); give these or ``random``.
+    random : MoveDistribution or None
+        A distribution; its set is ``count`` draws from ``first_seed``.
+
+    Raises
+    ------
+    ValueError
+        If neither or both are given, a move is not a :class:`vfgym.Scenario`, or two
+        moves share a name.
+    """
+
+    moves: tuple[Scenario, ...] = ()
+    random: MoveDistribution | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "moves", tuple(self.moves))
+        if (self.random is None) == (not self.moves):
+            raise ValueError(
+                f"moves={list(self.moves)!r}, random={self.random!r} is not allowed: give "
+                "one or more moves (vfgym.Scenario fields) or random: a MoveDistribution"
+            )
+        if self.random is not None and not isinstance(self.random, MoveDistribution):
+            raise ValueError(f"random={self.random!r} must be a MoveDistribution")
+        names = [m.name for m in self.moves]
+        for i, m in enumerate(self.moves):
+            if not isinstance(m, Scenario):
+                raise ValueError(f"moves[{i}]={m!r} must be a vfgym.Scenario")
+            if names.index(m.name) != i:
+                raise ValueError(
+                    f"moves[{i}].name={m.name!r} is not allowed: the name of moves"
+                    f"[{names.index(m.name)}] already; give each move its own name"
+                )
+
+    def scenarios(self, split: str, base: Plant = PAPER_PLANT) -> list[Scenario]:
+        """The set as scenarios.
+
+        Parameters
+        ----------
+        split : str
+            ``train`` or ``test``: the split a distribution draws from.
+        base : Plant
+            The axis's plant (a distribution's loads are drawn on it).
+
+        Returns
+        -------
+        list of Scenario
+            The listed moves, or the distribution's ``count`` draws of ``split``.
+        """
+        if self.random is not None:
+            return self.random.scenarios(split, base)
+        return list(self.moves)
+
+    def pick(self, seed: int, split: str, base: Plant = PAPER_PLANT) -> Scenario:
+        """The move of a seed, as the environments draw them.
+
+        Parameters
+        ----------
+        seed : int
+            The scenario seed.
+        split : str
+            ``train`` or ``test``: the split a distribution draws from.
+        base : Plant
+            The axis's plant.
+
+        Returns
+        -------
+        Scenario
+            The distribution's draw, or for a list the move ``seed mod len(moves)``
+            (seeds cycle through a listed set).
+        """
+        if self.random is not None:
+            return self.random.draw(seed, split, base)
+        return self.moves[int(seed) % len(self.moves)]
+
+
+@dataclass(frozen=True)
+class MoveSets:
+    """An axis's train moves and test moves.
+
+    Parameters
+    ----------
+    train : MoveSet
+        What a sweep tunes on, the envs' train split (default: 16 draws of the default
+        random distribution).
+    test : MoveSet
+        What ``vfgym evaluate`` judges on by default, the envs' test split (default: 32
+        draws).
+
+    Raises
+    ------
+    ValueError
+        If either is not a :class:`MoveSet`.
+    """
+
+    train: MoveSet = field(
+        default_factory=lambda: MoveSet(random=replace(DEFAULT_DISTRIBUTION, count=16))
+    )
+    test: MoveSet = field(
+        default_factory=lambda: MoveSet(random=replace(DEFAULT_DISTRIBUTION, count=32))
+    )
+
+    def __post_init__(self) -> None:
+        for split in SPLITS:
+            if not isinstance(getattr(self, split), MoveSet):
+                raise ValueError(f"{split}={getattr(self, split)!r} must be a MoveSet")
+
+    def of(self, split: str) -> MoveSet:
+        """The move set of a split.
+
+        Parameters
+        ----------
+        split : str
+            ``train`` or ``test``.
+
+        Returns
+        -------
+        MoveSet
+            Its moves.
+        """
+        return getattr(self, check_choice("split", split, SPLITS))
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One machine and its moves: the plant (with its load), the measures' windows, and
+    the train and test move sets. The default is the paper's axis: the paper's plant,
+    16 train and 32 test moves of the default random distribution (what ``vfgym`` uses
+    without ``--axis``; ``experiments/axes/paper.yaml``).
+
+    Every listed move must be able to arrive: its duration exceeds its ideal move time on
+    the axis (:func:`vfgym.moves.scenarios.ideal_move_time_s`) and its command reaches
+    its target within it.
+
+    Parameters
+    ----------
+    name : str
+        The axis's name (an axis file's default: its stem).
+    description : str
+        Free text.
+    plant : Plant
+        The machine: motor (with its load), servo, controller clock.
+    measures : Measures
+        The measures' windows and bands on this machine.
+    moves : MoveSets
+        The train and test move sets; a move's load is added to the plant's.
+
+    Raises
+    ------
+    ValueError
+        If a field has the wrong type, or a listed move cannot arrive within its duration.
+    """
+
+    name: str = "paper"
+    description: str = ""
+    plant: Plant = PAPER_PLANT
+    measures: Measures = DEFAULT_MEASURES
+    moves: MoveSets = field(default_factory=MoveSets)
+
+    def __post_init__(self) -> None:
+        for key, kind in (("plant", Plant), ("measures", Measures), ("moves", MoveSets)):
+            if not isinstance(getattr(self, key), kind):
+                raise ValueError(f"{key}={getattr(self, key)!r} must be a vfgym {kind.__name__}")
+        for split in SPLITS:
+            for i, sc in enumerate(self.moves.of(split).moves):
+                _check_arrives(sc, self.plant, f"moves.{split}[{i}]")
+
+    def scenarios(self, split: str) -> list[Scenario]:
+        """The train or test moves.
+
+        Parameters
+        ----------
+        split : str
+            ``train`` or ``test``.
+
+        Returns
+        -------
+        list of Scenario
+            The split's move set, drawn on the axis's plant if random.
+        """
+        return self.moves.of(split).scenarios(split, self.plant)
+
+    def scenario(self, name: str | Scenario) -> Scenario:
+        """A move by name.
+
+        Parameters
+        ----------
+        name : str or Scenario
+            A listed move of the axis, a named scenario (:data:`vfgym.SCENARIOS`), or
+            ``<split>-<seed>`` of a random move set; a Scenario is returned as it is.
+
+        Returns
+        -------
+        Scenario
+            The move.
+
+        Raises
+        ------
+        ValueError
+            If the name is none of these.
+        """
+        if isinstance(name, Scenario):
+            return name
+        for split in SPLITS:
+            for sc in self.moves.of(split).moves:
+                if sc.name == name:
+                    return sc
+        if name in SCENARIOS:
+            return SCENARIOS[name]
+        split, _, seed = str(name).partition("-")
+        if split in SPLITS and seed.isdigit() and self.moves.of(split).random is not None:
+            return self.moves.of(split).pick(int(seed), split, self.plant)
+        listed = [sc.name for s in SPLITS for sc in self.moves.of(s).moves]
+        raise ValueError(
+            f"scenario={name!r} is not known on axis {self.name!r}: choose one of "
+            f"{', '.join(listed + list(SCENARIOS))}"
+            + (
+                ", or <split>-<seed> of a random move set"
+                if any(self.moves.of(s).random is not None for s in SPLITS)
+                else ""
+            )
+        )
+
+    def scenario_set(self, spec: str | Scenario | list | tuple) -> list[Scenario]:
+        """Scenarios from a spec, resolved on the axis.
+
+        Parameters
+        ----------
+        spec : str, Scenario, list or tuple
+            ``train`` / ``test`` (the axis's move sets), ``named`` (the eight named
+            scenarios), a move's name (:meth:`scenario`), a comma-separated list, or a
+            list of these.
+
+        Returns
+        -------
+        list of Scenario
+            The scenarios, in order.
+        """
+        if isinstance(spec, Scenario):
+            return [spec]
+        if isinstance(spec, (list, tuple)):
+            return [s for item in spec for s in self.scenario_set(item)]
+        spec = str(spec)
+        if "," in spec:
+            return self.scenario_set([p.strip() for p in spec.split(",") if p.strip()])
+        if spec in SPLITS:
+            return self.scenarios(spec)
+        if spec == "named":
+            return list(SCENARIOS.values())
+        return [self.scenario(spec)]
+
+
+PAPER_AXIS = Axis()
+"""The paper's axis, the default: ``experiments/axes/paper.yaml`` holds the same."""
+
+
+def _check_arrives(sc: Scenario, base: Plant, key: str) -> None:
+    """A listed point-to-point move must be able to arrive within its duration."""
+    if sc.tracking:
+        return
+    plant = sc.plant(base)
+    ideal = sc.ideal_time_s(plant)
+    if sc.duration_s <= ideal:
+        raise ValueError(
+            f"{key}.duration_s={sc.duration_s!r} is too short for move {sc.name!r} to "
+            f"arrive: allowed more than its ideal move time on this axis, {ideal:.4g} s"
+        )
+    target = sum(d for d, _ in sc.moves) if sc.profile == "multi" else sc.distance_rad
+
+    def short(s: Scenario) -> bool:
+        return abs(float(s.command(plant)[-1]) - target) > plant.pulse_rad
+
+    if short(sc):
+        longer = sc
+        while short(longer) and longer.duration_s < 30.0:  # when the command ends
+            longer = replace(longer, duration_s=min(60.0, 2.0 * longer.duration_s))
+        end = command_end_s(longer.command(plant), plant.tick_hz)
+        raise ValueError(
+            f"{key}.duration_s={sc.duration_s!r} is too short for move {sc.name!r} to "
+            f"arrive: its {sc.profile} command reaches "
+            f"{float(sc.command(plant)[-1]):.4g} of {target:.4g} rad by then; allowed "
+            f"more than the {end:.4g} s the command takes"
+        )
+
+
+# --- the file ----------------------------------------------------------------------------
+
+
+def _make(cls: type, data: Any, key: str, **given: Any) -> Any:
+    """``cls(**data, **given)``: the keys checked against ``cls``'s fields, string and
+    bool fields checked for their type, and every error named by its key path."""
+    prefix = f"{key}." if key else ""
+    if not isinstance(data, dict):
+        raise ValueError(
+            f"{key or 'the file'}={data!r} is not allowed: give a mapping of "
+            f"vfgym.{cls.__name__} fields"
+        )
+    names = [f.name for f in fields(cls)]
+    for k, v in data.items():
+        if k not in names or k in given:
+            allowed = [n for n in names if n not in given]
+            raise ValueError(
+                f"{prefix}{k}={v!r} is not a key of vfgym.{cls.__name__}: allowed "
+                f"{', '.join(allowed)}"
+            )
+    for f in fields(cls):
+        v = data.get(f.name)
+        if f.type == "str" and f.name in data and not isinstance(v, str):
+            raise ValueError(f"{prefix}{f.name}={v!r} must be a string")
+    try:
+        return cls(**data, **given)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{prefix}{exc}") from None
+
+
+def _motor(data: Any, key: str) -> Motor:
+    if not isinstance(data, dict):
+        return _make(Motor, data, key)
+    data = dict(data)
+    preset = data.pop("preset", SGME_02A.name)
+    if not isinstance(preset, str) or preset not in MOTOR_PRESETS:
+        raise ValueError(
+            f"{key}.preset={preset!r} is not a known motor: choose one of "
+            f"{', '.join(MOTOR_PRESETS)}"
+        )
+    return _make(Motor, asdict(MOTOR_PRESETS[preset]) | data, key)
+
+
+def _plant(data: Any) -> Plant:
+    if data is None:
+        return PAPER_PLANT
+    if not isinstance(data, dict):
+        return _make(Plant, data, "plant")
+    data = dict(data)
+    servo = _make(Servo, data.pop("servo", {}) or {}, "plant.servo")
+    motor = _motor(data.pop("motor", {}) or {}, "plant.motor")
+    return _make(Plant, data, "plant", servo=servo, motor=motor)
+
+
+def _scenario(item: Any, key: str) -> Scenario:
+    if isinstance(item, str):
+        if item not in SCENARIOS:
+            raise ValueError(
+                f"{key}={item!r} is not a named scenario: choose one of {', '.join(SCENARIOS)}, "
+                "or give a move's fields (name, profile, distance_rad, duration_s, ...)"
+            )
+        return SCENARIOS[item]
+    if isinstance(item, dict) and "name" not in item:
+        raise ValueError(f"{key}={item!r} is not allowed: a move needs a name")
+    return _make(Scenario, item, key)
+
+
+def _move_set(data: Any, key: str) -> MoveSet:
+    """A list of moves, or a mapping with ``random`` (a distribution) or ``moves``."""
+    if isinstance(data, dict):
+        for k, v in data.items():
+            if k not in ("moves", "random") or len(data) > 1:
+                raise ValueError(
+                    f"{key}.{k}={v!r} is not allowed: give random: {{count: ..., "
+                    "first_seed: ..., ranges}, or a list of moves"
+                )
+        if "random" in data:
+            return MoveSet(random=_make(MoveDistribution, data["random"] or {}, f"{key}.random"))
+        key, data = f"{key}.moves", data.get("moves")
+    if not isinstance(data, list) or not data:
+        raise ValueError(
+            f"{key}={data!r} is not allowed: give one or more moves (vfgym.Scenario fields "
+            "or a named scenario) or random: {count: ..., first_seed: ..., ranges}"
+        )
+    moves = tuple(_scenario(item, f"{key}[{i}]") for i, item in enumerate(data))
+    try:
+        return MoveSet(moves=moves)
+    except ValueError as exc:
+        raise ValueError(f"{key}.{exc}") from None
+
+
+def axis_from_dict(data: Any, name: str = "axis") -> Axis:
+    """An :class:`Axis` from an axis file's mapping (see the module docstring).
+
+    Parameters
+    ----------
+    data : Any
+        The parsed YAML: a mapping with ``plant``, ``measures``, ``moves`` (each optional),
+        ``name``, ``description``.
+    name : str
+        The axis's name when the mapping gives none (the file's stem).
+
+    Returns
+    -------
+    Axis
+        The axis.
+
+    Raises
+    ------
+    ValueError
+        One line naming the key path, for a bad key or value.
+    """
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise ValueError(
+            f"the file holds {type(data).__name__} {data!r}: allowed a mapping with keys "
+            "name, description, plant, measures, moves"
+        )
+    data = dict(data)
+    plant = _plant(data.pop("plant", None))
+    measures = _make(Measures, data.pop("measures", {}) or {}, "measures")
+    moves_data = data.pop("moves", {}) or {}
+    if not isinstance(moves_data, dict):
+        raise ValueError(f"moves={moves_data!r} is not allowed: give a mapping with train, test")
+    unknown = sorted(set(moves_data) - set(SPLITS), key=str)
+    if unknown:
+        k = unknown[0]
+        raise ValueError(f"moves.{k}={moves_data[k]!r} is not a key: allowed train, test")
+    sets = {s: _move_set(moves_data[s], f"moves.{s}") for s in SPLITS if s in moves_data}
+    data.setdefault("name", name)
+    return _make(Axis, data, "", plant=plant, measures=measures, moves=MoveSets(**sets))
+
+
+def axis_to_dict(axis: Axis) -> dict[str, Any]:
+    """The axis as an axis file's mapping, every field written out.
+
+    A run folder's record so does not depend on today's defaults.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis.
+
+    Returns
+    -------
+    dict
+        The mapping; :func:`axis_from_dict` reads it back equal.
+    """
+    motor = axis.plant.motor
+    preset = motor.name if motor.name in MOTOR_PRESETS else SGME_02A.name
+
+    def move_set(ms: MoveSet) -> Any:
+        if ms.random is not None:
+            return {"random": asdict(ms.random)}
+        return [asdict(sc) for sc in ms.moves]
+
+    return {
+        "name": axis.name,
+        "description": axis.description,
+        "plant": {
+            "tick_hz": axis.plant.tick_hz,
+            "pulse_rad": axis.plant.pulse_rad,
+            "servo": asdict(axis.plant.servo),
+            "motor": {"preset": preset, **asdict(motor)},
+        },
+        "measures": asdict(axis.measures),
+        "moves": {s: move_set(axis.moves.of(s)) for s in SPLITS},
+    }
+
+
+def axis_kwargs(axis: Axis | None) -> dict[str, Any]:
+    """``plant=`` and ``measures=`` for :func:`vfgym.evaluate`, the reports and the
+    objective.
+
+    Parameters
+    ----------
+    axis : Axis or None
+        The axis, or ``None`` for the paper's.
+
+    Returns
+    -------
+    dict
+        The axis's ``plant`` and ``measures``, or empty (their defaults, the paper's) for
+        ``None``.
+    """
+    return {} if axis is None else {"plant": axis.plant, "measures": axis.measures}
+
+
+def axis_digest(axis: Axis | None) -> str | None:
+    """A fingerprint of everything the axis holds.
+
+    So a study or a grid reference made on one axis is never mistaken for another's with
+    the same move names.
+
+    Parameters
+    ----------
+    axis : Axis or None
+        The axis, or ``None`` for none.
+
+    Returns
+    -------
+    str or None
+        ``name:hash`` (12 hex digits of the SHA-256 of :func:`axis_to_dict`), or ``None``.
+    """
+    if axis is None:
+        return None
+    text = json.dumps(axis_to_dict(axis), sort_keys=True)
+    return f"{axis.name}:{hashlib.sha256(text.encode()).hexdigest()[:12]}"
+
+
+def load_axis(path: str | Path) -> Axis:
+    """The axis of a YAML file; any problem is one ``ValueError`` line starting with the
+    file's name.
+
+    Parameters
+    ----------
+    path : str or Path
+        The axis file (e.g. ``experiments/axes/belt.yaml``).
+
+    Returns
+    -------
+    Axis
+        Named after the file's stem unless the file gives a ``name``.
+    """
+    p = Path(path)
+    st = p.stat() if p.is_file() else None
+    return _load(str(p), None if st is None else (st.st_mtime_ns, st.st_size))
+
+
+@functools.lru_cache(maxsize=16)
+def _load(path: str, stamp: tuple[int, int] | None) -> Axis:
+    data = read_yaml(path)  # a missing or malformed file: "PATH: ..."
+    try:
+        return axis_from_dict(data, Path(path).stem)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
+
+
+def write_axis(axis: Axis, path: str | Path) -> Path:
+    """Write the axis as a YAML file (atomically) that :func:`load_axis` reads back equal.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis.
+    path : str or Path
+        The file, e.g. a run folder's ``axis.yaml``.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    return write_yaml(path, axis_to_dict(axis))
+
+
+__all__ = [
+    "AXIS_FILE",
+    "PAPER_AXIS",
+    "Axis",
+    "MoveSet",
+    "MoveSets",
+    "axis_digest",
+    "axis_from_dict",
+    "axis_kwargs",
+    "axis_to_dict",
+    "load_axis",
+    "write_axis",
+]

@@ -1,0 +1,341 @@
+"""The held-out verdict: a tuned setting against the baselines on moves it was not tuned on.
+
+What a sweep's report ends with. On the test moves (an axis's test set; the default
+random ``test`` set without one) the tuned setting is run beside the paper's settings,
+the rule of thumb and the S-curve source through :func:`vfgym.report.compare`, and the
+verdict reads the :class:`~vfgym.report.Report` it returns: per controller the feasible
+count and the cost's median [IQR] and mean (:meth:`Report.spread`), and per baseline the
+tuned setting's wins / losses / ties on cost and the bootstrap interval of the mean paired
+difference (:meth:`Report.win_loss`). Nothing is computed here that the report does not
+hold, so the verdict's numbers are those of ``vfgym evaluate`` on the same moves.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from vfgym.moves.axis import PAPER_AXIS, Axis, axis_kwargs
+from vfgym.moves.scenarios import Scenario
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.report._comparison import Candidate, Report, baseline_candidates, compare
+from vfgym.report._stats import Spread, WinLoss
+from vfgym.report._tables import _grid
+
+VERDICT_BASELINES = ("paper", "rule-of-thumb", "scurve")
+"""What a tuned setting is judged against: the paper's settings, the rule of thumb (the
+paper's method applied to each move's plant) and the MCX514 S-curve source at the limits."""
+
+
+@dataclass(frozen=True)
+class VerdictRow:
+    """One controller in the verdict.
+
+    Attributes
+    ----------
+    label : str
+        The controller's label.
+    feasible : int
+        Test moves on which every constraint holds.
+    applicable : int
+        Test moves on which it has a cost (a pulse source cannot follow a moving
+        reference).
+    cost : Spread
+        Its cost over the test moves (:meth:`Report.spread`).
+    versus : WinLoss or None
+        The tuned setting against it (:meth:`Report.win_loss`); ``None`` for the tuned
+        setting's own row.
+    """
+
+    label: str
+    feasible: int
+    applicable: int
+    cost: Spread
+    versus: WinLoss | None
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """A tuned setting against the baselines on the test moves.
+
+    Attributes
+    ----------
+    report : Report
+        The comparison every number is read from.
+    tuned : str
+        The tuned setting's label.
+    rows : tuple of VerdictRow
+        The tuned setting first, then each baseline.
+    seen : tuple of str
+        Test moves that are also among the moves tuned on (empty: truly held out).
+    title : str
+        Which moves these are, for the printed verdict (e.g. ``the 32 test moves of axis
+        paper``).
+    """
+
+    report: Report
+    tuned: str
+    rows: tuple[VerdictRow, ...]
+    seen: tuple[str, ...] = ()
+    title: str = ""
+
+    def row(self, label: str) -> VerdictRow:
+        """A controller's row by label.
+
+        Parameters
+        ----------
+        label : str
+            The controller's label.
+
+        Returns
+        -------
+        VerdictRow
+            Its row.
+
+        Raises
+        ------
+        ValueError
+            If no row has that label.
+        """
+        for r in self.rows:
+            if r.label == label:
+                return r
+        raise ValueError(f"controller={label!r} is not in this verdict")
+
+    def to_dict(self) -> dict[str, Any]:
+        """The verdict as plain data (for a run folder's ``summary.yaml``).
+
+        Returns
+        -------
+        dict
+            The test moves' names, the moves also tuned on, and per controller its
+            feasible count, cost spread and (baselines) wins, losses, ties, n/a and the
+            spread of the cost difference tuned − baseline.
+        """
+
+        def spread(s: Spread) -> dict[str, float | None]:
+            return {k: (None if math.isnan(v) else v) for k, v in s.__dict__.items()}
+
+        rows = []
+        for r in self.rows:
+            d: dict[str, Any] = {
+                "controller": r.label,
+                "feasible": r.feasible,
+                "applicable": r.applicable,
+                "cost": spread(r.cost),
+            }
+            if r.versus is not None:
+                w = r.versus
+                d |= {"wins": w.wins, "losses": w.losses, "ties": w.ties}
+                d |= {"not_applicable": w.not_applicable, "cost_diff": spread(w.cost_diff)}
+            rows.append(d)
+        return {
+            "tuned": self.tuned,
+            "title": self.title,
+            "moves": [s.name for s in self.report.scenarios],
+            "seen_in_tuning": list(self.seen),
+            "controllers": rows,
+        }
+
+
+def verdict(
+    report: Report,
+    tuned: str | None = None,
+    tuned_on: Sequence[Scenario] = (),
+    title: str = "",
+) -> Verdict:
+    """The verdict read off a comparison.
+
+    Parameters
+    ----------
+    report : Report
+        What :func:`vfgym.report.compare` returned for the tuned setting and the baselines.
+    tuned : str or None
+        The tuned candidate's label (default: the report's first tuned one).
+    tuned_on : sequence of Scenario
+        The moves tuned on; the report's moves among them (the same move, whatever its
+        name) are noted as not held out.
+    title : str
+        Which moves the report's are, for the printed verdict.
+
+    Returns
+    -------
+    Verdict
+        The tuned candidate's row, then one per baseline.
+
+    Raises
+    ------
+    ValueError
+        If the report has no tuned candidate or no baseline.
+    """
+    if not report.tuned or not report.baselines:
+        raise ValueError("a verdict needs a tuned candidate and at least one baseline")
+    tuned = tuned or report.tuned[0].label
+    rows = []
+    for col in [report.column(tuned), *report.baselines]:
+        f = col.feasible
+        rows.append(
+            VerdictRow(
+                label=col.label,
+                feasible=int(np.nansum(f)),
+                applicable=int(np.isfinite(f).sum()),
+                cost=report.spread(col.label, "cost"),
+                versus=None if col.label == tuned else report.win_loss(tuned, col.label),
+            )
+        )
+    known = {_content(sc) for sc in tuned_on}
+    seen = tuple(sc.name for sc in report.scenarios if _content(sc) in known)
+    return Verdict(report, tuned, tuple(rows), seen, title)
+
+
+def _content(sc: Scenario) -> Scenario:
+    """The move without its name: two names for one move are the same move."""
+    return replace(sc, name="move", description="")
+
+
+def held_out_verdict(
+    settings: Settings,
+    scenarios: Sequence[Scenario],
+    *,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+    baselines: str | Sequence[str] = VERDICT_BASELINES,
+    label: str = "tuned",
+    tuned_on: Sequence[Scenario] = (),
+    title: str = "",
+) -> Verdict:
+    """A tuned setting against the baselines on test moves (:func:`vfgym.report.compare`).
+
+    Parameters
+    ----------
+    settings : Settings
+        The tuned setting.
+    scenarios : sequence of Scenario
+        The test moves.
+    plant, measures : Plant, Measures
+        The axis's plant and measures (default: the paper's).
+    baselines : str or sequence of str
+        Baseline names (default :data:`VERDICT_BASELINES`).
+    label : str
+        The tuned setting's label.
+    tuned_on : sequence of Scenario
+        The moves tuned on (to note any test move among them).
+    title : str
+        Which moves these are, for the printed verdict.
+
+    Returns
+    -------
+    Verdict
+        The verdict.
+    """
+    report = compare(
+        [Candidate(label, settings, source="sweep")],
+        baseline_candidates(baselines),
+        list(scenarios),
+        plant=plant,
+        measures=measures,
+    )
+    return verdict(report, label, tuned_on, title)
+
+
+def axis_verdict(
+    settings: Settings,
+    axis: Axis | None = None,
+    tuned_on: Sequence[Scenario] = (),
+    label: str = "tuned",
+) -> Verdict:
+    """A tuned setting against :data:`VERDICT_BASELINES` on an axis's test moves: the
+    held-out verdict a sweep ends with.
+
+    Parameters
+    ----------
+    settings : Settings
+        The tuned setting.
+    axis : Axis or None
+        The axis tuned on; ``None`` is the paper's axis (:data:`vfgym.moves.axis.PAPER_AXIS`,
+        whose test moves are the 32 draws ``test-0`` … ``test-31`` of the default random
+        distribution).
+    tuned_on : sequence of Scenario
+        The moves tuned on (to note any test move among them).
+    label : str
+        The tuned setting's label.
+
+    Returns
+    -------
+    Verdict
+        The verdict on the axis's plant and measures.
+    """
+    ax = PAPER_AXIS if axis is None else axis
+    test = ax.scenarios("test")
+    title = f"the {len(test)} test moves of axis {ax.name}"
+    kw = axis_kwargs(ax)
+    return held_out_verdict(settings, test, **kw, label=label, tuned_on=tuned_on, title=title)
+
+
+def _num(x: float) -> str:
+    return "n/a" if not math.isfinite(x) else f"{x:.3g}"
+
+
+def format_verdict(v: Verdict) -> str:
+    """The verdict as text: one row per controller, then the tuned setting's summary.
+
+    Parameters
+    ----------
+    v : Verdict
+        The verdict.
+
+    Returns
+    -------
+    str
+        The table and a closing line (the tuned setting's win rate against each baseline
+        and its feasible share).
+    """
+    n = len(v.report.scenarios)
+    held = "not tuned on" if not v.seen else f"{len(v.seen)} of them also tuned on"
+    lines = [
+        f"held-out verdict: {v.tuned} against the baselines on {v.title or f'{n} moves'} ({held})"
+    ]
+    rows = [
+        [
+            "controller",
+            "feasible",
+            "cost median [IQR]",
+            "mean",
+            f"{v.tuned}: wins/losses/ties",
+            f"cost {v.tuned} − it: mean (95 % CI)",
+        ]
+    ]
+    for r in v.rows:
+        c = r.cost
+        cells = [r.label, f"{r.feasible}/{r.applicable}"]
+        cells += [f"{_num(c.median)} [{_num(c.q1)}, {_num(c.q3)}]", _num(c.mean)]
+        if r.versus is None:
+            cells += ["", ""]
+        else:
+            w, d = r.versus, r.versus.cost_diff
+            na = f" ({w.not_applicable} n/a)" if w.not_applicable else ""
+            cells += [f"{w.wins}/{w.losses}/{w.ties}{na}"]
+            cells += [f"{_num(d.mean)} ({_num(d.ci_low)}, {_num(d.ci_high)})"]
+        rows.append(cells)
+    lines += _grid(rows, right={1, 3})
+    me = v.rows[0]
+    beats = ", ".join(
+        f"{r.label} on {r.versus.wins}/{r.versus.wins + r.versus.losses + r.versus.ties}"
+        f" ({100 * r.versus.win_rate:.0f} %)"
+        for r in v.rows[1:]
+        if r.versus is not None and not math.isnan(r.versus.win_rate)
+    )
+    lines.append(
+        f"{v.tuned} beats {beats}; feasible on {me.feasible}/{me.applicable} "
+        f"({100 * me.feasible / max(me.applicable, 1):.0f} %)"
+    )
+    lines.append(
+        "cost: lower is better; a win is a lower cost on a move (tie: equal within 1e-9; "
+        "n/a: the baseline cannot run it); CI: bootstrap of the mean paired difference "
+        f"({v.report.resamples} resamples)"
+    )
+    return "\n".join(lines)

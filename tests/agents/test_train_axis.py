@@ -1,0 +1,69 @@
+"""``vfgym train --axis FILE``: the environments get the axis through ``env_kwargs``, the
+held-out validation moves come from its train move set, and ``predict --axis`` resolves
+the axis's moves."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+pytest.importorskip("stable_baselines3")
+
+from vfgym.agents import policy_settings
+from vfgym.agents.training import VALIDATION_SEED0, validation_scenarios
+from vfgym.cli import main
+from vfgym.commands._common import load_settings
+from vfgym.moves.axis import load_axis
+
+REPO = Path(__file__).resolve().parents[2]
+SMALL = {
+    "plant": {"motor": {"inertia_ratio": 2.0}},
+    "moves": {
+        "train": {"random": {"count": 2, "distance_rad": [0.2, 1.0], "settle_s": 0.02}},
+        "test": [{"name": "up", "profile": "trapezoid", "distance_rad": 1.5, "duration_s": 0.05}],
+    },
+}
+
+
+def test_validation_moves_come_from_the_axis_train_set(tmp_path):
+    path = tmp_path / "small.yaml"
+    path.write_text(yaml.safe_dump(SMALL))
+    axis = load_axis(path)
+    got = validation_scenarios(3, str(path))
+    assert got == [axis.moves.train.random.draw(VALIDATION_SEED0 + i, "train", axis.plant)
+                   for i in range(3)]  # fmt: skip
+    assert all(0.2 <= abs(s.distance_rad) <= 1.0 for s in got)
+
+
+def test_cli_train_on_an_axis_then_predict_on_it(tmp_path, capsys):
+    path = tmp_path / "small.yaml"
+    path.write_text(yaml.safe_dump(SMALL))
+    args = ["train", "--algo", "ppo", "--axis", str(path), "--runs-dir", str(tmp_path)]
+    args += ["--name", "t", "--no-progress", "--hyperparams-file",
+             str(REPO / "agents/hyperparams/ppo.yml"), "--hyperparams", "n_timesteps=32",
+             "n_envs=4", "n_steps=8", "batch_size=16", "eval_freq=16",
+             "n_eval_scenarios=2"]  # fmt: skip
+    assert main(args) == 0
+    run = tmp_path / "train" / "t"
+    cfg = yaml.safe_load((run / "config.yaml").read_text())
+    assert cfg["hyperparams"]["env_kwargs"]["axis"] == str(path)
+    out = tmp_path / "s.yaml"
+    capsys.readouterr()
+    model = str(run / "best_model.zip")
+    assert main(["predict", "--model", model, "--axis", str(path), "--scenario", "up",
+                 "--out", str(out)]) == 0  # fmt: skip
+    assert yaml.safe_load(capsys.readouterr().out)["scenario"] == "up"
+    # the agent's own config names the axis: predicting without --axis resolves the same
+    assert policy_settings(model)("up") == load_settings(str(out))
+    # a bad axis file fails before a run folder is made
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump({"measures": {"in_position_counts": -1}}))
+    bad_args = [str(bad) if a == str(path) else a for a in args]
+    bad_args[bad_args.index("--runs-dir") + 1] = str(tmp_path / "x")
+    capsys.readouterr()
+    assert main(bad_args) == 2
+    err = capsys.readouterr().err.strip()
+    assert f"{bad}: measures.in_position_counts=-1 is out of range" in err
+    assert not (tmp_path / "x").exists()

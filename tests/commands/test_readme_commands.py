@@ -1,0 +1,381 @@
+"""Every ``vfgym`` command line README.md shows runs and exits 0.
+
+``README_RUNS`` maps each command line of the README (as shown, whitespace collapsed) to the
+concrete runs that stand for it: a template (``--algo ppo|sac|td3``, ``NAME``) is filled in
+with real values, and lines that take minutes are budget-trimmed by appending options that
+override the README's (argparse keeps an option's last value, ``--hyperparams`` its last
+key). Every trim is listed in ``TRIMS`` with the reason. A README line without an entry
+here, or an entry whose line left the README, fails ``test_every_readme_command_has_a_run``.
+
+The runs share one working folder (``experiments/`` and ``agents/`` linked in from the
+repository, run folders under ``runs/``) and depend on each other as a user's would:
+``evaluate --settings best.yaml`` reads the main job's ``best.yaml``, ``plot history`` its
+study, ``predict`` and ``evaluate --model`` the trained PPO agent.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import re
+import subprocess
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+from vfgym.cli import main
+
+REPO = Path(__file__).resolve().parents[2]
+HAS_SB3 = importlib.util.find_spec("stable_baselines3") is not None
+
+TRIMS = {
+    "trials": (
+        "sweeps: 4 trials (quick.yaml asks 300, ~35 s here; the cmaes line 500, minutes); "
+        "the sampler, storage, workers and report paths run all the same"
+    ),
+    "grid": (
+        "grid: 3 points per dimension and 1 refinement round (the README's 12 and 3 "
+        "evaluate 269 543 settings in ~3 min)"
+    ),
+    "evaluate": "evaluate: 4 test scenarios and 200 bootstrap resamples (README: 32 and 2000)",
+    "train": (
+        "train: 64 timesteps on 2 envs with tiny batches, one held-out scenario (README: "
+        "50 k-400 k timesteps, 25 min)"
+    ),
+}
+SWEEP_TRIM = ["--trials", "4"]
+GRID_TRIM = ["--points", "3", "--refine", "1"]
+EVAL_TRIM = ["--count", "4", "--bootstrap", "200"]
+EVERY = ["eval_freq=64", "n_eval_scenarios=1", "checkpoint_freq=64", "n_timesteps=64", "n_envs=2"]
+TRAIN_TRIM = {
+    "ppo": [*EVERY, "n_steps=32", "batch_size=32", "n_epochs=1"],
+    "sac": [*EVERY, "learning_starts=16", "batch_size=16", "buffer_size=1000"],
+    "td3": [*EVERY, "learning_starts=16", "batch_size=16", "buffer_size=1000"],
+}
+AGAINST = "paper,rule-of-thumb,fixed-frequency,scurve"
+
+
+def train_trim(argv: list[str]) -> list[str]:
+    """``argv`` with the training budget trimmed: overrides appended to --hyperparams
+    (last in every README line, so the trims come after the README's own values)."""
+    algo = argv[argv.index("--algo") + 1]
+    extra = TRAIN_TRIM[algo]
+    if "--hyperparams" in argv:
+        assert not any(a.startswith("--") for a in argv[argv.index("--hyperparams") + 1 :])
+        return [*argv, *extra]
+    return [*argv, "--hyperparams", *extra]
+
+
+@dataclass(frozen=True)
+class Run:
+    """One concrete run: ``argv`` (placeholders in braces filled from earlier runs), the
+    runs it needs first, files it must write (relative to the working folder), and the
+    trim applied (a key of TRIMS) if any."""
+
+    key: str
+    argv: list[str]
+    needs: tuple[str, ...] = ()
+    writes: tuple[str, ...] = ()
+    trim: str | None = None
+    agents: bool = False
+    env: dict[str, str] = field(default_factory=dict)
+
+
+def _sweep(key: str, *extra: str, needs: tuple[str, ...] = ()) -> Run:
+    argv = ["sweep", "--config", "experiments/quick.yaml", *extra, "--study", key]
+    return Run(key, argv, needs, (f"runs/sweep/{key}/best.yaml",))
+
+
+README_RUNS: dict[str, list[Run]] = {
+    "vfgym sweep --config experiments/quick.yaml": [
+        Run("quick", ["sweep", "--config", "experiments/quick.yaml", *SWEEP_TRIM], trim="trials"),
+    ],
+    "vfgym sweep --config experiments/quick.yaml --axis experiments/axes/bare.yaml": [
+        Run(
+            "bare",
+            [
+                "sweep",
+                "--config",
+                "experiments/quick.yaml",
+                "--axis",
+                "experiments/axes/bare.yaml",
+                *SWEEP_TRIM,
+                "--study",
+                "bare",
+            ],
+            writes=("runs/sweep/bare/best.yaml",),
+            trim="trials",
+        ),
+    ],
+    "vfgym simulate --scenario NAME [--settings F | --baseline B]": [
+        Run("sim-paper", ["simulate", "--scenario", "paper-step"]),
+        Run("sim-rot", ["simulate", "--scenario", "short-move", "--baseline", "rule-of-thumb"]),
+        Run(
+            "sim-best", ["simulate", "--scenario", "long-move", "--settings", "{best}"], ("quick",)
+        ),
+    ],
+    "vfgym sweep --config experiments/quick.yaml [--sampler tpe|cmaes|gp|nsga2|grid] "
+    "[--trials N] [--workers N] [--storage sqlite|journal|postgresql://…] [--study NAME]": [
+        # postgresql://… needs a server: tests/tuning covers it where one runs
+        _sweep("t-tpe", "--sampler", "tpe", "--trials", "3", "--storage", "sqlite"),
+        _sweep("t-cmaes", "--sampler", "cmaes", "--trials", "4", "--storage", "journal"),
+        _sweep("t-nsga2", "--sampler", "nsga2", "--trials", "4", "--workers", "2"),
+        _sweep("t-grid", "--sampler", "grid", "--trials", "4"),
+        _sweep("t-gp", "--sampler", "gp", "--trials", "3"),
+    ],
+    "vfgym grid --config experiments/grid-paper-step.yaml": [
+        Run(
+            "grid",
+            ["grid", "--config", "experiments/grid-paper-step.yaml", *GRID_TRIM],
+            trim="grid",
+        ),
+    ],
+    "vfgym evaluate --settings best.yaml [--model M.zip] --against "
+    "paper,rule-of-thumb,fixed-frequency,scurve --scenarios test": [
+        Run(
+            "eval",
+            [
+                "evaluate",
+                "--settings",
+                "{best}",
+                "--against",
+                AGAINST,
+                "--scenarios",
+                "test",
+                *EVAL_TRIM,
+            ],
+            ("quick",),
+            trim="evaluate",
+        ),
+        Run(
+            "eval-model",
+            [
+                "evaluate",
+                "--settings",
+                "{best}",
+                "--model",
+                "{model}",
+                "--against",
+                AGAINST,
+                "--scenarios",
+                "test",
+                *EVAL_TRIM,
+            ],
+            ("quick", "train-ppo"),
+            trim="evaluate",
+            agents=True,
+        ),
+    ],
+    "vfgym plot response|scurve|frequency|compare|history|pareto …": [
+        Run("plot-response", ["plot", "response"], writes=("response-paper-step.png",)),
+        Run("plot-scurve", ["plot", "scurve"], writes=("scurve.png",)),
+        Run("plot-frequency", ["plot", "frequency"], writes=("frequency-paper-step.png",)),
+        Run("plot-compare", ["plot", "compare"], writes=("compare-paper-step.png",)),
+        Run(
+            "plot-history", ["plot", "history", "--sweep", "{quick}"], ("quick",), ("history.png",)
+        ),
+        Run(
+            "plot-pareto",
+            ["plot", "pareto", "--sweep", "runs/sweep/t-nsga2"],
+            ("t-nsga2",),
+            ("pareto.png",),
+        ),
+    ],
+    "vfgym export --format csv": [
+        Run("export-default", ["export", "--format", "csv"], writes=("paper-step-paper.csv",)),
+    ],
+    "vfgym export --format vcd|csv --scenario NAME": [
+        Run(
+            "export-vcd",
+            ["export", "--format", "vcd", "--scenario", "paper-step"],
+            writes=("paper-step-paper.vcd",),
+        ),
+        Run(
+            "export-csv",
+            ["export", "--format", "csv", "--scenario", "short-move"],
+            writes=("short-move-paper.csv",),
+        ),
+    ],
+    # each algorithm once on VFTune-v0; VFServo-v0 through the two servo lines below (a
+    # full 3 x 2 product would add three trainings of ~20 s for nothing the CLI does anew)
+    "vfgym train --algo ppo|sac|td3 --env vfgym/VFTune-v0|vfgym/VFServo-v0 [--hyperparams k=v …]": [
+        Run(
+            f"train-{algo}",
+            train_trim(["train", "--algo", algo, "--env", "vfgym/VFTune-v0"]),
+            writes=(f"runs/train/{algo}-VFTune-v0-seed0/best_model.zip",),
+            trim="train",
+            agents=True,
+        )
+        for algo in ("ppo", "sac", "td3")
+    ],
+    "vfgym predict --model RUN/best_model.zip --scenario NAME": [
+        Run(
+            "predict",
+            ["predict", "--model", "{model}", "--scenario", "test-3"],
+            ("train-ppo",),
+            agents=True,
+        ),
+    ],
+    "vfgym plot response --scenario paper-step": [
+        Run(
+            "fig4",
+            ["plot", "response", "--scenario", "paper-step"],
+            writes=("response-paper-step.png",),
+        ),
+    ],
+    "vfgym sweep --scenarios paper-step --sampler cmaes --trials 500": [
+        Run(
+            "cmaes-500",
+            [
+                "sweep",
+                "--scenarios",
+                "paper-step",
+                "--sampler",
+                "cmaes",
+                "--trials",
+                "500",
+                *SWEEP_TRIM,
+            ],
+            trim="trials",
+        ),
+    ],
+    "vfgym train --algo ppo --env vfgym/VFTune-v0 --seed 1 --name amortised-ppo-big "
+    "--hyperparams n_timesteps=400000 learning_rate=0.0001 "
+    '"policy_kwargs={net_arch: [128, 128], activation_fn: tanh, log_std_init: -1.0}"': [
+        Run(
+            "amortised",
+            train_trim(
+                [
+                    "train",
+                    "--algo",
+                    "ppo",
+                    "--env",
+                    "vfgym/VFTune-v0",
+                    "--seed",
+                    "1",
+                    "--name",
+                    "amortised-ppo-big",
+                    "--hyperparams",
+                    "n_timesteps=400000",
+                    "learning_rate=0.0001",
+                    "policy_kwargs={net_arch: [128, 128], activation_fn: tanh, log_std_init: -1.0}",
+                ]
+            ),
+            writes=("runs/train/amortised-ppo-big/best_model.zip",),
+            trim="train",
+            agents=True,
+        ),
+    ],
+    "vfgym train --algo ppo --env vfgym/VFServo-v0 --name servo-ppo": [
+        Run(
+            "servo-ppo",
+            train_trim(
+                ["train", "--algo", "ppo", "--env", "vfgym/VFServo-v0", "--name", "servo-ppo"]
+            ),
+            writes=("runs/train/servo-ppo/best_model.zip",),
+            trim="train",
+            agents=True,
+        ),
+    ],
+    # run as the shell line it is (the variable must reach libgomp at start-up)
+    "GOMP_SPINCOUNT=300000 vfgym train --algo ppo --env vfgym/VFServo-v0": [
+        Run(
+            "gomp",
+            train_trim(["train", "--algo", "ppo", "--env", "vfgym/VFServo-v0"]),
+            writes=("runs/train/ppo-VFServo-v0-seed0/best_model.zip",),
+            trim="train",
+            agents=True,
+            env={"GOMP_SPINCOUNT": "300000"},
+        ),
+    ],
+}
+RUNS = {r.key: r for runs in README_RUNS.values() for r in runs}
+
+
+def readme_commands(text: str) -> set[str]:
+    """The ``vfgym`` command lines README.md shows: on a line of a code block, or in an
+    inline code span (also across a line end; ``\\|`` read as ``|``), naming a
+    sub-command and giving it at least one argument (a bare ``vfgym sweep`` in a sentence
+    names the command, it is not a command line)."""
+    from vfgym.cli import build_parser
+
+    subs = "|".join(build_parser()._subparsers._group_actions[0].choices)
+    fence = re.compile(r"^```[^\n]*\n(.*?)^```", flags=re.S | re.M)
+    items = [ln for block in fence.findall(text) for ln in block.splitlines()]
+    items += re.findall(r"`([^`]+)`", fence.sub("", text))
+    command = re.compile(rf"((?:[A-Z_]+=\S+ )*vfgym (?:{subs}) \S.*)$")
+    found = set()
+    for item in items:
+        item = " ".join(item.replace("\\|", "|").split()).split(" # ")[0].strip()
+        m = command.search(item.split(" && ")[-1])
+        if m:
+            found.add(m.group(1))
+    return found
+
+
+def test_every_readme_command_has_a_run(repo_root):
+    shown = readme_commands((repo_root / "README.md").read_text(encoding="utf-8"))
+    assert shown - set(README_RUNS) == set(), "README lines without a run in README_RUNS"
+    assert set(README_RUNS) - shown == set(), "README_RUNS lines no longer in README.md"
+    for run in RUNS.values():
+        assert run.trim is None or run.trim in TRIMS
+
+
+@pytest.fixture(scope="module")
+def workspace(tmp_path_factory):
+    """The shared working folder; ``done`` holds each run's exit status."""
+    ws = tmp_path_factory.mktemp("readme")
+    for name in ("experiments", "agents"):
+        (ws / name).symlink_to(REPO / name)
+    return {"path": ws, "done": {}}
+
+
+def _fill(argv: list[str], ws: Path) -> list[str]:
+    def quick() -> str:
+        (run,) = [p for p in (ws / "runs" / "sweep").glob("quick-*") if p.is_dir()]
+        return str(run)
+
+    values = {
+        "{quick}": quick,
+        "{best}": lambda: f"{quick()}/best.yaml",
+        "{model}": lambda: str(ws / "runs/train/ppo-VFTune-v0-seed0/best_model.zip"),
+    }
+    return [values[a]() if a in values else a for a in argv]
+
+
+def _run(key: str, state: dict, monkeypatch) -> int:
+    if key in state["done"]:
+        return state["done"][key]
+    run = RUNS[key]
+    for need in run.needs:
+        assert _run(need, state, monkeypatch) == 0, f"{key} needs {need}, which failed"
+    ws = state["path"]
+    argv = _fill(run.argv, ws)
+    with monkeypatch.context() as m:
+        m.chdir(ws)
+        if run.env:  # a shell line with a variable: run it as a process
+            env = {**os.environ, **run.env, "MPLBACKEND": "Agg"}
+            env["PYTHONPATH"] = str(REPO / "src") + os.pathsep + env.get("PYTHONPATH", "")
+            code = subprocess.run(
+                [sys.executable, "-c", "import sys; from vfgym.cli import main; sys.exit(main())",
+                 *argv],
+                env=env, timeout=900,
+            ).returncode  # fmt: skip
+        else:
+            code = main(argv)
+    state["done"][key] = code
+    return code
+
+
+@pytest.mark.parametrize("key", list(RUNS))
+def test_readme_command_runs(key, workspace, monkeypatch):
+    run = RUNS[key]
+    if run.agents and not HAS_SB3:
+        pytest.skip("needs the agents extra")
+    if key == "t-gp" and importlib.util.find_spec("torch") is None:
+        pytest.skip("the gp sampler needs torch")
+    assert _run(key, workspace, monkeypatch) == 0
+    for path in run.writes:
+        assert (workspace["path"] / path).is_file(), path

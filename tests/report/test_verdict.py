@@ -1,0 +1,152 @@
+"""The held-out verdict: its numbers are report.compare's (and so vfgym.evaluate's) on the
+same moves, it names moves that were tuned on, and a sweep ends with it."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from vfgym import Settings, cli, evaluate
+from vfgym.commands._common import load_settings
+from vfgym.moves.axis import PAPER_AXIS, load_axis
+from vfgym.moves.scenarios import scenario_set
+from vfgym.report import (
+    VERDICT_BASELINES,
+    Candidate,
+    axis_verdict,
+    baseline_candidates,
+    compare,
+    format_verdict,
+    held_out_verdict,
+    verdict,
+)
+
+AXES = Path(__file__).resolve().parents[2] / "experiments" / "axes"
+TUNED = Settings(value_rad=0.75, error_limit_rad=0.66, k=470.0, ts_over_tf=0.98)
+MOVES = scenario_set("test", 12, 0) + scenario_set("paper-sine")  # a pulse source: n/a on a sine
+
+
+@pytest.fixture(scope="module")
+def held_out():
+    return held_out_verdict(TUNED, MOVES)
+
+
+def test_the_verdict_numbers_are_compare_s_on_the_same_moves(held_out):
+    rep = compare([Candidate("tuned", TUNED)], baseline_candidates(VERDICT_BASELINES), MOVES)
+    assert [r.label for r in held_out.rows] == ["tuned", *VERDICT_BASELINES]
+    for r in held_out.rows:
+        col = rep.column(r.label)
+        assert r.cost == rep.spread(r.label, "cost")
+        assert r.feasible == int(np.nansum(col.feasible))
+        assert r.applicable == int(np.isfinite(col.cost).sum())
+        if r.label == "tuned":
+            assert r.versus is None
+        else:
+            assert r.versus == rep.win_loss("tuned", r.label)
+
+
+def test_the_verdict_numbers_are_the_scoring_path_s(held_out):
+    """The same numbers from vfgym.evaluate directly, counted with numpy."""
+    ev = evaluate([TUNED, *VERDICT_BASELINES], MOVES)
+    tuned = ev.cost[0]
+    for i, r in enumerate(held_out.rows):
+        cost = ev.cost[i]
+        ok = np.isfinite(cost)
+        assert r.applicable == int(ok.sum())
+        assert r.feasible == int((ev.feasible[i] & ok).sum())
+        assert r.cost.median == pytest.approx(float(np.median(cost[ok])), rel=1e-12)
+        q1, q3 = np.percentile(cost[ok], [25, 75])
+        assert (r.cost.q1, r.cost.q3) == pytest.approx((q1, q3), rel=1e-12)
+        assert r.cost.mean == pytest.approx(float(cost[ok].mean()), rel=1e-12)
+        if i == 0:
+            continue
+        w = r.versus
+        both = ok & np.isfinite(tuned)
+        assert w.wins == int((tuned[both] < cost[both]).sum())
+        assert w.losses == int((tuned[both] > cost[both]).sum())
+        assert w.not_applicable == int((~both).sum())
+        d = tuned[both] - cost[both]
+        assert w.cost_diff.mean == pytest.approx(float(d.mean()), rel=1e-9, abs=1e-12)
+        assert w.cost_diff.ci_low <= w.cost_diff.mean <= w.cost_diff.ci_high
+    assert held_out.row("scurve").versus.not_applicable == 1  # the sine
+
+
+def test_the_printed_verdict_shows_the_numbers(held_out):
+    text = format_verdict(held_out)
+    lines = text.splitlines()
+    assert lines[0].startswith("held-out verdict: tuned against the baselines on 13 moves")
+    assert "(not tuned on)" in lines[0]
+    for r in held_out.rows:
+        row = next(line for line in lines if line.startswith(r.label + " "))
+        assert f"{r.feasible}/{r.applicable}" in row
+        assert f"{r.cost.median:.3g} [{r.cost.q1:.3g}, {r.cost.q3:.3g}]" in row
+        if r.versus is not None:
+            w = r.versus
+            assert f"{w.wins}/{w.losses}/{w.ties}" in row
+            d = w.cost_diff
+            assert f"{d.mean:.3g} ({d.ci_low:.3g}, {d.ci_high:.3g})" in row
+    p = held_out.row("paper").versus
+    assert f"beats paper on {p.wins}/{p.wins + p.losses + p.ties}" in text
+
+
+def test_moves_tuned_on_are_named_whatever_their_name():
+    moves = scenario_set("test", 3, 0)
+    renamed = [dataclasses.replace(moves[1], name="mine")]
+    v = held_out_verdict(TUNED, moves, baselines="paper", tuned_on=renamed)
+    assert v.seen == (moves[1].name,)
+    assert "(1 of them also tuned on)" in format_verdict(v)
+    assert held_out_verdict(TUNED, moves, baselines="paper", tuned_on=moves[:1]).seen == (
+        moves[0].name,
+    )
+
+
+def test_a_verdict_needs_a_tuned_candidate_and_a_baseline():
+    with pytest.raises(ValueError, match="tuned candidate"):
+        verdict(compare([], ["paper"], MOVES[:1]))
+    with pytest.raises(ValueError, match="baseline"):
+        verdict(compare([Candidate("t", TUNED)], [], MOVES[:1]))
+
+
+def test_the_axis_verdict_is_on_the_axis_test_moves():
+    axis = load_axis(AXES / "vertical.yaml")
+    v = axis_verdict(TUNED, axis)
+    assert v.report.scenarios == axis.scenarios("test")
+    assert v.title == "the 32 test moves of axis vertical"
+    ev = evaluate(TUNED, axis.scenarios("test"), plant=axis.plant, measures=axis.measures)
+    assert v.rows[0].cost.mean == pytest.approx(float(ev.cost[0].mean()), rel=1e-12)
+    # no axis: the paper's, whose test moves are the random test set
+    assert axis_verdict(TUNED).report.scenarios == scenario_set("test", 32, 0)
+    assert PAPER_AXIS.scenarios("test") == scenario_set("test", 32, 0)
+
+
+def test_a_sweep_ends_with_the_held_out_verdict(tmp_path, capsys):
+    """The smoke run: `vfgym sweep --axis experiments/axes/vertical.yaml --trials 3`."""
+    path = str(AXES / "vertical.yaml")
+    code = cli.main(
+        ["sweep", "--axis", path, "--trials", "3", "--runs-dir", str(tmp_path), "--study", "s",
+         "--no-progress", "--no-plots"]
+    )  # fmt: skip
+    assert code == 0
+    out = capsys.readouterr().out
+    run = tmp_path / "sweep" / "s"
+    axis = load_axis(path)
+    best = load_settings(str(run / "best.yaml"))
+    want = format_verdict(axis_verdict(best, axis, tuned_on=axis.scenarios("train")))
+    assert out.rstrip().endswith(want)  # the report ends with it, as printed
+    assert (run / "report.txt").read_text().rstrip().endswith(want)
+    assert (
+        "held-out verdict: tuned against the baselines on the 32 test moves of axis vertical" in out
+    )
+    summary = yaml.safe_load((run / "summary.yaml").read_text())
+    rows = {r["controller"]: r for r in summary["verdict"]["controllers"]}
+    ev = evaluate([best, "paper"], axis.scenarios("test"), plant=axis.plant,
+                  measures=axis.measures)  # fmt: skip
+    assert rows["tuned"]["feasible"] == int(ev.feasible[0].sum())
+    assert rows["paper"]["wins"] == int((ev.cost[0] < ev.cost[1]).sum())
+    assert summary["verdict"]["seen_in_tuning"] == []
+    assert not math.isnan(rows["tuned"]["cost"]["mean"])
