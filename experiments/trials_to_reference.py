@@ -79,12 +79,15 @@ class Run:
         return self.gaps[min(n, len(self.gaps)) - 1] if self.gaps else math.inf
 
 
-def run_one(problem: str, sampler: str, seed: int, trials: int, ref_cost: float) -> Run:
+def run_one(
+    problem: str, sampler: str, seed: int, trials: int, ref_cost: float, storage: str = "sqlite"
+) -> Run:
     """The sweep's worker on a fresh SQLite study; the trials read back in completion order."""
     with tempfile.TemporaryDirectory(prefix="vfgym-ttr-") as tmp:
         cfg = problem_config(
             problem, sampler=sampler, objective="cost", trials=trials, seed=seed,
-            storage=f"sqlite:///{tmp}/study.db", progress=False, plots=False,
+            storage=f"sqlite:///{tmp}/study.db" if storage == "sqlite" else f"journal:{tmp}/j.log",
+            progress=False, plots=False,
         )  # fmt: skip
         spec = tuning.resolve_storage(cfg.storage, Path(tmp))
         tuning.create_or_load(tuning.open_storage(spec), "s", cfg, cfg.scenario_list())
@@ -121,8 +124,8 @@ def main() -> None:
     ap.add_argument("--samplers", default=",".join(tuning.SAMPLERS))
     ap.add_argument("--seeds", default="0,1,2,3,4")
     ap.add_argument("--max-trials", type=int, default=200)
-    ap.add_argument("--cap", default="gp=100",
-                    help="fewer trials for slow samplers, e.g. gp=100 (its trials take seconds)")  # fmt: skip
+    ap.add_argument("--cap", default="gp=100", help="fewer trials for slow samplers, e.g. gp=100")
+    ap.add_argument("--storage", default="sqlite", choices=("sqlite", "journal"))
     args = ap.parse_args()
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     warnings.filterwarnings("ignore")
@@ -147,12 +150,12 @@ def main() -> None:
         for sampler in args.samplers.split(","):
             n = min(args.max_trials, caps.get(sampler, args.max_trials))
             t0 = time.monotonic()
-            runs = [run_one(problem, sampler, s, n, ref_cost) for s in seeds]
+            runs = [run_one(problem, sampler, s, n, ref_cost, args.storage) for s in seeds]
             cap = f">{n}"
             gaps = " ".join(
-                f"{statistics.median(r.gap_after(c) for r in runs):+8.2f}" if c <= n else f"{'-':>8s}"
+                f"{statistics.median(r.gap_after(c) for r in runs):+8.2f}" if c <= n else "       -"
                 for c in CHECKPOINTS
-            )  # fmt: skip
+            )
             print(
                 f"{sampler:8s} {_spread([r.trials_to(1.0) for r in runs], 'd', cap):>14s} "
                 f"{_spread([r.trials_to(2.0) for r in runs], 'd', cap):>12s} "
