@@ -117,7 +117,8 @@ README_RUNS: dict[str, list[Run]] = {
         ),
     ],
     "vfgym sweep --config experiments/quick.yaml "
-    "[--sampler compass|tpe|cmaes|gp|nsga2|grid|random] [--trials N] [--workers N] [--storage sqlite|journal|postgresql://…] [--study NAME]": [
+    "[--sampler compass|tpe|cmaes|gp|nsga2|grid|random] [--trials N] [--workers N] "
+    "[--storage sqlite|journal|postgresql://…] [--study NAME]": [
         _sweep("t-compass", "--sampler", "compass", "--trials", "12", "--storage", "journal"),
         _sweep("t-random", "--sampler", "random", "--trials", "3"),
         # postgresql://… needs a server: tests/tuning covers it where one runs
