@@ -64,8 +64,11 @@ def rank(o: Observation) -> tuple:
 
 @dataclass(frozen=True)
 class CompassOptions:
-    """Settings of :class:`CompassSampler` (the defaults were measured on the benchmark of
-    ``experiments/trials_to_reference.py``)."""
+    """Settings of :class:`CompassSampler`: Latin-hypercube points of the first generation,
+    first and smallest compass step (natural-log units), trials of compass before the model
+    is consulted, model batch, least relative improvement sought, and model points handed to
+    a worker that asks while another's generation runs. (Chosen before the benchmark of
+    ``experiments/trials_to_reference.py`` existed; not tuned against it.)"""
 
     n_init: int = 6
     step0: float = 0.4
@@ -204,9 +207,8 @@ class CompassSampler(optuna.samplers.BaseSampler):
                 return self._sobol(last + 1)
             centre = min(warm, key=rank)
             return self._compass(last + 1, centre, None, np.full(4, o.step0), n_done)
-        centre = by_num.get(st["centre"])
-        if centre is None:  # the centre's trial is gone (failed): the best instead
-            centre = min(obs, key=rank)
+        # The centre's trial may be gone (failed): the best instead.
+        centre = by_num.get(st["centre"]) or min(obs, key=rank)
         done_here = [by_num[t.number] for t in mine if t.number in by_num]
         if st["mode"] == "compass":
             improved = np.zeros(4, dtype=bool)
@@ -361,7 +363,7 @@ def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n:
     processes: log cost (on the feasible points once there are three) and the worst
     constraint (signed log). Linear algebra on one thread: OpenBLAS's threads spin on
     matrices this small, 30x slower on a busy machine (measured, 150 points)."""
-    from threadpoolctl import threadpool_limits
+    from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
     with threadpool_limits(1, user_api="blas"):
         return _propose(x, obs, pending, n, xi, rng, n_laws)

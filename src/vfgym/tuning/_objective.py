@@ -260,15 +260,16 @@ class Objective:
         )
         out = []
         for i, s in enumerate(settings):
-            attrs = {
+            cost = float(agg.cost[i])
+            objectives = [float(x) for x in agg.objectives[i]]
+            attrs: dict[str, Any] = {
                 "settings": space.settings_to_dict(s),
-                "cost": float(agg.cost[i]),
+                "cost": cost,
                 "constraints": [float(x) for x in agg.constraints[i]],
                 "feasible": bool(agg.feasible[i]),
-                "objectives": [float(x) for x in agg.objectives[i]],
+                "objectives": objectives,
             }
-            values = attrs["cost"] if self.form == "cost" else list(attrs["objectives"])
-            out.append(Result(values, attrs))
+            out.append(Result(cost if self.form == "cost" else objectives, attrs))
         return out
 
     def _completed(self, study: Study) -> dict[tuple, Result]:
@@ -287,7 +288,7 @@ class Objective:
                 continue
             attrs = {k: t.user_attrs[k] for k in _RESULT_ATTRS if k in t.user_attrs}
             attrs["cached_from"] = t.user_attrs.get("cached_from", t.number)
-            values = t.value if self.form == "cost" else list(t.values)
+            values = float(t.value) if self.form == "cost" else [float(v) for v in t.values]
             found[key] = Result(values, attrs)
         return found
 

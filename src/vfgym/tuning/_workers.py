@@ -332,9 +332,10 @@ class Heartbeats:
             self._thread.start()
 
     def _beat(self) -> None:
-        while not self._stop.wait(self._interval):
+        storage = self._storage
+        while storage is not None and not self._stop.wait(self._interval):
             for trial_id in list(self._ids):
-                self._storage.record_heartbeat(trial_id)
+                storage.record_heartbeat(trial_id)
 
     def stop(self) -> None:
         if self._thread is not None:
