@@ -1,78 +1,170 @@
-"""How many trials TPE and CMA-ES need to get within 1 % of the grid reference.
+"""Trials and seconds each sampler needs to get within 1 % and 2 % of the grid optimum, and
+its gap after 50, 100 and 200 trials, on several scenario sets over several seeds.
 
-Each (sampler, seed) runs the study `vfgym sweep` runs (same objective, sampler settings,
-baseline enqueued first; in memory, one worker) until its best feasible cost is within
-``--within`` % of the reference's, or ``--max-trials``. Prints one row per run and the
-median per sampler.
+Each (problem, sampler, seed) runs the worker ``vfgym sweep`` runs with one worker: the
+same objective, sampler, batch and warm starts (enqueued first), on a SQLite file in a
+temporary folder, for ``--max-trials`` completed trials. A trial's gap is its best
+feasible cost so far against the problem's grid reference (``vfgym grid``; looked up in
+``--refs``, a runs folder of grid runs, by scenario set). Seconds run from the worker's
+start (the compiled kernel loaded from numba's cache) to the tell of the trial that
+first got within the target; they are wall-clock on whatever else the machine runs
+(the load average is printed with each problem).
 
-    vfgym grid --config experiments/grid-paper-step.yaml
-    python experiments/trials_to_reference.py --reference runs/grid/paper-step-p12-r3k4
+    vfgym grid --config experiments/grid-paper-step.yaml --runs-dir refs   # one per problem
+    python experiments/trials_to_reference.py --refs refs
+
+Columns: trials (and seconds) to within 1 % and 2 %, median and worst over the seeds
+(``>N``: not within N trials); median gap in % after 50, 100 and 200 trials; the
+best's feasibility (every run's best must be feasible).
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime as dt
+import math
+import os
 import statistics
+import tempfile
 import time
 import warnings
+from dataclasses import dataclass
+from pathlib import Path
 
 import optuna
 
 from vfgym import tuning
+from vfgym.moves.axis import axis_digest
+
+PROBLEMS = (
+    "paper-step",
+    "heavy-load",
+    "short-move",
+    "multi-move",
+    "experiments/axes/bare.yaml:train",
+)
+"""The paper's step; one loaded, one short, one multi-move scenario; the main job's train
+set (the 16 train moves of the bare axis, one machine, its load fixed). ``AXIS_FILE:SET``
+is a scenario set on an axis."""
 
 
-def trials_to(cfg: tuning.SweepConfig, seed: int, target: float, max_trials: int) -> tuple:
-    """(trials needed or None, best cost, seconds) for one seeded study."""
-    scenarios = cfg.scenario_list()
-    sampler = tuning.make_sampler(cfg, seed)
-    study, _ = tuning.create_or_load(None, f"{cfg.sampler}-{seed}", cfg, scenarios, sampler)
-    objective = tuning.Objective(scenarios, cfg.laws, cfg.objective)
-    hit: list[int] = []
+def problem_config(problem: str, **kw: object) -> tuning.SweepConfig:
+    """The sweep configuration of a problem: a scenario set, or ``AXIS_FILE:SET``."""
+    if problem.endswith(".yaml") or ".yaml:" in problem:
+        axis, _, scen = problem.partition(".yaml")
+        scen = scen.lstrip(":") or "train"
+        return tuning.SweepConfig(axis=axis + ".yaml", scenarios=scen, **kw)  # type: ignore[arg-type]
+    return tuning.SweepConfig(scenarios=problem, **kw)  # type: ignore[arg-type]
 
-    def stop_at_target(study: optuna.Study, trial: optuna.trial.FrozenTrial) -> None:
-        best = tuning.best_trial(study)
-        if best is not None and best.user_attrs["feasible"] and best.user_attrs["cost"] <= target:
-            hit.append(len(study.trials))
-            study.stop()
 
-    t0 = time.perf_counter()
-    study.optimize(objective, n_trials=max_trials, callbacks=[stop_at_target])
-    best = tuning.best_trial(study)
-    return (hit[0] if hit else None), best.user_attrs["cost"], time.perf_counter() - t0
+CHECKPOINTS = (50, 100, 200)
+
+
+@dataclass(frozen=True)
+class Run:
+    """One seeded sweep: best feasible gap (%) after each trial and when each trial ended."""
+
+    gaps: list[float]
+    seconds: list[float]
+    best_feasible: bool
+
+    def trials_to(self, pct: float) -> int | None:
+        return next((i + 1 for i, g in enumerate(self.gaps) if g <= pct), None)
+
+    def seconds_to(self, pct: float) -> float | None:
+        n = self.trials_to(pct)
+        return None if n is None else self.seconds[n - 1]
+
+    def gap_after(self, n: int) -> float:
+        return self.gaps[min(n, len(self.gaps)) - 1] if self.gaps else math.inf
+
+
+def run_one(
+    problem: str, sampler: str, seed: int, trials: int, ref_cost: float, storage: str = "sqlite"
+) -> Run:
+    """The sweep's worker on a fresh SQLite study; the trials read back in completion order."""
+    with tempfile.TemporaryDirectory(prefix="vfgym-ttr-") as tmp:
+        cfg = problem_config(
+            problem, sampler=sampler, objective="cost", trials=trials, seed=seed,
+            storage=f"sqlite:///{tmp}/study.db" if storage == "sqlite" else f"journal:{tmp}/j.log",
+            progress=False, plots=False,
+        )  # fmt: skip
+        spec = tuning.resolve_storage(cfg.storage, Path(tmp))
+        tuning.create_or_load(tuning.open_storage(spec), "s", cfg, cfg.scenario_list())
+        start = dt.datetime.now()
+        tuning.run_worker(cfg, spec, "s")
+        study = optuna.load_study(study_name="s", storage=tuning.open_storage(spec))
+        done = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
+        done.sort(key=lambda t: (t.datetime_complete, t.number))
+        best, gaps, secs = math.inf, [], []
+        for t in done:
+            if t.user_attrs["feasible"]:
+                best = min(best, t.user_attrs["cost"])
+            gaps.append(tuning.gap_pct(best, ref_cost) if best < math.inf else math.inf)
+            secs.append((t.datetime_complete - start).total_seconds())
+        top = tuning.best_trial(study)
+        return Run(gaps, secs, bool(top is not None and top.user_attrs["feasible"]))
+
+
+def _spread(values: list[float | None], fmt: str, cap: str) -> str:
+    """``median / worst`` of values where None is "not reached" (shown as ``cap``)."""
+    x = sorted(math.inf if v is None else v for v in values)
+    med = statistics.median(x)
+
+    def show(v: float) -> str:
+        return cap if v == math.inf else format(v, fmt)
+
+    return f"{show(med)} / {show(x[-1])}"
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--reference", required=True, help="grid reference.yaml or grid run folder")
-    ap.add_argument("--scenarios", default="paper-step")
-    ap.add_argument("--samplers", default="tpe,cmaes")
+    ap.add_argument("--refs", default="runs", help="runs folder holding the grid references")
+    ap.add_argument("--problems", default=";".join(PROBLEMS), help="';'-separated scenario sets")
+    ap.add_argument("--samplers", default=",".join(tuning.SAMPLERS))
     ap.add_argument("--seeds", default="0,1,2,3,4")
-    ap.add_argument("--within", type=float, default=1.0, help="percent above the reference")
-    ap.add_argument("--max-trials", type=int, default=1500)
+    ap.add_argument("--max-trials", type=int, default=200)
+    ap.add_argument("--cap", default="gp=100", help="fewer trials for slow samplers, e.g. gp=100")
+    ap.add_argument("--storage", default="sqlite", choices=("sqlite", "journal"))
     args = ap.parse_args()
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     warnings.filterwarnings("ignore")
-
-    base = tuning.SweepConfig(scenarios=args.scenarios)
-    found = tuning.find_reference(args.reference, "runs", base.scenario_list(), base.laws)
-    assert found is not None
-    ref_cost = float(found[0]["cost"])
-    target = ref_cost * (1.0 + args.within / 100.0)
-    print(f"reference {found[1]}: cost {ref_cost:.6f}; target <= {target:.6f} "
-          f"(+{args.within:g} %), at most {args.max_trials} trials")  # fmt: skip
-    print(f"{'sampler':8s} {'seed':>4s} {'trials':>7s} {'best cost':>10s} {'gap %':>7s} {'s':>6s}")
-    for name in args.samplers.split(","):
-        cfg = tuning.SweepConfig(scenarios=args.scenarios, sampler=name)
-        needed = []
-        for seed in (int(s) for s in args.seeds.split(",")):
-            n, best, secs = trials_to(cfg, seed, target, args.max_trials)
-            needed.append(n if n is not None else float("inf"))
-            shown = str(n) if n is not None else f">{args.max_trials}"
-            print(f"{name:8s} {seed:4d} {shown:>7s} {best:10.6f} "
-                  f"{tuning.gap_pct(best, ref_cost):+7.2f} {secs:6.1f}", flush=True)  # fmt: skip
-        med = statistics.median(needed)
-        print(f"{name:8s} median trials to within {args.within:g} %: "
-              f"{med if med != float('inf') else f'>{args.max_trials}'}", flush=True)  # fmt: skip
+    caps = {k: int(v) for k, v in (c.split("=") for c in args.cap.split(",") if c)}
+    seeds = [int(s) for s in args.seeds.split(",")]
+    head = (f"{'sampler':8s} {'trials to 1 %':>14s} {'to 2 %':>12s} {'s to 1 %':>14s} "
+            f"{'s to 2 %':>14s} " + " ".join(f"{'gap@' + str(n):>8s}" for n in CHECKPOINTS)
+            + "  best feasible")  # fmt: skip
+    for problem in args.problems.split(";"):
+        pcfg = problem_config(problem)
+        scen = pcfg.scenario_list()
+        found = tuning.find_reference(
+            None, args.refs, scen, ("rise",), axis_digest(pcfg.load_axis())
+        )
+        if found is None:
+            raise SystemExit(f"no grid reference for {problem} in {args.refs}/grid/*/")
+        ref_cost = float(found[0]["cost"])
+        load = os.getloadavg()[0]
+        print(f"\n{problem}: reference {found[1]} cost {ref_cost:.6f} "
+              f"({found[0].get('evaluated', '?')} settings); load average {load:.1f}")  # fmt: skip
+        print(head)
+        for sampler in args.samplers.split(","):
+            n = min(args.max_trials, caps.get(sampler, args.max_trials))
+            t0 = time.monotonic()
+            runs = [run_one(problem, sampler, s, n, ref_cost, args.storage) for s in seeds]
+            cap = f">{n}"
+            gaps = " ".join(
+                f"{statistics.median(r.gap_after(c) for r in runs):+8.2f}" if c <= n else "       -"
+                for c in CHECKPOINTS
+            )
+            print(
+                f"{sampler:8s} {_spread([r.trials_to(1.0) for r in runs], 'd', cap):>14s} "
+                f"{_spread([r.trials_to(2.0) for r in runs], 'd', cap):>12s} "
+                f"{_spread([r.seconds_to(1.0) for r in runs], '.1f', '-'):>14s} "
+                f"{_spread([r.seconds_to(2.0) for r in runs], '.1f', '-'):>14s} {gaps}  "
+                f"{sum(r.best_feasible for r in runs)}/{len(runs)}"
+                f"   [{time.monotonic() - t0:.0f} s, load {os.getloadavg()[0]:.1f}]",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

@@ -126,6 +126,75 @@ def grid(
     ]
 
 
+@dataclass(frozen=True)
+class Relative:
+    """The search coordinates that fit the problem, for samplers that work in them.
+
+    The optimum sits on the acceleration limit, with the error limit tied to ``value``
+    (the paper: most efficient when equal; below it, the top speed drops to L/value of
+    δ·f). So ``k`` is searched relative to ``k_ref`` (the limit's k,
+    :func:`vfgym.params.paper_k`) and ``L`` relative to ``value``; all four on log scales:
+
+    ======  ====================  =====================================
+    axis    coordinate            range
+    ======  ====================  =====================================
+    0       value_rad             :data:`SPACE`'s (0.05 – 10 rad)
+    1       L / value             :data:`LIMIT_RATIO` (0.05 – 20)
+    2       k / k_ref             :data:`SPACE`'s k range over ``k_ref``
+    3       ts_over_tf            :data:`SPACE`'s (0.02 – 1)
+    ======  ====================  =====================================
+
+    A point is given in unit coordinates u ∈ [0, 1]⁴ (log-linear along each axis); the
+    settings it stands for are clipped to :data:`SPACE` (L = ratio · value may leave it).
+    """
+
+    k_ref: float
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.k_ref) and self.k_ref > 0.0):
+            raise ValueError(f"k_ref={self.k_ref!r} is out of range: allowed finite > 0")
+
+    def bounds(self) -> np.ndarray:
+        """(4, 2) array of the natural-log bounds of each axis."""
+        v, _, k, a = SPACE
+        return np.log(
+            [
+                [v.low, v.high],
+                list(LIMIT_RATIO),
+                [k.low / self.k_ref, k.high / self.k_ref],
+                [a.low, a.high],
+            ]
+        )
+
+    def to_unit(self, s: Settings) -> np.ndarray:
+        """The unit coordinates of ``s`` (clipped to [0, 1]⁴)."""
+        x = np.log([s.value_rad, s.error_limit_rad / s.value_rad, s.k / self.k_ref, s.ts_over_tf])
+        b = self.bounds()
+        return np.clip((x - b[:, 0]) / (b[:, 1] - b[:, 0]), 0.0, 1.0)
+
+    def settings(self, u: Any, accel_law: str = "rise") -> Settings:
+        """The settings at unit coordinates ``u`` (clipped to [0, 1]⁴, then to SPACE)."""
+        b = self.bounds()
+        t = np.clip(np.asarray(u, dtype=np.float64).reshape(len(SPACE)), 0.0, 1.0)
+        value, ratio, k_ratio, a = np.exp(b[:, 0] + t * (b[:, 1] - b[:, 0]))
+        v, lim, k, ts = SPACE
+        return Settings(
+            value_rad=_clip(value, v),
+            error_limit_rad=_clip(value * ratio, lim),
+            k=_clip(k_ratio * self.k_ref, k),
+            ts_over_tf=_clip(a, ts),
+            accel_law=accel_law,
+        )
+
+
+LIMIT_RATIO = (0.05, 20.0)
+"""Range of L / value searched in :class:`Relative`."""
+
+
+def _clip(x: float, d: Dim) -> float:
+    return float(min(max(x, d.low), d.high))
+
+
 def settings_to_dict(s: Settings) -> dict[str, Any]:
     """Plain dict of settings, as written to YAML."""
     return {d.name: float(getattr(s, d.name)) for d in SPACE} | {"accel_law": s.accel_law}

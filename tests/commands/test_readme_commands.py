@@ -116,8 +116,11 @@ README_RUNS: dict[str, list[Run]] = {
             "sim-best", ["simulate", "--scenario", "long-move", "--settings", "{best}"], ("quick",)
         ),
     ],
-    "vfgym sweep --config experiments/quick.yaml [--sampler tpe|cmaes|gp|nsga2|grid] "
-    "[--trials N] [--workers N] [--storage sqlite|journal|postgresql://…] [--study NAME]": [
+    "vfgym sweep --config experiments/quick.yaml "
+    "[--sampler compass|tpe|cmaes|gp|nsga2|grid|random] [--trials N] [--workers N] "
+    "[--storage sqlite|journal|postgresql://…] [--study NAME]": [
+        _sweep("t-compass", "--sampler", "compass", "--trials", "12", "--storage", "journal"),
+        _sweep("t-random", "--sampler", "random", "--trials", "3"),
         # postgresql://… needs a server: tests/tuning covers it where one runs
         _sweep("t-tpe", "--sampler", "tpe", "--trials", "3", "--storage", "sqlite"),
         _sweep("t-cmaes", "--sampler", "cmaes", "--trials", "4", "--storage", "journal"),

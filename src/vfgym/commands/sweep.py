@@ -21,7 +21,8 @@ OPTIONS = (
     ("--axis", "an axis file (e.g. experiments/axes/belt.yaml): its plant, measures and "
      "train/test moves; the sweep tunes on its train moves"),
     ("--laws", "acceleration laws searched: rise, slew or rise,slew (default rise)"),
-    ("--sampler", "tpe (default), cmaes, gp, nsga2, grid or random"),
+    ("--sampler", "compass (default: compass search in the problem's own coordinates with "
+     "Gaussian-process checks), tpe, cmaes, gp, nsga2, grid or random"),
     ("--objective", "cost (default) or pareto (overshoot, move time, accel violation)"),
     ("--aggregate", "the cost minimised over the scenarios: mean (default), cvar (mean of the "
      "costliest --cvar-alpha share) or worst"),
@@ -39,6 +40,8 @@ OPTIONS = (
     ("--reference", "a grid reference.yaml (or grid run folder) to report the gap to "
      "(default: the best matching RUNS/grid/*/reference.yaml)"),
     ("--grid-points", "values per dimension for --sampler grid (default 5)"),
+    ("--batch", "trials a worker claims and simulates in one batched call (default: the "
+     "sampler's own: compass one generation, cmaes/nsga2 8, grid/random 16, tpe/gp 1)"),
     ("--heartbeat", "seconds between a running trial's heartbeats (RDB storages; default 10)"),
     ("--grace", "seconds without a heartbeat before a trial is taken as dead "
      "(default 2 x heartbeat)"),

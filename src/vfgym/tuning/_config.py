@@ -14,10 +14,11 @@ from vfgym.moves.scenarios import Scenario
 from vfgym.params import ACCEL_LAWS
 from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, check_aggregate
 
-SAMPLERS = ("tpe", "cmaes", "gp", "nsga2", "grid", "random")
-"""Samplers of ``vfgym sweep --sampler``: TPE (default), CMA-ES, a Gaussian process for the
-deterministic objective, NSGA-II (the Pareto form by default), a grid over
-:func:`vfgym.space.grid`, and uniform random sampling (a control)."""
+SAMPLERS = ("compass", "tpe", "cmaes", "gp", "nsga2", "grid", "random")
+"""Samplers of ``vfgym sweep --sampler``: the compass search with model checks in the
+problem's own coordinates (default; :mod:`vfgym.tuning._compass`), TPE, CMA-ES, a
+Gaussian process for the deterministic objective, NSGA-II (the Pareto form by default), a
+grid over :func:`vfgym.space.grid`, and uniform random sampling (a control)."""
 FORMS = ("cost", "pareto")
 """``cost``: minimise the mean cost; ``pareto``: minimise the three objectives."""
 
@@ -188,6 +189,9 @@ class SweepConfig(_Options):
         Draw the history and Pareto plots.
     progress : bool
         Show a progress bar.
+    batch : int or None
+        Trials a worker claims at once and simulates in one batched call, 1 to 1024
+        (default: the sampler's own, :func:`vfgym.tuning.batch_size`).
     heartbeat : int
         Seconds between a running trial's heartbeats (RDB storages), ≥ 1.
     grace : int or None
@@ -204,7 +208,7 @@ class SweepConfig(_Options):
     first_seed: int = 0
     laws: tuple[str, ...] = ("rise",)
     axis: str | None = None
-    sampler: str = "tpe"
+    sampler: str = "compass"
     objective: str | None = None
     aggregate: str = DEFAULT_AGGREGATE
     cvar_alpha: float = DEFAULT_CVAR_ALPHA
@@ -217,6 +221,7 @@ class SweepConfig(_Options):
     runs_dir: str = "runs"
     reference: str | None = None
     grid_points: int = 5
+    batch: int | None = None
     plots: bool = True
     progress: bool = True
     heartbeat: int = 10
@@ -228,8 +233,10 @@ class SweepConfig(_Options):
         check_choice("sampler", self.sampler, SAMPLERS)
         form = self.objective or ("pareto" if self.sampler == "nsga2" else "cost")
         check_choice("objective", form, FORMS)
-        if form == "pareto" and self.sampler == "cmaes":
-            raise ValueError("objective='pareto' is not allowed with sampler='cmaes': use nsga2")
+        if form == "pareto" and self.sampler in ("cmaes", "compass"):
+            raise ValueError(
+                f"objective='pareto' is not allowed with sampler={self.sampler!r}: use nsga2"
+            )
         s(self, "objective", form)
         how, alpha = check_aggregate(self.aggregate, self.cvar_alpha)
         s(self, "aggregate", how)
@@ -246,6 +253,8 @@ class SweepConfig(_Options):
         if self.reference is not None:
             s(self, "reference", str(self.reference))
         s(self, "grid_points", check_int("grid_points", self.grid_points, 2, 64))
+        if self.batch is not None:
+            s(self, "batch", check_int("batch", self.batch, 1, 1024))
         s(self, "plots", _bool("plots", self.plots))
         s(self, "progress", _bool("progress", self.progress))
         s(self, "heartbeat", check_int("heartbeat", self.heartbeat, 1))

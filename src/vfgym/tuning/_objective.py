@@ -1,11 +1,15 @@
 """The sweep's objective: a trial's settings scored by the one scoring path, with its
 constraints set on the trial for the samplers that learn them.
+
+Trials are scored one at a time (:meth:`Objective.__call__`, what ``study.optimize``
+calls) or as a batch whose settings are simulated in ONE batched, multi-threaded kernel
+call (:meth:`Objective.results`, then :meth:`Objective.record` per trial).
 """
 
 from __future__ import annotations
 
-import warnings
-from collections.abc import Callable
+import math
+from collections.abc import Callable, Sequence
 from contextlib import nullcontext
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -20,6 +24,9 @@ from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
 
 if TYPE_CHECKING:
     from optuna import Study, Trial
+
+_CONSTRAINTS_KEY = "constraints"
+"""Optuna's system-attribute prefix of a trial's constraints (``constraints:NAME``)."""
 
 
 class Aggregate(NamedTuple):
@@ -92,6 +99,13 @@ def settings_key(s: Settings) -> tuple:
     return (s.value_rad, s.error_limit_rad, s.k, s.ts_over_tf, s.accel_law)
 
 
+class Result(NamedTuple):
+    """A trial's objective value(s) and the user attributes it records."""
+
+    values: float | list[float]
+    attrs: dict[str, Any]
+
+
 class Objective:
     """Settings from the trial → :func:`vfgym.evaluate` on the scenarios (on ``plant``
     with ``measures``: an axis's) → cost (or the three objectives), with the worst
@@ -133,7 +147,7 @@ class Objective:
         self.measures = measures
         self.laws = laws
         self.form = form
-        self.cache: dict[tuple, tuple[Any, dict[str, Any]]] = {}
+        self.cache: dict[tuple, Result] = {}
         self.simulated = 0
         self.on_enter: Callable[[], None] | None = None
         self.guard: Callable[[], Any] = nullcontext
@@ -146,30 +160,71 @@ class Objective:
         trial.set_user_attr(WORKER_ATTR, _worker_id())
         if self.on_enter:
             self.on_enter()
-        return self._run(trial)
-
-    def _run(self, trial: Trial) -> float | list[float]:
         settings = space.suggest(trial, self.laws)
-        key = settings_key(settings)
-        hit = self.cache.get(key) or self._lookup(trial.study, settings)
-        if hit is None:
-            with self.guard():  # the only place a trial may be interrupted
-                values, attrs = self.score(settings)
-            self.simulated += 1
-            self.cache[key] = (values, attrs | {"cached_from": trial.number})
-        else:
-            values, attrs = hit
-        for k, v in attrs.items():
-            trial.set_user_attr(k, v)
-        # Optuna 5 reads constraints from the trial (its constraints_func is deprecated).
-        # A retried trial carries its first run's (identical) constraints: those stay.
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            for name, v in zip(CONSTRAINTS, attrs["constraints"], strict=True):
-                trial.set_constraint(name, v)
-        return values
+        (res,) = self.results(trial.study, [trial.number], [settings])
+        self.record(trial, res)
+        return res.values
 
-    def score(self, settings: Settings) -> tuple[Any, dict[str, Any]]:
+    def results(
+        self, study: Study, numbers: Sequence[int], settings: list[Settings]
+    ) -> list[Result]:
+        """The result of each setting, simulating only those never scored.
+
+        A setting is copied from this process's cache or from a completed trial of
+        ``study``; the others are simulated together in one batched call (the only place a
+        trial may be interrupted); repeats within the batch copy the first.
+
+        Parameters
+        ----------
+        study : optuna.Study
+            The study whose completed trials may already hold a setting's result.
+        numbers : sequence of int
+            The trials' numbers (recorded as ``cached_from`` of the results they create).
+        settings : list of Settings
+            The settings, one per trial.
+
+        Returns
+        -------
+        list of Result
+            One per setting, in order.
+        """
+        out: list[Result | None] = [self.cache.get(settings_key(s)) for s in settings]
+        if any(r is None for r in out):
+            found = self._completed(study)
+            for i, s in enumerate(settings):
+                if out[i] is None:
+                    out[i] = found.get(settings_key(s))
+        todo: dict[tuple, int] = {}
+        for i, s in enumerate(settings):
+            if out[i] is None:
+                todo.setdefault(settings_key(s), i)
+        if todo:
+            with self.guard():
+                scored = self.score_many([settings[i] for i in todo.values()])
+            self.simulated += len(todo)
+            for (key, i), res in zip(todo.items(), scored, strict=True):
+                self.cache[key] = Result(res.values, res.attrs | {"cached_from": numbers[i]})
+                out[i] = res
+            for i, s in enumerate(settings):
+                if out[i] is None:
+                    out[i] = self.cache[settings_key(s)]
+        return [r for r in out if r is not None]
+
+    def record(self, trial: Trial, res: Result) -> None:
+        """Set a result's user attributes and constraints on the trial.
+
+        Parameters
+        ----------
+        trial : optuna.Trial
+            The trial.
+        res : Result
+            Its result.
+        """
+        for k, v in res.attrs.items():
+            trial.set_user_attr(k, v)
+        set_constraints(trial, dict(zip(CONSTRAINTS, res.attrs["constraints"], strict=True)))
+
+    def score(self, settings: Settings) -> Result:
         """Values and user attributes of one setting (one batched evaluation).
 
         Parameters
@@ -179,41 +234,77 @@ class Objective:
 
         Returns
         -------
-        tuple
+        Result
             ``(values, attrs)``: the aggregate cost (``cost`` form) or the three
             objectives' means, and the trial's user attributes (settings, cost, constraints,
             feasible, objectives).
+        """
+        return self.score_many([settings])[0]
+
+    def score_many(self, settings: list[Settings]) -> list[Result]:
+        """Values and user attributes of each setting, all in one batched evaluation.
+
+        Parameters
+        ----------
+        settings : list of Settings
+            The settings.
+
+        Returns
+        -------
+        list of Result
+            One per setting, as :meth:`score` gives it.
         """
         agg = aggregate(
             evaluate(settings, self.scenarios, plant=self.plant, measures=self.measures),
             *self.how,
         )
-        attrs = {
-            "settings": space.settings_to_dict(settings),
-            "cost": float(agg.cost[0]),
-            "constraints": [float(x) for x in agg.constraints[0]],
-            "feasible": bool(agg.feasible[0]),
-            "objectives": [float(x) for x in agg.objectives[0]],
-        }
-        values = attrs["cost"] if self.form == "cost" else list(attrs["objectives"])
-        return values, attrs
+        out = []
+        for i, s in enumerate(settings):
+            cost = float(agg.cost[i])
+            objectives = [float(x) for x in agg.objectives[i]]
+            attrs: dict[str, Any] = {
+                "settings": space.settings_to_dict(s),
+                "cost": cost,
+                "constraints": [float(x) for x in agg.constraints[i]],
+                "feasible": bool(agg.feasible[i]),
+                "objectives": objectives,
+            }
+            out.append(Result(cost if self.form == "cost" else objectives, attrs))
+        return out
 
-    def _lookup(self, study: Study, settings: Settings) -> tuple[Any, dict[str, Any]] | None:
+    def _completed(self, study: Study) -> dict[tuple, Result]:
+        """Results of the study's completed trials, by settings (the first trial of each)."""
         import optuna
 
-        want = space.settings_to_dict(settings)
+        found: dict[tuple, Result] = {}
         for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,)):
             cons = t.user_attrs.get("constraints")
-            if (
-                t.user_attrs.get("settings") == want
-                and "cost" in t.user_attrs
-                and len(cons or ()) == len(CONSTRAINTS)  # not scored with other constraints
-            ):
-                attrs = {k: t.user_attrs[k] for k in _RESULT_ATTRS if k in t.user_attrs}
-                attrs["cached_from"] = t.user_attrs.get("cached_from", t.number)
-                values = t.value if self.form == "cost" else list(t.values)
-                return values, attrs
-        return None
+            if "cost" not in t.user_attrs or "settings" not in t.user_attrs:
+                continue
+            if len(cons or ()) != len(CONSTRAINTS):  # scored with other constraints
+                continue
+            key = settings_key(space.settings_from_dict(t.user_attrs["settings"]))
+            if key in found:
+                continue
+            attrs = {k: t.user_attrs[k] for k in _RESULT_ATTRS if k in t.user_attrs}
+            attrs["cached_from"] = t.user_attrs.get("cached_from", t.number)
+            values = float(t.value) if self.form == "cost" else [float(v) for v in t.values]
+            found[key] = Result(values, attrs)
+        return found
 
 
 _RESULT_ATTRS = ("settings", "cost", "constraints", "feasible", "objectives")
+
+
+def set_constraints(trial: Any, values: dict[str, float]) -> None:
+    """Set the trial's constraints, as ``trial.set_constraint`` does (Optuna 5 reads them
+    from the trial; its ``constraints_func`` is deprecated), with one read of the trial
+    instead of one per constraint: on an RDB storage each read rebuilds the whole trial.
+    A retried trial carries its first run's (identical) constraints: those stay."""
+    have = trial.constraints
+    for name, v in values.items():
+        if name not in have:
+            v = float(v)
+            if math.isnan(v):
+                raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
+            trial.storage.set_trial_system_attr(trial._trial_id, f"{_CONSTRAINTS_KEY}:{name}", v)

@@ -1,5 +1,6 @@
 """Samplers and studies: which sampler a sweep uses, its search space and trial budget, and
-the study created or resumed with the paper's settings enqueued first.
+the study created or resumed with the warm starts (the paper's settings, the rule of thumb)
+enqueued first.
 """
 
 from __future__ import annotations
@@ -8,10 +9,13 @@ import warnings
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from vfgym import space
 from vfgym.moves.axis import axis_digest
+from vfgym.moves.baselines import rule_of_thumb, usable_accel
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_SETTINGS
+from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings, paper_k
 from vfgym.scoring import OBJECTIVES
 from vfgym.tuning._aggregate import describe
 from vfgym.tuning._config import SweepConfig
@@ -50,8 +54,13 @@ def check_sampler(cfg: SweepConfig) -> None:
         )
 
 
-def make_sampler(cfg: SweepConfig, seed: int | None) -> BaseSampler:
+def make_sampler(
+    cfg: SweepConfig, seed: int | None, scenarios: list[Scenario] | None = None
+) -> BaseSampler:
     """The Optuna sampler named by ``cfg.sampler``, seeded; constrained where it can be.
+
+    The constraints reach TPE, GP and NSGA-II through the trials (``trial.set_constraint``,
+    Optuna 5's way; its ``constraints_func`` is deprecated); CMA-ES and the grid ignore them.
 
     Parameters
     ----------
@@ -59,17 +68,26 @@ def make_sampler(cfg: SweepConfig, seed: int | None) -> BaseSampler:
         The sweep's configuration.
     seed : int or None
         The sampler's seed (``None``: unseeded).
+    scenarios : list of Scenario or None
+        The sweep's scenarios (the compass sampler's coordinates depend on their plants;
+        default: ``cfg``'s).
 
     Returns
     -------
     optuna.samplers.BaseSampler
-        TPE (multivariate), CMA-ES, GP, NSGA-II, grid or random.
+        Compass, TPE (multivariate), CMA-ES, GP, NSGA-II, grid or random.
     """
     import optuna
 
     s = optuna.samplers
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        if cfg.sampler == "compass":
+            from vfgym.tuning._compass import CompassSampler
+
+            base = _base_plant(cfg)
+            rel = relative_space(scenarios or cfg.scenario_list(), base)
+            return CompassSampler(rel, cfg.laws, seed)
         if cfg.sampler == "tpe":
             return s.TPESampler(seed=seed, multivariate=True)
         if cfg.sampler == "cmaes":
@@ -81,8 +99,80 @@ def make_sampler(cfg: SweepConfig, seed: int | None) -> BaseSampler:
         if cfg.sampler == "nsga2":
             return s.NSGAIISampler(seed=seed)
         if cfg.sampler == "grid":
-            return s.GridSampler(grid_space(cfg), seed=seed)
+            return _grid_sampler(grid_space(cfg), seed=seed)
         return s.RandomSampler(seed=seed)
+
+
+def _base_plant(cfg: SweepConfig) -> Plant:
+    axis = cfg.load_axis()
+    return PAPER_PLANT if axis is None else axis.plant
+
+
+def _grid_sampler(search_space: dict[str, list[Any]], seed: int | None) -> BaseSampler:
+    """Optuna's grid sampler without its ``after_trial`` stop: the worker's trial budget
+    (:func:`trial_budget`) ends the grid, and a batch told out of order would otherwise stop
+    the study outside ``optimize``, or look up the grid point of the enqueued baseline,
+    which has none."""
+    import optuna
+
+    class GridSampler(optuna.samplers.GridSampler):
+        def after_trial(self, study: Study, trial: object, state: object, values: object) -> None:
+            return None
+
+    return GridSampler(search_space, seed=seed)
+
+
+def relative_space(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> space.Relative:
+    """The compass sampler's coordinates for a scenario set.
+
+    Parameters
+    ----------
+    scenarios : list of Scenario
+        The sweep's scenarios.
+    base : Plant
+        The plant their loads are added to (an axis's; default the paper's).
+
+    Returns
+    -------
+    vfgym.space.Relative
+        ``k`` relative to the geometric mean of the acceleration limit's k
+        (:func:`vfgym.params.paper_k`) over the scenarios' plants.
+    """
+    ks = [paper_k(sc.plant(base)) for sc in scenarios] or [paper_k(base)]
+    return space.Relative(float(np.exp(np.mean(np.log(ks)))))
+
+
+BATCH = {"tpe": 1, "gp": 1, "cmaes": 8, "nsga2": 8, "grid": 16, "random": 16}
+"""Trials a worker claims and simulates at once, by sampler: one for the samplers that
+learn from every trial (TPE, GP: a batch would be asked blind), CMA-ES's population (4 +
+3 ln 4 = 8 in four dimensions), a share of NSGA-II's generation, and more for the grid
+and random sampling, which never look at results."""
+
+
+def batch_size(cfg: SweepConfig, sampler: object = None, study: Study | None = None) -> int:
+    """Trials a worker claims next.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+    sampler : optuna.samplers.BaseSampler or None
+        The worker's sampler; one with a ``batch_hint(study)`` method (the compass
+        sampler: the rest of its generation) says its own.
+    study : optuna.Study or None
+        The study.
+
+    Returns
+    -------
+    int
+        ``cfg.batch``, else the sampler's hint, else :data:`BATCH`'s.
+    """
+    if cfg.batch:
+        return cfg.batch
+    hint = getattr(sampler, "batch_hint", None)
+    if hint is not None and study is not None:
+        return int(hint(study))
+    return BATCH.get(cfg.sampler, 1)
 
 
 def grid_space(cfg: SweepConfig) -> dict[str, list[Any]]:
@@ -116,13 +206,16 @@ def trial_budget(cfg: SweepConfig) -> int:
     return cfg.trials
 
 
-def baseline_params(laws: tuple[str, ...]) -> dict[str, Any]:
-    """The paper's settings as trial parameters, the study's first (enqueued) trial.
+def baseline_params(laws: tuple[str, ...], settings: Settings = PAPER_SETTINGS) -> dict[str, Any]:
+    """Settings (the paper's by default) as trial parameters, clipped to the search space:
+    what the study's first (enqueued) trials try.
 
     Parameters
     ----------
     laws : tuple of str
         The laws searched.
+    settings : Settings
+        The settings.
 
     Returns
     -------
@@ -130,11 +223,40 @@ def baseline_params(laws: tuple[str, ...]) -> dict[str, Any]:
         The parameters; ``accel_law`` only when several laws are searched (the paper's,
         if among them, else the first).
     """
-    d = space.settings_to_dict(PAPER_SETTINGS)
+    d = space.settings_to_dict(settings)
     law = d.pop("accel_law")
+    for dim in space.SPACE:
+        d[dim.name] = min(max(d[dim.name], dim.low), dim.high)
     if len(laws) > 1:
         d["accel_law"] = law if law in laws else laws[0]
     return d
+
+
+def warm_starts(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> list[tuple[str, Settings]]:
+    """The settings a study tries first.
+
+    Parameters
+    ----------
+    scenarios : list of Scenario
+        The sweep's scenarios.
+    base : Plant
+        The plant their loads are added to (an axis's; default the paper's).
+
+    Returns
+    -------
+    list of (str, Settings)
+        The paper's settings, then the rule of thumb
+        (:func:`vfgym.moves.baselines.rule_of_thumb`) for the scenarios' most loaded plant
+        (the least usable acceleration, whose limits bind the set) if it differs; each
+        with its baseline's name.
+    """
+    plants = [sc.plant(base) for sc in scenarios]
+    loaded = min(plants, key=usable_accel) if plants else base
+    out = [("paper", PAPER_SETTINGS)]
+    rot = rule_of_thumb(loaded)
+    if rot != PAPER_SETTINGS:
+        out.append(("rule-of-thumb", rot))
+    return out
 
 
 @dataclass(frozen=True)
@@ -237,7 +359,9 @@ def create_or_load(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             study.set_metric_names(["cost"] if cfg.objective == "cost" else list(OBJECTIVES))
-        study.enqueue_trial(baseline_params(cfg.laws), user_attrs={"baseline": "paper"})
+        starts = warm_starts(scenarios, _base_plant(cfg))
+        for label, settings in starts[:1] if cfg.sampler == "grid" else starts:  # grid: exhaustive
+            study.enqueue_trial(baseline_params(cfg.laws, settings), user_attrs={"baseline": label})
         return study, True
     old = study.user_attrs.get(META_KEY)
     if old is not None:

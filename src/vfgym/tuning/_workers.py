@@ -23,16 +23,25 @@ import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
+from vfgym import space
 from vfgym.moves.axis import axis_kwargs
-from vfgym.params import PAPER_SETTINGS
+from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
 from vfgym.tuning._objective import Objective
-from vfgym.tuning._recovery import RetryStale, _fail_and_retry, _retry, counts, recover
+from vfgym.tuning._recovery import (
+    WORKER_ATTR,
+    RetryStale,
+    _fail_and_retry,
+    _retry,
+    _worker_id,
+    counts,
+    recover,
+)
 from vfgym.tuning._storage import StorageSpec, _claim_lock, open_storage
-from vfgym.tuning._study import make_sampler, trial_budget
+from vfgym.tuning._study import batch_size, make_sampler, trial_budget
 
 if TYPE_CHECKING:
     from optuna import Study
@@ -141,9 +150,11 @@ def run_worker(
 ) -> WorkerReport:
     """Run trials of ``study_name`` until it holds the trials asked for (or the timeout).
 
-    SIGINT is held back (:class:`DeferredInterrupt`) except inside a trial's evaluation
-    and while waiting; an interrupted trial is marked failed and enqueued again before
-    KeyboardInterrupt propagates.
+    Each round claims a batch of trials under the claim lock (asked of the sampler, their
+    settings stored, heartbeats started), simulates their settings in one batched call,
+    then tells the study each result. SIGINT is held back (:class:`DeferredInterrupt`)
+    except inside that simulation and while waiting; the trials of an interrupted batch
+    are marked failed and enqueued again before KeyboardInterrupt propagates.
 
     Parameters
     ----------
@@ -181,9 +192,8 @@ def run_worker(
     deadline = math.inf if cfg.timeout is None else time.monotonic() + cfg.timeout
     with DeferredInterrupt() as interrupts:
         storage = open_storage(spec, cfg.heartbeat, cfg.grace)
-        study = optuna.load_study(
-            study_name=study_name, storage=storage, sampler=make_sampler(cfg, seed)
-        )
+        sampler = make_sampler(cfg, seed, scenarios)
+        study = optuna.load_study(study_name=study_name, storage=storage, sampler=sampler)
         on_axis = axis_kwargs(cfg.load_axis())
         objective = Objective(
             scenarios,
@@ -196,13 +206,12 @@ def run_worker(
         # First call compiles/loads the kernel before any trial is claimed.
         evaluate(PAPER_SETTINGS, scenarios[:1], **on_axis)
         lock = _claim_lock(spec, study_name)
-
-        objective.on_enter = lock.release
+        beats = Heartbeats(storage)
         objective.guard = interrupts.allowed
+        claimed: list[Claimed] = []
         try:
             while True:
                 interrupts.check()
-                busy = False
                 lock.acquire()
                 try:
                     rep.recovered += recover(study, storage, spec, orphan_s)
@@ -213,36 +222,127 @@ def run_worker(
                     if time.monotonic() >= deadline:
                         rep.stopped = "timeout"
                         break
-                    busy = n["complete"] + n["running"] >= budget and n["waiting"] == 0
-                    if not busy:
-                        objective.current = None
-                        study.optimize(objective, n_trials=1, gc_after_trial=False)
+                    free = budget - n["complete"] - n["running"]
+                    size = batch_size(cfg, sampler, study)
+                    take = min(size, free) if free > 0 else min(1, n["waiting"])
+                    claimed = claim(study, objective, take, beats)
                 finally:
                     lock.release()
-                if busy:
+                if not claimed:
                     with interrupts.allowed():
                         time.sleep(poll_s)
                     continue
-                if objective.current is not None:
-                    rep.trials.append(objective.current)
-                    if on_trial is not None:
-                        on_trial(study)
+                run_batch(study, objective, claimed)
+                beats.stop()
+                rep.trials += [c.trial.number for c in claimed]
+                claimed = []
+                if on_trial is not None:
+                    on_trial(study)
         except KeyboardInterrupt:
             rep.stopped = "interrupted"
-            if objective.current is not None:
-                t = copy.deepcopy(study.get_trials(deepcopy=False)[objective.current])
-                if t.state == optuna.trial.TrialState.FAIL:
-                    _retry(study, t)
-                elif t.state == optuna.trial.TrialState.RUNNING:
-                    _fail_and_retry(study, t)
+            beats.stop()
+            give_back(study, claimed)
             raise
         finally:
+            beats.stop()
             rep.simulated = objective.simulated
             cb = getattr(storage, "heartbeat_stale_trial_callback", None)
-            if isinstance(cb, RetryStale):  # also those failed inside study.optimize
+            if isinstance(cb, RetryStale):  # also those failed while claiming
                 rep.recovered = sorted(set(rep.recovered) | set(cb.failed))
             lock.close()
     return rep
+
+
+def claim(study: Any, objective: Objective, n: int, beats: Heartbeats) -> list[Claimed]:
+    """Ask the study for ``n`` trials (waiting ones first), each with its heartbeat
+    started, this worker's name and its settings stored (call under the claim lock: a
+    retried trial inherits its dead worker's name, which must be gone when it goes)."""
+    out = []
+    for _ in range(n):
+        with warnings.catch_warnings():  # heartbeats are ours (:class:`Heartbeats`)
+            warnings.filterwarnings("ignore", message="Heartbeat of storage is supposed")
+            trial = study.ask()
+        beats.add(trial)
+        trial.set_user_attr(WORKER_ATTR, _worker_id())
+        objective.current = trial.number
+        out.append(Claimed(trial, space.suggest(trial, objective.laws)))
+    return out
+
+
+class Claimed(NamedTuple):
+    """A trial a worker claimed, and the settings drawn for it."""
+
+    trial: Any
+    settings: Settings
+
+
+def run_batch(study: Any, objective: Objective, batch: list[Claimed]) -> None:
+    """Score the batch's settings together (one batched simulation) and tell the study;
+    a failing evaluation fails the batch's trials and raises."""
+    import optuna
+
+    try:
+        results = objective.results(
+            study, [c.trial.number for c in batch], [c.settings for c in batch]
+        )
+    except KeyboardInterrupt:
+        raise
+    except Exception:
+        for c in batch:
+            study.tell(c.trial, state=optuna.trial.TrialState.FAIL)
+        raise
+    for c, res in zip(batch, results, strict=True):
+        objective.record(c.trial, res)
+        study.tell(c.trial, res.values)
+
+
+def give_back(study: Any, batch: list[Claimed]) -> None:
+    """Mark the claimed trials that did not complete failed and enqueue them again."""
+    import optuna
+
+    for c in batch:
+        t = copy.deepcopy(study.get_trials(deepcopy=False)[c.trial.number])
+        if t.state == optuna.trial.TrialState.FAIL:
+            _retry(study, t)
+        elif t.state == optuna.trial.TrialState.RUNNING:
+            _fail_and_retry(study, t)
+
+
+class Heartbeats:
+    """Heartbeats of the claimed trials on RDB storages (what ``study.optimize`` runs for
+    one trial): one recorded when a trial is claimed, then every ``heartbeat`` seconds
+    from a thread until :meth:`stop`. Without one, a dead worker's trial is never stale."""
+
+    def __init__(self, storage: Any) -> None:
+        interval = getattr(storage, "get_heartbeat_interval", lambda: None)()
+        self._storage = storage if interval else None
+        self._interval = float(interval or 0)
+        self._ids: list[int] = []
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def add(self, trial: Any) -> None:
+        if self._storage is None:
+            return
+        self._storage.record_heartbeat(trial._trial_id)
+        self._ids.append(trial._trial_id)
+        if self._thread is None:
+            self._stop.clear()
+            self._thread = threading.Thread(target=self._beat, daemon=True)
+            self._thread.start()
+
+    def _beat(self) -> None:
+        storage = self._storage
+        while storage is not None and not self._stop.wait(self._interval):
+            for trial_id in list(self._ids):
+                storage.record_heartbeat(trial_id)
+
+    def stop(self) -> None:
+        if self._thread is not None:
+            self._stop.set()
+            self._thread.join()
+            self._thread = None
+        self._ids = []
 
 
 def spawn_workers(

@@ -1,0 +1,417 @@
+"""The default sampler: a compass search in coordinates that fit the problem, from the warm
+starts, with Gaussian-process checks for a better basin; one generation per batch.
+
+The sweep's optimum sits on constraint edges (the acceleration limit, L = value), where a
+model of the cost is poor and a compass (pattern) search is good: it moves one axis at a
+time and halves its steps at an edge. But the cost has several basins (a short move is
+fastest with L ≈ value/3 and a near-instant jump, a long one with L = value and k on the
+acceleration limit), and a compass stays in the first it finds. So the search alternates:
+
+1. ``init``: the warm starts (enqueued by the study: the paper's settings, the rule of
+   thumb) and ``n_init`` scrambled Sobol points, as one batch.
+2. ``compass``: from the best warm start (feasible first, then by cost; an infeasible one
+   by its total violation), poll each of the four axes of :class:`vfgym.space.Relative`
+   both ways, plus the pattern move (the last move again) when the last generation moved;
+   move to the best poll if it beats the centre; per axis, widen the step ×1.5 where a
+   poll beat the centre, else halve it. After ``compass_trials`` trials, or when every
+   step is below ``min_step``, with a feasible centre:
+3. ``model``: a batch of points maximising the expected improvement of at least ``xi``
+   over the best feasible cost, times the probability of feasibility (Gaussian processes
+   on log cost and on each constraint, :mod:`vfgym.tuning._gp`); a batch is chosen one
+   point at a time, each conditioned on the previous ones at their predicted values.
+   Repeated until a feasible point beats the centre; the compass then starts again
+   there with fresh steps.
+
+Every choice is a deterministic function of the seed and the study's completed trials,
+and each sampled trial records its generation (system attribute ``vfgym:compass``), so a
+study resumed in a new process, or shared by several workers, continues the same search;
+a worker that asks while another's generation is still running gets model points that
+take the running trials into account.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+import optuna
+
+from vfgym import space
+from vfgym.tuning._gp import GaussianProcess, expected_improvement, norm_cdf
+
+ATTR = "vfgym:compass"
+"""System attribute of each trial the sampler draws: its generation's state and role."""
+
+
+class Observation(NamedTuple):
+    """A completed trial as the sampler sees it."""
+
+    number: int
+    x: np.ndarray  # log coordinates of :class:`vfgym.space.Relative`
+    law: str
+    cost: float
+    violation: float  # sum of the positive constraint values
+    feasible: bool
+    constraints: np.ndarray
+
+
+def rank(o: Observation) -> tuple:
+    """Feasible first, by cost; then infeasible ones by total violation, then cost."""
+    return (0, o.cost, 0.0) if o.feasible else (1, o.violation, o.cost)
+
+
+@dataclass(frozen=True)
+class CompassOptions:
+    """Settings of :class:`CompassSampler`: Latin-hypercube points of the first generation,
+    first and smallest compass step (natural-log units), trials of compass before the model
+    is consulted, model batch, least relative improvement sought, and model points handed to
+    a worker that asks while another's generation runs. (Chosen before the benchmark of
+    ``experiments/trials_to_reference.py`` existed; not tuned against it.)"""
+
+    n_init: int = 6
+    step0: float = 0.4
+    min_step: float = 0.1
+    compass_trials: int = 40
+    model_batch: int = 8
+    xi: float = 0.03
+    extra_batch: int = 4
+
+
+class CompassSampler(optuna.samplers.BaseSampler):
+    """An Optuna sampler (:class:`optuna.samplers.BaseSampler`) running the search above.
+
+    Parameters
+    ----------
+    relative : the search coordinates (``k`` relative to the acceleration limit's).
+    laws : acceleration laws searched (several: the law is one more coordinate).
+    seed : seed of the Sobol points and the model's candidates.
+    options : :class:`CompassOptions`.
+    """
+
+    def __init__(
+        self,
+        relative: space.Relative,
+        laws: tuple[str, ...] = ("rise",),
+        seed: int | None = None,
+        options: CompassOptions | None = None,
+    ) -> None:
+        self.relative = relative
+        self.laws = tuple(laws)
+        self.seed = 0 if seed is None else int(seed)
+        self.options = options or CompassOptions()
+        b = relative.bounds()
+        self._lo, self._span = b[:, 0], b[:, 1] - b[:, 0]
+        self._queue: list[dict[str, Any]] = []
+
+    # --- Optuna's sampler interface -----------------------------------------------------
+    def infer_relative_search_space(self, study: Any, trial: Any) -> dict[str, Any]:
+        return space.distributions(self.laws)
+
+    def sample_relative(self, study: Any, trial: Any, search_space: dict[str, Any]) -> dict:
+        if not search_space or "fixed_params" in trial.system_attrs:
+            return {}  # an enqueued trial (a warm start, a retry) keeps its settings
+        item = self._next(study)
+        study._storage.set_trial_system_attr(trial._trial_id, ATTR, item["tag"])
+        s = self.relative.settings(self._to_unit(np.asarray(item["x"])), item["law"])
+        params = {d.name: getattr(s, d.name) for d in space.SPACE}
+        if len(self.laws) > 1:
+            params["accel_law"] = s.accel_law
+        return params
+
+    def sample_independent(self, study: Any, trial: Any, name: str, dist: Any) -> Any:
+        rng = np.random.default_rng([self.seed, trial.number, 7])
+        return optuna.samplers.RandomSampler(seed=int(rng.integers(2**31))).sample_independent(
+            study, trial, name, dist
+        )
+
+    def before_trial(self, study: Any, trial: Any) -> None:
+        return None
+
+    def after_trial(self, study: Any, trial: Any, state: Any, values: Any) -> None:
+        return None
+
+    def reseed_rng(self) -> None:
+        return None
+
+    # --- batches --------------------------------------------------------------------------
+    def batch_hint(self, study: Any) -> int:
+        """How many trials the next batch should claim: the waiting (enqueued) ones, plus
+        the rest of the generation being handed out or the next one; while another
+        worker's generation runs, :attr:`CompassOptions.extra_batch` model points."""
+        import optuna
+
+        states = [t.state for t in study.get_trials(deepcopy=False)]
+        waiting = states.count(optuna.trial.TrialState.WAITING)
+        queue = self._queue_for(study)
+        if queue or waiting:
+            return waiting + len(queue)
+        return self.options.extra_batch
+
+    def _next(self, study: Any) -> dict[str, Any]:
+        queue = self._queue_for(study)
+        if not queue:  # asked beyond the plan while it runs (another worker, a retry)
+            queue = self._queue = self._extra_plan(study)
+        return queue.pop(0)
+
+    def _queue_for(self, study: Any) -> list[dict[str, Any]]:
+        """The rest of the generation this sampler is handing out, else the next one
+        (empty while another worker's generation is still running)."""
+        import optuna
+
+        trials = study.get_trials(deepcopy=False)
+        tagged = [t for t in trials if ATTR in t.system_attrs]
+        last = max((t.system_attrs[ATTR]["gen"] for t in tagged), default=-1)
+        if self._queue and self._queue[0]["tag"]["gen"] in (last, last + 1):
+            return self._queue
+        if any(t.system_attrs[ATTR]["gen"] == last and not t.state.is_finished() for t in tagged):
+            return []  # its retries wait, or another worker runs it
+        done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
+        obs = [o for o in (self._observe(t) for t in done) if o is not None]
+        self._queue = self._generation(obs, tagged, last)
+        return self._queue
+
+    def _extra_plan(self, study: Any) -> list[dict[str, Any]]:
+        import optuna
+
+        trials = study.get_trials(deepcopy=False)
+        last = max((t.system_attrs[ATTR]["gen"] for t in trials if ATTR in t.system_attrs),
+                   default=0)  # fmt: skip
+        done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
+        obs = [o for o in (self._observe(t) for t in done) if o is not None]
+        running = optuna.trial.TrialState.RUNNING
+        pending = [self._x_of(t) for t in trials if t.state == running and self._has_params(t)]
+        return self._extra(obs, pending, last, len(trials))
+
+    # --- the search ---------------------------------------------------------------------
+    def _generation(
+        self, obs: list[Observation], tagged: list[Any], last: int
+    ) -> list[dict[str, Any]]:
+        o = self.options
+        by_num = {ob.number: ob for ob in obs}
+        n_done = len(obs)
+        if last < 0 or not obs:
+            return self._sobol(last + 1)
+        mine = [
+            t
+            for t in tagged
+            if t.system_attrs[ATTR]["gen"] == last and t.system_attrs[ATTR]["role"] != "extra"
+        ]
+        st = mine[0].system_attrs[ATTR]
+        steps = np.asarray(st["steps"], dtype=np.float64)
+        if st["mode"] == "init":
+            ours = {t.number for t in tagged}
+            warm = [ob for ob in obs if ob.number not in ours] or obs
+            if not warm:
+                return self._sobol(last + 1)
+            centre = min(warm, key=rank)
+            return self._compass(last + 1, centre, None, np.full(4, o.step0), n_done)
+        # The centre's trial may be gone (failed): the best instead.
+        centre = by_num.get(st["centre"]) or min(obs, key=rank)
+        done_here = [by_num[t.number] for t in mine if t.number in by_num]
+        if st["mode"] == "compass":
+            improved = np.zeros(4, dtype=bool)
+            for t in mine:
+                role = t.system_attrs[ATTR]["role"]
+                ob = by_num.get(t.number)
+                if ob is not None and role.startswith("axis") and rank(ob) < rank(centre):
+                    improved[int(role.split(":")[1])] = True
+            best = min(done_here, key=rank, default=centre)
+            prev = None
+            if rank(best) < rank(centre):
+                prev, centre = centre, best
+            steps = np.where(improved, np.minimum(steps * 1.5, 2.0), steps * 0.5)
+            stale = steps.max() < o.min_step or n_done - st["since"] >= o.compass_trials
+            if centre.feasible and stale:
+                return self._model(last + 1, obs, centre, steps, st["since"], [])
+            if steps.max() < o.min_step:
+                steps = np.full(4, o.step0)
+            return self._compass(last + 1, centre, prev, steps, st["since"]) or self._model(
+                last + 1, obs, centre, steps, st["since"], []
+            )
+        best = min(done_here, key=rank, default=centre)
+        if best.feasible and rank(best) < rank(centre):
+            return self._compass(last + 1, best, None, np.full(4, o.step0), n_done)
+        return self._model(last + 1, obs, centre, steps, st["since"], [])
+
+    def _tag(self, gen: int, mode: str, role: str, centre: Observation | None,
+             steps: np.ndarray, since: int) -> dict[str, Any]:  # fmt: skip
+        return {
+            "gen": gen,
+            "mode": mode,
+            "role": role,
+            "centre": None if centre is None else centre.number,
+            "steps": [float(s) for s in steps],
+            "since": since,
+        }
+
+    def _sobol(self, gen: int) -> list[dict[str, Any]]:
+        n = self.options.n_init
+        u = latin_hypercube(n, 4, self._rng(gen, 1))
+        tag = self._tag(gen, "init", "lhs", None, np.full(4, self.options.step0), 0)
+        return [
+            {"x": self._from_unit(p), "law": self.laws[i % len(self.laws)], "tag": tag}
+            for i, p in enumerate(u)
+        ]
+
+    def _compass(self, gen: int, centre: Observation, prev: Observation | None,
+                 steps: np.ndarray, since: int) -> list[dict[str, Any]]:  # fmt: skip
+        lo, hi = self._lo, self._lo + self._span
+        out: list[dict[str, Any]] = []
+        seen = {tuple(centre.x)}
+
+        def add(x: np.ndarray, role: str, law: str = centre.law) -> None:
+            x = np.clip(x, lo, hi)
+            if (tuple(x), law) in seen:
+                return
+            seen.add((tuple(x), law))
+            out.append({"x": x, "law": law,
+                        "tag": self._tag(gen, "compass", role, centre, steps, since)})  # fmt: skip
+
+        seen = {(tuple(centre.x), centre.law)}
+        if prev is not None:
+            add(centre.x + (centre.x - prev.x), "pattern")
+        for d in range(4):
+            for sign in (1, -1):
+                x = centre.x.copy()
+                x[d] += sign * steps[d]
+                add(x, f"axis:{d}:{sign:+d}")
+        for law in self.laws:
+            if law != centre.law:
+                add(centre.x.copy(), "law", law)
+        return out
+
+    def _model(self, gen: int, obs: list[Observation], centre: Observation,
+               steps: np.ndarray, since: int, pending: list[tuple[np.ndarray, str]],
+               n: int | None = None, role: str = "model") -> list[dict[str, Any]]:  # fmt: skip
+        o = self.options
+        rng = self._rng(gen, 2 + len(pending))
+        pts = propose(self._inputs(obs), obs, [self._input(x, law) for x, law in pending],
+                      n or o.model_batch, o.xi, rng, len(self.laws))  # fmt: skip
+        tag = self._tag(gen, "model", role, centre, steps, since)
+        out = []
+        for p in pts:
+            law = (
+                self.laws[round(p[4] * (len(self.laws) - 1))]
+                if len(self.laws) > 1
+                else self.laws[0]
+            )
+            out.append({"x": self._from_unit(p[:4]), "law": law, "tag": tag})
+        return out
+
+    def _extra(self, obs: list[Observation], pending: list, last: int, k: int) -> list:
+        """Points for a worker that asks while a generation is still running."""
+        if len(obs) < 2:
+            plan = self._sobol(last)
+            return plan[k % len(plan):][:1] or plan[:1]  # fmt: skip
+        centre = min(obs, key=rank)
+        return self._model(last, obs, centre, np.full(4, self.options.step0), len(obs),
+                           pending, self.options.extra_batch, "extra")  # fmt: skip
+
+    # --- coordinates --------------------------------------------------------------------
+    def _rng(self, gen: int, salt: int) -> np.random.Generator:
+        return np.random.default_rng([self.seed, gen, salt])
+
+    def _to_unit(self, x: np.ndarray) -> np.ndarray:
+        return (x - self._lo) / self._span
+
+    def _from_unit(self, u: np.ndarray) -> np.ndarray:
+        return self._lo + np.clip(u, 0.0, 1.0) * self._span
+
+    def _input(self, x: np.ndarray, law: str) -> np.ndarray:
+        u = self._to_unit(x)
+        if len(self.laws) > 1:
+            u = np.r_[u, self.laws.index(law) / (len(self.laws) - 1)]
+        return u
+
+    def _inputs(self, obs: list[Observation]) -> np.ndarray:
+        return np.array([self._input(o.x, o.law) for o in obs])
+
+    def _x_of(self, trial: Any) -> tuple[np.ndarray, str]:
+        s = space.Settings(**{d.name: trial.params[d.name] for d in space.SPACE},
+                           accel_law=trial.params.get("accel_law", self.laws[0]))  # fmt: skip
+        return self._lo + self.relative.to_unit(s) * self._span, s.accel_law
+
+    def _has_params(self, trial: Any) -> bool:
+        return all(d.name in trial.params for d in space.SPACE)
+
+    def _observe(self, trial: Any) -> Observation | None:
+        if trial.value is None or not self._has_params(trial):
+            return None
+        x, law = self._x_of(trial)
+        cons = np.array([float(v) for _, v in sorted(trial.constraints.items())])
+        viol = float(np.maximum(cons, 0.0).sum()) if cons.size else 0.0
+        return Observation(trial.number, x, law, float(trial.value), viol, viol <= 0.0, cons)
+
+
+MODEL_POINTS = 160
+"""At most this many observations inform the model (the best half and the latest half)."""
+
+
+def latin_hypercube(n: int, dim: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` points in [0, 1]^dim, one in each of n equal slices of every axis."""
+    u = (np.argsort(rng.random((dim, n)), axis=1).T + rng.random((n, dim))) / max(n, 1)
+    return u
+
+
+def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
+            xi: float, rng: np.random.Generator, n_laws: int = 1) -> list[np.ndarray]:  # fmt: skip
+    """``n`` points (unit coordinates) of highest expected improvement (by at least
+    ``xi`` over the best feasible cost) times probability of feasibility, each conditioned
+    on the previous ones and on ``pending`` at their predicted values. Two Gaussian
+    processes: log cost (on the feasible points once there are three) and the worst
+    constraint (signed log). Linear algebra on one thread: OpenBLAS's threads spin on
+    matrices this small, 30x slower on a busy machine (measured, 150 points)."""
+    from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
+
+    with threadpool_limits(1, user_api="blas"):
+        return _propose(x, obs, pending, n, xi, rng, n_laws)
+
+
+def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
+             xi: float, rng: np.random.Generator, n_laws: int) -> list[np.ndarray]:  # fmt: skip
+    if len(obs) > MODEL_POINTS:
+        order = sorted(range(len(obs)), key=lambda i: rank(obs[i]))
+        keep = sorted(set(order[: MODEL_POINTS // 2]) | set(range(len(obs))[-MODEL_POINTS // 2 :]))
+        x, obs = x[keep], [obs[i] for i in keep]
+    y = np.log(np.maximum([o.cost for o in obs], 1e-12))
+    feas = np.array([o.feasible for o in obs])
+    cons = np.array([o.constraints for o in obs])
+    fit = feas if feas.sum() >= 3 else np.ones(len(obs), dtype=bool)
+    gp = GaussianProcess(x[fit], y[fit])
+    worst = cons.max(axis=1) if cons.size else np.zeros(len(obs))
+    cgps = [GaussianProcess(x, _signed_log(worst))] if (worst > 0).any() else []
+    best = y[feas].min() + math.log1p(-xi) if feas.any() else None
+    top = x[np.argsort(np.where(feas, y, np.inf), kind="stable")[:3]]
+    models = [gp, *cgps]
+    for p in pending:
+        for m in models:
+            m.condition(p[None], float(m.predict(p[None])[0][0]))
+    dim = x.shape[1]
+    out = []
+    for _ in range(n):
+        cand = [rng.random((1024, dim))]
+        for t in top:
+            for scale in (0.1, 0.03):
+                dz = np.zeros((200, dim))
+                dz[np.arange(200), rng.integers(0, 4, 200)] = rng.normal(0.0, scale, 200)
+                cand.append(np.clip(t + dz, 0.0, 1.0))
+        c = np.vstack(cand)
+        if n_laws > 1:
+            c[:, 4] = np.round(c[:, 4] * (n_laws - 1)) / (n_laws - 1)
+        mu, sd = gp.predict(c)
+        pf = np.ones(len(c))
+        for m in cgps:
+            cm, cs = m.predict(c)
+            pf *= norm_cdf(-cm / np.maximum(cs, 1e-9))
+        acq = pf if best is None else expected_improvement(best, mu, sd) * pf
+        j = int(np.argmax(acq))
+        out.append(c[j])
+        for m in models:
+            m.condition(c[j][None], float(m.predict(c[j][None])[0][0]))
+    return out
+
+
+def _signed_log(v: np.ndarray) -> np.ndarray:
+    return np.sign(v) * np.log1p(np.abs(v))

@@ -1,0 +1,153 @@
+"""A small Gaussian process for the compass sampler's model: Matérn-5/2 kernel with one
+length scale per axis, constant mean, hyperparameters fitted by maximum marginal
+likelihood (Adam on their logarithms, within bounds), and the normal distribution's
+functions the expected improvement needs.
+
+Plain numpy (scipy is not a dependency of vfgym), sized for a sweep's few hundred points
+in four dimensions.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+SQRT5 = math.sqrt(5.0)
+COLD_STEPS, WARM_STEPS = 60, 20
+"""Adam steps of a fit from the default hyperparameters, and from a previous fit's."""
+LEARNING_RATE = 0.1
+
+LENGTH_BOUNDS = (0.02, 5.0)
+"""Length scales allowed, in unit coordinates (the search box is [0, 1] per axis)."""
+NOISE_BOUNDS = (1e-6, 0.2)
+"""Noise variance allowed, on standardised targets: the objective is exact, but its cliffs
+(a constraint crossed) are better taken as noise than as wild wiggles."""
+
+
+def matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """The Matérn-5/2 correlation between the rows of ``a`` and of ``b``."""
+    d = (a[:, None, :] - b[None, :, :]) / lengths
+    r = np.sqrt(np.maximum((d * d).sum(-1), 0.0))
+    return (1.0 + SQRT5 * r + (5.0 / 3.0) * r * r) * np.exp(-SQRT5 * r)
+
+
+class GaussianProcess:
+    """A GP regression of ``y`` on the points ``x`` (unit coordinates).
+
+    Parameters
+    ----------
+    x : (n, d) array of points.
+    y : (n,) array of targets (standardised inside).
+    start : log hyperparameters to start the fit from (a previous fit's ``theta``), which
+        then takes fewer steps.
+    """
+
+    def __init__(self, x: np.ndarray, y: np.ndarray, start: Any = None) -> None:
+        self.x = np.asarray(x, dtype=np.float64)
+        y = np.asarray(y, dtype=np.float64)
+        self.mean = float(y.mean())
+        self.scale = float(y.std()) or 1.0
+        self.y = (y - self.mean) / self.scale
+        d = self.x.shape[1]
+        default = np.r_[np.full(d, math.log(0.3)), 0.0, math.log(1e-3)]
+        if start is not None and len(start) == len(default):
+            self.theta = self._fit(np.asarray(start, dtype=np.float64), WARM_STEPS)
+        else:
+            self.theta = self._fit(default, COLD_STEPS)
+        self._factor()
+
+    def _unpack(self, theta: np.ndarray) -> tuple[np.ndarray, float, float]:
+        d = self.x.shape[1]
+        return np.exp(theta[:d]), float(np.exp(theta[d])), float(np.exp(theta[d + 1]))
+
+    def _nll(self, theta: np.ndarray) -> tuple[float, np.ndarray]:
+        """Negative log marginal likelihood and its gradient in the log hyperparameters."""
+        lengths, var, noise = self._unpack(theta)
+        n, dim = self.x.shape
+        diff2 = ((self.x[:, None, :] - self.x[None, :, :]) / lengths) ** 2
+        r = np.sqrt(np.maximum(diff2.sum(-1), 0.0))
+        e = np.exp(-SQRT5 * r)
+        corr = (1.0 + SQRT5 * r + (5.0 / 3.0) * r * r) * e
+        k = var * corr + (noise + 1e-10) * np.eye(n)
+        try:
+            chol = np.linalg.cholesky(k)
+        except np.linalg.LinAlgError:
+            return 1e25, np.zeros_like(theta)
+        alpha = np.linalg.solve(chol.T, np.linalg.solve(chol, self.y))
+        nll = 0.5 * float(self.y @ alpha) + float(np.log(np.diag(chol)).sum())
+        kinv = np.linalg.solve(chol.T, np.linalg.solve(chol, np.eye(n)))
+        w = np.outer(alpha, alpha) - kinv  # d nll / d K = -w / 2
+        grad = np.empty_like(theta)
+        common = var * (5.0 / 3.0) * (1.0 + SQRT5 * r) * e
+        for i in range(dim):
+            grad[i] = -0.5 * float((w * (common * diff2[:, :, i])).sum())
+        grad[dim] = -0.5 * float((w * (var * corr)).sum())
+        grad[dim + 1] = -0.5 * float(np.trace(w)) * noise
+        return nll, grad
+
+    def _fit(self, start: np.ndarray, steps: int) -> np.ndarray:
+        """Adam on the log hyperparameters, projected onto their bounds; the best seen."""
+        dim = self.x.shape[1]
+        lo = np.r_[
+            np.full(dim, math.log(LENGTH_BOUNDS[0])), math.log(0.05), math.log(NOISE_BOUNDS[0])
+        ]
+        hi = np.r_[
+            np.full(dim, math.log(LENGTH_BOUNDS[1])), math.log(20.0), math.log(NOISE_BOUNDS[1])
+        ]
+        theta = np.clip(start, lo, hi)
+        m = np.zeros_like(theta)
+        v = np.zeros_like(theta)
+        best, best_f = theta.copy(), math.inf
+        for i in range(1, steps + 1):
+            f, g = self._nll(theta)
+            if f < best_f:
+                best, best_f = theta.copy(), f
+            m = 0.9 * m + 0.1 * g
+            v = 0.999 * v + 0.001 * g * g
+            step = LEARNING_RATE * (m / (1 - 0.9**i)) / (np.sqrt(v / (1 - 0.999**i)) + 1e-8)
+            theta = np.clip(theta - step, lo, hi)
+        return best
+
+    def _factor(self) -> None:
+        lengths, var, noise = self._unpack(self.theta)
+        self.lengths, self.var, self.noise = lengths, var, noise
+        k = var * matern52(self.x, self.x, lengths) + (noise + 1e-10) * np.eye(len(self.x))
+        self.chol = np.linalg.cholesky(k)
+        self.alpha = np.linalg.solve(self.chol.T, np.linalg.solve(self.chol, self.y))
+
+    def condition(self, x: np.ndarray, y: float) -> None:
+        """Add one observation, keeping the hyperparameters (a batch's "believed" points)."""
+        self.x = np.vstack([self.x, x])
+        self.y = np.append(self.y, (y - self.mean) / self.scale)
+        self._factor()
+
+    def predict(self, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Posterior mean and standard deviation at the rows of ``xs``, in ``y``'s units."""
+        ks = self.var * matern52(xs, self.x, self.lengths)
+        mu = ks @ self.alpha
+        v = np.linalg.solve(self.chol, ks.T)
+        sd = np.sqrt(np.maximum(self.var - (v * v).sum(0), 1e-18))
+        return mu * self.scale + self.mean, sd * self.scale
+
+
+def norm_cdf(z: np.ndarray) -> np.ndarray:
+    """The standard normal distribution function (``math.erfc`` element-wise)."""
+    z = np.asarray(z, dtype=np.float64)
+    return 0.5 * _erfc(-z / math.sqrt(2.0))
+
+
+def norm_pdf(z: np.ndarray) -> np.ndarray:
+    """The standard normal density."""
+    z = np.asarray(z, dtype=np.float64)
+    return np.exp(-0.5 * z * z) / math.sqrt(2.0 * math.pi)
+
+
+_erfc = np.vectorize(math.erfc, otypes=[np.float64])
+
+
+def expected_improvement(best: float, mu: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """E[max(best − f, 0)] for f ~ N(mu, sd²) (minimisation)."""
+    z = (best - mu) / sd
+    return (best - mu) * norm_cdf(z) + sd * norm_pdf(z)
