@@ -41,10 +41,10 @@ PROBLEMS = (
     "heavy-load",
     "short-move",
     "multi-move",
-    "experiments/axes/bare.yaml:train",
+    "experiments/axes/paper.yaml:train",
 )
 """The paper's step; one loaded, one short, one multi-move scenario; the main job's train
-set (the 16 train moves of the bare axis, one machine, its load fixed). ``AXIS_FILE:SET``
+set (the 16 train moves of the default axis, one machine, its load fixed). ``AXIS_FILE:SET``
 is a scenario set on an axis."""
 
 
