@@ -22,6 +22,7 @@ import pytest
 import yaml
 
 from vfgym import tuning
+from vfgym.tuning._study import BATCH
 
 SRC = Path(__file__).resolve().parents[2] / "src"
 PG_URL = os.environ.get("VFGYM_TEST_POSTGRES_URL")
@@ -178,18 +179,22 @@ def test_interrupted_sweep_continues_where_it_stopped(tmp_path, kind):
     states = Counter(t.state for t in study.trials)
     k = states[COMPLETE]
     assert 6 <= k < 2000 and states[RUNNING] == 0
-    # An interrupted trial is failed and enqueued again; nothing else is left behind.
-    assert states[FAIL] == states[WAITING] <= 1
+    # The interrupted batch (the trials claimed together, at most one batch) is failed and
+    # each of its trials enqueued again once; nothing else is left behind.
+    assert states[FAIL] == states[WAITING] <= max(BATCH.values())
+    retried = sorted(t.system_attrs["failed_trial"] for t in study.trials if t.state == WAITING)
+    assert retried == sorted(t.number for t in study.trials if t.state == FAIL)
     kept = {t.number: t.values for t in study.trials if t.state == COMPLETE}
     run_dir = tmp_path / "sweep" / "r"
     assert (run_dir / "trials.csv").read_text().count("\n") == len(study.trials) + 1
 
-    q = subprocess.run(cmd(tmp_path, "r", kind, "--trials", str(k + 4)), env=env(),
+    more = max(4, states[WAITING])  # enough for every retry (they run first)
+    q = subprocess.run(cmd(tmp_path, "r", kind, "--trials", str(k + more)), env=env(),
                        capture_output=True, text=True, timeout=300)  # fmt: skip
     assert q.returncode == 0, q.stderr
-    assert f"(continued: {k}/{k + 4} trials done)" in q.stdout
+    assert f"(continued: {k}/{k + more} trials done)" in q.stdout
     final = load(tmp_path, "r", kind)
-    assert Counter(t.state for t in final.trials)[COMPLETE] == k + 4
+    assert Counter(t.state for t in final.trials)[COMPLETE] == k + more
     for n, values in kept.items():
         assert final.trials[n].state == COMPLETE and final.trials[n].values == values
     for t in final.trials:
