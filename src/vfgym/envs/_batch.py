@@ -35,6 +35,7 @@ from vfgym.plant._notice import announce_compile
 from vfgym.plant._threads import keeps_torch_threads
 from vfgym.scoring import _cost_compiled as CC
 
+from . import _common
 from ._common import clip_feature
 
 _jit = J.jit
@@ -476,6 +477,6 @@ def ring_size(prm: np.ndarray) -> int:
     return int(K.ring_size(prm))
 
 
-# The functions here compile the kernel, its tick, the lane kernel and the compiled cost
-# into themselves.
-J.guard_cache(step_one, (K, TK, LN, L, CC))
+# The functions here compile the kernel, its tick, the lane kernel, the compiled cost and
+# the observation clip (_common.clip_feature) into themselves.
+J.guard_cache(step_one, (K, TK, LN, L, CC, _common))
