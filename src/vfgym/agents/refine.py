@@ -13,7 +13,6 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass
 
-from vfgym import space
 from vfgym._validate import check_int
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
@@ -82,7 +81,14 @@ def refine(
     """
     import optuna
 
-    from vfgym.tuning import Objective, SweepConfig, best_trial, make_sampler, trial_settings
+    from vfgym.tuning import (
+        Objective,
+        SweepConfig,
+        baseline_params,
+        best_trial,
+        make_sampler,
+        trial_settings,
+    )
 
     trials = check_int("refine", trials, 1)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -90,10 +96,9 @@ def refine(
     cfg = SweepConfig(laws=laws, seed=seed, plots=False)  # its sampler: the default
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        study = optuna.create_study(direction="minimize", sampler=make_sampler(cfg, cfg.seed))
-    params = space.settings_to_dict(start)
-    params.pop("accel_law")
-    study.enqueue_trial(params)
+        sampler = make_sampler(cfg, cfg.seed, [scenario])  # coordinates from this move
+        study = optuna.create_study(direction="minimize", sampler=sampler)
+    study.enqueue_trial(baseline_params(laws, start))
     objective = Objective([scenario], laws, "cost", plant=plant, measures=measures)
     study.optimize(objective, n_trials=trials)
     done = study.trials
