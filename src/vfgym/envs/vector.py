@@ -114,10 +114,15 @@ class _BatchVectorEnv(VectorEnv):
         """The current observations, a new (num_envs, n) float32 array."""
         raise NotImplementedError
 
-    def _check_actions(self, actions: Any, active: np.ndarray) -> np.ndarray:
-        """The actions as a C-contiguous float array; a misshapen batch, or a NaN or
-        out-of-box action of an active sub-env, raises ``ValueError`` before anything
-        changes."""
+    _SIMULATE_CHECKS_ACTIONS = False
+    """True when :meth:`_simulate` itself refuses a NaN or out-of-box action before it
+    changes anything (VFServo-v0's compiled step), so that a step which resets nothing
+    before simulating need not check them in Python first."""
+
+    def _check_actions(self, actions: Any, active: np.ndarray, ranges: bool = True) -> np.ndarray:
+        """The actions as a C-contiguous float array; a misshapen batch, or (with
+        ``ranges``) a NaN or out-of-box action of an active sub-env, raises ``ValueError``
+        before anything changes."""
         a = np.asarray(actions)
         if a.shape != (self.num_envs, 4) or a.dtype.kind not in "fiu":
             raise ValueError(
@@ -126,6 +131,8 @@ class _BatchVectorEnv(VectorEnv):
             )
         if a.dtype not in (np.float32, np.float64) or not a.flags.c_contiguous:
             a = np.ascontiguousarray(a, dtype=np.float64)
+        if not ranges:
+            return a
         ok = (np.abs(a.astype(np.float64, copy=False)) <= 1.0 + B.ACTION_TOL).all(axis=1)
         bad = np.flatnonzero(active & ~ok)
         if bad.size:
@@ -211,7 +218,7 @@ class _BatchVectorEnv(VectorEnv):
         (last observation, reset info)."""
         if not self._started:
             raise ResetNeeded("call reset() before step()")
-        a = self._check_actions(actions, self._all)
+        a = self._check_actions(actions, self._all, not self._SIMULATE_CHECKS_ACTIONS)
         rew, term, trunc, ends = self._simulate(a, self._all)
         done = np.flatnonzero(term | trunc)
         finals: dict[int, Any] = {}
@@ -397,6 +404,8 @@ class VFServoVectorEnv(_BatchVectorEnv):
         self._lanes = B.lane_scratch(n, self.core.interval_ticks, self.core.acc_window)
         self._eps: list[Episode | None] = [None] * n
         self._obs = slice(B.W_OBS, B.W_OBS + self.core.n_obs)
+
+    _SIMULATE_CHECKS_ACTIONS = True  # step_batch: every action checked before any step
 
     @property
     def accel_law(self) -> str:
