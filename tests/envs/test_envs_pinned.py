@@ -6,7 +6,9 @@ change, not by the code under test."""
 
 from __future__ import annotations
 
+import numba
 import numpy as np
+import pytest
 
 from vfgym.envs.vector import VFServoVectorEnv, VFTuneVectorEnv
 
@@ -79,3 +81,44 @@ def test_servo_episodes_as_before() -> None:
     assert total.tolist() == [H(x) for x in SERVO_RETURNS]
     assert ends == SERVO_ENDS
     assert float(obs.astype(np.float64).sum()) == H(SERVO_OBS_SUM)
+
+
+SB3_TUNE_REWARDS = [  # float32, as the SB3 adapter returns them
+    ["-0x1.b2acc4p+5", "-0x1.664598p+4", "-0x1.f47a0ep+8", "-0x1.18845p+2"],
+    ["-0x1.6dc80cp+4", "-0x1.4a3c52p+4", "-0x1.e63b72p+2", "-0x1.2cf992p+6"],
+    ["-0x1.c8b7b4p+5", "-0x1.0932ap+4", "-0x1.c6377p+3", "-0x1.74e75cp+5"],
+]
+SB3_TUNE_OBS_SUMS = ["0x1.68f752e3p+4", "0x1.67317c7cp+4", "0x1.91fc6385p+4"]
+SB3_TUNE_NEXT = [
+    ["train-384259586", "train-17191595", "train-830544272", "train-1716092143"],
+    ["train-56731231", "train-318890903", "train-766530883", "train-595477346"],
+    ["train-1374203059", "train-828676468", "train-1272505875", "train-82488969"],
+]
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_sb3_tune_episodes_as_before(threads: int) -> None:
+    """The SB3 adapter's same-step path, where VFTune-v0 draws the next moves while the
+    batch simulates (beside it on a worker thread with two numba threads, after it with
+    one): main's numbers either way."""
+    if threads > numba.config.NUMBA_NUM_THREADS:
+        pytest.skip("numba started with fewer threads")
+    from vfgym.envs.sb3 import make_sb3_vec_env
+
+    before = numba.get_num_threads()
+    numba.set_num_threads(threads)
+    try:
+        venv = make_sb3_vec_env("vfgym/VFTune-v0", n_envs=4, seed=2026)
+        venv.reset()
+        rng = np.random.default_rng(5)
+        for k in range(3):
+            obs, rew, done, infos = venv.step(rng.uniform(-1, 1, (4, 4)).astype(np.float32))
+            assert rew.tolist() == [H(x) for x in SB3_TUNE_REWARDS[k]], k
+            assert float(obs.astype(np.float64).sum()) == H(SB3_TUNE_OBS_SUMS[k]), k
+            assert done.all()
+            assert [r["scenario"] for r in venv.reset_infos] == SB3_TUNE_NEXT[k], k
+            last = [np.asarray(i["terminal_observation"], np.float64).sum() for i in infos]
+            previous = SB3_TUNE_OBS_SUMS[k - 1] if k else "0x1.6f8bead2p+4"
+            assert float(sum(last)) == H(previous), k
+    finally:
+        numba.set_num_threads(before)
