@@ -62,7 +62,8 @@ class SB3VecEnv(VecEnv):
         rew, term, trunc, ends, finals = self.venv._step_same(self._actions)
         self._actions = None
         dones = term | trunc
-        limits = (trunc & ~term).tolist()
+        # a truncation (not a termination) is an ended episode's
+        limits = (trunc & ~term).tolist() if ends else [False] * self.num_envs
         infos: list[dict[str, Any]] = [{"TimeLimit.truncated": x} for x in limits]
         for i, info in ends.items():
             info["TimeLimit.truncated"] = limits[i]

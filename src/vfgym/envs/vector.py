@@ -462,7 +462,10 @@ class VFServoVectorEnv(_BatchVectorEnv):
         if bad >= 0:
             raise_bad_action(actions[bad], self.core.accel_law, bad)
         flags = self._flags
-        rew = np.where(active, self._W[:, B.X_REWARD], 0.0)
+        if active is self._all:  # every sub-env stepped (same-step autoreset, SB3)
+            rew = self._W[:, B.X_REWARD].copy()
+        else:
+            rew = np.where(active, self._W[:, B.X_REWARD], 0.0)
         ends: dict[int, Infos] = {}
         if not flags.any():  # most steps: no episode ended
             none = np.zeros(self.num_envs, dtype=np.bool_)
