@@ -258,8 +258,8 @@ def score_pairs(
         return out
     acc = K.new_acc(len(rows))
     announce_compile("evaluate", "the batched simulation kernel", K.run_batch)
-    _run_beside(
-        keeps_torch_threads(K.run_batch),
+    keeps_torch_threads(_run_beside)(
+        K.run_batch,
         while_running,
         np.concatenate(cmds),
         np.concatenate([[0], np.cumsum([c.size for c in cmds])]).astype(np.int64),
@@ -280,12 +280,16 @@ def score_pairs(
 def _run_beside(run: Callable[..., None], beside: Callable[[], None] | None, *args: Any) -> None:
     """``run(*args)`` (a compiled call, which releases the GIL) with ``beside()`` on this
     thread: at once on a worker thread when this thread may use two or more numba
-    threads, else one after the other. Python stays on this thread."""
-    n = numba.get_num_threads()
-    if beside is None or n < 2:
+    threads, else one after the other. Python stays on this thread; the caller guards
+    torch's thread count around the whole (the first query of numba's threads starts
+    them), and the worker calls nothing of torch's."""
+    if beside is None:
         run(*args)
-        if beside is not None:
-            beside()
+        return
+    n = numba.get_num_threads()
+    if n < 2:
+        run(*args)
+        beside()
         return
     failed: list[BaseException] = []
 
