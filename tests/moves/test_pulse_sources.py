@@ -633,4 +633,4 @@ def test_property_scurve_command_is_the_trains_running_count(dist, sign, v, a, d
     want[m:] = want[m - 1]
     got = profiles.scurve(sign * dist, v, a, dur, PAPER_PLANT.tick_hz, delta)
     np.testing.assert_array_equal(got, math.copysign(delta, sign) * want)
-    np.testing.assert_array_equal(np.diff(scurve_counts(total, **args)), train)
+    np.testing.assert_array_equal(np.diff(scurve_counts(scurve_profile(total, **args))), train)

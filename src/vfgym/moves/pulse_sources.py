@@ -587,50 +587,6 @@ def scurve_pulses(
     ValueError
         Naming the parameter, its value and the allowed range.
     """
-    counts = scurve_counts(
-        total_pulses,
-        initial_speed_pps=initial_speed_pps,
-        drive_speed_pps=drive_speed_pps,
-        jerk_pps3=jerk_pps3,
-        tick_hz=tick_hz,
-        triangle_prevention=triangle_prevention,
-        stop_tick=stop_tick,
-    )
-    return np.diff(counts).astype(np.int8)
-
-
-def scurve_counts(
-    total_pulses: int,
-    *,
-    initial_speed_pps: float,
-    drive_speed_pps: float,
-    jerk_pps3: float,
-    tick_hz: float,
-    triangle_prevention: bool = True,
-    stop_tick: int | None = None,
-) -> np.ndarray:
-    """The pulses an S-curve fixed-pulse move has output by each tick boundary: the
-    running count of :func:`scurve_pulses` (its train is this array's steps), for callers
-    that want positions, such as the S-curve command profile.
-
-    Parameters
-    ----------
-    total_pulses, initial_speed_pps, drive_speed_pps, jerk_pps3, tick_hz
-        As in :func:`scurve_pulses`.
-    triangle_prevention, stop_tick
-        As in :func:`scurve_pulses`.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``int64``, one entry per tick boundary 0 … len(train): 0 first, then the count
-        after each tick.
-
-    Raises
-    ------
-    ValueError
-        Naming the parameter, its value and the allowed range.
-    """
     prof = scurve_profile(
         total_pulses,
         initial_speed_pps=initial_speed_pps,
@@ -640,6 +596,25 @@ def scurve_counts(
         triangle_prevention=triangle_prevention,
         stop_tick=stop_tick,
     )
+    return np.diff(scurve_counts(prof)).astype(np.int8)
+
+
+def scurve_counts(prof: ScurveProfile) -> np.ndarray:
+    """The pulses an S-curve fixed-pulse move has output by each tick boundary: the
+    running count of its pulse train (:func:`scurve_pulses` is this array's steps), for
+    callers that want positions, such as the S-curve command profile.
+
+    Parameters
+    ----------
+    prof : ScurveProfile
+        The move (:func:`scurve_profile`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``int64``, one entry per tick boundary 0 … len(train): 0 first, then the count
+        after each tick.
+    """
     n = prof.n_ticks
     pad = 8
     t = np.arange(n + 1 + pad, dtype=np.float64) / prof.tick_hz
