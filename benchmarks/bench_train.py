@@ -2,8 +2,9 @@
 
 PPO with the shipped hyperparameters (agents/hyperparams/ppo.yml: VFServo-v0 16 envs ×
 128 steps, VFTune-v0 32 envs × 8 steps, a 64-64 tanh MLP, CPU), on one thread as
-``vfgym train --threads 1`` runs it; each measurement in a fresh process, after one
-rollout and update outside the timing (compiles, first allocations). Figures:
+``vfgym train --threads 1`` runs it (``--threads N``: as ``vfgym train --threads N``,
+torch's and numba's threads); each measurement in a fresh process, after one rollout and
+update outside the timing (compiles, first allocations). Figures:
 
 1. PPO steps/s on VFServo-v0 alone, then two such trainings side by side (started
    together): each one's steps/s and its ratio to alone (target ≥ 0.45x each).
@@ -15,7 +16,10 @@ With ``--compare SRC`` every measurement runs also on another source tree (its
 ``src`` folder, e.g. an older commit exported by ``git archive``), each measurement on
 both trees before the next, so that before/after ratios come from one run.
 
-    python benchmarks/bench_train.py [--steps-servo N] [--steps-tune N] [--compare SRC]
+    python benchmarks/bench_train.py [--steps-servo N] [--steps-tune N] [--threads N]
+                                     [--compare SRC] [--share-only]
+
+``--share-only`` skips the side-by-side runs (figure 1's second half).
 """
 
 from __future__ import annotations
@@ -32,7 +36,7 @@ HYPERPARAMS = Path(__file__).resolve().parents[1] / "agents" / "hyperparams" / "
 PPO_KEYS = ("n_steps", "batch_size", "n_epochs", "learning_rate", "gamma", "gae_lambda")
 
 
-def child(env_id: str, steps: int) -> dict:
+def child(env_id: str, steps: int, threads: int = 1) -> dict:
     """PPO on ``env_id`` for ``steps`` steps in this process: steps/s, the env's share of
     the wall time, and the compiled simulation's share (VFTune-v0's batched kernel)."""
     import numba
@@ -42,11 +46,12 @@ def child(env_id: str, steps: int) -> dict:
     from vfgym.agents import hyperparams as hp
     from vfgym.envs.sb3 import SB3VecEnv, make_sb3_vec_env
     from vfgym.plant import _kernel as K
+    from vfgym.plant._layout import A_TICKS
 
-    torch.set_num_threads(1)  # as vfgym train --threads 1
-    numba.set_num_threads(1)
+    torch.set_num_threads(threads)  # as vfgym train --threads N
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     params = hp.load("ppo", env_id, HYPERPARAMS, {})
-    spent = {"env": 0.0, "kernel": 0.0}
+    spent = {"env": 0.0, "kernel": 0.0, "ticks": 0.0}
 
     def timed(key, fn):
         def run(*a, **kw):
@@ -59,7 +64,13 @@ def child(env_id: str, steps: int) -> dict:
         return run
 
     SB3VecEnv.step_wait = timed("env", SB3VecEnv.step_wait)  # type: ignore[method-assign]
-    K.run_batch = timed("kernel", K.run_batch)
+    run_batch = timed("kernel", K.run_batch)
+
+    def counted(*args):  # the last argument: the accumulator rows, ticks among them
+        run_batch(*args)
+        spent["ticks"] += float(args[-1][:, A_TICKS].sum())
+
+    K.run_batch = counted
     venv = make_sb3_vec_env(env_id, n_envs=params["n_envs"], seed=0)
     pk = dict(params["policy_kwargs"])
     pk["activation_fn"] = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[pk["activation_fn"]]
@@ -74,7 +85,7 @@ def child(env_id: str, steps: int) -> dict:
         **{k: params[k] for k in PPO_KEYS},
     )
     model.learn(params["n_steps"] * params["n_envs"])  # compiles, allocations
-    spent.update(env=0.0, kernel=0.0)
+    spent.update(env=0.0, kernel=0.0, ticks=0.0)
     t = time.perf_counter()
     model.learn(steps, reset_num_timesteps=False)
     wall = time.perf_counter() - t
@@ -83,15 +94,16 @@ def child(env_id: str, steps: int) -> dict:
         "steps_per_s": done / wall,
         "env_share": spent["env"] / wall,
         "kernel_share": spent["kernel"] / wall,
+        "kernel_mticks_per_s": spent["ticks"] / spent["kernel"] / 1e6 if spent["ticks"] else 0.0,
     }
 
 
-def spawn(env_id: str, steps: int, src: str | None) -> subprocess.Popen:
+def spawn(env_id: str, steps: int, src: str | None, threads: int = 1) -> subprocess.Popen:
     env = dict(os.environ)
     if src is not None:
         env["PYTHONPATH"] = src
     return subprocess.Popen(
-        [sys.executable, __file__, "--child", env_id, str(steps)],
+        [sys.executable, __file__, "--child", env_id, str(steps), str(threads)],
         env=env,
         stdout=subprocess.PIPE,
         text=True,
@@ -109,26 +121,37 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps-servo", type=int, default=32768, help="timed VFServo-v0 steps")
     ap.add_argument("--steps-tune", type=int, default=8192, help="timed VFTune-v0 steps")
+    ap.add_argument("--threads", type=int, default=1, help="as vfgym train --threads")
     ap.add_argument("--compare", metavar="SRC", help="also measure this source tree's src")
-    ap.add_argument("--child", nargs=2, metavar=("ENV", "STEPS"), help=argparse.SUPPRESS)
+    ap.add_argument("--share-only", action="store_true", help="skip the side-by-side runs")
+    ap.add_argument("--child", nargs=3, metavar=("ENV", "STEPS", "N"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
-        print(json.dumps(child(args.child[0], int(args.child[1]))))
+        print(json.dumps(child(args.child[0], int(args.child[1]), int(args.child[2]))))
         return
+    if args.threads < 1:
+        ap.error(f"--threads={args.threads} is out of range: allowed whole numbers >= 1")
+    n = args.threads
     load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
-    print(f"{os.cpu_count()} CPUs, load average {load}; PPO, shipped hyperparameters, 1 thread")
+    print(
+        f"{os.cpu_count()} CPUs, load average {load}; PPO, shipped hyperparameters, "
+        f"{n} thread{'s' if n > 1 else ''}"
+    )
     trees = [("this tree", None)]
     if args.compare:
         trees.append((f"--compare {args.compare}", str(Path(args.compare) / "src")))
     servo, tune = "vfgym/VFServo-v0", "vfgym/VFTune-v0"
     alone, both, t = {}, {}, {}
     for label, src in trees:  # each measurement on every tree before the next one
-        alone[label] = result(spawn(servo, args.steps_servo, src))
+        alone[label] = result(spawn(servo, args.steps_servo, src, n))
     for label, src in trees:
-        pair = [spawn(servo, args.steps_servo, src) for _ in range(2)]
+        if args.share_only:
+            both[label] = []
+            continue
+        pair = [spawn(servo, args.steps_servo, src, n) for _ in range(2)]
         both[label] = [result(p) for p in pair]
     for label, src in trees:
-        t[label] = result(spawn(tune, args.steps_tune, src))
+        t[label] = result(spawn(tune, args.steps_tune, src, n))
     for label, _ in trees:
         a = alone[label]["steps_per_s"]
         print(f"{label}:")
@@ -145,7 +168,8 @@ def main() -> None:
         )
         print(
             f"  VFTune-v0 PPO              : {t[label]['steps_per_s']:8.0f} steps/s; its "
-            f"compiled simulation {t[label]['kernel_share']:.1%} of the wall time"
+            f"compiled simulation {t[label]['kernel_share']:.1%} of the wall time, at "
+            f"{t[label]['kernel_mticks_per_s']:.1f} M ticks/s"
         )
     if args.compare:
         this, other = (label for label, _ in trees)

@@ -45,42 +45,51 @@ def check_real(
     """Return ``value`` as a finite float inside the interval, else raise ``ValueError``.
 
     An empty ``name`` leaves the name out of the message (argparse adds the option's)."""
-    allowed = _interval(lo, hi, lo_open, hi_open)
-    what = _what(name, value)
+    # the messages are formatted only when one is raised: the envs check ~40 numbers a move
     if isinstance(value, bool):
-        raise ValueError(f"{what} must be a real number in {allowed}")
+        raise ValueError(
+            f"{_what(name, value)} must be a real number in {_interval(lo, hi, lo_open, hi_open)}"
+        )
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{what} must be a real number in {allowed}") from None
+        raise ValueError(
+            f"{_what(name, value)} must be a real number in {_interval(lo, hi, lo_open, hi_open)}"
+        ) from None
     bad = (
         not math.isfinite(x)
         or (lo is not None and (x <= lo if lo_open else x < lo))
         or (hi is not None and (x >= hi if hi_open else x > hi))
     )
     if bad:
-        raise ValueError(f"{what} is out of range: allowed {allowed}")
+        raise ValueError(
+            f"{_what(name, value)} is out of range: allowed {_interval(lo, hi, lo_open, hi_open)}"
+        )
     return x
+
+
+def _whole_numbers(lo: int | None, hi: int | None) -> str:
+    return f"whole numbers in {_interval(lo, hi, False, False)}"
 
 
 def check_int(name: str, value: Any, lo: int | None = None, hi: int | None = None) -> int:
     """Return ``value`` as an int inside ``[lo, hi]``; a float must be whole."""
-    allowed = f"whole numbers in {_interval(lo, hi, False, False)}"
-    what = _what(name, value)
     if isinstance(value, bool):
-        raise ValueError(f"{what} must be one of the {allowed}")
+        raise ValueError(f"{_what(name, value)} must be one of the {_whole_numbers(lo, hi)}")
     if isinstance(value, (int, np.integer)):
         n = int(value)
     else:
         try:
             x = float(value)
         except (TypeError, ValueError):
-            raise ValueError(f"{what} must be one of the {allowed}") from None
+            raise ValueError(
+                f"{_what(name, value)} must be one of the {_whole_numbers(lo, hi)}"
+            ) from None
         if not math.isfinite(x) or x != round(x):
-            raise ValueError(f"{what} is not allowed: {allowed}")
+            raise ValueError(f"{_what(name, value)} is not allowed: {_whole_numbers(lo, hi)}")
         n = round(x)
     if (lo is not None and n < lo) or (hi is not None and n > hi):
-        raise ValueError(f"{what} is out of range: allowed {allowed}")
+        raise ValueError(f"{_what(name, value)} is out of range: allowed {_whole_numbers(lo, hi)}")
     return n
 
 

@@ -265,6 +265,24 @@ def test_evaluate_pairs_equals_evaluate_pair_by_pair():
         assert_same(res.metrics, ev.metrics[0][0])
 
 
+@pytest.mark.parametrize("cls", [VFTuneVectorEnv, VFServoVectorEnv])
+def test_same_step_bad_actions_raise_and_step_nothing(cls):
+    """Same-step autoreset (the SB3 adapter's path): VFServo-v0 leaves the range check to
+    its compiled step, which must refuse the batch before stepping any env."""
+    venv = cls(3, scenario="short-move", autoreset_mode="SameStep")
+    ref = cls(3, scenario="short-move", autoreset_mode="SameStep")
+    venv.reset(seed=0)
+    ref.reset(seed=0)
+    good = np.tile(PAPER_ACTION, (3, 1))
+    for value, message in ((np.nan, "finite"), (-1.5, "out of range"), (1.0 + 2e-6, "range")):
+        bad = good.copy()
+        bad[2, 1] = value
+        with pytest.raises(ValueError, match=rf"actions\[2\].*{message}"):
+            venv.step(bad)
+    for _ in range(3):
+        assert_same(venv.step(good), ref.step(good))
+
+
 def test_a_bad_action_leaves_pending_autoresets_pending():
     venv, ref = (VFServoVectorEnv(2, scenario="short-move") for _ in range(2))
     venv.reset(seed=0)

@@ -18,9 +18,11 @@ from scipy.optimize import brentq
 from vfgym.moves.pulse_sources import (
     ScurveProfile,
     fixed_frequency_pulses,
+    scurve_counts,
     scurve_profile,
     scurve_pulses,
 )
+from vfgym.params import PAPER_PLANT
 
 F = 140_000.0  # tick frequency, Hz (the paper's controller clock)
 
@@ -602,3 +604,33 @@ def test_property_position_on_rising_times_is_position(kw, frac):
     ticks = np.arange(prof.n_ticks + 9, dtype=np.float64) / prof.tick_hz
     t = np.sort(np.concatenate([ticks, np.array(edges), [s[0] for s in prof.segments]]))
     np.testing.assert_array_equal(prof.position_rising(t), prof.position(t))
+
+
+@PROPERTY
+@given(
+    st.floats(0.01, 60.0),
+    st.sampled_from([1.0, -1.0]),
+    st.floats(50.0, 500.0),
+    st.floats(2e3, 2e5),
+    st.floats(0.001, 0.5),
+)
+def test_property_scurve_command_is_the_trains_running_count(dist, sign, v, a, dur):
+    """The S-curve command reads the train's running count (scurve_counts) instead of
+    summing the train again: the same numbers as the pulse train's cumulative sum held
+    at its end, times ±δ (the command's definition, computed here the long way)."""
+    from vfgym.moves import profiles
+
+    delta = PAPER_PLANT.pulse_rad
+    args = profiles.scurve_source_args(v, a, PAPER_PLANT.tick_hz, delta)
+    total = round(dist / delta)
+    assume(total >= 1)
+    n = max(1, round(dur * PAPER_PLANT.tick_hz))
+    train = scurve_pulses(total, **args)
+    assume(train.size < 60_000)
+    want = np.zeros(n)
+    m = min(n, train.size)
+    want[:m] = np.cumsum(train[:m], dtype=np.int64)
+    want[m:] = want[m - 1]
+    got = profiles.scurve(sign * dist, v, a, dur, PAPER_PLANT.tick_hz, delta)
+    np.testing.assert_array_equal(got, math.copysign(delta, sign) * want)
+    np.testing.assert_array_equal(np.diff(scurve_counts(scurve_profile(total, **args))), train)

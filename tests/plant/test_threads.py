@@ -71,3 +71,40 @@ def test_parallel_calls_keep_the_torch_thread_count(order: str, tmp_path) -> Non
     )
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip().endswith("ok")
+
+
+FIRST_CALL = """
+import sys
+if sys.argv[1] == "torch-first":
+    import torch
+    import vfgym
+else:
+    import vfgym
+    import torch
+import numpy as np
+from vfgym.envs.sb3 import make_sb3_vec_env
+
+torch.set_num_threads(1)
+assert torch.get_num_threads() == 1
+venv = make_sb3_vec_env("vfgym/VFTune-v0", n_envs=4, seed=0)
+venv.reset()
+for _ in range(2):
+    venv.step(np.zeros((4, 4), dtype=np.float32))
+assert torch.get_num_threads() == 1, torch.get_num_threads()
+print("ok")
+"""
+
+
+@pytest.mark.parametrize("order", ["torch-first", "vfgym-first"])
+def test_tune_sb3_first_parallel_call_keeps_the_torch_thread_count(order: str) -> None:
+    """VFTune-v0 through the SB3 adapter is the process's first parallel call: it asks
+    numba for its threads (which starts them) to decide whether to draw the next moves
+    beside the batch, and runs the batch on a worker thread; torch's count stays."""
+    out = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(FIRST_CALL), order],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip().endswith("ok")

@@ -62,11 +62,12 @@ class SB3VecEnv(VecEnv):
         rew, term, trunc, ends, finals = self.venv._step_same(self._actions)
         self._actions = None
         dones = term | trunc
-        infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
+        # a truncation (not a termination) is an ended episode's
+        limits = (trunc & ~term).tolist() if ends else [False] * self.num_envs
+        infos: list[dict[str, Any]] = [{"TimeLimit.truncated": x} for x in limits]
         for i, info in ends.items():
+            info["TimeLimit.truncated"] = limits[i]
             infos[i] = info
-        for i in range(self.num_envs):
-            infos[i]["TimeLimit.truncated"] = bool(trunc[i] and not term[i])
         for i, (last_obs, reset_info) in finals.items():
             infos[i]["terminal_observation"] = last_obs
             self.reset_infos[i] = reset_info

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -294,9 +294,11 @@ def evaluate_pairs(
     measures: Measures,
     weights: CostWeights,
     bounds: Bounds,
+    while_running: Callable[[], None] | None = None,
 ) -> list[Score]:
     """Score ``settings[i]`` on ``episodes[i]`` for every i in one compiled, multi-threaded
-    call: :func:`vfgym.scoring.score_pairs`, the pairwise core of :func:`vfgym.evaluate`.
+    call: :func:`vfgym.scoring.score_pairs`, the pairwise core of :func:`vfgym.evaluate`;
+    ``while_running`` runs beside the compiled call (see there).
 
     Returns
     -------
@@ -304,6 +306,11 @@ def evaluate_pairs(
         One per pair (V-F settings run every move).
     """
     results = score_pairs(
-        list(settings), list(episodes), measures=measures, weights=weights, bounds=bounds
+        list(settings),
+        list(episodes),
+        measures=measures,
+        weights=weights,
+        bounds=bounds,
+        while_running=while_running,
     )
     return [r for r in results if r is not None]

@@ -11,6 +11,7 @@ info under ``info["final_obs"]``, ``info["final_info"]``) or ``disabled`` (reset
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import numpy as np
@@ -114,10 +115,15 @@ class _BatchVectorEnv(VectorEnv):
         """The current observations, a new (num_envs, n) float32 array."""
         raise NotImplementedError
 
-    def _check_actions(self, actions: Any, active: np.ndarray) -> np.ndarray:
-        """The actions as a C-contiguous float array; a misshapen batch, or a NaN or
-        out-of-box action of an active sub-env, raises ``ValueError`` before anything
-        changes."""
+    _SIMULATE_CHECKS_ACTIONS = False
+    """True when :meth:`_simulate` itself refuses a NaN or out-of-box action before it
+    changes anything (VFServo-v0's compiled step), so that a step which resets nothing
+    before simulating need not check them in Python first."""
+
+    def _check_actions(self, actions: Any, active: np.ndarray, ranges: bool = True) -> np.ndarray:
+        """The actions as a C-contiguous float array; a misshapen batch, or (with
+        ``ranges``) a NaN or out-of-box action of an active sub-env, raises ``ValueError``
+        before anything changes."""
         a = np.asarray(actions)
         if a.shape != (self.num_envs, 4) or a.dtype.kind not in "fiu":
             raise ValueError(
@@ -126,6 +132,8 @@ class _BatchVectorEnv(VectorEnv):
             )
         if a.dtype not in (np.float32, np.float64) or not a.flags.c_contiguous:
             a = np.ascontiguousarray(a, dtype=np.float64)
+        if not ranges:
+            return a
         ok = (np.abs(a.astype(np.float64, copy=False)) <= 1.0 + B.ACTION_TOL).all(axis=1)
         bad = np.flatnonzero(active & ~ok)
         if bad.size:
@@ -211,18 +219,14 @@ class _BatchVectorEnv(VectorEnv):
         (last observation, reset info)."""
         if not self._started:
             raise ResetNeeded("call reset() before step()")
-        a = self._check_actions(actions, self._all)
+        a = self._check_actions(actions, self._all, not self._SIMULATE_CHECKS_ACTIONS)
         rew, term, trunc, ends = self._simulate(a, self._all)
-        done = np.flatnonzero(term | trunc)
         finals: dict[int, Any] = {}
-        if done.size:
+        if ends:  # the sub-envs whose episode ended (by _simulate's contract), in order
             last = self._observations()
-            for i in done:
-                i = int(i)
-                finals[i] = (
-                    last[i],
-                    self._reset_indices([i], [None] * self.num_envs, [None] * self.num_envs)[0],
-                )
+            nones: list[Any] = [None] * self.num_envs
+            for i in sorted(ends):
+                finals[i] = (last[i], self._reset_indices([i], nones, nones)[0])
         return rew, term, trunc, ends, finals
 
     def step(
@@ -321,8 +325,31 @@ class VFTuneVectorEnv(_BatchVectorEnv):
     def _observations(self) -> np.ndarray:
         return self._obs.copy()
 
+    def _step_same(
+        self, actions: Any
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[int, Infos], dict[int, Any]]:
+        """As the base class's, but every episode is one step long, so each sub-env's next
+        episode is drawn while the moves simulate (the draws depend on the sub-envs'
+        generators alone): beside the compiled call when numba may use two threads,
+        after it otherwise; the same numbers either way."""
+        if not self._started:
+            raise ResetNeeded("call reset() before step()")
+        a = self._check_actions(actions, self._all)
+        last = self._observations()
+        resets: list[Infos] = []
+        nones: list[Any] = [None] * self.num_envs
+
+        def draw_next() -> None:
+            resets.extend(self._reset_indices(range(self.num_envs), nones, nones))
+
+        rew, term, trunc, ends = self._simulate(a, self._all, draw_next)
+        return rew, term, trunc, ends, {i: (last[i], resets[i]) for i in sorted(ends)}
+
     def _simulate(
-        self, actions: np.ndarray, active: np.ndarray
+        self,
+        actions: np.ndarray,
+        active: np.ndarray,
+        while_running: Callable[[], None] | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[int, Infos]]:
         idx = np.flatnonzero(active)
         settings = []
@@ -342,6 +369,7 @@ class VFTuneVectorEnv(_BatchVectorEnv):
                 measures=self.config.measures,
                 weights=self.config.weights,
                 bounds=self.config.bounds,
+                while_running=while_running,
             )
             for i, s, ep, res in zip(idx, settings, eps, results, strict=True):
                 rew[i] = -res.cost
@@ -398,6 +426,8 @@ class VFServoVectorEnv(_BatchVectorEnv):
         self._eps: list[Episode | None] = [None] * n
         self._obs = slice(B.W_OBS, B.W_OBS + self.core.n_obs)
 
+    _SIMULATE_CHECKS_ACTIONS = True  # step_batch: every action checked before any step
+
     @property
     def accel_law(self) -> str:
         """The acceleration law the actions' settings use."""
@@ -432,9 +462,14 @@ class VFServoVectorEnv(_BatchVectorEnv):
         if bad >= 0:
             raise_bad_action(actions[bad], self.core.accel_law, bad)
         flags = self._flags
-        rew = np.where(active, self._W[:, B.X_REWARD], 0.0)
+        if active is self._all:  # every sub-env stepped (same-step autoreset, SB3)
+            rew = self._W[:, B.X_REWARD].copy()
+        else:
+            rew = np.where(active, self._W[:, B.X_REWARD], 0.0)
         ends: dict[int, Infos] = {}
-        for i in np.flatnonzero(flags & B.ENDED):
-            i = int(i)
+        if not flags.any():  # most steps: no episode ended
+            none = np.zeros(self.num_envs, dtype=np.bool_)
+            return rew, none, none.copy(), ends
+        for i in np.flatnonzero(flags & B.ENDED).tolist():
             rew[i], ends[i] = self.core.finish(self._W[i], self._eps[i], int(flags[i]))
         return rew, (flags & B.TERMINATED) != 0, (flags & B.TRUNCATED) != 0, ends

@@ -223,7 +223,7 @@ def scurve(
         float64, the position (rad) at each tick, from tick 0 at time 0.
         The position is the pulse count times δ.
     """
-    from vfgym.moves.pulse_sources import scurve_pulses
+    from vfgym.moves.pulse_sources import scurve_counts, scurve_profile
 
     d = check_real("distance_rad", distance_rad)
     n = _ticks(duration_s, tick_hz)
@@ -231,11 +231,12 @@ def scurve(
     out = np.zeros(n)
     if total == 0:
         return out
-    pulses = scurve_pulses(
-        total, **scurve_source_args(speed_rad_s, accel_rad_s2, tick_hz, pulse_rad)
+    # the pulse train's running count (scurve_pulses is its steps), after each tick
+    counts = scurve_counts(
+        scurve_profile(total, **scurve_source_args(speed_rad_s, accel_rad_s2, tick_hz, pulse_rad))
     )
-    m = min(n, pulses.size)
-    out[:m] = np.cumsum(pulses[:m], dtype=np.int64)
+    m = min(n, counts.size - 1)
+    out[:m] = counts[1 : m + 1]
     out[m:] = out[m - 1] if m else 0.0
     return math.copysign(pulse_rad, d) * out
 

@@ -50,8 +50,9 @@ __all__ = [
 ]
 
 
-def _train_from_counts(counts: np.ndarray, n_ticks: int, total: int) -> np.ndarray:
-    """Per-tick pulses from cumulative counts at tick boundaries, at most one per tick.
+def _counts_of_train(counts: np.ndarray, n_ticks: int, total: int) -> np.ndarray:
+    """Cumulative counts at tick boundaries made a train's, at most one pulse per tick:
+    the counts at boundaries 0 … length (length ≥ ``n_ticks``), starting at 0.
 
     ``counts`` holds samples past ``n_ticks``. Clamping and the one-per-tick cap only
     act on rounding artefacts (an increment of exactly one pulse per tick at
@@ -65,7 +66,13 @@ def _train_from_counts(counts: np.ndarray, n_ticks: int, total: int) -> np.ndarr
     if done.size == 0:  # pragma: no cover - the padding always suffices
         raise RuntimeError("pulse train did not reach its pulse count")
     length = max(n_ticks, int(done[0]))
-    return np.diff(counts[: length + 1]).astype(np.int8)
+    return counts[: length + 1]
+
+
+def _train_from_counts(counts: np.ndarray, n_ticks: int, total: int) -> np.ndarray:
+    """Per-tick pulses from cumulative counts at tick boundaries, at most one per tick
+    (the steps of :func:`_counts_of_train`)."""
+    return np.diff(_counts_of_train(counts, n_ticks, total)).astype(np.int8)
 
 
 def scurve_pulses(
@@ -127,6 +134,25 @@ def scurve_pulses(
         triangle_prevention=triangle_prevention,
         stop_tick=stop_tick,
     )
+    return np.diff(scurve_counts(prof)).astype(np.int8)
+
+
+def scurve_counts(prof: ScurveProfile) -> np.ndarray:
+    """The pulses an S-curve fixed-pulse move has output by each tick boundary: the
+    running count of its pulse train (:func:`scurve_pulses` is this array's steps), for
+    callers that want positions, such as the S-curve command profile.
+
+    Parameters
+    ----------
+    prof : ScurveProfile
+        The move (:func:`scurve_profile`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``int64``, one entry per tick boundary 0 … len(train): 0 first, then the count
+        after each tick.
+    """
     n = prof.n_ticks
     pad = 8
     t = np.arange(n + 1 + pad, dtype=np.float64) / prof.tick_hz
@@ -135,7 +161,7 @@ def scurve_pulses(
     counts = np.floor(pos + 0.5 + guard).astype(np.int64)
     counts[n:] = prof.output_pulses  # the move has ended at t_n >= t_end (up to rounding)
     counts[0] = 0
-    return _train_from_counts(counts, n, prof.output_pulses)
+    return _counts_of_train(counts, n, prof.output_pulses)
 
 
 def fixed_frequency_pulses(total_pulses: int, *, frequency_hz: float, tick_hz: float) -> np.ndarray:

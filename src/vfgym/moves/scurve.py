@@ -138,7 +138,11 @@ class ScurveProfile:
 
     @staticmethod
     def _segment_position(
-        d: np.ndarray, p0: np.ndarray, v0: np.ndarray, a0: np.ndarray, jk: np.ndarray
+        d: np.ndarray,
+        p0: np.ndarray | float,
+        v0: np.ndarray | float,
+        a0: np.ndarray | float,
+        jk: np.ndarray | float,
     ) -> np.ndarray:
         """Position ``d`` seconds into segments starting at p0, v0, a0 with jerk jk."""
         return p0 + d * (v0 + d * (a0 / 2.0 + d * (jk / 6.0)))
@@ -208,17 +212,30 @@ class ScurveProfile:
             Position in pulses, as :meth:`position` gives it.
         """
 
-        def acc_position(s: np.ndarray) -> np.ndarray:
-            return self._segment_position(*self._at_segments(s))
-
         i_a, i_d, i_e = np.searchsorted(t, [self.t_acc_end, self.t_dec_start, self.t_end])
         pos = np.empty_like(t)
         # in _evaluate's order, so that where phases overlap the later one wins as there
-        pos[:i_a] = acc_position(t[:i_a])
+        pos[:i_a] = self._rising_acc_position(t[:i_a])
         pos[i_a:i_d] = self.accel_pulses + self.peak_speed_pps * (t[i_a:i_d] - self.t_acc_end)
-        pos[i_d:i_e] = self.end_position - acc_position(np.maximum(self.t_end - t[i_d:i_e], 0.0))
+        # the deceleration's times into the move's mirror fall: reversed, they rise
+        s = np.maximum(self.t_end - t[i_d:i_e], 0.0)[::-1]
+        pos[i_d:i_e] = self.end_position - self._rising_acc_position(s)[::-1]
         pos[i_e:] = self.end_position
         return pos
+
+    def _rising_acc_position(self, s: np.ndarray) -> np.ndarray:
+        """``_segment_position(*_at_segments(s))`` for rising ``s``, value for value: each
+        segment is a run of ``s``, computed on its slice with the segment's numbers as
+        scalars (the same operations in the same order) instead of gathered per time."""
+        out = np.empty_like(s)
+        segs = self.segments
+        # segment j holds the s with starts[j] <= s < starts[j+1] (the first also the s
+        # before it, the last the s after it), as _at_segments' clipped search finds
+        cuts = [0, *np.searchsorted(s, [g[0] for g in segs[1:]], side="left"), s.size]
+        for (t0, p0, v0, a0, jk), lo, hi in zip(segs, cuts[:-1], cuts[1:], strict=True):
+            d = s[lo:hi] - t0
+            out[lo:hi] = self._segment_position(d, p0, v0, a0, jk)
+        return out
 
     def speed(self, t: np.ndarray | float) -> np.ndarray:
         """Speed at times ``t``.

@@ -4,10 +4,12 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import threading
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import numba
 import numpy as np
 
 from vfgym.moves.baselines import (
@@ -192,6 +194,7 @@ def score_pairs(
     measures: Measures = DEFAULT_MEASURES,
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
+    while_running: Callable[[], None] | None = None,
 ) -> list[Score | None]:
     """Score ``controllers[i]`` on ``moves[i]`` for every i in one compiled, multi-threaded call.
 
@@ -208,6 +211,11 @@ def score_pairs(
         Weights of the cost.
     bounds : Bounds
         Bounds of the constraints.
+    while_running : callable or None
+        Work of the caller's to do while the compiled call runs (the vector env's next
+        draws): on this thread, beside the call on a worker thread when this thread may
+        use two or more numba threads (the call then takes one fewer), else after it. It
+        must not touch the moves being scored.
 
     Returns
     -------
@@ -245,10 +253,14 @@ def score_pairs(
         rows.append(r)
     out: list[Score | None] = [None] * len(moves)
     if not rows:
+        if while_running is not None:
+            while_running()
         return out
     acc = K.new_acc(len(rows))
     announce_compile("evaluate", "the batched simulation kernel", K.run_batch)
-    keeps_torch_threads(K.run_batch)(
+    keeps_torch_threads(_run_beside)(
+        K.run_batch,
+        while_running,
         np.concatenate(cmds),
         np.concatenate([[0], np.cumsum([c.size for c in cmds])]).astype(np.int64),
         np.array(cmd_idx, np.int64),
@@ -263,6 +275,39 @@ def score_pairs(
         m = from_acc(acc[k], mv.plant, measures, float(mv.command[-1]), mv.command_end_s)
         out[r] = score(m, mv.scenario, mv.plant, measures, weights, bounds)
     return out
+
+
+def _run_beside(run: Callable[..., None], beside: Callable[[], None] | None, *args: Any) -> None:
+    """``run(*args)`` (a compiled call, which releases the GIL) with ``beside()`` on this
+    thread: at once on a worker thread when this thread may use two or more numba
+    threads, else one after the other. Python stays on this thread; the caller guards
+    torch's thread count around the whole (the first query of numba's threads starts
+    them), and the worker calls nothing of torch's."""
+    if beside is None:
+        run(*args)
+        return
+    n = numba.get_num_threads()
+    if n < 2:
+        run(*args)
+        beside()
+        return
+    failed: list[BaseException] = []
+
+    def work() -> None:
+        numba.set_num_threads(n - 1)  # numba's thread count is per thread
+        try:
+            run(*args)
+        except BaseException as e:  # re-raised on this thread below
+            failed.append(e)
+
+    worker = threading.Thread(target=work, name="vfgym-batch")
+    worker.start()
+    try:
+        beside()
+    finally:
+        worker.join()
+    if failed:
+        raise failed[0]
 
 
 def evaluate(
