@@ -65,6 +65,10 @@ FIRST_USE = {
         "e = gym.make_vec('vfgym/VFServo-v0', num_envs=16, vectorization_mode="
         "'vector_entry_point'); e.reset(seed=0); e.step(np.zeros((16, 4), np.float32))"
     ),
+    "vector env, threads": (
+        "e = gym.make_vec('vfgym/VFServo-v0', num_envs=512, vectorization_mode="
+        "'vector_entry_point'); e.reset(seed=0); e.step(np.zeros((512, 4), np.float32))"
+    ),
     "VFTune vector env": (
         "e = gym.make_vec('vfgym/VFTune-v0', num_envs=4, vectorization_mode="
         "'vector_entry_point'); e.reset(seed=0); e.step(np.zeros((4, 4), np.float32))"

@@ -31,7 +31,7 @@ from vfgym.plant import _kernel as K
 from vfgym.plant import _lanes as LN
 from vfgym.plant import _layout as L
 from vfgym.plant import _tick as TK
-from vfgym.plant._notice import announce_compile
+from vfgym.plant._notice import announced, compiling
 from vfgym.plant._threads import keeps_torch_threads
 from vfgym.scoring import _cost_compiled as CC
 
@@ -506,18 +506,24 @@ def step_batch_balanced(
     being exact)."""
     par = PARALLEL_MIN_ENVS if parallel_min is None else parallel_min
     kernel = _batch_kernel(W.shape[0], par)
-    if kernel is _step_parallel:
-        announce_compile(
-            "vector env, threads", "the vector env's SIMD-lane kernels on threads", kernel
-        )
-    else:
-        announce_compile("vector env", "the vector env's SIMD-lane kernels", kernel)
     act = np.asarray(act, dtype=np.float64)
-    if kernel is _step_serial:
-        return kernel(act, W, RING, CMD, active, flags, *scratch, lane_min)
+    args = (act, W, RING, CMD, active, flags, *scratch, lane_min)
+    threads = kernel is _step_parallel
+    entry = "vector env, threads" if threads else "vector env"
+    if not announced(entry):  # the first call: it may compile, for some 30 s
+        what = "the vector env's SIMD-lane kernels" + (" on threads" if threads else "")
+        with compiling(entry, what, kernel):
+            return _run(kernel, args, threads)
+    return _run(kernel, args, threads)
+
+
+def _run(kernel, args: tuple, threads: bool) -> int:
+    """``kernel(*args)``, with one block per work chunk when on threads."""
+    if not threads:
+        return kernel(*args)
     old = numba.set_parallel_chunksize(1)
     try:
-        return kernel(act, W, RING, CMD, active, flags, *scratch, lane_min)
+        return kernel(*args)
     finally:
         numba.set_parallel_chunksize(old)
 
