@@ -45,16 +45,16 @@ def is_compiled(dispatcher: Any) -> bool:
 
 
 COLD_COMPILE_S = {
-    "simulate": 6.5,
-    "evaluate": 15.2,
-    "servo env": 18.7,
-    "vector env": 256.2,
-    "vector env, threads": 256.2,
+    "simulate": 5.1,
+    "evaluate": 12.6,
+    "servo env": 14.7,
+    "vector env": 28.4,
+    "vector env, threads": 39.1,
 }
 """CPU seconds a first call compiles for, with numba's cache empty, per entry point
-(measured on the README's 2-core machine at load ≈ 10–17, so on the high side:
-``python benchmarks/bench_plant.py --cold``); what :func:`announce_compile` tells the
-user."""
+(measured on the README's 2-core machine at load ≈ 5–6, so on the high side:
+``python benchmarks/bench_plant.py --cold``; the vector env's two entries the median of
+three runs); what :func:`announce_compile` tells the user."""
 
 _ANNOUNCED: set[str] = set()
 
