@@ -6,10 +6,11 @@ ratios are taken within this one run. Cold start: `import vfgym` plus the first
 simulation in a fresh process, with numba's cache cold (a new cache directory) and warm.
 
 ``--cold`` prints only the first-use compile of each entry point (simulate, evaluate,
-VFServo-v0's step, the vector env's SIMD-lane step, VFTune-v0's vector step): its CPU
+VFServo-v0's step, the vector env's SIMD-lane step on the calling thread (16 envs) and on
+numba's threads (512 envs), VFTune-v0's vector step): its CPU
 seconds in a fresh process with an empty cache and with the cache it left (CPU time, not
 wall time: on a shared machine the wall time mostly measures the others' load), the
-figures vfgym's one-line compile notice quotes (``vfgym.plant._jit.COLD_COMPILE_S``).
+figures vfgym's one-line compile notice quotes (``vfgym.plant._notice.COLD_COMPILE_S``).
 
     python benchmarks/bench_plant.py [--ticks N] [--repeats R] [--cold]
 """
@@ -65,6 +66,10 @@ FIRST_USE = {
         "e = gym.make_vec('vfgym/VFServo-v0', num_envs=16, vectorization_mode="
         "'vector_entry_point'); e.reset(seed=0); e.step(np.zeros((16, 4), np.float32))"
     ),
+    "vector env, threads": (
+        "e = gym.make_vec('vfgym/VFServo-v0', num_envs=512, vectorization_mode="
+        "'vector_entry_point'); e.reset(seed=0); e.step(np.zeros((512, 4), np.float32))"
+    ),
     "VFTune vector env": (
         "e = gym.make_vec('vfgym/VFTune-v0', num_envs=4, vectorization_mode="
         "'vector_entry_point'); e.reset(seed=0); e.step(np.zeros((4, 4), np.float32))"
@@ -97,9 +102,11 @@ def cold_compiles() -> None:
         with tempfile.TemporaryDirectory() as cache:
             cpu, wall, notice = first_use(code, cache)
             warm_cpu, _, warm_notice = first_use(code, cache)
+        lines = notice.splitlines()
+        progress = f" (+ {len(lines) - 1} progress lines)" if len(lines) > 1 else ""
         print(
-            f"  {name:18s}: cold {cpu:6.1f} s CPU ({wall:6.1f} s wall), warm {warm_cpu:5.2f} s "
-            f"CPU; notice cold: {notice or '-'}; warm: {warm_notice or '-'}"
+            f"  {name:19s}: cold {cpu:6.1f} s CPU ({wall:6.1f} s wall), warm {warm_cpu:5.2f} s "
+            f"CPU; notice cold: {lines[0] if lines else '-'}{progress}; warm: {warm_notice or '-'}"
         )
 
 

@@ -1,11 +1,14 @@
 """A first call that compiles says so in one line on stderr (with its expected duration);
-one that finds its machine code cached says nothing. The mechanism is tested on a small
-kernel in fresh processes (a fresh cache folder, cold then warm); the entry points'
-wiring in-process, with the cache check made to answer "not compiled"."""
+one that finds its machine code cached says nothing; a long one (the vector env's) also
+shows its progress. The mechanism is tested on a small kernel in fresh processes (a fresh
+cache folder, cold then warm); the entry points' wiring in-process, with the cache check
+made to answer "not compiled". The vector env compiles its kernels for one type of
+action only: float32 (SB3) and float64 actions give the same numbers."""
 
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -14,6 +17,8 @@ import numpy as np
 import pytest
 
 import vfgym
+from vfgym.envs import _batch as B
+from vfgym.envs.vector import VFServoVectorEnv
 from vfgym.plant import _notice as N
 
 TINY = """
@@ -37,14 +42,29 @@ announce_compile("tiny", "a tiny kernel", tiny.plus_one)  # once per process
 """
 
 
-def test_a_cold_compile_says_so_once_and_a_cached_one_says_nothing(tmp_path):
+PROGRESS = """
+import sys, time
+sys.path.insert(0, sys.argv[1])
+import tiny
+from vfgym.plant import _notice as N
+N.COLD_COMPILE_S["tiny"] = 40.0
+N.PROGRESS_EVERY_S = 0.1
+with N.compiling("tiny", "a tiny kernel", tiny.plus_one):
+    assert tiny.plus_one(1) == 2
+    time.sleep(0.45)  # a long compile
+with N.compiling("tiny", "a tiny kernel", tiny.plus_one):  # once per process
+    time.sleep(0.25)
+"""
+
+
+def _runner(tmp_path, code: str):
+    """A function running ``code`` in a fresh process on ``tmp_path``'s cache; its stderr."""
     (tmp_path / "tiny.py").write_text(TINY)
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
-    code = textwrap.dedent(RUN)
 
     def run() -> str:
         out = subprocess.run(
-            [sys.executable, "-c", code, str(tmp_path)],
+            [sys.executable, "-c", textwrap.dedent(code), str(tmp_path)],
             env=env,
             capture_output=True,
             text=True,
@@ -53,11 +73,32 @@ def test_a_cold_compile_says_so_once_and_a_cached_one_says_nothing(tmp_path):
         assert out.returncode == 0, out.stderr[-2000:]
         return out.stderr
 
+    return run
+
+
+def test_a_cold_compile_says_so_once_and_a_cached_one_says_nothing(tmp_path):
+    run = _runner(tmp_path, RUN)
     cold, warm = run(), run()
     assert cold == "vfgym: compiling a tiny kernel once (about 7 s; cached for later runs) ...\n"
     assert warm == ""
     (tmp_path / "tiny.py").write_text(TINY + "\n# edited\n")  # a stale cache compiles again
     assert run() == cold
+
+
+def test_a_long_compile_shows_its_progress_and_a_cached_one_nothing(tmp_path):
+    run = _runner(tmp_path, PROGRESS)
+    cold, warm = run(), run()
+    lines = cold.splitlines()
+    assert lines[0] == "vfgym: compiling a tiny kernel once (about 40 s; cached for later runs) ..."
+    # stderr is a pipe here, not a terminal: a line every PROGRESS_EVERY_S (the compile
+    # and the 0.45 s sleep: at least 4), then the total
+    spent = [re.fullmatch(r"vfgym: \.\.\. compiling, (\d+) s", line) for line in lines[1:-1]]
+    assert len(spent) >= 4 and all(spent), cold
+    seconds = [int(m.group(1)) for m in spent]
+    assert seconds == sorted(seconds), cold
+    total = re.fullmatch(r"vfgym: compiled in (\d+) s", lines[-1])
+    assert total and int(total.group(1)) >= seconds[-1], cold
+    assert warm == ""
 
 
 @pytest.fixture
@@ -80,25 +121,53 @@ def cold(monkeypatch):
             lambda: _step_servo(vector=True),
             "the vector env's SIMD-lane kernels",
         ),
+        (
+            lambda: _step_servo(vector=True, envs=B.PARALLEL_MIN_ENVS),
+            "the vector env's SIMD-lane kernels on threads",
+        ),
     ],
-    ids=["simulate", "evaluate", "servo env", "vector env"],
+    ids=["simulate", "evaluate", "servo env", "vector env", "vector env, threads"],
 )
 def test_each_entry_point_announces_its_compile(cold, capsys, call, line):
     call()
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and f"vfgym: compiling {line} once (about " in err, err
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith(f"vfgym: compiling {line} once (about "), err
+    if "SIMD" in line:  # the vector env's (long) compile shows its progress (if it is real)
+        assert all(re.fullmatch(r"vfgym: \.\.\. compiling, \d+ s", x) for x in err[1:-1]), err
+        assert re.fullmatch(r"vfgym: compiled in \d+ s", err[-1]), err
+    else:
+        assert len(err) == 1, err
     call()
     assert capsys.readouterr().err == ""
 
 
-def _step_servo(vector: bool) -> None:
+def _step_servo(vector: bool, envs: int = 2) -> None:
     import gymnasium as gym
 
     if vector:
-        env = gym.make_vec("vfgym/VFServo-v0", num_envs=2, vectorization_mode="vector_entry_point")
+        env = gym.make_vec(
+            "vfgym/VFServo-v0", num_envs=envs, vectorization_mode="vector_entry_point"
+        )
         env.reset(seed=0)
-        env.step(np.zeros((2, 4), dtype=np.float32))
+        env.step(np.zeros((envs, 4), dtype=np.float32))
     else:
         env = gym.make("vfgym/VFServo-v0")
         env.reset(seed=0)
         env.step(np.zeros(4, dtype=np.float32))
+
+
+def test_float32_and_float64_actions_step_alike_through_one_compiled_kernel():
+    n = 20  # a block in lanes and a block env by env
+    envs = [VFServoVectorEnv(n, seed_range=(0, 30)), VFServoVectorEnv(n, seed_range=(0, 30))]
+    for env in envs:
+        env.reset(seed=5)
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        a32 = rng.uniform(-1, 1, (n, 4)).astype(np.float32)
+        out32 = envs[0].step(a32)
+        out64 = envs[1].step(a32.astype(np.float64))
+        for x, y in zip(out32[:4], out64[:4], strict=True):
+            assert x.dtype == y.dtype and x.tobytes() == y.tobytes()
+        assert envs[0]._W.tobytes() == envs[1]._W.tobytes()
+    # one compiled step, for float64 actions: SB3's float32 ones are converted first
+    assert [str(sig[0]) for sig in B._step_serial.signatures] == ["array(float64, 2d, C)"]

@@ -31,7 +31,7 @@ from vfgym.plant import _kernel as K
 from vfgym.plant import _lanes as LN
 from vfgym.plant import _layout as L
 from vfgym.plant import _tick as TK
-from vfgym.plant._notice import announce_compile
+from vfgym.plant._notice import announced, compiling
 from vfgym.plant._threads import keeps_torch_threads
 from vfgym.scoring import _cost_compiled as CC
 
@@ -411,9 +411,63 @@ def _end_block(b: int, W, RING, CMD, active, flags, I0, H, G, m: int) -> None:
             flags[r] = f
 
 
+@_jit
+def _begin_batch(act, W, active, flags, I0) -> int:
+    """Check the active envs' actions and, if all are good, set their settings and note
+    each env's tick in ``I0``; returns −1, or the first env whose action is bad (then no
+    env has changed)."""
+    N = W.shape[0]
+    for r in range(N):
+        flags[r] = 0
+        if active[r] and (act.shape[1] != 4 or not action_ok(act[r])):
+            flags[r] = BAD_ACTION
+            return r
+    for r in range(N):
+        I0[r] = int(W[r, W_ST + L.S_TICK])
+        if active[r]:
+            begin_step(act[r], W[r])
+    return -1
+
+
+@_jit
+def _step_serial(act, W, RING, CMD, active, flags, Z, CB, H, G, lane_min) -> int:
+    """:func:`step_batch` on the calling thread, block after block."""
+    I0 = np.empty(W.shape[0], dtype=np.int64)
+    bad = _begin_batch(act, W, active, flags, I0)
+    if bad >= 0:
+        return bad
+    m = CB.shape[1]
+    for b in range(G.shape[0]):
+        _step_block(b, W, RING, CMD, active, Z[b], CB[b], H[b], G, lane_min)
+        _end_block(b, W, RING, CMD, active, flags, I0, H[b], G, m)
+    return -1
+
+
 @J.jit(parallel=True)
+def _step_parallel(act, W, RING, CMD, active, flags, Z, CB, H, G, lane_min) -> int:
+    """:func:`step_batch` with the blocks on numba's threads. Kept apart from
+    :func:`_step_serial`, so that its compile (numba's parallel passes, some seconds)
+    is paid only by a batch that uses the threads."""
+    I0 = np.empty(W.shape[0], dtype=np.int64)
+    bad = _begin_batch(act, W, active, flags, I0)
+    if bad >= 0:
+        return bad
+    m = CB.shape[1]
+    for i in numba.prange(G.shape[0]):
+        b = np.int64(i)  # prange's index is unsigned: one compile of the blocks serves both
+        _step_block(b, W, RING, CMD, active, Z[b], CB[b], H[b], G, lane_min)
+        _end_block(b, W, RING, CMD, active, flags, I0, H[b], G, m)
+    return -1
+
+
+def _batch_kernel(num_envs: int, parallel_min: int):
+    """The compiled step a batch of ``num_envs`` envs runs: on numba's threads from
+    ``parallel_min`` envs, else on the calling thread."""
+    return _step_parallel if num_envs >= parallel_min else _step_serial
+
+
 def step_batch(
-    act, W, RING, CMD, active, flags, Z, CB, H, G, lane_min=LANE_MIN, parallel_min=PARALLEL_MIN_ENVS
+    act, W, RING, CMD, active, flags, Z, CB, H, G, lane_min=LANE_MIN, parallel_min=None
 ) -> int:
     """Step every env ``r`` with ``active[r]`` by one interval; ``flags[r]`` gets its flags
     (0 for inactive envs). Returns −1, or the first env whose action is bad, in which case
@@ -421,32 +475,17 @@ def step_batch(
 
     Envs are simulated in lane blocks of :data:`vfgym.plant._lanes.LANES` (env r in block
     r // LANES, lane r % LANES), numba threads over the blocks from ``parallel_min``
-    envs (:data:`PARALLEL_MIN_ENVS`); a block with fewer than
+    envs (None: :data:`PARALLEL_MIN_ENVS`); a block with fewer than
     ``lane_min`` envs that can tick in lanes runs them one by one. ``Z``, ``CB``, ``H``:
     one block scratch each per block (:func:`vfgym.plant._lanes.scratch`); ``G``: each block's
     tick counter. While an env's last counts live in its block's history (``X_LANE``),
-    its ring is out of date; they are written back whenever it leaves the lanes."""
-    N = W.shape[0]
-    for r in range(N):
-        flags[r] = 0
-        if active[r] and (act.shape[1] != 4 or not action_ok(act[r])):
-            flags[r] = BAD_ACTION
-            return r
-    I0 = np.empty(N, dtype=np.int64)
-    for r in range(N):
-        I0[r] = int(W[r, W_ST + L.S_TICK])
-        if active[r]:
-            begin_step(act[r], W[r])
-    m = CB.shape[1]
-    if W.shape[0] >= parallel_min:
-        for b in numba.prange(G.shape[0]):
-            _step_block(b, W, RING, CMD, active, Z[b], CB[b], H[b], G, lane_min)
-            _end_block(b, W, RING, CMD, active, flags, I0, H[b], G, m)
-    else:
-        for b in range(G.shape[0]):
-            _step_block(b, W, RING, CMD, active, Z[b], CB[b], H[b], G, lane_min)
-            _end_block(b, W, RING, CMD, active, flags, I0, H[b], G, m)
-    return -1
+    its ring is out of date; they are written back whenever it leaves the lanes.
+
+    ``act`` should be float64 (float32 works, at the cost of a second compile of the
+    kernels' action path: :func:`step_batch_balanced` converts)."""
+    par = PARALLEL_MIN_ENVS if parallel_min is None else parallel_min
+    kernel = _batch_kernel(W.shape[0], par)
+    return kernel(act, W, RING, CMD, active, flags, Z, CB, H, G, lane_min)
 
 
 def lane_scratch(num_envs: int, interval_ticks: int, acc_window: int) -> tuple[np.ndarray, ...]:
@@ -462,12 +501,29 @@ def step_batch_balanced(
     """:func:`step_batch` with one block per work chunk, handed out as threads free up (an
     env whose episode ends runs the rest of its move in the same call, so the work is
     uneven). The chunk size is set from Python: set inside the compiled function it would
-    stop numba from caching it."""
-    announce_compile("vector env", "the vector env's SIMD-lane kernels", step_batch)
+    stop numba from caching it. The actions are taken as float64 (SB3 hands float32, users
+    float64: one compiled kernel serves both, with the same numbers, float32 → float64
+    being exact)."""
+    par = PARALLEL_MIN_ENVS if parallel_min is None else parallel_min
+    kernel = _batch_kernel(W.shape[0], par)
+    act = np.asarray(act, dtype=np.float64)
+    args = (act, W, RING, CMD, active, flags, *scratch, lane_min)
+    threads = kernel is _step_parallel
+    entry = "vector env, threads" if threads else "vector env"
+    if not announced(entry):  # the first call: it may compile, for some 30 s
+        what = "the vector env's SIMD-lane kernels" + (" on threads" if threads else "")
+        with compiling(entry, what, kernel):
+            return _run(kernel, args, threads)
+    return _run(kernel, args, threads)
+
+
+def _run(kernel, args: tuple, threads: bool) -> int:
+    """``kernel(*args)``, with one block per work chunk when on threads."""
+    if not threads:
+        return kernel(*args)
     old = numba.set_parallel_chunksize(1)
     try:
-        par = PARALLEL_MIN_ENVS if parallel_min is None else parallel_min
-        return step_batch(act, W, RING, CMD, active, flags, *scratch, lane_min, par)
+        return kernel(*args)
     finally:
         numba.set_parallel_chunksize(old)
 

@@ -25,7 +25,11 @@ Each option numba takes is decided here, once, with its reason:
     the caller before typing, so a tick's loop is one function that LLVM optimises whole,
     with the loop state in registers and no call per tick, and a loop over lanes holds no
     call that would stop it vectorising. ``"never"`` (numba's default) otherwise: LLVM
-    still inlines small callees where it pays.
+    still inlines small callees where it pays. Inlining costs compile time: numba
+    deep-copies the callee's IR at every call site, at a cost that grows with the
+    callee's blocks times its variables, so it suits a few blocks called once each (the
+    kernel's tick), not a helper called at hundreds of sites (the SIMD lanes, which took
+    minutes so, use an intrinsic and loops specialised by literal arguments instead).
 ``nogil``
     Always: compiled code touches no Python object, so it releases the GIL and threads
     of the caller (agents, sweep workers) run beside it.

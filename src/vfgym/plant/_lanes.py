@@ -13,7 +13,7 @@ ticks against the kernel).
 What makes the loops vectorise, and must stay so:
 
 * one flat block array ``Z`` of rows of ``LANES`` numbers, indexed with unsigned
-  (:func:`_u`) constant-row offsets, so that LLVM sees fixed distances between rows (no
+  (:func:`_at`) constant-row offsets, so that LLVM sees fixed distances between rows (no
   negative-index wrap-around, no symbolic row);
 * ``error_model="numpy"`` (``simd=True`` in the package's policy, :mod:`vfgym.plant._jit`:
   no zero-division branch; every divisor is validated > 0);
@@ -32,6 +32,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba.core import types as nbt
+from numba.extending import intrinsic
 
 from vfgym.plant import _layout as L
 from vfgym.plant import _tick as TK
@@ -42,8 +44,6 @@ LANES = 16
 
 _jit = jit(simd=True)
 """The lanes' compile policy: ``error_model="numpy"``, so that the loops over lanes vectorise."""
-_inline = jit(inline=True, simd=True)
-"""The same, for the blocks compiled into those loops."""
 
 # --- block rows (each LANES numbers) -----------------------------------------------------
 Z_PRM = 0  # the kernel's parameter row, transposed
@@ -57,272 +57,250 @@ Z_NOUT = Z_P + 5  # pulse count after this tick
 N_ROWS = Z_P + 6
 
 
-@_inline
-def _u(x):
-    return np.uint64(x)
+@intrinsic
+def _at(typingctx, row, lane):
+    """The index of lane ``lane`` of block row ``row`` in ``Z``, row·LANES + lane, as an
+    unsigned integer: so LLVM sees fixed distances between rows and no negative-index
+    wrap-around. An intrinsic, emitted in place as two integer operations: as a numba
+    function inlined at its ~250 uses (``inline=True``) it took minutes to compile, numba
+    copying the caller's whole scope at every inlined call."""
+    if not (isinstance(row, nbt.Integer) and isinstance(lane, nbt.Integer)):
+        return None
+
+    def codegen(context, builder, sig, args):
+        r = context.cast(builder, args[0], sig.args[0], nbt.uint64)
+        e = context.cast(builder, args[1], sig.args[1], nbt.uint64)
+        return builder.add(builder.mul(r, context.get_constant(nbt.uint64, LANES)), e)
+
+    return nbt.uint64(row, lane), codegen
 
 
-@_inline
-def _r(row, lane):
-    return row * LANES + lane
+@_jit
+def _tick_source_servo_motor(Z, sampling, friction) -> int:
+    """Steps 1-4 of the tick (pulse source, servo, torque, motor) in every lane; returns
+    how many lanes need the friction stop (left unmoved, flagged in ``Z_SLOW``).
 
-
-@_inline
-def _source_servo_motor(Z, e, sampling, friction):
-    """Steps 1-4 of the tick (pulse source, servo, torque, motor) in lane ``e``; returns
-    1 if the lane needs the friction stop (left unmoved, flagged in ``Z_SLOW``), else 0.
-
-    ``sampling`` and ``friction`` are constants of each caller, so that the compiler drops
-    what cannot happen: sampling 0 / 1: no lane / every lane latches its speed counter
-    this tick (the lanes' sample periods are in step), 2: each lane as its counter says;
-    friction False: no lane has Coulomb friction."""
-    P = Z[_u(_r(Z_CMD, e))]
-    # 1. V-F controller (vfgym.plant._tick.vf_tick as selects)
-    delta = Z[_u(_r(Z_PRM + L.P_DELTA, e))]
-    limit = Z[_u(_r(Z_PRM + L.P_LIMIT, e))]
-    step = Z[_u(_r(Z_PRM + L.P_STEP, e))]
-    value = Z[_u(_r(Z_PRM + L.P_VALUE, e))]
-    slew = Z[_u(_r(Z_PRM + L.P_LAW, e))] != 0.0
-    n = Z[_u(_r(Z_ST + L.S_N, e))]
-    e_prev = Z[_u(_r(Z_ST + L.S_EPREV, e))]
-    err = P - n * delta
-    err = limit if err > limit else err
-    err = -limit if err < -limit else err
-    up = e_prev + step
-    dn = e_prev - step
-    c_up = err > up and (slew or e_prev >= 0.0)
-    err = up if c_up else err
-    c_dn = err < dn and ((slew and not c_up) or (not slew and e_prev <= 0.0))
-    err = dn if c_dn else err
-    s = Z[_u(_r(Z_ST + L.S_SUM, e))] + err
-    plus = s >= value
-    minus = (not plus) and s <= -value
-    p = 1.0 if plus else (-1.0 if minus else 0.0)
-    s = s - value if plus else (s + value if minus else s)
-    Z[_u(_r(Z_ST + L.S_SUM, e))] = s
-    Z[_u(_r(Z_ST + L.S_EPREV, e))] = err
-    n = n + p
-    Z[_u(_r(Z_ST + L.S_N, e))] = n
-    Z[_u(_r(Z_P, e))] = p
-    Z[_u(_r(Z_NOUT, e))] = n
-    # 2. servo counters and sampled filter
-    c = Z[_u(_r(Z_ST + L.S_C, e))]
-    dc = c - Z[_u(_r(Z_ST + L.S_CPREV, e))]
-    Z[_u(_r(Z_ST + L.S_CPREV, e))] = c
-    pc = Z[_u(_r(Z_ST + L.S_PC, e))] + (Z[_u(_r(Z_PRM + L.P_GEAR, e))] * p - dc)
-    Z[_u(_r(Z_ST + L.S_PC, e))] = pc
-    sc = Z[_u(_r(Z_ST + L.S_SC, e))] + dc
-    ns_left = Z[_u(_r(Z_ST + L.S_NSLEFT, e))] - 1.0
-    latch = (ns_left == 0.0) if sampling == 2 else (sampling == 1)
-    ns = Z[_u(_r(Z_PRM + L.P_NS, e))]
-    y = Z[_u(_r(Z_ST + L.S_Y, e))]
-    x_new = Z[_u(_r(Z_PRM + L.P_B, e))] * sc
-    y_new = y + Z[_u(_r(Z_PRM + L.P_A, e))] * (x_new - y)
-    theta = Z[_u(_r(Z_ST + L.S_THETA, e))]
-    ths0 = Z[_u(_r(Z_ST + L.S_THS0, e))]
-    v0 = (theta - ths0) / (ns * Z[_u(_r(Z_PRM + L.P_TICK_S, e))])
-    nsamp = Z[_u(_r(Z_ST + L.S_NSAMP, e))] + 1.0
-    v1 = Z[_u(_r(Z_ST + L.S_V1, e))]
-    v2 = Z[_u(_r(Z_ST + L.S_V2, e))]
-    d2 = v0 - 2.0 * v1 + v2
-    ripple = latch and nsamp >= 3.0
-    rip_sq = Z[_u(_r(Z_ST + L.S_RIPSQ, e))]
-    rip_n = Z[_u(_r(Z_ST + L.S_RIPN, e))]
-    Z[_u(_r(Z_ST + L.S_RIPSQ, e))] = rip_sq + d2 * d2 if ripple else rip_sq
-    Z[_u(_r(Z_ST + L.S_RIPN, e))] = rip_n + 1.0 if ripple else rip_n
-    Z[_u(_r(Z_ST + L.S_V2, e))] = v1 if latch else v2
-    Z[_u(_r(Z_ST + L.S_V1, e))] = v0 if latch else v1
-    Z[_u(_r(Z_ST + L.S_NSAMP, e))] = nsamp if latch else nsamp - 1.0
-    Z[_u(_r(Z_ST + L.S_THS0, e))] = theta if latch else ths0
-    x = Z[_u(_r(Z_ST + L.S_X, e))]
-    Z[_u(_r(Z_ST + L.S_X, e))] = x_new if latch else x
-    y = y_new if latch else y
-    Z[_u(_r(Z_ST + L.S_Y, e))] = y
-    Z[_u(_r(Z_ST + L.S_SC, e))] = 0.0 if latch else sc
-    Z[_u(_r(Z_ST + L.S_NSLEFT, e))] = ns if latch else ns_left
-    # 3. torque command and the torque–speed limit
-    u = pc - y
-    Z[_u(_r(Z_ST + L.S_U, e))] = u
-    tau = Z[_u(_r(Z_PRM + L.P_K3, e))] * u
-    omega = Z[_u(_r(Z_ST + L.S_OMEGA, e))]
-    tpeak = Z[_u(_r(Z_PRM + L.P_TPEAK, e))]
-    wknee = Z[_u(_r(Z_PRM + L.P_WKNEE, e))]
-    aw = abs(omega)
-    sloped = tpeak + Z[_u(_r(Z_PRM + L.P_SLOPE, e))] * (aw - wknee)
-    curve = tpeak if aw <= wknee else (sloped if aw < Z[_u(_r(Z_PRM + L.P_WMAX, e))] else 0.0)
-    lim = curve if tau * omega > 0.0 else tpeak
-    hi = tau > lim
-    lo = (not hi) and tau < -lim
-    sat = Z[_u(_r(Z_ST + L.S_SAT, e))]
-    Z[_u(_r(Z_ST + L.S_SAT, e))] = sat + 1.0 if (hi or lo) else sat
-    tau = lim if hi else (-lim if lo else tau)
-    Z[_u(_r(Z_ST + L.S_TAU, e))] = tau
-    # 4. motor over the tick, torque held
-    net = tau - Z[_u(_r(Z_PRM + L.P_TLOAD, e))]
-    Z[_u(_r(Z_NET, e))] = net
-    Z[_u(_r(Z_WOLD, e))] = omega
-    tc = Z[_u(_r(Z_PRM + L.P_TC, e))]
-    cww = Z[_u(_r(Z_PRM + L.P_CWW, e))]
-    cwf = Z[_u(_r(Z_PRM + L.P_CWF, e))]
-    ctw = Z[_u(_r(Z_PRM + L.P_CTW, e))]
-    ctf = Z[_u(_r(Z_PRM + L.P_CTF, e))]
-    free = (tc == 0.0) if friction else True
-    stuck = (not free) and omega == 0.0
-    th_free = theta + (ctw * omega + ctf * net)
-    w_free = cww * omega + cwf * net
-    breaks = net > tc or net < -tc
-    f1 = net - tc if net > 0.0 else net + tc
-    th_stuck = theta + ctf * f1 if breaks else theta
-    w_stuck = cwf * f1 if breaks else omega
-    sgn = 1.0 if omega > 0.0 else -1.0
-    f2 = net - sgn * tc
-    w_move = cww * omega + cwf * f2
-    keeps = w_move * sgn > 0.0
-    th_move = theta + (ctw * omega + ctf * f2)
-    slow = (not free) and (not stuck) and (not keeps)
-    Z[_u(_r(Z_SLOW, e))] = 1.0 if slow else 0.0
-    theta = th_free if free else (th_stuck if stuck else (th_move if keeps else theta))
-    omega = w_free if free else (w_stuck if stuck else (w_move if keeps else omega))
-    Z[_u(_r(Z_ST + L.S_THETA, e))] = theta
-    Z[_u(_r(Z_ST + L.S_OMEGA, e))] = omega
-    return 1 if slow else 0
+    ``sampling`` and ``friction`` are constants at each call (literal arguments: numba
+    compiles one loop for each pair, with what cannot happen dropped): sampling 0 / 1: no
+    lane / every lane latches its speed counter this tick (the lanes' sample periods are
+    in step), 2: each lane as its counter says; friction False: no lane has Coulomb
+    friction."""
+    nslow = 0
+    for e in range(LANES):
+        P = Z[_at(Z_CMD, e)]
+        # 1. V-F controller (vfgym.plant._tick.vf_tick as selects)
+        delta = Z[_at(Z_PRM + L.P_DELTA, e)]
+        limit = Z[_at(Z_PRM + L.P_LIMIT, e)]
+        step = Z[_at(Z_PRM + L.P_STEP, e)]
+        value = Z[_at(Z_PRM + L.P_VALUE, e)]
+        slew = Z[_at(Z_PRM + L.P_LAW, e)] != 0.0
+        n = Z[_at(Z_ST + L.S_N, e)]
+        e_prev = Z[_at(Z_ST + L.S_EPREV, e)]
+        err = P - n * delta
+        err = limit if err > limit else err
+        err = -limit if err < -limit else err
+        up = e_prev + step
+        dn = e_prev - step
+        c_up = err > up and (slew or e_prev >= 0.0)
+        err = up if c_up else err
+        c_dn = err < dn and ((slew and not c_up) or (not slew and e_prev <= 0.0))
+        err = dn if c_dn else err
+        s = Z[_at(Z_ST + L.S_SUM, e)] + err
+        plus = s >= value
+        minus = (not plus) and s <= -value
+        p = 1.0 if plus else (-1.0 if minus else 0.0)
+        s = s - value if plus else (s + value if minus else s)
+        Z[_at(Z_ST + L.S_SUM, e)] = s
+        Z[_at(Z_ST + L.S_EPREV, e)] = err
+        n = n + p
+        Z[_at(Z_ST + L.S_N, e)] = n
+        Z[_at(Z_P, e)] = p
+        Z[_at(Z_NOUT, e)] = n
+        # 2. servo counters and sampled filter
+        c = Z[_at(Z_ST + L.S_C, e)]
+        dc = c - Z[_at(Z_ST + L.S_CPREV, e)]
+        Z[_at(Z_ST + L.S_CPREV, e)] = c
+        pc = Z[_at(Z_ST + L.S_PC, e)] + (Z[_at(Z_PRM + L.P_GEAR, e)] * p - dc)
+        Z[_at(Z_ST + L.S_PC, e)] = pc
+        sc = Z[_at(Z_ST + L.S_SC, e)] + dc
+        ns_left = Z[_at(Z_ST + L.S_NSLEFT, e)] - 1.0
+        latch = (ns_left == 0.0) if sampling == 2 else (sampling == 1)
+        ns = Z[_at(Z_PRM + L.P_NS, e)]
+        y = Z[_at(Z_ST + L.S_Y, e)]
+        x_new = Z[_at(Z_PRM + L.P_B, e)] * sc
+        y_new = y + Z[_at(Z_PRM + L.P_A, e)] * (x_new - y)
+        theta = Z[_at(Z_ST + L.S_THETA, e)]
+        ths0 = Z[_at(Z_ST + L.S_THS0, e)]
+        v0 = (theta - ths0) / (ns * Z[_at(Z_PRM + L.P_TICK_S, e)])
+        nsamp = Z[_at(Z_ST + L.S_NSAMP, e)] + 1.0
+        v1 = Z[_at(Z_ST + L.S_V1, e)]
+        v2 = Z[_at(Z_ST + L.S_V2, e)]
+        d2 = v0 - 2.0 * v1 + v2
+        ripple = latch and nsamp >= 3.0
+        rip_sq = Z[_at(Z_ST + L.S_RIPSQ, e)]
+        rip_n = Z[_at(Z_ST + L.S_RIPN, e)]
+        Z[_at(Z_ST + L.S_RIPSQ, e)] = rip_sq + d2 * d2 if ripple else rip_sq
+        Z[_at(Z_ST + L.S_RIPN, e)] = rip_n + 1.0 if ripple else rip_n
+        Z[_at(Z_ST + L.S_V2, e)] = v1 if latch else v2
+        Z[_at(Z_ST + L.S_V1, e)] = v0 if latch else v1
+        Z[_at(Z_ST + L.S_NSAMP, e)] = nsamp if latch else nsamp - 1.0
+        Z[_at(Z_ST + L.S_THS0, e)] = theta if latch else ths0
+        x = Z[_at(Z_ST + L.S_X, e)]
+        Z[_at(Z_ST + L.S_X, e)] = x_new if latch else x
+        y = y_new if latch else y
+        Z[_at(Z_ST + L.S_Y, e)] = y
+        Z[_at(Z_ST + L.S_SC, e)] = 0.0 if latch else sc
+        Z[_at(Z_ST + L.S_NSLEFT, e)] = ns if latch else ns_left
+        # 3. torque command and the torque–speed limit
+        u = pc - y
+        Z[_at(Z_ST + L.S_U, e)] = u
+        tau = Z[_at(Z_PRM + L.P_K3, e)] * u
+        omega = Z[_at(Z_ST + L.S_OMEGA, e)]
+        tpeak = Z[_at(Z_PRM + L.P_TPEAK, e)]
+        wknee = Z[_at(Z_PRM + L.P_WKNEE, e)]
+        aw = abs(omega)
+        sloped = tpeak + Z[_at(Z_PRM + L.P_SLOPE, e)] * (aw - wknee)
+        curve = tpeak if aw <= wknee else (sloped if aw < Z[_at(Z_PRM + L.P_WMAX, e)] else 0.0)
+        lim = curve if tau * omega > 0.0 else tpeak
+        hi = tau > lim
+        lo = (not hi) and tau < -lim
+        sat = Z[_at(Z_ST + L.S_SAT, e)]
+        Z[_at(Z_ST + L.S_SAT, e)] = sat + 1.0 if (hi or lo) else sat
+        tau = lim if hi else (-lim if lo else tau)
+        Z[_at(Z_ST + L.S_TAU, e)] = tau
+        # 4. motor over the tick, torque held
+        net = tau - Z[_at(Z_PRM + L.P_TLOAD, e)]
+        Z[_at(Z_NET, e)] = net
+        Z[_at(Z_WOLD, e)] = omega
+        tc = Z[_at(Z_PRM + L.P_TC, e)]
+        cww = Z[_at(Z_PRM + L.P_CWW, e)]
+        cwf = Z[_at(Z_PRM + L.P_CWF, e)]
+        ctw = Z[_at(Z_PRM + L.P_CTW, e)]
+        ctf = Z[_at(Z_PRM + L.P_CTF, e)]
+        free = (tc == 0.0) if friction else True
+        stuck = (not free) and omega == 0.0
+        th_free = theta + (ctw * omega + ctf * net)
+        w_free = cww * omega + cwf * net
+        breaks = net > tc or net < -tc
+        f1 = net - tc if net > 0.0 else net + tc
+        th_stuck = theta + ctf * f1 if breaks else theta
+        w_stuck = cwf * f1 if breaks else omega
+        sgn = 1.0 if omega > 0.0 else -1.0
+        f2 = net - sgn * tc
+        w_move = cww * omega + cwf * f2
+        keeps = w_move * sgn > 0.0
+        th_move = theta + (ctw * omega + ctf * f2)
+        slow = (not free) and (not stuck) and (not keeps)
+        Z[_at(Z_SLOW, e)] = 1.0 if slow else 0.0
+        theta = th_free if free else (th_stuck if stuck else (th_move if keeps else theta))
+        omega = w_free if free else (w_stuck if stuck else (w_move if keeps else omega))
+        Z[_at(Z_ST + L.S_THETA, e)] = theta
+        Z[_at(Z_ST + L.S_OMEGA, e)] = omega
+        nslow += 1 if slow else 0
+    return nslow
 
 
 @_jit
 def _friction_stops(Z) -> None:
     """The flagged lanes' motor step: Coulomb friction stops the motor within the tick."""
     for e in range(LANES):
-        if Z[_r(Z_SLOW, e)] != 0.0:
-            omega = Z[_r(Z_ST + L.S_OMEGA, e)]
-            net = Z[_r(Z_NET, e)]
-            tc = Z[_r(Z_PRM + L.P_TC, e)]
+        if Z[_at(Z_SLOW, e)] != 0.0:
+            omega = Z[_at(Z_ST + L.S_OMEGA, e)]
+            net = Z[_at(Z_NET, e)]
+            tc = Z[_at(Z_PRM + L.P_TC, e)]
             sgn = 1.0 if omega > 0.0 else -1.0
             theta, omega = TK.stop_within_tick(
-                Z[_r(Z_ST + L.S_THETA, e)],
+                Z[_at(Z_ST + L.S_THETA, e)],
                 omega,
                 net - sgn * tc,
                 net,
                 tc,
-                Z[_r(Z_PRM + L.P_DAMP, e)],
-                Z[_r(Z_PRM + L.P_INV_J, e)],
-                Z[_r(Z_PRM + L.P_TICK_S, e)],
+                Z[_at(Z_PRM + L.P_DAMP, e)],
+                Z[_at(Z_PRM + L.P_INV_J, e)],
+                Z[_at(Z_PRM + L.P_TICK_S, e)],
             )
-            Z[_r(Z_ST + L.S_THETA, e)] = theta
-            Z[_r(Z_ST + L.S_OMEGA, e)] = omega
-
-
-@_inline
-def _encoder_measures(Z, e, k):
-    """Step 5 of tick ``k`` of the block (encoder) and the streamed measures, lane ``e``."""
-    i = Z[_u(_r(Z_ST + L.S_TICK, e))] + k
-    P = Z[_u(_r(Z_CMD, e))]
-    theta = Z[_u(_r(Z_ST + L.S_THETA, e))]
-    omega = Z[_u(_r(Z_ST + L.S_OMEGA, e))]
-    Z[_u(_r(Z_ST + L.S_C, e))] = math.floor(theta / Z[_u(_r(Z_PRM + L.P_COUNT_RAD, e))])
-    n = Z[_u(_r(Z_ST + L.S_N, e))]
-    pos = n * Z[_u(_r(Z_PRM + L.P_DELTA, e))]
-    # overshoot while the command is at rest, after its last change
-    p_prev = Z[_u(_r(Z_ST + L.S_PPREV, e))]
-    last_dir = Z[_u(_r(Z_ST + L.S_LASTDIR, e))]
-    changed = p_prev != P
-    at_rest = (not changed) and last_dir != 0.0
-    o_m = last_dir * (theta - P)
-    o_p = last_dir * (pos - P)
-    ov_m = Z[_u(_r(Z_ST + L.S_OVM, e))]
-    ov_p = Z[_u(_r(Z_ST + L.S_OVP, e))]
-    Z[_u(_r(Z_ST + L.S_OVM, e))] = o_m if (at_rest and o_m > ov_m) else ov_m
-    Z[_u(_r(Z_ST + L.S_OVP, e))] = o_p if (at_rest and o_p > ov_p) else ov_p
-    new_dir = 1.0 if p_prev < P else -1.0
-    Z[_u(_r(Z_ST + L.S_LASTDIR, e))] = new_dir if changed else last_dir
-    Z[_u(_r(Z_ST + L.S_PPREV, e))] = P
-    # in-position window and steady state
-    target = Z[_u(_r(Z_PRM + L.P_TARGET, e))]
-    win = Z[_u(_r(Z_PRM + L.P_WIN_RAD, e))]
-    lom = Z[_u(_r(Z_ST + L.S_LOM, e))]
-    lop = Z[_u(_r(Z_ST + L.S_LOP, e))]
-    Z[_u(_r(Z_ST + L.S_LOM, e))] = i if abs(theta - target) > win else lom
-    Z[_u(_r(Z_ST + L.S_LOP, e))] = i if abs(pos - target) > win else lop
-    steady = i >= Z[_u(_r(Z_PRM + L.P_SS_START, e))]
-    ss_m = Z[_u(_r(Z_ST + L.S_SSM, e))]
-    ss_p = Z[_u(_r(Z_ST + L.S_SSP, e))]
-    ss_n = Z[_u(_r(Z_ST + L.S_SSN, e))]
-    Z[_u(_r(Z_ST + L.S_SSM, e))] = ss_m + (theta - target) if steady else ss_m
-    Z[_u(_r(Z_ST + L.S_SSP, e))] = ss_p + (pos - target) if steady else ss_p
-    Z[_u(_r(Z_ST + L.S_SSN, e))] = ss_n + 1.0 if steady else ss_n
-    # motor acceleration, tracking errors
-    dw = abs(omega - Z[_u(_r(Z_WOLD, e))])
-    dw_max = Z[_u(_r(Z_ST + L.S_DWMX, e))]
-    Z[_u(_r(Z_ST + L.S_DWMX, e))] = dw if dw > dw_max else dw_max
-    d = P - theta
-    Z[_u(_r(Z_ST + L.S_TSQM, e))] = Z[_u(_r(Z_ST + L.S_TSQM, e))] + d * d
-    mx = Z[_u(_r(Z_ST + L.S_TMXM, e))]
-    Z[_u(_r(Z_ST + L.S_TMXM, e))] = abs(d) if abs(d) > mx else mx
-    d = P - pos
-    Z[_u(_r(Z_ST + L.S_TSQP, e))] = Z[_u(_r(Z_ST + L.S_TSQP, e))] + d * d
-    mx = Z[_u(_r(Z_ST + L.S_TMXP, e))]
-    Z[_u(_r(Z_ST + L.S_TMXP, e))] = abs(d) if abs(d) > mx else mx
-    # pulse statistics
-    p = Z[_u(_r(Z_P, e))]
-    has = p != 0.0
-    last_p = Z[_u(_r(Z_ST + L.S_LASTP, e))]
-    seen = has and last_p >= 0.0
-    iv = i - last_p
-    min_iv = Z[_u(_r(Z_ST + L.S_MINIV, e))]
-    shorter = seen and (min_iv == 0.0 or iv < min_iv)
-    Z[_u(_r(Z_ST + L.S_MINIV, e))] = iv if shorter else min_iv
-    last_sign = Z[_u(_r(Z_ST + L.S_LASTSIGN, e))]
-    rev = Z[_u(_r(Z_ST + L.S_REV, e))]
-    Z[_u(_r(Z_ST + L.S_REV, e))] = rev + 1.0 if (seen and p != last_sign) else rev
-    first_p = Z[_u(_r(Z_ST + L.S_FIRSTP, e))]
-    Z[_u(_r(Z_ST + L.S_FIRSTP, e))] = i if (has and not seen) else first_p
-    Z[_u(_r(Z_ST + L.S_LASTP, e))] = i if has else last_p
-    Z[_u(_r(Z_ST + L.S_LASTSIGN, e))] = p if has else last_sign
-    pulses = Z[_u(_r(Z_ST + L.S_PULSES, e))]
-    Z[_u(_r(Z_ST + L.S_PULSES, e))] = pulses + 1.0 if has else pulses
-    # peaks
-    tau = Z[_u(_r(Z_ST + L.S_TAU, e))]
-    pc = Z[_u(_r(Z_ST + L.S_PC, e))]
-    mx = Z[_u(_r(Z_ST + L.S_TQMX, e))]
-    Z[_u(_r(Z_ST + L.S_TQMX, e))] = abs(tau) if abs(tau) > mx else mx
-    mx = Z[_u(_r(Z_ST + L.S_PCMX, e))]
-    Z[_u(_r(Z_ST + L.S_PCMX, e))] = abs(pc) if abs(pc) > mx else mx
-    mx = Z[_u(_r(Z_ST + L.S_WMX, e))]
-    Z[_u(_r(Z_ST + L.S_WMX, e))] = abs(omega) if abs(omega) > mx else mx
-
-
-@_jit
-def _tick_source_servo_motor(Z) -> int:
-    """Steps 1-4 of the tick in every lane; returns how many lanes need the friction stop."""
-    nslow = 0
-    for e in range(LANES):
-        nslow += _source_servo_motor(Z, e, 2, True)
-    return nslow
+            Z[_at(Z_ST + L.S_THETA, e)] = theta
+            Z[_at(Z_ST + L.S_OMEGA, e)] = omega
 
 
 @_jit
 def _tick_encoder_measures(Z, k: int) -> None:
-    """Step 5 of tick ``k`` and the measures in every lane."""
+    """Step 5 of tick ``k`` of the block (encoder) and the streamed measures, in every lane."""
     for e in range(LANES):
-        _encoder_measures(Z, e, k)
-
-
-@_jit
-def _tick_fused(Z, k: int, sampling: int) -> None:
-    """Tick ``k`` in every lane in one pass, when no lane has Coulomb friction (so none
-    can need the friction stop between the motor and the encoder); ``sampling`` as in
-    :func:`_source_servo_motor`, one loop compiled for each."""
-    if sampling == 0:
-        for e in range(LANES):
-            _source_servo_motor(Z, e, 0, False)
-            _encoder_measures(Z, e, k)
-    elif sampling == 1:
-        for e in range(LANES):
-            _source_servo_motor(Z, e, 1, False)
-            _encoder_measures(Z, e, k)
-    else:
-        for e in range(LANES):
-            _source_servo_motor(Z, e, 2, False)
-            _encoder_measures(Z, e, k)
+        i = Z[_at(Z_ST + L.S_TICK, e)] + k
+        P = Z[_at(Z_CMD, e)]
+        theta = Z[_at(Z_ST + L.S_THETA, e)]
+        omega = Z[_at(Z_ST + L.S_OMEGA, e)]
+        Z[_at(Z_ST + L.S_C, e)] = math.floor(theta / Z[_at(Z_PRM + L.P_COUNT_RAD, e)])
+        n = Z[_at(Z_ST + L.S_N, e)]
+        pos = n * Z[_at(Z_PRM + L.P_DELTA, e)]
+        # overshoot while the command is at rest, after its last change
+        p_prev = Z[_at(Z_ST + L.S_PPREV, e)]
+        last_dir = Z[_at(Z_ST + L.S_LASTDIR, e)]
+        changed = p_prev != P
+        at_rest = (not changed) and last_dir != 0.0
+        o_m = last_dir * (theta - P)
+        o_p = last_dir * (pos - P)
+        ov_m = Z[_at(Z_ST + L.S_OVM, e)]
+        ov_p = Z[_at(Z_ST + L.S_OVP, e)]
+        Z[_at(Z_ST + L.S_OVM, e)] = o_m if (at_rest and o_m > ov_m) else ov_m
+        Z[_at(Z_ST + L.S_OVP, e)] = o_p if (at_rest and o_p > ov_p) else ov_p
+        new_dir = 1.0 if p_prev < P else -1.0
+        Z[_at(Z_ST + L.S_LASTDIR, e)] = new_dir if changed else last_dir
+        Z[_at(Z_ST + L.S_PPREV, e)] = P
+        # in-position window and steady state
+        target = Z[_at(Z_PRM + L.P_TARGET, e)]
+        win = Z[_at(Z_PRM + L.P_WIN_RAD, e)]
+        lom = Z[_at(Z_ST + L.S_LOM, e)]
+        lop = Z[_at(Z_ST + L.S_LOP, e)]
+        Z[_at(Z_ST + L.S_LOM, e)] = i if abs(theta - target) > win else lom
+        Z[_at(Z_ST + L.S_LOP, e)] = i if abs(pos - target) > win else lop
+        steady = i >= Z[_at(Z_PRM + L.P_SS_START, e)]
+        ss_m = Z[_at(Z_ST + L.S_SSM, e)]
+        ss_p = Z[_at(Z_ST + L.S_SSP, e)]
+        ss_n = Z[_at(Z_ST + L.S_SSN, e)]
+        Z[_at(Z_ST + L.S_SSM, e)] = ss_m + (theta - target) if steady else ss_m
+        Z[_at(Z_ST + L.S_SSP, e)] = ss_p + (pos - target) if steady else ss_p
+        Z[_at(Z_ST + L.S_SSN, e)] = ss_n + 1.0 if steady else ss_n
+        # motor acceleration, tracking errors
+        dw = abs(omega - Z[_at(Z_WOLD, e)])
+        dw_max = Z[_at(Z_ST + L.S_DWMX, e)]
+        Z[_at(Z_ST + L.S_DWMX, e)] = dw if dw > dw_max else dw_max
+        d = P - theta
+        Z[_at(Z_ST + L.S_TSQM, e)] = Z[_at(Z_ST + L.S_TSQM, e)] + d * d
+        mx = Z[_at(Z_ST + L.S_TMXM, e)]
+        Z[_at(Z_ST + L.S_TMXM, e)] = abs(d) if abs(d) > mx else mx
+        d = P - pos
+        Z[_at(Z_ST + L.S_TSQP, e)] = Z[_at(Z_ST + L.S_TSQP, e)] + d * d
+        mx = Z[_at(Z_ST + L.S_TMXP, e)]
+        Z[_at(Z_ST + L.S_TMXP, e)] = abs(d) if abs(d) > mx else mx
+        # pulse statistics
+        p = Z[_at(Z_P, e)]
+        has = p != 0.0
+        last_p = Z[_at(Z_ST + L.S_LASTP, e)]
+        seen = has and last_p >= 0.0
+        iv = i - last_p
+        min_iv = Z[_at(Z_ST + L.S_MINIV, e)]
+        shorter = seen and (min_iv == 0.0 or iv < min_iv)
+        Z[_at(Z_ST + L.S_MINIV, e)] = iv if shorter else min_iv
+        last_sign = Z[_at(Z_ST + L.S_LASTSIGN, e)]
+        rev = Z[_at(Z_ST + L.S_REV, e)]
+        Z[_at(Z_ST + L.S_REV, e)] = rev + 1.0 if (seen and p != last_sign) else rev
+        first_p = Z[_at(Z_ST + L.S_FIRSTP, e)]
+        Z[_at(Z_ST + L.S_FIRSTP, e)] = i if (has and not seen) else first_p
+        Z[_at(Z_ST + L.S_LASTP, e)] = i if has else last_p
+        Z[_at(Z_ST + L.S_LASTSIGN, e)] = p if has else last_sign
+        pulses = Z[_at(Z_ST + L.S_PULSES, e)]
+        Z[_at(Z_ST + L.S_PULSES, e)] = pulses + 1.0 if has else pulses
+        # peaks
+        tau = Z[_at(Z_ST + L.S_TAU, e)]
+        pc = Z[_at(Z_ST + L.S_PC, e)]
+        mx = Z[_at(Z_ST + L.S_TQMX, e)]
+        Z[_at(Z_ST + L.S_TQMX, e)] = abs(tau) if abs(tau) > mx else mx
+        mx = Z[_at(Z_ST + L.S_PCMX, e)]
+        Z[_at(Z_ST + L.S_PCMX, e)] = abs(pc) if abs(pc) > mx else mx
+        mx = Z[_at(Z_ST + L.S_WMX, e)]
+        Z[_at(Z_ST + L.S_WMX, e)] = abs(omega) if abs(omega) > mx else mx
 
 
 @_jit
@@ -337,8 +315,8 @@ def _pulse_accel_peak(Z, H, g: int, m: int, w: int) -> None:
         r2 = (t - 2 * w) % R
         for e in range(LANES):
             d2 = abs(H[r0, e] - 2.0 * H[r1, e] + H[r2, e])
-            mx = Z[_u(_r(Z_ST + L.S_D2MX, e))]
-            Z[_u(_r(Z_ST + L.S_D2MX, e))] = d2 if d2 > mx else mx
+            mx = Z[_at(Z_ST + L.S_D2MX, e)]
+            Z[_at(Z_ST + L.S_D2MX, e)] = d2 if d2 > mx else mx
 
 
 @_jit
@@ -349,44 +327,44 @@ def run_block(Z, CB, H, g: int, m: int, w: int) -> None:
     R = H.shape[0]
     friction = False
     # the lanes' sample periods in step (same length, same phase): one latch for all
-    ns = Z[_r(Z_PRM + L.P_NS, 0)]
-    ns_left = Z[_r(Z_ST + L.S_NSLEFT, 0)]
+    ns = Z[_at(Z_PRM + L.P_NS, 0)]
+    ns_left = Z[_at(Z_ST + L.S_NSLEFT, 0)]
     in_step = True
     for e in range(LANES):
-        friction = friction or Z[_r(Z_PRM + L.P_TC, e)] != 0.0
-        in_step = in_step and Z[_r(Z_PRM + L.P_NS, e)] == ns
-        in_step = in_step and Z[_r(Z_ST + L.S_NSLEFT, e)] == ns_left
+        friction = friction or Z[_at(Z_PRM + L.P_TC, e)] != 0.0
+        in_step = in_step and Z[_at(Z_PRM + L.P_NS, e)] == ns
+        in_step = in_step and Z[_at(Z_ST + L.S_NSLEFT, e)] == ns_left
     for k in range(m):
         for e in range(LANES):
-            Z[_u(_r(Z_CMD, e))] = CB[k, e]
+            Z[_at(Z_CMD, e)] = CB[k, e]
         if friction:
-            if _tick_source_servo_motor(Z) > 0:
+            if _tick_source_servo_motor(Z, 2, True) > 0:
                 _friction_stops(Z)
-            _tick_encoder_measures(Z, k)
         elif in_step:
             ns_left -= 1.0
             if ns_left == 0.0:
                 ns_left = ns
-                _tick_fused(Z, k, 1)
+                _tick_source_servo_motor(Z, 1, False)
             else:
-                _tick_fused(Z, k, 0)
+                _tick_source_servo_motor(Z, 0, False)
         else:
-            _tick_fused(Z, k, 2)
+            _tick_source_servo_motor(Z, 2, False)
+        _tick_encoder_measures(Z, k)
         row = (g + k) % R
         for e in range(LANES):
-            H[row, e] = Z[_u(_r(Z_NOUT, e))]
+            H[row, e] = Z[_at(Z_NOUT, e)]
     _pulse_accel_peak(Z, H, g, m, w)
     for e in range(LANES):
-        Z[_u(_r(Z_ST + L.S_TICK, e))] += m
+        Z[_at(Z_ST + L.S_TICK, e)] += m
 
 
 @_jit
 def load_lane(Z, CB, e: int, prm, st, cmd, m: int) -> None:
     """Lane ``e`` takes a move's parameter row, loop state and next ``m`` commands."""
     for j in range(L.N_PARAMS):
-        Z[_r(Z_PRM + j, e)] = prm[j]
+        Z[_at(Z_PRM + j, e)] = prm[j]
     for j in range(L.N_STATE):
-        Z[_r(Z_ST + j, e)] = st[j]
+        Z[_at(Z_ST + j, e)] = st[j]
     i0 = int(st[L.S_TICK])
     for k in range(m):
         CB[k, e] = cmd[i0 + k]
@@ -396,7 +374,7 @@ def load_lane(Z, CB, e: int, prm, st, cmd, m: int) -> None:
 def store_lane(Z, e: int, st) -> None:
     """Lane ``e``'s loop state back into a move's state row."""
     for j in range(L.N_STATE):
-        st[j] = Z[_r(Z_ST + j, e)]
+        st[j] = Z[_at(Z_ST + j, e)]
 
 
 @_jit
