@@ -171,3 +171,22 @@ def test_float32_and_float64_actions_step_alike_through_one_compiled_kernel():
         assert envs[0]._W.tobytes() == envs[1]._W.tobytes()
     # one compiled step, for float64 actions: SB3's float32 ones are converted first
     assert [str(sig[0]) for sig in B._step_serial.signatures] == ["array(float64, 2d, C)"]
+
+
+def test_single_servo_env_steps_float32_actions_through_the_float64_kernel():
+    import gymnasium as gym
+
+    envs = [gym.make("vfgym/VFServo-v0").unwrapped for _ in range(2)]
+    for env in envs:
+        env.reset(seed=3)
+    rng = np.random.default_rng(2)
+    for _ in range(40):
+        a32 = rng.uniform(-1, 1, 4).astype(np.float32)
+        out32 = envs[0].step(a32)
+        out64 = envs[1].step(a32.astype(np.float64))
+        assert out32[0].tobytes() == out64[0].tobytes()
+        assert out32[1:4] == out64[1:4]
+        if out32[2] or out32[3]:
+            break
+    sigs = {str(sig[0]) for sig in B.step_one.signatures}
+    assert sigs == {"array(float64, 1d, C)"}, sigs

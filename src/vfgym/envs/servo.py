@@ -422,9 +422,10 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
                 + ("the episode has ended" if self._ended else "no episode yet")
             )
         a = action
-        # the fast path takes any 1-D numeric array as it is (the kernel checks its length
-        # and values); anything else goes through as_action
-        if type(a) is not np.ndarray or a.ndim != 1 or a.dtype.kind not in "fi":
+        # the fast path takes a 1-D float64 array as it is (the kernel checks its length
+        # and values); anything else goes through as_action, so that one kernel compiles
+        # (float32 actions from SB3 convert exactly)
+        if type(a) is not np.ndarray or a.ndim != 1 or a.dtype != np.float64:
             a = as_action(action)
         reward, flags = _step_one(a, self._w, self._ring, self._cmd, self._obs32)
         if flags & _BAD_ACTION:
