@@ -68,7 +68,10 @@ class CompassOptions:
     first and smallest compass step (natural-log units), trials of compass before the model
     is consulted, model batch, least relative improvement sought, and model points handed to
     a worker that asks while another's generation runs. (Chosen before the benchmark of
-    ``experiments/trials_to_reference.py`` existed; not tuned against it.)"""
+    ``experiments/trials_to_reference.py`` existed; not tuned against it.) ``search``: model
+    points added to each compass generation, chosen within ``search_radius`` steps of the
+    centre along every axis at once (the search step of a pattern search: the optimum lies
+    along constraint edges that cut the axes diagonally, which axis polls cannot follow)."""
 
     n_init: int = 6
     step0: float = 0.4
@@ -77,6 +80,8 @@ class CompassOptions:
     model_batch: int = 8
     xi: float = 0.03
     extra_batch: int = 4
+    search: int = 2
+    search_radius: float = 2.0
 
 
 class CompassSampler(optuna.samplers.BaseSampler):
@@ -206,7 +211,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
             if not warm:
                 return self._sobol(last + 1)
             centre = min(warm, key=rank)
-            return self._compass(last + 1, centre, None, np.full(4, o.step0), n_done)
+            return self._compass(last + 1, obs, centre, None, np.full(4, o.step0), n_done)
         # The centre's trial may be gone (failed): the best instead.
         centre = by_num.get(st["centre"]) or min(obs, key=rank)
         done_here = [by_num[t.number] for t in mine if t.number in by_num]
@@ -221,18 +226,20 @@ class CompassSampler(optuna.samplers.BaseSampler):
             prev = None
             if rank(best) < rank(centre):
                 prev, centre = centre, best
-            steps = np.where(improved, np.minimum(steps * 1.5, 2.0), steps * 0.5)
+            # A search point that won keeps the steps of the axes no poll improved on.
+            keep = prev is not None and not improved.any()
+            steps = np.where(improved, np.minimum(steps * 1.5, 2.0), steps if keep else steps * 0.5)
             stale = steps.max() < o.min_step or n_done - st["since"] >= o.compass_trials
             if centre.feasible and stale:
                 return self._model(last + 1, obs, centre, steps, st["since"], [])
             if steps.max() < o.min_step:
                 steps = np.full(4, o.step0)
-            return self._compass(last + 1, centre, prev, steps, st["since"]) or self._model(
+            return self._compass(last + 1, obs, centre, prev, steps, st["since"]) or self._model(
                 last + 1, obs, centre, steps, st["since"], []
             )
         best = min(done_here, key=rank, default=centre)
         if best.feasible and rank(best) < rank(centre):
-            return self._compass(last + 1, best, None, np.full(4, o.step0), n_done)
+            return self._compass(last + 1, obs, best, None, np.full(4, o.step0), n_done)
         return self._model(last + 1, obs, centre, steps, st["since"], [])
 
     def _tag(self, gen: int, mode: str, role: str, centre: Observation | None,
@@ -255,8 +262,9 @@ class CompassSampler(optuna.samplers.BaseSampler):
             for i, p in enumerate(u)
         ]
 
-    def _compass(self, gen: int, centre: Observation, prev: Observation | None,
-                 steps: np.ndarray, since: int) -> list[dict[str, Any]]:  # fmt: skip
+    def _compass(self, gen: int, obs: list[Observation], centre: Observation,
+                 prev: Observation | None, steps: np.ndarray,
+                 since: int) -> list[dict[str, Any]]:  # fmt: skip
         lo, hi = self._lo, self._lo + self._span
         out: list[dict[str, Any]] = []
         seen = {tuple(centre.x)}
@@ -280,6 +288,13 @@ class CompassSampler(optuna.samplers.BaseSampler):
         for law in self.laws:
             if law != centre.law:
                 add(centre.x.copy(), "law", law)
+        if out and self.options.search and len(obs) >= 4:
+            radius = np.maximum(self.options.search_radius * steps, 0.05) / self._span
+            rng = self._rng(gen, 3)
+            pending = [self._input(p["x"], p["law"]) for p in out]
+            for p in propose_local(self._inputs(obs), obs, self._input(centre.x, centre.law),
+                                   radius, pending, self.options.search, rng):  # fmt: skip
+                add(self._from_unit(p[:4]), "search")
         return out
 
     def _model(self, gen: int, obs: list[Observation], centre: Observation,
@@ -375,22 +390,13 @@ def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n
         order = sorted(range(len(obs)), key=lambda i: rank(obs[i]))
         keep = sorted(set(order[: MODEL_POINTS // 2]) | set(range(len(obs))[-MODEL_POINTS // 2 :]))
         x, obs = x[keep], [obs[i] for i in keep]
-    y = np.log(np.maximum([o.cost for o in obs], 1e-12))
+    fit = _fit(x, obs, xi, pending)
     feas = np.array([o.feasible for o in obs])
-    cons = np.array([o.constraints for o in obs])
-    fit = feas if feas.sum() >= 3 else np.ones(len(obs), dtype=bool)
-    gp = GaussianProcess(x[fit], y[fit])
-    worst = cons.max(axis=1) if cons.size else np.zeros(len(obs))
-    cgps = [GaussianProcess(x, _signed_log(worst))] if (worst > 0).any() else []
-    best = y[feas].min() + math.log1p(-xi) if feas.any() else None
+    y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     top = x[np.argsort(np.where(feas, y, np.inf), kind="stable")[:3]]
-    models = [gp, *cgps]
-    for p in pending:
-        for m in models:
-            m.condition(p[None], float(m.predict(p[None])[0][0]))
     dim = x.shape[1]
-    out = []
-    for _ in range(n):
+
+    def candidates() -> np.ndarray:
         cand = [rng.random((1024, dim))]
         for t in top:
             for scale in (0.1, 0.03):
@@ -400,17 +406,83 @@ def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n
         c = np.vstack(cand)
         if n_laws > 1:
             c[:, 4] = np.round(c[:, 4] * (n_laws - 1)) / (n_laws - 1)
-        mu, sd = gp.predict(c)
-        pf = np.ones(len(c))
-        for m in cgps:
-            cm, cs = m.predict(c)
-            pf *= norm_cdf(-cm / np.maximum(cs, 1e-9))
-        acq = pf if best is None else expected_improvement(best, mu, sd) * pf
-        j = int(np.argmax(acq))
-        out.append(c[j])
-        for m in models:
-            m.condition(c[j][None], float(m.predict(c[j][None])[0][0]))
-    return out
+        return c
+
+    return fit.choose(n, candidates)
+
+
+LOCAL_POINTS = 60
+"""At most this many observations, the nearest to the centre, inform the local model."""
+
+
+def propose_local(x: np.ndarray, obs: list[Observation], centre: np.ndarray,
+                  radius: np.ndarray, pending: list[np.ndarray], n: int,
+                  rng: np.random.Generator) -> list[np.ndarray]:  # fmt: skip
+    """``n`` points (unit coordinates) within ``radius`` of ``centre`` along every axis
+    (a box; the law, if searched, kept at the centre's) of highest expected improvement
+    over the best feasible cost near the centre, times probability of feasibility, from
+    Gaussian processes on the :data:`LOCAL_POINTS` observations nearest the centre (in
+    units of the radius); each point conditioned on ``pending`` and the previous ones."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1, user_api="blas"):
+        dim = len(radius)
+        r = np.ones(x.shape[1])
+        r[:dim] = radius
+        near = np.argsort((((x - centre) / r) ** 2).sum(1), kind="stable")[:LOCAL_POINTS]
+        fit = _fit(x[near], [obs[i] for i in near], 0.0, pending)
+
+        def candidates() -> np.ndarray:
+            c = np.repeat(centre[None], 1536, axis=0)
+            c[:1024, :dim] += radius * rng.uniform(-1.0, 1.0, (1024, dim))
+            c[1024:, :dim] += radius * rng.normal(0.0, 0.25, (512, dim))
+            return np.clip(c, 0.0, 1.0)
+
+        return fit.choose(n, candidates)
+
+
+class _Fit(NamedTuple):
+    """The models a proposal is chosen by: log cost, and the worst constraint (if any
+    observation violates one); ``best``: the log cost to improve on (None: none feasible)."""
+
+    gp: GaussianProcess
+    cgps: list[GaussianProcess]
+    best: float | None
+
+    def choose(self, n: int, candidates: Any) -> list[np.ndarray]:
+        """``n`` points, each the best of fresh ``candidates()`` by expected improvement
+        times probability of feasibility, then believed at its predicted values."""
+        out = []
+        for _ in range(n):
+            c = candidates()
+            mu, sd = self.gp.predict(c)
+            pf = np.ones(len(c))
+            for m in self.cgps:
+                cm, cs = m.predict(c)
+                pf *= norm_cdf(-cm / np.maximum(cs, 1e-9))
+            acq = pf if self.best is None else expected_improvement(self.best, mu, sd) * pf
+            j = int(np.argmax(acq))
+            out.append(c[j])
+            for m in (self.gp, *self.cgps):
+                m.condition(c[j][None], float(m.predict(c[j][None])[0][0]))
+        return out
+
+
+def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndarray]) -> _Fit:
+    """Gaussian processes on log cost (on the feasible points once there are three) and
+    on the worst constraint (signed log), conditioned on ``pending`` at their predictions."""
+    y = np.log(np.maximum([o.cost for o in obs], 1e-12))
+    feas = np.array([o.feasible for o in obs])
+    cons = np.array([o.constraints for o in obs])
+    fit = feas if feas.sum() >= 3 else np.ones(len(obs), dtype=bool)
+    gp = GaussianProcess(x[fit], y[fit])
+    worst = cons.max(axis=1) if cons.size else np.zeros(len(obs))
+    cgps = [GaussianProcess(x, _signed_log(worst))] if (worst > 0).any() else []
+    best = y[feas].min() + math.log1p(-xi) if feas.any() else None
+    for p in pending:
+        for m in (gp, *cgps):
+            m.condition(p[None], float(m.predict(p[None])[0][0]))
+    return _Fit(gp, cgps, best)
 
 
 def _signed_log(v: np.ndarray) -> np.ndarray:
