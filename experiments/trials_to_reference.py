@@ -42,10 +42,12 @@ PROBLEMS = (
     "short-move",
     "multi-move",
     "experiments/axes/paper.yaml:train",
+    "reversal",
 )
 """The paper's step; one loaded, one short, one multi-move scenario; the main job's train
-set (the 16 train moves of the default axis, one machine, its load fixed). ``AXIS_FILE:SET``
-is a scenario set on an axis."""
+set (the 16 train moves of the default axis, one machine, its load fixed); and
+``reversal``, a check the sampler was never adjusted on. ``AXIS_FILE:SET`` is a scenario
+set on an axis."""
 
 
 def problem_config(problem: str, **kw: object) -> tuning.SweepConfig:

@@ -82,6 +82,7 @@ class CompassOptions:
     extra_batch: int = 4
     search: int = 2
     search_radius: float = 2.0
+    model_rounds: int = 2
 
 
 class CompassSampler(optuna.samplers.BaseSampler):
@@ -217,33 +218,46 @@ class CompassSampler(optuna.samplers.BaseSampler):
         done_here = [by_num[t.number] for t in mine if t.number in by_num]
         if st["mode"] == "compass":
             improved = np.zeros(4, dtype=bool)
+            moves = np.zeros(4)  # the sum of the axis polls that beat the centre
             for t in mine:
                 role = t.system_attrs[ATTR]["role"]
                 ob = by_num.get(t.number)
                 if ob is not None and role.startswith("axis") and rank(ob) < rank(centre):
                     improved[int(role.split(":")[1])] = True
+                    moves += ob.x - centre.x
             best = min(done_here, key=rank, default=centre)
             prev = None
             if rank(best) < rank(centre):
                 prev, centre = centre, best
-            # A search point that won keeps the steps of the axes no poll improved on.
+            # A search (model) point that won keeps the steps of the axes no poll improved on.
             keep = prev is not None and not improved.any()
             steps = np.where(improved, np.minimum(steps * 1.5, 2.0), steps if keep else steps * 0.5)
-            stale = steps.max() < o.min_step or n_done - st["since"] >= o.compass_trials
+            since = st["since"]
+            stale = steps.max() < o.min_step or n_done - since >= o.compass_trials
             if centre.feasible and stale:
-                return self._model(last + 1, obs, centre, steps, st["since"], [])
+                return self._model(last + 1, obs, centre, steps, since, [])
             if steps.max() < o.min_step:
                 steps = np.full(4, o.step0)
-            return self._compass(last + 1, obs, centre, prev, steps, st["since"]) or self._model(
-                last + 1, obs, centre, steps, st["since"], []
-            )
+            composite = None
+            if improved.sum() >= 2 and prev is not None:
+                composite = prev.x + moves
+            return self._compass(
+                last + 1, obs, centre, prev, steps, since, composite
+            ) or self._model(last + 1, obs, centre, steps, since, [])
+        # One model batch, then the compass again: from its best point if that beats the
+        # centre, else from the centre with fresh steps.
         best = min(done_here, key=rank, default=centre)
         if best.feasible and rank(best) < rank(centre):
-            return self._compass(last + 1, obs, best, None, np.full(4, o.step0), n_done)
-        return self._model(last + 1, obs, centre, steps, st["since"], [])
+            centre = best
+        elif st.get("rounds", 1) < o.model_rounds:
+            return self._model(last + 1, obs, centre, steps, st["since"], [],
+                               rounds=st.get("rounds", 1) + 1)  # fmt: skip
+        return self._compass(last + 1, obs, centre, None, np.full(4, o.step0), n_done) or (
+            self._model(last + 1, obs, centre, steps, n_done, [])
+        )
 
     def _tag(self, gen: int, mode: str, role: str, centre: Observation | None,
-             steps: np.ndarray, since: int) -> dict[str, Any]:  # fmt: skip
+             steps: np.ndarray, since: int, rounds: int = 0) -> dict[str, Any]:  # fmt: skip
         return {
             "gen": gen,
             "mode": mode,
@@ -251,6 +265,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
             "centre": None if centre is None else centre.number,
             "steps": [float(s) for s in steps],
             "since": since,
+            "rounds": rounds,
         }
 
     def _sobol(self, gen: int) -> list[dict[str, Any]]:
@@ -263,8 +278,8 @@ class CompassSampler(optuna.samplers.BaseSampler):
         ]
 
     def _compass(self, gen: int, obs: list[Observation], centre: Observation,
-                 prev: Observation | None, steps: np.ndarray,
-                 since: int) -> list[dict[str, Any]]:  # fmt: skip
+                 prev: Observation | None, steps: np.ndarray, since: int,
+                 composite: np.ndarray | None = None) -> list[dict[str, Any]]:  # fmt: skip
         lo, hi = self._lo, self._lo + self._span
         out: list[dict[str, Any]] = []
         seen = {tuple(centre.x)}
@@ -280,6 +295,8 @@ class CompassSampler(optuna.samplers.BaseSampler):
         seen = {(tuple(centre.x), centre.law)}
         if prev is not None:
             add(centre.x + (centre.x - prev.x), "pattern")
+        if composite is not None:
+            add(composite, "composite")
         for d in range(4):
             for sign in (1, -1):
                 x = centre.x.copy()
@@ -297,23 +314,22 @@ class CompassSampler(optuna.samplers.BaseSampler):
                 add(self._from_unit(p[:4]), "search")
         return out
 
+    def _law_of(self, p: np.ndarray) -> str:
+        """The law a model point's fifth coordinate stands for (the only one if one)."""
+        if len(self.laws) == 1:
+            return self.laws[0]
+        return self.laws[round(p[4] * (len(self.laws) - 1))]
+
     def _model(self, gen: int, obs: list[Observation], centre: Observation,
                steps: np.ndarray, since: int, pending: list[tuple[np.ndarray, str]],
-               n: int | None = None, role: str = "model") -> list[dict[str, Any]]:  # fmt: skip
+               n: int | None = None, role: str = "model",
+               rounds: int = 1) -> list[dict[str, Any]]:  # fmt: skip
         o = self.options
         rng = self._rng(gen, 2 + len(pending))
         pts = propose(self._inputs(obs), obs, [self._input(x, law) for x, law in pending],
                       n or o.model_batch, o.xi, rng, len(self.laws))  # fmt: skip
-        tag = self._tag(gen, "model", role, centre, steps, since)
-        out = []
-        for p in pts:
-            law = (
-                self.laws[round(p[4] * (len(self.laws) - 1))]
-                if len(self.laws) > 1
-                else self.laws[0]
-            )
-            out.append({"x": self._from_unit(p[:4]), "law": law, "tag": tag})
-        return out
+        tag = self._tag(gen, "model", role, centre, steps, since, rounds)
+        return [{"x": self._from_unit(p[:4]), "law": self._law_of(p), "tag": tag} for p in pts]
 
     def _extra(self, obs: list[Observation], pending: list, last: int, k: int) -> list:
         """Points for a worker that asks while a generation is still running."""
@@ -390,7 +406,7 @@ def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n
         order = sorted(range(len(obs)), key=lambda i: rank(obs[i]))
         keep = sorted(set(order[: MODEL_POINTS // 2]) | set(range(len(obs))[-MODEL_POINTS // 2 :]))
         x, obs = x[keep], [obs[i] for i in keep]
-    fit = _fit(x, obs, xi, pending)
+    fit = _fit(x, obs, xi, pending, cap=True)
     feas = np.array([o.feasible for o in obs])
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     top = x[np.argsort(np.where(feas, y, np.inf), kind="stable")[:3]]
@@ -468,14 +484,18 @@ class _Fit(NamedTuple):
         return out
 
 
-def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndarray]) -> _Fit:
+def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndarray],
+         cap: bool = False) -> _Fit:  # fmt: skip
     """Gaussian processes on log cost (on the feasible points once there are three) and
-    on the worst constraint (signed log), conditioned on ``pending`` at their predictions."""
+    on the worst constraint (signed log), conditioned on ``pending`` at their predictions.
+    ``cap``: log costs above their median taken as the median, so that the model spends
+    itself on the good half of a space whose costs span decades."""
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     feas = np.array([o.feasible for o in obs])
     cons = np.array([o.constraints for o in obs])
     fit = feas if feas.sum() >= 3 else np.ones(len(obs), dtype=bool)
-    gp = GaussianProcess(x[fit], y[fit])
+    yf = np.minimum(y[fit], np.median(y[fit])) if cap else y[fit]
+    gp = GaussianProcess(x[fit], yf)
     worst = cons.max(axis=1) if cons.size else np.zeros(len(obs))
     cgps = [GaussianProcess(x, _signed_log(worst))] if (worst > 0).any() else []
     best = y[feas].min() + math.log1p(-xi) if feas.any() else None
