@@ -11,16 +11,24 @@ acceleration limit), and a compass stays in the first it finds. So the search al
    thumb) and ``n_init`` scrambled Sobol points, as one batch.
 2. ``compass``: from the best warm start (feasible first, then by cost; an infeasible one
    by its total violation), poll each of the four axes of :class:`vfgym.space.Relative`
-   both ways, plus the pattern move (the last move again) when the last generation moved;
-   move to the best poll if it beats the centre; per axis, widen the step ×1.5 where a
-   poll beat the centre, else halve it. After ``compass_trials`` trials, or when every
-   step is below ``min_step``, with a feasible centre:
-3. ``model``: a batch of points maximising the expected improvement of at least ``xi``
-   over the best feasible cost, times the probability of feasibility (Gaussian processes
-   on log cost and on each constraint, :mod:`vfgym.tuning._gp`); a batch is chosen one
-   point at a time, each conditioned on the previous ones at their predicted values.
-   Repeated until a feasible point beats the centre; the compass then starts again
-   there with fresh steps.
+   both ways, plus the pattern move (the last move again) when the last generation moved,
+   the composite move (the sum of the last generation's axis polls that beat the centre)
+   when two or more did, and ``search`` model points: the expected improvement times
+   probability of feasibility of Gaussian processes on the observations nearest the
+   centre, within ``search_radius`` steps of it along every axis at once (a pattern
+   search's search step: the optimum lies along constraint edges that cut the axes
+   diagonally, the acceleration limit binding value, L and k together, which one-axis
+   polls cannot follow). Move to the best point if it beats the centre; per axis, widen
+   the step ×1.5 where a poll beat the centre, else halve it (a model point that won
+   keeps them). After ``compass_trials`` trials of this compass, or when every step is
+   below ``min_step``, with a feasible centre:
+3. ``model``: a batch of points over the whole space maximising the expected improvement
+   of at least ``xi`` over the best feasible cost, times the probability of feasibility
+   (Gaussian processes on log cost, capped at its median so that the model spends
+   itself on the good half, and on the worst constraint, :mod:`vfgym.tuning._gp`); a
+   batch is chosen one point at a time, each conditioned on the previous ones at their
+   predicted values. Up to ``model_rounds`` batches until a feasible point beats the
+   centre; the compass then starts again with fresh steps, there, or else at the centre.
 
 Every choice is a deterministic function of the seed and the study's completed trials,
 and each sampled trial records its generation (system attribute ``vfgym:compass``), so a
@@ -66,12 +74,12 @@ def rank(o: Observation) -> tuple:
 class CompassOptions:
     """Settings of :class:`CompassSampler`: Latin-hypercube points of the first generation,
     first and smallest compass step (natural-log units), trials of compass before the model
-    is consulted, model batch, least relative improvement sought, and model points handed to
-    a worker that asks while another's generation runs. (Chosen before the benchmark of
-    ``experiments/trials_to_reference.py`` existed; not tuned against it.) ``search``: model
-    points added to each compass generation, chosen within ``search_radius`` steps of the
-    centre along every axis at once (the search step of a pattern search: the optimum lies
-    along constraint edges that cut the axes diagonally, which axis polls cannot follow)."""
+    is consulted, model batch, least relative improvement sought, model points handed to
+    a worker that asks while another's generation runs (chosen before the benchmark of
+    ``experiments/trials_to_reference.py`` existed); the local model points of each compass
+    generation and their reach in steps, and the model batches at most per stall (chosen
+    on ``short-move`` and ``heavy-load`` among a few variants, each measured over 5 seeds;
+    ``reversal`` was not looked at until they were fixed)."""
 
     n_init: int = 6
     step0: float = 0.4
