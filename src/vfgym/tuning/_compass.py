@@ -77,9 +77,10 @@ class CompassOptions:
     is consulted, model batch, least relative improvement sought, model points handed to
     a worker that asks while another's generation runs (chosen before the benchmark of
     ``experiments/trials_to_reference.py`` existed); the local model points of each compass
-    generation and their reach in steps, and the model batches at most per stall (chosen
-    on ``short-move`` and ``heavy-load`` among a few variants, each measured over 5 seeds;
-    ``reversal`` was not looked at until they were fixed)."""
+    generation and their reach in steps, the composite poll, the model batches at most per
+    stall (0: until one beats the centre) and the model's cap on log costs: all off by
+    default, which is the search measured best overall (README, "Trials to the grid
+    optimum"); :data:`LOCAL` turns them on."""
 
     n_init: int = 6
     step0: float = 0.4
@@ -88,9 +89,17 @@ class CompassOptions:
     model_batch: int = 8
     xi: float = 0.03
     extra_batch: int = 4
-    search: int = 2
+    search: int = 0
     search_radius: float = 2.0
-    model_rounds: int = 2
+    composite: bool = False
+    model_rounds: int = 0
+    cap_model: bool = False
+
+
+LOCAL = CompassOptions(search=2, composite=True, model_rounds=2, cap_model=True)
+"""The compass with its local model step: faster on ``heavy-load`` (within 1.5 % after 200
+trials, against 4.6 %), slower on ``paper-step``, ``multi-move`` and ``short-move``
+(README); chosen on ``short-move`` and ``heavy-load`` among a few variants over 5 seeds."""
 
 
 class CompassSampler(optuna.samplers.BaseSampler):
@@ -224,6 +233,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         # The centre's trial may be gone (failed): the best instead.
         centre = by_num.get(st["centre"]) or min(obs, key=rank)
         done_here = [by_num[t.number] for t in mine if t.number in by_num]
+        roles = {t.number: t.system_attrs[ATTR]["role"] for t in mine}
         if st["mode"] == "compass":
             improved = np.zeros(4, dtype=bool)
             moves = np.zeros(4)  # the sum of the axis polls that beat the centre
@@ -237,8 +247,9 @@ class CompassSampler(optuna.samplers.BaseSampler):
             prev = None
             if rank(best) < rank(centre):
                 prev, centre = centre, best
-            # A search (model) point that won keeps the steps of the axes no poll improved on.
-            keep = prev is not None and not improved.any()
+            # A search (model) or composite point that won keeps the steps of the axes no
+            # poll improved on.
+            keep = prev is not None and roles.get(centre.number) in ("search", "composite")
             steps = np.where(improved, np.minimum(steps * 1.5, 2.0), steps if keep else steps * 0.5)
             since = st["since"]
             stale = steps.max() < o.min_step or n_done - since >= o.compass_trials
@@ -247,7 +258,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
             if steps.max() < o.min_step:
                 steps = np.full(4, o.step0)
             composite = None
-            if improved.sum() >= 2 and prev is not None:
+            if o.composite and improved.sum() >= 2 and prev is not None:
                 composite = prev.x + moves
             return self._compass(
                 last + 1, obs, centre, prev, steps, since, composite
@@ -257,7 +268,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         best = min(done_here, key=rank, default=centre)
         if best.feasible and rank(best) < rank(centre):
             centre = best
-        elif st.get("rounds", 1) < o.model_rounds:
+        elif not o.model_rounds or st.get("rounds", 1) < o.model_rounds:
             return self._model(last + 1, obs, centre, steps, st["since"], [],
                                rounds=st.get("rounds", 1) + 1)  # fmt: skip
         return self._compass(last + 1, obs, centre, None, np.full(4, o.step0), n_done) or (
@@ -335,7 +346,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         o = self.options
         rng = self._rng(gen, 2 + len(pending))
         pts = propose(self._inputs(obs), obs, [self._input(x, law) for x, law in pending],
-                      n or o.model_batch, o.xi, rng, len(self.laws))  # fmt: skip
+                      n or o.model_batch, o.xi, rng, len(self.laws), o.cap_model)  # fmt: skip
         tag = self._tag(gen, "model", role, centre, steps, since, rounds)
         return [{"x": self._from_unit(p[:4]), "law": self._law_of(p), "tag": tag} for p in pts]
 
@@ -395,7 +406,8 @@ def latin_hypercube(n: int, dim: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
-            xi: float, rng: np.random.Generator, n_laws: int = 1) -> list[np.ndarray]:  # fmt: skip
+            xi: float, rng: np.random.Generator, n_laws: int = 1,
+            cap: bool = False) -> list[np.ndarray]:  # fmt: skip
     """``n`` points (unit coordinates) of highest expected improvement (by at least
     ``xi`` over the best feasible cost) times probability of feasibility, each conditioned
     on the previous ones and on ``pending`` at their predicted values. Two Gaussian
@@ -405,16 +417,17 @@ def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n:
     from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
     with threadpool_limits(1, user_api="blas"):
-        return _propose(x, obs, pending, n, xi, rng, n_laws)
+        return _propose(x, obs, pending, n, xi, rng, n_laws, cap)
 
 
 def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
-             xi: float, rng: np.random.Generator, n_laws: int) -> list[np.ndarray]:  # fmt: skip
+             xi: float, rng: np.random.Generator, n_laws: int,
+             cap: bool) -> list[np.ndarray]:  # fmt: skip
     if len(obs) > MODEL_POINTS:
         order = sorted(range(len(obs)), key=lambda i: rank(obs[i]))
         keep = sorted(set(order[: MODEL_POINTS // 2]) | set(range(len(obs))[-MODEL_POINTS // 2 :]))
         x, obs = x[keep], [obs[i] for i in keep]
-    fit = _fit(x, obs, xi, pending, cap=True)
+    fit = _fit(x, obs, xi, pending, cap)
     feas = np.array([o.feasible for o in obs])
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     top = x[np.argsort(np.where(feas, y, np.inf), kind="stable")[:3]]
