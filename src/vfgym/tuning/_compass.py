@@ -11,24 +11,25 @@ acceleration limit), and a compass stays in the first it finds. So the search al
    thumb) and ``n_init`` scrambled Sobol points, as one batch.
 2. ``compass``: from the best warm start (feasible first, then by cost; an infeasible one
    by its total violation), poll each of the four axes of :class:`vfgym.space.Relative`
-   both ways, plus the pattern move (the last move again) when the last generation moved,
-   the composite move (the sum of the last generation's axis polls that beat the centre)
-   when two or more did, and ``search`` model points: the expected improvement times
-   probability of feasibility of Gaussian processes on the observations nearest the
-   centre, within ``search_radius`` steps of it along every axis at once (a pattern
-   search's search step: the optimum lies along constraint edges that cut the axes
-   diagonally, the acceleration limit binding value, L and k together, which one-axis
-   polls cannot follow). Move to the best point if it beats the centre; per axis, widen
-   the step ×1.5 where a poll beat the centre, else halve it (a model point that won
-   keeps them). After ``compass_trials`` trials of this compass, or when every step is
-   below ``min_step``, with a feasible centre:
+   both ways, plus the pattern move (the last move again) when the last generation moved;
+   move to the best poll if it beats the centre; per axis, widen the step ×1.5 where a
+   poll beat the centre, else halve it. After ``compass_trials`` trials of this compass,
+   or when every step is below ``min_step``, with a feasible centre:
 3. ``model``: a batch of points over the whole space maximising the expected improvement
    of at least ``xi`` over the best feasible cost, times the probability of feasibility
-   (Gaussian processes on log cost, capped at its median so that the model spends
-   itself on the good half, and on the worst constraint, :mod:`vfgym.tuning._gp`); a
-   batch is chosen one point at a time, each conditioned on the previous ones at their
-   predicted values. Up to ``model_rounds`` batches until a feasible point beats the
-   centre; the compass then starts again with fresh steps, there, or else at the centre.
+   (Gaussian processes on log cost and on the worst constraint,
+   :mod:`vfgym.tuning._gp`); a batch is chosen one point at a time, each conditioned on
+   the previous ones at their predicted values. Repeated until a feasible point beats the
+   centre; the compass then starts again there with fresh steps.
+
+:data:`LOCAL` adds to each compass generation the composite move (the sum of the last
+generation's axis polls that beat the centre) and ``search`` model points chosen within
+``search_radius`` steps of the centre along every axis at once, from Gaussian processes
+on the observations nearest it (a pattern search's search step: the optimum lies along
+constraint edges that cut the axes diagonally, the acceleration limit binding value, L
+and k together, which one-axis polls cannot follow; a model or composite point that wins
+keeps the steps); and it caps the model's log costs at their median and stops after
+``model_rounds`` batches, then compasses on from the centre with fresh steps.
 
 Every choice is a deterministic function of the seed and the study's completed trials,
 and each sampled trial records its generation (system attribute ``vfgym:compass``), so a
@@ -412,8 +413,9 @@ def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n:
     ``xi`` over the best feasible cost) times probability of feasibility, each conditioned
     on the previous ones and on ``pending`` at their predicted values. Two Gaussian
     processes: log cost (on the feasible points once there are three) and the worst
-    constraint (signed log). Linear algebra on one thread: OpenBLAS's threads spin on
-    matrices this small, 30x slower on a busy machine (measured, 150 points)."""
+    constraint (signed log); ``cap``: log costs above their median taken as the median.
+    Linear algebra on one thread: OpenBLAS's threads spin on matrices this small, 30x
+    slower on a busy machine (measured, 150 points)."""
     from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
     with threadpool_limits(1, user_api="blas"):
