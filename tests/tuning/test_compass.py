@@ -45,3 +45,39 @@ def test_local_points_are_a_function_of_the_seed():
     a = propose_local(x, obs, centre, np.full(4, 0.1), [], 2, np.random.default_rng(5))
     b = propose_local(x, obs, centre, np.full(4, 0.1), [], 2, np.random.default_rng(5))
     assert np.array_equal(np.array(a), np.array(b))
+
+
+def _study(options, seed: int, trials: int = 45):
+    import optuna
+
+    from vfgym import space
+    from vfgym.params import Settings
+    from vfgym.tuning._compass import ATTR, CompassSampler
+    from vfgym.tuning._objective import set_constraints
+
+    rel = space.Relative(430.0)
+    sampler = CompassSampler(rel, seed=seed, options=options)
+    study = optuna.create_study(sampler=sampler)
+    study.enqueue_trial({"value_rad": 1.0, "error_limit_rad": 1.0, "k": 430.0, "ts_over_tf": 0.25})
+
+    def objective(trial: optuna.Trial) -> float:
+        s = space.suggest(trial)
+        u = rel.to_unit(Settings(**{d.name: getattr(s, d.name) for d in space.SPACE}))
+        set_constraints(trial, {"edge": float(u[1] - u[0] - 0.05)})
+        return float(np.exp(2.0 - (u[0] + u[1]) + (u[2] - 0.5) ** 2 + (u[3] - 0.8) ** 2))
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    study.optimize(objective, n_trials=trials)
+    roles = [t.system_attrs[ATTR]["role"] for t in study.trials if ATTR in t.system_attrs]
+    return [(t.params, t.value) for t in study.trials], roles
+
+
+def test_local_options_add_search_points_and_keep_the_trials_a_function_of_the_seed():
+    from vfgym.tuning._compass import LOCAL, CompassOptions
+
+    a, roles = _study(LOCAL, seed=1)
+    b, _ = _study(LOCAL, seed=1)
+    assert a == b
+    assert "search" in roles
+    _, plain = _study(CompassOptions(), seed=1)
+    assert "search" not in plain and "composite" not in plain  # off by default
