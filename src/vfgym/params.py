@@ -463,6 +463,27 @@ def paper_k(plant: Plant = PAPER_PLANT, accel_limit_rad_s2: float | None = None)
     return plant.tick_hz**2 * plant.pulse_rad / limit
 
 
+def usable_k(plant: Plant = PAPER_PLANT) -> float:
+    """k that holds the pulse train to the loaded motor's usable acceleration.
+
+    The one home of "the loaded motor's k": the rule of thumb's k, the settings models'
+    k_a and the compass sampler's k reference. A step's optimal k sits near it, on the
+    acceleration limit.
+
+    Parameters
+    ----------
+    plant : Plant
+        The plant with the move's load.
+
+    Returns
+    -------
+    float
+        :func:`paper_k` at :attr:`Motor.usable_accel_rad_s2` (equal to :func:`paper_k`
+        on the bare paper motor, 5x it with 5 rotor inertias of load).
+    """
+    return paper_k(plant, plant.motor.usable_accel_rad_s2)
+
+
 @dataclass(frozen=True)
 class Measures:
     """Windows and bands of the measures of a move (docs/model.md §5).

@@ -133,7 +133,7 @@ class Relative:
     The optimum sits on the acceleration limit, with the error limit tied to ``value``
     (the paper: most efficient when equal; below it, the top speed drops to L/value of
     δ·f). So ``k`` is searched relative to ``k_ref`` (the limit's k,
-    :func:`vfgym.params.paper_k`) and ``L`` relative to ``value``; all four on log scales:
+    :func:`vfgym.params.usable_k`) and ``L`` relative to ``value``; all four on log scales:
 
     ======  ====================  =====================================
     axis    coordinate            range

@@ -2,7 +2,7 @@
 
 Value, L and Ts/Tf as unit coordinates of :data:`vfgym.space.SPACE` (log scales), and k
 as log10(k / k_a), k_a the k that holds the pulse train to the loaded motor's usable
-acceleration (:func:`vfgym.params.paper_k`), which carries most of a load's effect on
+acceleration (:func:`vfgym.params.usable_k`), which carries most of a load's effect on
 the best k: a step's optimal k sits at k_a, on the acceleration limit.
 """
 
@@ -19,7 +19,7 @@ from vfgym import space
 from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
 from vfgym.io.runs import write_text
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_PLANT, Plant, Settings, paper_k
+from vfgym.params import PAPER_PLANT, Plant, Settings, usable_k
 
 TARGETS = ("value_rad", "error_limit_rad", "log10_k_over_ka", "ts_over_tf")
 """What the regression predicts (module doc)."""
@@ -27,20 +27,9 @@ K_LOG_RANGE = 4.0
 """log10(k / k_a) is clipped to ±this before k is clipped to the search space."""
 
 
-def accel_k(plant: Plant) -> float:
-    """k_a: the k that holds the pulse train to the loaded motor's usable acceleration.
-
-    Parameters
-    ----------
-    plant : Plant
-        The plant with the move's load.
-
-    Returns
-    -------
-    float
-        :func:`vfgym.params.paper_k` at ``plant.motor.usable_accel_rad_s2``.
-    """
-    return paper_k(plant, plant.motor.usable_accel_rad_s2)
+accel_k = usable_k
+"""k_a: the k that holds the pulse train to the loaded motor's usable acceleration
+(:func:`vfgym.params.usable_k`)."""
 
 
 def settings_targets(settings: Settings, plant: Plant) -> np.ndarray:

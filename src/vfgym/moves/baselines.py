@@ -14,7 +14,7 @@ import numpy as np
 from vfgym._validate import check_real
 from vfgym.moves.profiles import scurve_source_args
 from vfgym.moves.pulse_sources import fixed_frequency_pulses, scurve_pulses
-from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings, paper_k
+from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings, usable_k
 
 BASELINE_NAMES = ("paper", "rule-of-thumb", "fixed-frequency", "scurve")
 
@@ -240,7 +240,7 @@ def rule_of_thumb(plant: Plant = PAPER_PLANT) -> Settings:
     return Settings(
         value_rad=value,
         error_limit_rad=value,
-        k=max(1.0, paper_k(plant, a)),
+        k=max(1.0, usable_k(plant)),
         ts_over_tf=PAPER_SETTINGS.ts_over_tf,
     )
 

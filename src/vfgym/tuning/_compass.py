@@ -13,14 +13,23 @@ acceleration limit), and a compass stays in the first it finds. So the search al
    by its total violation), poll each of the four axes of :class:`vfgym.space.Relative`
    both ways, plus the pattern move (the last move again) when the last generation moved;
    move to the best poll if it beats the centre; per axis, widen the step ×1.5 where a
-   poll beat the centre, else halve it. After ``compass_trials`` trials, or when every
-   step is below ``min_step``, with a feasible centre:
-3. ``model``: a batch of points maximising the expected improvement of at least ``xi``
-   over the best feasible cost, times the probability of feasibility (Gaussian processes
-   on log cost and on each constraint, :mod:`vfgym.tuning._gp`); a batch is chosen one
-   point at a time, each conditioned on the previous ones at their predicted values.
-   Repeated until a feasible point beats the centre; the compass then starts again
-   there with fresh steps.
+   poll beat the centre, else halve it. After ``compass_trials`` trials of this compass,
+   or when every step is below ``min_step``, with a feasible centre:
+3. ``model``: a batch of points over the whole space maximising the expected improvement
+   of at least ``xi`` over the best feasible cost, times the probability of feasibility
+   (Gaussian processes on log cost and on the worst constraint,
+   :mod:`vfgym.tuning._gp`); a batch is chosen one point at a time, each conditioned on
+   the previous ones at their predicted values. Repeated until a feasible point beats the
+   centre; the compass then starts again there with fresh steps.
+
+:data:`LOCAL` adds to each compass generation the composite move (the sum of the last
+generation's axis polls that beat the centre) and ``search`` model points chosen within
+``search_radius`` steps of the centre along every axis at once, from Gaussian processes
+on the observations nearest it (a pattern search's search step: the optimum lies along
+constraint edges that cut the axes diagonally, the acceleration limit binding value, L
+and k together, which one-axis polls cannot follow; a model or composite point that wins
+keeps the steps); and it caps the model's log costs at their median and stops after
+``model_rounds`` batches, then compasses on from the centre with fresh steps.
 
 Every choice is a deterministic function of the seed and the study's completed trials,
 and each sampled trial records its generation (system attribute ``vfgym:compass``), so a
@@ -66,9 +75,13 @@ def rank(o: Observation) -> tuple:
 class CompassOptions:
     """Settings of :class:`CompassSampler`: Latin-hypercube points of the first generation,
     first and smallest compass step (natural-log units), trials of compass before the model
-    is consulted, model batch, least relative improvement sought, and model points handed to
-    a worker that asks while another's generation runs. (Chosen before the benchmark of
-    ``experiments/trials_to_reference.py`` existed; not tuned against it.)"""
+    is consulted, model batch, least relative improvement sought, model points handed to
+    a worker that asks while another's generation runs (chosen before the benchmark of
+    ``experiments/trials_to_reference.py`` existed); the local model points of each compass
+    generation and their reach in steps, the composite poll, the model batches at most per
+    stall (0: until one beats the centre) and the model's cap on log costs: all off by
+    default, which is the search measured best overall (README, "Trials to the grid
+    optimum"); :data:`LOCAL` turns them on."""
 
     n_init: int = 6
     step0: float = 0.4
@@ -77,6 +90,17 @@ class CompassOptions:
     model_batch: int = 8
     xi: float = 0.03
     extra_batch: int = 4
+    search: int = 0
+    search_radius: float = 2.0
+    composite: bool = False
+    model_rounds: int = 0
+    cap_model: bool = False
+
+
+LOCAL = CompassOptions(search=2, composite=True, model_rounds=2, cap_model=True)
+"""The compass with its local model step: faster on ``heavy-load`` (within 1.5 % after 200
+trials, against 4.6 %), slower on ``paper-step``, ``multi-move`` and ``short-move``
+(README); chosen on ``short-move`` and ``heavy-load`` among a few variants over 5 seeds."""
 
 
 class CompassSampler(optuna.samplers.BaseSampler):
@@ -206,37 +230,54 @@ class CompassSampler(optuna.samplers.BaseSampler):
             if not warm:
                 return self._sobol(last + 1)
             centre = min(warm, key=rank)
-            return self._compass(last + 1, centre, None, np.full(4, o.step0), n_done)
+            return self._compass(last + 1, obs, centre, None, np.full(4, o.step0), n_done)
         # The centre's trial may be gone (failed): the best instead.
         centre = by_num.get(st["centre"]) or min(obs, key=rank)
         done_here = [by_num[t.number] for t in mine if t.number in by_num]
+        roles = {t.number: t.system_attrs[ATTR]["role"] for t in mine}
         if st["mode"] == "compass":
             improved = np.zeros(4, dtype=bool)
+            moves = np.zeros(4)  # the sum of the axis polls that beat the centre
             for t in mine:
                 role = t.system_attrs[ATTR]["role"]
                 ob = by_num.get(t.number)
                 if ob is not None and role.startswith("axis") and rank(ob) < rank(centre):
                     improved[int(role.split(":")[1])] = True
+                    moves += ob.x - centre.x
             best = min(done_here, key=rank, default=centre)
             prev = None
             if rank(best) < rank(centre):
                 prev, centre = centre, best
-            steps = np.where(improved, np.minimum(steps * 1.5, 2.0), steps * 0.5)
-            stale = steps.max() < o.min_step or n_done - st["since"] >= o.compass_trials
+            # A search (model) or composite point that won keeps the steps of the axes no
+            # poll improved on.
+            keep = prev is not None and roles.get(centre.number) in ("search", "composite")
+            steps = np.where(improved, np.minimum(steps * 1.5, 2.0), steps if keep else steps * 0.5)
+            since = st["since"]
+            stale = steps.max() < o.min_step or n_done - since >= o.compass_trials
             if centre.feasible and stale:
-                return self._model(last + 1, obs, centre, steps, st["since"], [])
+                return self._model(last + 1, obs, centre, steps, since, [])
             if steps.max() < o.min_step:
                 steps = np.full(4, o.step0)
-            return self._compass(last + 1, centre, prev, steps, st["since"]) or self._model(
-                last + 1, obs, centre, steps, st["since"], []
-            )
+            composite = None
+            if o.composite and improved.sum() >= 2 and prev is not None:
+                composite = prev.x + moves
+            return self._compass(
+                last + 1, obs, centre, prev, steps, since, composite
+            ) or self._model(last + 1, obs, centre, steps, since, [])
+        # One model batch, then the compass again: from its best point if that beats the
+        # centre, else from the centre with fresh steps.
         best = min(done_here, key=rank, default=centre)
         if best.feasible and rank(best) < rank(centre):
-            return self._compass(last + 1, best, None, np.full(4, o.step0), n_done)
-        return self._model(last + 1, obs, centre, steps, st["since"], [])
+            centre = best
+        elif not o.model_rounds or st.get("rounds", 1) < o.model_rounds:
+            return self._model(last + 1, obs, centre, steps, st["since"], [],
+                               rounds=st.get("rounds", 1) + 1)  # fmt: skip
+        return self._compass(last + 1, obs, centre, None, np.full(4, o.step0), n_done) or (
+            self._model(last + 1, obs, centre, steps, n_done, [])
+        )
 
     def _tag(self, gen: int, mode: str, role: str, centre: Observation | None,
-             steps: np.ndarray, since: int) -> dict[str, Any]:  # fmt: skip
+             steps: np.ndarray, since: int, rounds: int = 0) -> dict[str, Any]:  # fmt: skip
         return {
             "gen": gen,
             "mode": mode,
@@ -244,6 +285,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
             "centre": None if centre is None else centre.number,
             "steps": [float(s) for s in steps],
             "since": since,
+            "rounds": rounds,
         }
 
     def _sobol(self, gen: int) -> list[dict[str, Any]]:
@@ -255,8 +297,9 @@ class CompassSampler(optuna.samplers.BaseSampler):
             for i, p in enumerate(u)
         ]
 
-    def _compass(self, gen: int, centre: Observation, prev: Observation | None,
-                 steps: np.ndarray, since: int) -> list[dict[str, Any]]:  # fmt: skip
+    def _compass(self, gen: int, obs: list[Observation], centre: Observation,
+                 prev: Observation | None, steps: np.ndarray, since: int,
+                 composite: np.ndarray | None = None) -> list[dict[str, Any]]:  # fmt: skip
         lo, hi = self._lo, self._lo + self._span
         out: list[dict[str, Any]] = []
         seen = {tuple(centre.x)}
@@ -272,6 +315,8 @@ class CompassSampler(optuna.samplers.BaseSampler):
         seen = {(tuple(centre.x), centre.law)}
         if prev is not None:
             add(centre.x + (centre.x - prev.x), "pattern")
+        if composite is not None:
+            add(composite, "composite")
         for d in range(4):
             for sign in (1, -1):
                 x = centre.x.copy()
@@ -280,25 +325,31 @@ class CompassSampler(optuna.samplers.BaseSampler):
         for law in self.laws:
             if law != centre.law:
                 add(centre.x.copy(), "law", law)
+        if out and self.options.search and len(obs) >= 4:
+            radius = np.maximum(self.options.search_radius * steps, 0.05) / self._span
+            rng = self._rng(gen, 3)
+            pending = [self._input(p["x"], p["law"]) for p in out]
+            for p in propose_local(self._inputs(obs), obs, self._input(centre.x, centre.law),
+                                   radius, pending, self.options.search, rng):  # fmt: skip
+                add(self._from_unit(p[:4]), "search")
         return out
+
+    def _law_of(self, p: np.ndarray) -> str:
+        """The law a model point's fifth coordinate stands for (the only one if one)."""
+        if len(self.laws) == 1:
+            return self.laws[0]
+        return self.laws[round(p[4] * (len(self.laws) - 1))]
 
     def _model(self, gen: int, obs: list[Observation], centre: Observation,
                steps: np.ndarray, since: int, pending: list[tuple[np.ndarray, str]],
-               n: int | None = None, role: str = "model") -> list[dict[str, Any]]:  # fmt: skip
+               n: int | None = None, role: str = "model",
+               rounds: int = 1) -> list[dict[str, Any]]:  # fmt: skip
         o = self.options
         rng = self._rng(gen, 2 + len(pending))
         pts = propose(self._inputs(obs), obs, [self._input(x, law) for x, law in pending],
-                      n or o.model_batch, o.xi, rng, len(self.laws))  # fmt: skip
-        tag = self._tag(gen, "model", role, centre, steps, since)
-        out = []
-        for p in pts:
-            law = (
-                self.laws[round(p[4] * (len(self.laws) - 1))]
-                if len(self.laws) > 1
-                else self.laws[0]
-            )
-            out.append({"x": self._from_unit(p[:4]), "law": law, "tag": tag})
-        return out
+                      n or o.model_batch, o.xi, rng, len(self.laws), o.cap_model)  # fmt: skip
+        tag = self._tag(gen, "model", role, centre, steps, since, rounds)
+        return [{"x": self._from_unit(p[:4]), "law": self._law_of(p), "tag": tag} for p in pts]
 
     def _extra(self, obs: list[Observation], pending: list, last: int, k: int) -> list:
         """Points for a worker that asks while a generation is still running."""
@@ -356,41 +407,35 @@ def latin_hypercube(n: int, dim: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
-            xi: float, rng: np.random.Generator, n_laws: int = 1) -> list[np.ndarray]:  # fmt: skip
+            xi: float, rng: np.random.Generator, n_laws: int = 1,
+            cap: bool = False) -> list[np.ndarray]:  # fmt: skip
     """``n`` points (unit coordinates) of highest expected improvement (by at least
     ``xi`` over the best feasible cost) times probability of feasibility, each conditioned
     on the previous ones and on ``pending`` at their predicted values. Two Gaussian
     processes: log cost (on the feasible points once there are three) and the worst
-    constraint (signed log). Linear algebra on one thread: OpenBLAS's threads spin on
-    matrices this small, 30x slower on a busy machine (measured, 150 points)."""
+    constraint (signed log); ``cap``: log costs above their median taken as the median.
+    Linear algebra on one thread: OpenBLAS's threads spin on matrices this small, 30x
+    slower on a busy machine (measured, 150 points)."""
     from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
     with threadpool_limits(1, user_api="blas"):
-        return _propose(x, obs, pending, n, xi, rng, n_laws)
+        return _propose(x, obs, pending, n, xi, rng, n_laws, cap)
 
 
 def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
-             xi: float, rng: np.random.Generator, n_laws: int) -> list[np.ndarray]:  # fmt: skip
+             xi: float, rng: np.random.Generator, n_laws: int,
+             cap: bool) -> list[np.ndarray]:  # fmt: skip
     if len(obs) > MODEL_POINTS:
         order = sorted(range(len(obs)), key=lambda i: rank(obs[i]))
         keep = sorted(set(order[: MODEL_POINTS // 2]) | set(range(len(obs))[-MODEL_POINTS // 2 :]))
         x, obs = x[keep], [obs[i] for i in keep]
-    y = np.log(np.maximum([o.cost for o in obs], 1e-12))
+    fit = _fit(x, obs, xi, pending, cap)
     feas = np.array([o.feasible for o in obs])
-    cons = np.array([o.constraints for o in obs])
-    fit = feas if feas.sum() >= 3 else np.ones(len(obs), dtype=bool)
-    gp = GaussianProcess(x[fit], y[fit])
-    worst = cons.max(axis=1) if cons.size else np.zeros(len(obs))
-    cgps = [GaussianProcess(x, _signed_log(worst))] if (worst > 0).any() else []
-    best = y[feas].min() + math.log1p(-xi) if feas.any() else None
+    y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     top = x[np.argsort(np.where(feas, y, np.inf), kind="stable")[:3]]
-    models = [gp, *cgps]
-    for p in pending:
-        for m in models:
-            m.condition(p[None], float(m.predict(p[None])[0][0]))
     dim = x.shape[1]
-    out = []
-    for _ in range(n):
+
+    def candidates() -> np.ndarray:
         cand = [rng.random((1024, dim))]
         for t in top:
             for scale in (0.1, 0.03):
@@ -400,17 +445,87 @@ def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n
         c = np.vstack(cand)
         if n_laws > 1:
             c[:, 4] = np.round(c[:, 4] * (n_laws - 1)) / (n_laws - 1)
-        mu, sd = gp.predict(c)
-        pf = np.ones(len(c))
-        for m in cgps:
-            cm, cs = m.predict(c)
-            pf *= norm_cdf(-cm / np.maximum(cs, 1e-9))
-        acq = pf if best is None else expected_improvement(best, mu, sd) * pf
-        j = int(np.argmax(acq))
-        out.append(c[j])
-        for m in models:
-            m.condition(c[j][None], float(m.predict(c[j][None])[0][0]))
-    return out
+        return c
+
+    return fit.choose(n, candidates)
+
+
+LOCAL_POINTS = 60
+"""At most this many observations, the nearest to the centre, inform the local model."""
+
+
+def propose_local(x: np.ndarray, obs: list[Observation], centre: np.ndarray,
+                  radius: np.ndarray, pending: list[np.ndarray], n: int,
+                  rng: np.random.Generator) -> list[np.ndarray]:  # fmt: skip
+    """``n`` points (unit coordinates) within ``radius`` of ``centre`` along every axis
+    (a box; the law, if searched, kept at the centre's) of highest expected improvement
+    over the best feasible cost near the centre, times probability of feasibility, from
+    Gaussian processes on the :data:`LOCAL_POINTS` observations nearest the centre (in
+    units of the radius); each point conditioned on ``pending`` and the previous ones."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1, user_api="blas"):
+        dim = len(radius)
+        r = np.ones(x.shape[1])
+        r[:dim] = radius
+        near = np.argsort((((x - centre) / r) ** 2).sum(1), kind="stable")[:LOCAL_POINTS]
+        fit = _fit(x[near], [obs[i] for i in near], 0.0, pending)
+
+        def candidates() -> np.ndarray:
+            c = np.repeat(centre[None], 1536, axis=0)
+            c[:1024, :dim] += radius * rng.uniform(-1.0, 1.0, (1024, dim))
+            c[1024:, :dim] += radius * rng.normal(0.0, 0.25, (512, dim))
+            return np.clip(c, 0.0, 1.0)
+
+        return fit.choose(n, candidates)
+
+
+class _Fit(NamedTuple):
+    """The models a proposal is chosen by: log cost, and the worst constraint (if any
+    observation violates one); ``best``: the log cost to improve on (None: none feasible)."""
+
+    gp: GaussianProcess
+    cgps: list[GaussianProcess]
+    best: float | None
+
+    def choose(self, n: int, candidates: Any) -> list[np.ndarray]:
+        """``n`` points, each the best of fresh ``candidates()`` by expected improvement
+        times probability of feasibility, then believed at its predicted values."""
+        out = []
+        for _ in range(n):
+            c = candidates()
+            mu, sd = self.gp.predict(c)
+            pf = np.ones(len(c))
+            for m in self.cgps:
+                cm, cs = m.predict(c)
+                pf *= norm_cdf(-cm / np.maximum(cs, 1e-9))
+            acq = pf if self.best is None else expected_improvement(self.best, mu, sd) * pf
+            j = int(np.argmax(acq))
+            out.append(c[j])
+            for m in (self.gp, *self.cgps):
+                m.condition(c[j][None], float(m.predict(c[j][None])[0][0]))
+        return out
+
+
+def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndarray],
+         cap: bool = False) -> _Fit:  # fmt: skip
+    """Gaussian processes on log cost (on the feasible points once there are three) and
+    on the worst constraint (signed log), conditioned on ``pending`` at their predictions.
+    ``cap``: log costs above their median taken as the median, so that the model spends
+    itself on the good half of a space whose costs span decades."""
+    y = np.log(np.maximum([o.cost for o in obs], 1e-12))
+    feas = np.array([o.feasible for o in obs])
+    cons = np.array([o.constraints for o in obs])
+    fit = feas if feas.sum() >= 3 else np.ones(len(obs), dtype=bool)
+    yf = np.minimum(y[fit], np.median(y[fit])) if cap else y[fit]
+    gp = GaussianProcess(x[fit], yf)
+    worst = cons.max(axis=1) if cons.size else np.zeros(len(obs))
+    cgps = [GaussianProcess(x, _signed_log(worst))] if (worst > 0).any() else []
+    best = y[feas].min() + math.log1p(-xi) if feas.any() else None
+    for p in pending:
+        for m in (gp, *cgps):
+            m.condition(p[None], float(m.predict(p[None])[0][0]))
+    return _Fit(gp, cgps, best)
 
 
 def _signed_log(v: np.ndarray) -> np.ndarray:

@@ -15,7 +15,7 @@ from vfgym import space
 from vfgym.moves.axis import axis_digest
 from vfgym.moves.baselines import rule_of_thumb, usable_accel
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings, paper_k
+from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings, usable_k
 from vfgym.scoring import OBJECTIVES
 from vfgym.tuning._aggregate import describe
 from vfgym.tuning._config import SweepConfig
@@ -135,10 +135,11 @@ def relative_space(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> spac
     Returns
     -------
     vfgym.space.Relative
-        ``k`` relative to the geometric mean of the acceleration limit's k
-        (:func:`vfgym.params.paper_k`) over the scenarios' plants.
+        ``k`` relative to the geometric mean of the loaded motor's k
+        (:func:`vfgym.params.usable_k`: the usable acceleration's, not the stated
+        limit's) over the scenarios' plants.
     """
-    ks = [paper_k(sc.plant(base)) for sc in scenarios] or [paper_k(base)]
+    ks = [usable_k(sc.plant(base)) for sc in scenarios] or [usable_k(base)]
     return space.Relative(float(np.exp(np.mean(np.log(ks)))))
 
 

@@ -1,0 +1,83 @@
+"""The compass sampler's local model step (no simulation: synthetic observations)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vfgym.tuning._compass import Observation, propose_local
+
+
+def _observe(points: np.ndarray) -> list[Observation]:
+    """A cost falling along the diagonal (u0 + u1) behind a diagonal constraint edge
+    u1 - u0 <= 0.05: an axis poll from the centre (0.5, 0.5) either breaks the constraint
+    or raises the cost; only a move along the edge both ways at once pays."""
+    out = []
+    for i, u in enumerate(points):
+        cost = float(np.exp(2.0 - (u[0] + u[1]) + 0.1 * (u[2] - 0.5) ** 2))
+        g = float(u[1] - u[0] - 0.05)
+        out.append(Observation(i, u.copy(), "rise", cost, max(g, 0.0), g <= 0.0, np.array([g])))
+    return out
+
+
+def test_local_points_stay_in_the_box_and_follow_the_diagonal_edge():
+    rng = np.random.default_rng(0)
+    centre = np.array([0.5, 0.5, 0.5, 0.5])
+    steps = 0.04
+    polls = [centre + s * steps * np.eye(4)[d] for d in range(4) for s in (1, -1)]
+    x = np.vstack([centre, *polls, centre + rng.uniform(-0.15, 0.15, (20, 4))])
+    obs = _observe(x)
+    radius = np.full(4, 2 * steps)
+    pts = propose_local(x, obs, centre, radius, [], 3, np.random.default_rng(1))
+    assert len(pts) == 3
+    for p in pts:
+        assert np.all(np.abs(p - centre) <= radius + 1e-12)  # within the box
+    best_centre = obs[0].cost
+    wins = [o for o in _observe(np.array(pts)) if o.feasible and o.cost < best_centre]
+    assert wins  # at least one beats the centre, feasibly: a diagonal move
+    moved = np.array(pts[0]) - centre
+    assert moved[0] > 0 and moved[1] > 0  # both coordinates at once, up the edge
+
+
+def test_local_points_are_a_function_of_the_seed():
+    x = np.random.default_rng(2).uniform(0.3, 0.7, (25, 4))
+    obs = _observe(x)
+    centre = x[np.argmin([o.cost if o.feasible else np.inf for o in obs])]
+    a = propose_local(x, obs, centre, np.full(4, 0.1), [], 2, np.random.default_rng(5))
+    b = propose_local(x, obs, centre, np.full(4, 0.1), [], 2, np.random.default_rng(5))
+    assert np.array_equal(np.array(a), np.array(b))
+
+
+def _study(options, seed: int, trials: int = 45):
+    import optuna
+
+    from vfgym import space
+    from vfgym.params import Settings
+    from vfgym.tuning._compass import ATTR, CompassSampler
+    from vfgym.tuning._objective import set_constraints
+
+    rel = space.Relative(430.0)
+    sampler = CompassSampler(rel, seed=seed, options=options)
+    study = optuna.create_study(sampler=sampler)
+    study.enqueue_trial({"value_rad": 1.0, "error_limit_rad": 1.0, "k": 430.0, "ts_over_tf": 0.25})
+
+    def objective(trial: optuna.Trial) -> float:
+        s = space.suggest(trial)
+        u = rel.to_unit(Settings(**{d.name: getattr(s, d.name) for d in space.SPACE}))
+        set_constraints(trial, {"edge": float(u[1] - u[0] - 0.05)})
+        return float(np.exp(2.0 - (u[0] + u[1]) + (u[2] - 0.5) ** 2 + (u[3] - 0.8) ** 2))
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    study.optimize(objective, n_trials=trials)
+    roles = [t.system_attrs[ATTR]["role"] for t in study.trials if ATTR in t.system_attrs]
+    return [(t.params, t.value) for t in study.trials], roles
+
+
+def test_local_options_add_search_points_and_keep_the_trials_a_function_of_the_seed():
+    from vfgym.tuning._compass import LOCAL, CompassOptions
+
+    a, roles = _study(LOCAL, seed=1)
+    b, _ = _study(LOCAL, seed=1)
+    assert a == b
+    assert "search" in roles
+    _, plain = _study(CompassOptions(), seed=1)
+    assert "search" not in plain and "composite" not in plain  # off by default
