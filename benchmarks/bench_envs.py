@@ -261,7 +261,8 @@ def main() -> None:
         np.zeros(1, np.bool_),
         np.zeros(1, np.int64),
         *B.lane_scratch(1, 1, 1),
-    )  # threads up
+        parallel_min=1,
+    )  # the threaded kernel, so numba's threads (and its threading layer) are up
     layer = numba.threading_layer()
     policy = os.environ.get("OMP_WAIT_POLICY", "unset")
     print(
