@@ -257,11 +257,11 @@ def test_rule_of_one_twelfth_only_for_moves_that_cannot_reach_drive_speed():
 def test_train_builder_caps_rounding_to_one_pulse_per_tick():
     # Rounding at DV = tick_hz could in principle step the count by two in one tick; the
     # builder delays the extra pulse by a tick and extends the train if need be.
-    from vfgym.moves.pulse_sources import _train_from_counts
+    from vfgym.moves.pulse_sources import _counts_of_train
 
-    train = _train_from_counts(np.array([0, 1, 3, 4, 5, 5, 5, 5]), 5, 5)
+    train = np.diff(_counts_of_train(np.array([0, 1, 3, 4, 5, 5, 5, 5]), 5, 5))
     np.testing.assert_array_equal(train, [1, 1, 1, 1, 1])
-    train = _train_from_counts(np.array([0, 2, 3, 4, 5, 5, 5, 5]), 4, 5)
+    train = np.diff(_counts_of_train(np.array([0, 2, 3, 4, 5, 5, 5, 5]), 4, 5))
     np.testing.assert_array_equal(train, [1, 1, 1, 1, 1])
 
 

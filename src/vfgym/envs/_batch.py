@@ -460,10 +460,11 @@ def _step_parallel(act, W, RING, CMD, active, flags, Z, CB, H, G, lane_min) -> i
     return -1
 
 
-def _batch_kernel(num_envs: int, parallel_min: int):
+def _batch_kernel(num_envs: int, parallel_min: int | None):
     """The compiled step a batch of ``num_envs`` envs runs: on numba's threads from
-    ``parallel_min`` envs, else on the calling thread."""
-    return _step_parallel if num_envs >= parallel_min else _step_serial
+    ``parallel_min`` envs (None: :data:`PARALLEL_MIN_ENVS`), else on the calling thread."""
+    par = PARALLEL_MIN_ENVS if parallel_min is None else parallel_min
+    return _step_parallel if num_envs >= par else _step_serial
 
 
 def step_batch(
@@ -483,8 +484,7 @@ def step_batch(
 
     ``act`` should be float64 (float32 works, at the cost of a second compile of the
     kernels' action path: :func:`step_batch_balanced` converts)."""
-    par = PARALLEL_MIN_ENVS if parallel_min is None else parallel_min
-    kernel = _batch_kernel(W.shape[0], par)
+    kernel = _batch_kernel(W.shape[0], parallel_min)
     return kernel(act, W, RING, CMD, active, flags, Z, CB, H, G, lane_min)
 
 
@@ -504,8 +504,7 @@ def step_batch_balanced(
     stop numba from caching it. The actions are taken as float64 (SB3 hands float32, users
     float64: one compiled kernel serves both, with the same numbers, float32 → float64
     being exact)."""
-    par = PARALLEL_MIN_ENVS if parallel_min is None else parallel_min
-    kernel = _batch_kernel(W.shape[0], par)
+    kernel = _batch_kernel(W.shape[0], parallel_min)
     act = np.asarray(act, dtype=np.float64)
     args = (act, W, RING, CMD, active, flags, *scratch, lane_min)
     threads = kernel is _step_parallel

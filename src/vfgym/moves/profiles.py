@@ -223,7 +223,8 @@ def scurve(
         float64, the position (rad) at each tick, from tick 0 at time 0.
         The position is the pulse count times δ.
     """
-    from vfgym.moves.pulse_sources import scurve_counts, scurve_profile
+    from vfgym.moves.pulse_sources import scurve_counts
+    from vfgym.moves.scurve import scurve_profile
 
     d = check_real("distance_rad", distance_rad)
     n = _ticks(duration_s, tick_hz)

@@ -69,12 +69,6 @@ def _counts_of_train(counts: np.ndarray, n_ticks: int, total: int) -> np.ndarray
     return counts[: length + 1]
 
 
-def _train_from_counts(counts: np.ndarray, n_ticks: int, total: int) -> np.ndarray:
-    """Per-tick pulses from cumulative counts at tick boundaries, at most one per tick
-    (the steps of :func:`_counts_of_train`)."""
-    return np.diff(_counts_of_train(counts, n_ticks, total)).astype(np.int8)
-
-
 def scurve_pulses(
     total_pulses: int,
     *,
