@@ -166,8 +166,8 @@ def main() -> None:
                 for c in CHECKPOINTS
             )
             print(
-                f"{sampler:8s} {_spread([r.trials_to(1.0) for r in runs], 'd', cap):>14s} "
-                f"{_spread([r.trials_to(2.0) for r in runs], 'd', cap):>12s} "
+                f"{sampler:8s} {_spread([r.trials_to(1.0) for r in runs], 'g', cap):>14s} "
+                f"{_spread([r.trials_to(2.0) for r in runs], 'g', cap):>12s} "
                 f"{_spread([r.seconds_to(1.0) for r in runs], '.1f', '-'):>14s} "
                 f"{_spread([r.seconds_to(2.0) for r in runs], '.1f', '-'):>14s} {gaps}  "
                 f"{sum(r.best_feasible for r in runs)}/{len(runs)}"

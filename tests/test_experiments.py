@@ -1,0 +1,58 @@
+"""Smoke runs of the experiments that measure the sweeps against a grid reference: on a
+3-point grid of ``paper-step`` (81 settings) they must run to the end and print their
+tables. Their figures are not checked (they are the experiments' output, not properties).
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from vfgym.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def refs(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A runs folder holding a small grid reference for ``paper-step``."""
+    runs = tmp_path_factory.mktemp("refs")
+    rc = main(["grid", "--scenarios", "paper-step", "--points", "3", "--refine", "0",
+               "--runs-dir", str(runs)])  # fmt: skip
+    assert rc == 0
+    assert list(runs.glob("grid/*/reference.yaml"))
+    return runs
+
+
+def run(script: str, *args: str) -> str:
+    out = subprocess.run(
+        [sys.executable, f"experiments/{script}", *args],
+        cwd=ROOT, capture_output=True, text=True, timeout=900,
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr[-2000:]
+    return out.stdout
+
+
+def test_trials_to_reference_prints_a_row_per_sampler_with_an_even_number_of_seeds(refs):
+    # Two seeds: the median of two trial counts may be a half (it once failed to print).
+    out = run("trials_to_reference.py", "--refs", str(refs), "--problems", "paper-step",
+              "--samplers", "compass,random", "--seeds", "0,1", "--max-trials", "6",
+              "--storage", "journal")  # fmt: skip
+    for sampler in ("compass", "random"):
+        row = next(line for line in out.splitlines() if line.startswith(sampler))
+        assert re.search(r"\d+/2 ", row), row  # every run's best feasible, of 2
+
+
+def test_reference_basin_prints_a_row_per_box(refs):
+    out = run("reference_basin.py", "--refs", str(refs), "--problems", "paper-step",
+              "--count", "4")  # fmt: skip
+    assert "reference cost" in out
+    rows = [line for line in out.splitlines() if line.strip().startswith("±")]
+    assert len(rows) == 5, out
+    for row in rows:
+        feasible, within1, within2 = (float(v) for v in row.split()[2:5])
+        assert 0.0 <= within1 <= within2 <= feasible <= 1.0, row
