@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from vfgym.tuning._compass import Observation, propose_local
 
@@ -48,11 +49,21 @@ def test_local_points_are_a_function_of_the_seed():
 
 
 def _study(options, seed: int, trials: int = 45):
+    from vfgym.tuning._compass import ATTR
+
+    study = _run(options, seed, trials)
+    roles = [t.system_attrs[ATTR]["role"] for t in study.trials if ATTR in t.system_attrs]
+    return [(t.params, t.value) for t in study.trials], roles
+
+
+def _run(options, seed: int, trials: int):
+    """A compass study on a synthetic cost falling along u0 + u1 behind the edge
+    u1 − u0 ≤ 0.05 (unit coordinates of :class:`vfgym.space.Relative`)."""
     import optuna
 
     from vfgym import space
     from vfgym.params import Settings
-    from vfgym.tuning._compass import ATTR, CompassSampler
+    from vfgym.tuning._compass import CompassSampler
     from vfgym.tuning._objective import set_constraints
 
     rel = space.Relative(430.0)
@@ -68,8 +79,7 @@ def _study(options, seed: int, trials: int = 45):
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     study.optimize(objective, n_trials=trials)
-    roles = [t.system_attrs[ATTR]["role"] for t in study.trials if ATTR in t.system_attrs]
-    return [(t.params, t.value) for t in study.trials], roles
+    return study
 
 
 def test_local_options_add_search_points_and_keep_the_trials_a_function_of_the_seed():
@@ -81,3 +91,51 @@ def test_local_options_add_search_points_and_keep_the_trials_a_function_of_the_s
     assert "search" in roles
     _, plain = _study(CompassOptions(), seed=1)
     assert "search" not in plain and "composite" not in plain  # off by default
+
+
+def test_diagonal_polls_move_value_and_the_limit_ratio_together():
+    # The fifth poll direction keeps L/value² (the tail's deceleration at top speed) fixed:
+    # log value and log L/value move by the same step, k and Ts/Tf not at all.
+    from vfgym import space
+    from vfgym.tuning._compass import ATTR, CompassOptions
+
+    study = _run(CompassOptions(diagonal=True), seed=0, trials=40)
+    lo, hi = space.Relative(430.0).bounds()[:2].T
+    by_number = {t.number: t.params for t in study.trials}
+    diag = [
+        t for t in study.trials if t.system_attrs.get(ATTR, {}).get("role", "")[:7] == "axis:4:"
+    ]
+    assert len(diag) >= 4
+    checked = 0
+    for t in diag:
+        p, c = t.params, by_number[t.system_attrs[ATTR]["centre"]]
+        dv = np.log(p["value_rad"] / c["value_rad"])
+        dr = np.log(p["error_limit_rad"] / p["value_rad"] / (c["error_limit_rad"] / c["value_rad"]))
+        x = np.log([p["value_rad"], p["error_limit_rad"] / p["value_rad"]])
+        if (
+            np.any(x <= lo + 1e-9)
+            or np.any(x >= hi - 1e-9)
+            or not 0.05 < p["error_limit_rad"] < 10.0
+        ):
+            continue  # a poll clipped to the search box moves one coordinate only
+        checked += 1
+        assert abs(dv) > 0.01 and dv == pytest.approx(dr, abs=1e-9)
+        assert p["k"] == pytest.approx(c["k"]) and p["ts_over_tf"] == pytest.approx(c["ts_over_tf"])
+    assert checked >= 2
+    plain = _run(CompassOptions(), seed=0, trials=40)
+    roles = [t.system_attrs.get(ATTR, {}).get("role", "") for t in plain.trials]
+    assert not any(r.startswith("axis:4:") for r in roles)  # off: the four axes only
+
+
+def test_patience_keeps_the_compass_going_while_it_improves():
+    # The synthetic cost falls for as long as the compass climbs the edge: counted from the
+    # compass's start, 40 trials end it (a model batch follows); counted from its last
+    # move (patience), it is still polling after 60.
+    from vfgym.tuning._compass import ATTR, CompassOptions
+
+    def modes(options):
+        study = _run(options, seed=0, trials=70)
+        return [t.system_attrs[ATTR]["mode"] for t in study.trials if ATTR in t.system_attrs]
+
+    assert "model" in modes(CompassOptions(compass_trials=40))
+    assert "model" not in modes(CompassOptions(compass_trials=40, patience=True))

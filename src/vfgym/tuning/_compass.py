@@ -95,6 +95,8 @@ class CompassOptions:
     composite: bool = False
     model_rounds: int = 0
     cap_model: bool = False
+    diagonal: bool = False
+    patience: bool = False
 
 
 LOCAL = CompassOptions(search=2, composite=True, model_rounds=2, cap_model=True)
@@ -128,6 +130,12 @@ class CompassSampler(optuna.samplers.BaseSampler):
         b = relative.bounds()
         self._lo, self._span = b[:, 0], b[:, 1] - b[:, 0]
         self._queue: list[dict[str, Any]] = []
+        # Poll directions: the four axes, and with ``diagonal`` value and L/value moved
+        # together (L/value² fixed: the tail's deceleration at top speed, δ²f²·L/value²).
+        self._dirs = np.eye(4)
+        if self.options.diagonal:
+            self._dirs = np.vstack([self._dirs, [1.0, 1.0, 0.0, 0.0]])
+        self._ndir = len(self._dirs)
 
     # --- Optuna's sampler interface -----------------------------------------------------
     def infer_relative_search_space(self, study: Any, trial: Any) -> dict[str, Any]:
@@ -230,13 +238,13 @@ class CompassSampler(optuna.samplers.BaseSampler):
             if not warm:
                 return self._sobol(last + 1)
             centre = min(warm, key=rank)
-            return self._compass(last + 1, obs, centre, None, np.full(4, o.step0), n_done)
+            return self._compass(last + 1, obs, centre, None, np.full(self._ndir, o.step0), n_done)
         # The centre's trial may be gone (failed): the best instead.
         centre = by_num.get(st["centre"]) or min(obs, key=rank)
         done_here = [by_num[t.number] for t in mine if t.number in by_num]
         roles = {t.number: t.system_attrs[ATTR]["role"] for t in mine}
         if st["mode"] == "compass":
-            improved = np.zeros(4, dtype=bool)
+            improved = np.zeros(len(steps), dtype=bool)
             moves = np.zeros(4)  # the sum of the axis polls that beat the centre
             for t in mine:
                 role = t.system_attrs[ATTR]["role"]
@@ -252,12 +260,12 @@ class CompassSampler(optuna.samplers.BaseSampler):
             # poll improved on.
             keep = prev is not None and roles.get(centre.number) in ("search", "composite")
             steps = np.where(improved, np.minimum(steps * 1.5, 2.0), steps if keep else steps * 0.5)
-            since = st["since"]
+            since = n_done if (o.patience and prev is not None) else st["since"]
             stale = steps.max() < o.min_step or n_done - since >= o.compass_trials
             if centre.feasible and stale:
                 return self._model(last + 1, obs, centre, steps, since, [])
             if steps.max() < o.min_step:
-                steps = np.full(4, o.step0)
+                steps = np.full(self._ndir, o.step0)
             composite = None
             if o.composite and improved.sum() >= 2 and prev is not None:
                 composite = prev.x + moves
@@ -272,7 +280,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         elif not o.model_rounds or st.get("rounds", 1) < o.model_rounds:
             return self._model(last + 1, obs, centre, steps, st["since"], [],
                                rounds=st.get("rounds", 1) + 1)  # fmt: skip
-        return self._compass(last + 1, obs, centre, None, np.full(4, o.step0), n_done) or (
+        return self._compass(last + 1, obs, centre, None, np.full(self._ndir, o.step0), n_done) or (
             self._model(last + 1, obs, centre, steps, n_done, [])
         )
 
@@ -291,7 +299,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
     def _sobol(self, gen: int) -> list[dict[str, Any]]:
         n = self.options.n_init
         u = latin_hypercube(n, 4, self._rng(gen, 1))
-        tag = self._tag(gen, "init", "lhs", None, np.full(4, self.options.step0), 0)
+        tag = self._tag(gen, "init", "lhs", None, np.full(self._ndir, self.options.step0), 0)
         return [
             {"x": self._from_unit(p), "law": self.laws[i % len(self.laws)], "tag": tag}
             for i, p in enumerate(u)
@@ -317,16 +325,14 @@ class CompassSampler(optuna.samplers.BaseSampler):
             add(centre.x + (centre.x - prev.x), "pattern")
         if composite is not None:
             add(composite, "composite")
-        for d in range(4):
+        for d in range(len(steps)):
             for sign in (1, -1):
-                x = centre.x.copy()
-                x[d] += sign * steps[d]
-                add(x, f"axis:{d}:{sign:+d}")
+                add(centre.x + sign * steps[d] * self._dirs[d], f"axis:{d}:{sign:+d}")
         for law in self.laws:
             if law != centre.law:
                 add(centre.x.copy(), "law", law)
         if out and self.options.search and len(obs) >= 4:
-            radius = np.maximum(self.options.search_radius * steps, 0.05) / self._span
+            radius = np.maximum(self.options.search_radius * steps[:4], 0.05) / self._span
             rng = self._rng(gen, 3)
             pending = [self._input(p["x"], p["law"]) for p in out]
             for p in propose_local(self._inputs(obs), obs, self._input(centre.x, centre.law),
@@ -357,7 +363,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
             plan = self._sobol(last)
             return plan[k % len(plan):][:1] or plan[:1]  # fmt: skip
         centre = min(obs, key=rank)
-        return self._model(last, obs, centre, np.full(4, self.options.step0), len(obs),
+        return self._model(last, obs, centre, np.full(self._ndir, self.options.step0), len(obs),
                            pending, self.options.extra_batch, "extra")  # fmt: skip
 
     # --- coordinates --------------------------------------------------------------------
