@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 import pytest
 
@@ -139,3 +141,72 @@ def test_patience_keeps_the_compass_going_while_it_improves():
 
     assert "model" in modes(CompassOptions(compass_trials=40))
     assert "model" not in modes(CompassOptions(compass_trials=40, patience=True))
+
+
+@pytest.mark.parametrize(
+    ("cons", "split", "expected"),
+    [
+        # each broken constraint alone; one never broken is left out
+        ([[-1.0, 0.5, -2.0], [0.2, -0.5, -1.0]], True, [[-1.0, 0.2], [0.5, -0.5]]),
+        # the worst of them
+        ([[-1.0, 0.5, -2.0], [0.2, -0.5, -1.0]], False, [[0.5, 0.2]]),
+        # none broken: no feasibility model, either way
+        ([[-1.0, -0.5], [-0.2, 0.0]], True, []),
+        ([[-1.0, -0.5], [-0.2, 0.0]], False, []),
+    ],
+)
+def test_constraint_targets(cons, split, expected):
+    from vfgym.tuning._compass import _constraint_targets
+
+    got = _constraint_targets(np.array(cons), split)
+    assert [list(c) for c in got] == expected
+
+
+def test_one_feasibility_model_per_broken_constraint():
+    from vfgym.tuning._compass import _fit
+
+    x = np.random.default_rng(3).uniform(0.0, 1.0, (30, 4))
+    obs = []
+    for i, u in enumerate(x):
+        g = np.array([u[0] - 0.7, 0.3 - u[1], -1.0])  # the third never broken
+        v = float(np.maximum(g, 0.0).sum())
+        obs.append(Observation(i, u, "rise", float(1.0 + u @ u), v, v <= 0.0, g))
+    assert len(_fit(x, obs, 0.0, [], split=True).cgps) == 2
+    assert len(_fit(x, obs, 0.0, [], split=False).cgps) == 1
+
+
+class _Trial(NamedTuple):
+    number: int
+    system_attrs: dict
+
+
+@pytest.mark.parametrize(
+    ("cost", "far", "gap", "mode"),
+    [
+        (1.05, True, 0.1, "compass"),  # another basin's point nearly as good: searched
+        (1.2, True, 0.1, "model"),  # too much worse: the model again
+        (1.05, False, 0.1, "model"),  # near the centre: its basin, already searched
+        (1.05, True, 0.0, "model"),  # off
+        (0.9, False, 0.0, "compass"),  # better: the compass from it, either way
+    ],
+)
+def test_a_model_point_of_another_basin_gets_a_compass(cost, far, gap, mode):
+    from vfgym import space
+    from vfgym.tuning._compass import ATTR, CompassOptions, CompassSampler
+
+    opts = CompassOptions(explore_gap=gap)
+    sampler = CompassSampler(space.Relative(430.0), seed=0, options=opts)
+    mid = sampler._lo + 0.5 * sampler._span
+    away = mid + np.array([1.0, -1.0, 0.0, 0.0]) * (3.0 if far else 1.0) * opts.step0
+    obs = [
+        Observation(0, mid, "rise", 1.0, 0.0, True, np.array([-1.0])),
+        Observation(1, away, "rise", cost, 0.0, True, np.array([-1.0])),
+        Observation(2, mid + 0.1, "rise", 5.0, 0.0, True, np.array([-1.0])),
+    ]
+    tag = {"gen": 4, "mode": "model", "role": "model", "centre": 0, "steps": [0.1] * 4,
+           "since": 0, "rounds": 1}  # fmt: skip
+    tagged = [_Trial(n, {ATTR: tag}) for n in (1, 2)]
+    plan = sampler._generation(obs, tagged, 4)
+    assert plan[0]["tag"]["mode"] == mode
+    if mode == "compass":
+        assert plan[0]["tag"]["centre"] == 1
