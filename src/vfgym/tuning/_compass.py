@@ -89,7 +89,8 @@ class CompassOptions:
     per constraint a trial broke, not one on the worst; ``explore_gap``: a model point of
     another basin within this fraction of the centre's cost gets a compass (0: off); both
     on by default since issue 13 (``short-move`` within 1 % in a median of 76 trials over
-    5 seeds, against 155)."""
+    5 seeds, against 155; but ``reversal``, never tuned on, is +5.5 % after 200 trials
+    with both, +1.1 % with ``split_constraints`` alone, +5.1 % with neither)."""
 
     n_init: int = 6
     step0: float = 0.4
