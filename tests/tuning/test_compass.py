@@ -129,18 +129,36 @@ def test_diagonal_polls_move_value_and_the_limit_ratio_together():
     assert not any(r.startswith("axis:4:") for r in roles)  # off: the four axes only
 
 
-def test_patience_keeps_the_compass_going_while_it_improves():
-    # The synthetic cost falls for as long as the compass climbs the edge: counted from the
-    # compass's start, 40 trials end it (a model batch follows); counted from its last
-    # move (patience), it is still polling after 60.
-    from vfgym.tuning._compass import ATTR, CompassOptions
+@pytest.mark.parametrize(
+    ("moved", "patience", "mode"),
+    [
+        (True, False, "model"),  # budget spent: the model, though the compass still moves
+        (True, True, "compass"),  # patience: a compass that moved goes on
+        (False, True, "model"),  # one that did not move stops at its budget either way
+        (False, False, "model"),
+    ],
+)
+def test_patience_keeps_a_moving_compass_past_its_budget(moved, patience, mode):
+    from vfgym import space
+    from vfgym.tuning._compass import ATTR, CompassOptions, CompassSampler
 
-    def modes(options):
-        study = _run(options, seed=0, trials=70)
-        return [t.system_attrs[ATTR]["mode"] for t in study.trials if ATTR in t.system_attrs]
-
-    assert "model" in modes(CompassOptions(compass_trials=40))
-    assert "model" not in modes(CompassOptions(compass_trials=40, patience=True))
+    opts = CompassOptions(compass_trials=8, patience=patience)
+    sampler = CompassSampler(space.Relative(430.0), seed=0, options=opts)
+    mid = sampler._lo + 0.5 * sampler._span
+    ok = np.array([-1.0])
+    obs = [Observation(0, mid, "rise", 1.0, 0.0, True, ok)]
+    for i in range(8):  # one generation of axis polls, the first better if the compass moved
+        x = mid + (1 if i % 2 == 0 else -1) * opts.step0 * np.eye(4)[i // 2]
+        cost = 0.9 if (moved and i == 0) else 1.1
+        obs.append(Observation(i + 1, x, "rise", cost, 0.0, True, ok))
+    tags = [
+        {"gen": 3, "mode": "compass", "role": f"axis:{i // 2}:{1 if i % 2 == 0 else -1:+d}",
+         "centre": 0, "steps": [opts.step0] * 4, "since": 0, "rounds": 0}
+        for i in range(8)
+    ]  # fmt: skip
+    tagged = [_Trial(i + 1, {ATTR: t}) for i, t in enumerate(tags)]
+    plan = sampler._generation(obs, tagged, 3)
+    assert plan[0]["tag"]["mode"] == mode
 
 
 @pytest.mark.parametrize(

@@ -273,8 +273,10 @@ class CompassSampler(optuna.samplers.BaseSampler):
             # poll improved on.
             keep = prev is not None and roles.get(centre.number) in ("search", "composite")
             steps = np.where(improved, np.minimum(steps * 1.5, 2.0), steps if keep else steps * 0.5)
-            since = n_done if (o.patience and prev is not None) else st["since"]
-            stale = steps.max() < o.min_step or n_done - since >= o.compass_trials
+            since = st["since"]
+            # patience: a compass whose last generation moved goes on past its budget.
+            spent = n_done - since >= o.compass_trials and not (o.patience and prev is not None)
+            stale = steps.max() < o.min_step or spent
             if centre.feasible and stale:
                 return self._model(last + 1, obs, centre, steps, since, [])
             if steps.max() < o.min_step:
