@@ -124,7 +124,7 @@ def test_diagonal_polls_move_value_and_the_limit_ratio_together():
         assert abs(dv) > 0.01 and dv == pytest.approx(dr, abs=1e-9)
         assert p["k"] == pytest.approx(c["k"]) and p["ts_over_tf"] == pytest.approx(c["ts_over_tf"])
     assert checked >= 2
-    plain = _run(CompassOptions(), seed=0, trials=40)
+    plain = _run(CompassOptions(diagonal=False), seed=0, trials=40)
     roles = [t.system_attrs.get(ATTR, {}).get("role", "") for t in plain.trials]
     assert not any(r.startswith("axis:4:") for r in roles)  # off: the four axes only
 
@@ -142,7 +142,7 @@ def test_patience_keeps_a_moving_compass_past_its_budget(moved, patience, mode):
     from vfgym import space
     from vfgym.tuning._compass import ATTR, CompassOptions, CompassSampler
 
-    opts = CompassOptions(compass_trials=8, patience=patience)
+    opts = CompassOptions(compass_trials=8, patience=patience, diagonal=False)
     sampler = CompassSampler(space.Relative(430.0), seed=0, options=opts)
     mid = sampler._lo + 0.5 * sampler._span
     ok = np.array([-1.0])

@@ -11,10 +11,16 @@ acceleration limit), and a compass stays in the first it finds. So the search al
    thumb) and ``n_init`` scrambled Sobol points, as one batch.
 2. ``compass``: from the best warm start (feasible first, then by cost; an infeasible one
    by its total violation), poll each of the four axes of :class:`vfgym.space.Relative`
-   both ways, plus the pattern move (the last move again) when the last generation moved;
-   move to the best poll if it beats the centre; per axis, widen the step ×1.5 where a
-   poll beat the centre, else halve it. After ``compass_trials`` trials of this compass,
-   or when every step is below ``min_step``, with a feasible centre:
+   both ways, and a fifth direction (``diagonal``): value and L/value moved together by
+   the same step, L/value² held. That is the tail's deceleration at top speed,
+   Kv·v_max = δ²f²·L/value², which the acceleration limit bounds: on a loaded axis the
+   feasible edge, where the optimum lies, runs along it, and one-axis polls can only
+   zigzag up it. Plus the pattern move (the last move again) when the last generation
+   moved; move to the best poll if it beats the centre; per direction, widen the step
+   ×1.5 where a poll beat the centre, else halve it. After ``compass_trials`` trials of
+   this compass (with ``patience``: and a generation that did not move, so that a
+   compass still descending is not cut short), or when every step is below
+   ``min_step``, with a feasible centre:
 3. ``model``: a batch of points over the whole space maximising the expected improvement
    of at least ``xi`` over the best feasible cost, times the probability of feasibility
    (Gaussian processes on log cost and on each constraint some trial broke,
@@ -87,15 +93,16 @@ class CompassOptions:
     default, which is the search measured best overall (README, "Trials to the grid
     optimum"); :data:`LOCAL` turns them on. ``split_constraints``: one feasibility model
     per constraint a trial broke, not one on the worst; ``explore_gap``: a model point of
-    another basin within this fraction of the centre's cost gets a compass (0: off); both
-    on by default since issue 13 (``short-move`` within 1 % in a median of 76 trials over
-    5 seeds, against 155; but ``reversal``, never tuned on, is +5.5 % after 200 trials
-    with both, +1.1 % with ``split_constraints`` alone, +5.1 % with neither)."""
+    another basin within this fraction of the centre's cost gets a compass (0: off);
+    ``diagonal``: the fifth poll direction (value and L/value together); ``patience``: a
+    compass whose last generation moved goes on past ``compass_trials`` (50: five
+    generations of ten polls, as 40 were of eight). All four on by default since issue 13
+    (README, "Trials to the grid optimum")."""
 
     n_init: int = 6
     step0: float = 0.4
     min_step: float = 0.1
-    compass_trials: int = 40
+    compass_trials: int = 50
     model_batch: int = 8
     xi: float = 0.03
     extra_batch: int = 4
@@ -104,18 +111,20 @@ class CompassOptions:
     composite: bool = False
     model_rounds: int = 0
     cap_model: bool = False
-    diagonal: bool = False
-    patience: bool = False
+    diagonal: bool = True
+    patience: bool = True
     split_constraints: bool = True
     explore_gap: float = 0.1
 
 
 LOCAL = CompassOptions(search=2, composite=True, model_rounds=2, cap_model=True,
+                       compass_trials=40, diagonal=False, patience=False,
                        split_constraints=False, explore_gap=0.0)  # fmt: skip
 """The compass with its local model step: faster on ``heavy-load`` (within 1.5 % after 200
 trials, against 4.6 %), slower on ``paper-step``, ``multi-move`` and ``short-move``
 (README); chosen on ``short-move`` and ``heavy-load`` among a few variants over 5 seeds,
-before ``split_constraints`` and ``explore_gap`` (off here: the search as measured)."""
+before ``split_constraints``, ``explore_gap``, ``diagonal`` and ``patience`` (off here:
+the search as measured)."""
 
 
 class CompassSampler(optuna.samplers.BaseSampler):
@@ -144,7 +153,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         self._lo, self._span = b[:, 0], b[:, 1] - b[:, 0]
         self._queue: list[dict[str, Any]] = []
         # Poll directions: the four axes, and with ``diagonal`` value and L/value moved
-        # together (L/value² fixed: the tail's deceleration at top speed, δ²f²·L/value²).
+        # together (L/value² held: the tail's deceleration at top speed, δ²f²·L/value²).
         self._dirs = np.eye(4)
         if self.options.diagonal:
             self._dirs = np.vstack([self._dirs, [1.0, 1.0, 0.0, 0.0]])
