@@ -29,11 +29,11 @@ from pathlib import Path
 import numpy as np
 
 from vfgym import Settings, evaluate, tuning
-from vfgym.moves.axis import axis_digest
+from vfgym.moves.axis import axis_kwargs
 from vfgym.scoring import CONSTRAINTS
 
 sys.path.insert(0, str(Path(__file__).parent))
-from trials_to_reference import PROBLEMS, problem_config
+from trials_to_reference import PROBLEMS, problem_config, problem_reference
 
 WIDTHS = (0.001, 0.003, 0.01, 0.03, 0.1)
 """Half-widths of the boxes, in natural-log units (0.01: ±1 % on each setting)."""
@@ -61,14 +61,10 @@ def main() -> None:
     for problem in args.problems.split(";"):
         cfg = problem_config(problem)
         scen = cfg.scenario_list()
-        axis = cfg.load_axis()
-        found = tuning.find_reference(None, args.refs, scen, ("rise",), axis_digest(axis))
-        if found is None:
-            raise SystemExit(f"no grid reference for {problem} in {args.refs}/grid/*/")
-        data = found.record
+        on_axis = axis_kwargs(cfg.load_axis())
+        data = problem_reference(args.refs, problem).record
         ref = Settings(**data["settings"])
         ref_cost = float(data["cost"])
-        on_axis = {} if axis is None else {"plant": axis.plant}
         own = tuning.aggregate(evaluate(ref, scen, **on_axis))
         pairs = zip(CONSTRAINTS, own.constraints[0], strict=True)
         margins = ", ".join(f"{c} {v:+.3f}" for c, v in pairs)

@@ -60,6 +60,17 @@ def problem_config(problem: str, **kw: object) -> tuning.SweepConfig:
     return tuning.SweepConfig(scenarios=problem, **kw)  # type: ignore[arg-type]
 
 
+def problem_reference(refs: str, problem: str) -> tuning.FoundReference:
+    """The grid reference of a problem in the runs folder ``refs`` (exits if none)."""
+    cfg = problem_config(problem)
+    found = tuning.find_reference(
+        None, refs, cfg.scenario_list(), ("rise",), axis_digest(cfg.load_axis())
+    )
+    if found is None:
+        raise SystemExit(f"no grid reference for {problem} in {refs}/grid/*/")
+    return found
+
+
 CHECKPOINTS = (50, 100, 200)
 
 
@@ -144,13 +155,7 @@ def main() -> None:
             f"{'s to 2 %':>14s} " + " ".join(f"{'gap@' + str(n):>8s}" for n in CHECKPOINTS)
             + "  best feasible")  # fmt: skip
     for problem in args.problems.split(";"):
-        pcfg = problem_config(problem)
-        scen = pcfg.scenario_list()
-        found = tuning.find_reference(
-            None, args.refs, scen, ("rise",), axis_digest(pcfg.load_axis())
-        )
-        if found is None:
-            raise SystemExit(f"no grid reference for {problem} in {args.refs}/grid/*/")
+        found = problem_reference(args.refs, problem)
         ref_cost = float(found[0]["cost"])
         load = os.getloadavg()[0]
         print(f"\n{problem}: reference {found[1]} cost {ref_cost:.6f} "
