@@ -157,7 +157,6 @@ class CompassSampler(optuna.samplers.BaseSampler):
         self._dirs = np.eye(4)
         if self.options.diagonal:
             self._dirs = np.vstack([self._dirs, [1.0, 1.0, 0.0, 0.0]])
-        self._ndir = len(self._dirs)
 
     # --- Optuna's sampler interface -----------------------------------------------------
     def infer_relative_search_space(self, study: Any, trial: Any) -> dict[str, Any]:
@@ -260,7 +259,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
             if not warm:
                 return self._sobol(last + 1)
             centre = min(warm, key=rank)
-            return self._compass(last + 1, obs, centre, None, np.full(self._ndir, o.step0), n_done)
+            return self._compass(last + 1, obs, centre, None, self._fresh_steps(), n_done)
         # The centre's trial may be gone (failed): the best instead.
         centre = by_num.get(st["centre"]) or min(obs, key=rank)
         done_here = [by_num[t.number] for t in mine if t.number in by_num]
@@ -289,7 +288,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
             if centre.feasible and stale:
                 return self._model(last + 1, obs, centre, steps, since, [])
             if steps.max() < o.min_step:
-                steps = np.full(self._ndir, o.step0)
+                steps = self._fresh_steps()
             composite = None
             if o.composite and improved.sum() >= 2 and prev is not None:
                 composite = prev.x + moves
@@ -314,9 +313,13 @@ class CompassSampler(optuna.samplers.BaseSampler):
         elif not o.model_rounds or st.get("rounds", 1) < o.model_rounds:
             return self._model(last + 1, obs, centre, steps, st["since"], [],
                                rounds=st.get("rounds", 1) + 1)  # fmt: skip
-        return self._compass(last + 1, obs, centre, None, np.full(self._ndir, o.step0), n_done) or (
+        return self._compass(last + 1, obs, centre, None, self._fresh_steps(), n_done) or (
             self._model(last + 1, obs, centre, steps, n_done, [])
         )
+
+    def _fresh_steps(self) -> np.ndarray:
+        """The first step along each poll direction."""
+        return np.full(len(self._dirs), self.options.step0)
 
     def _tag(self, gen: int, mode: str, role: str, centre: Observation | None,
              steps: np.ndarray, since: int, rounds: int = 0) -> dict[str, Any]:  # fmt: skip
@@ -333,7 +336,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
     def _sobol(self, gen: int) -> list[dict[str, Any]]:
         n = self.options.n_init
         u = latin_hypercube(n, 4, self._rng(gen, 1))
-        tag = self._tag(gen, "init", "lhs", None, np.full(self._ndir, self.options.step0), 0)
+        tag = self._tag(gen, "init", "lhs", None, self._fresh_steps(), 0)
         return [
             {"x": self._from_unit(p), "law": self.laws[i % len(self.laws)], "tag": tag}
             for i, p in enumerate(u)
@@ -398,7 +401,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
             plan = self._sobol(last)
             return plan[k % len(plan):][:1] or plan[:1]  # fmt: skip
         centre = min(obs, key=rank)
-        return self._model(last, obs, centre, np.full(self._ndir, self.options.step0), len(obs),
+        return self._model(last, obs, centre, self._fresh_steps(), len(obs),
                            pending, self.options.extra_batch, "extra")  # fmt: skip
 
     # --- coordinates --------------------------------------------------------------------
