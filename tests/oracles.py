@@ -16,6 +16,32 @@ from vfgym.params import in_position_rad
 from vfgym.plant.measures import accel_window_ticks, command_end_s
 
 
+def vf_position(trace: Any, n_pulses: np.ndarray) -> np.ndarray:
+    """The V-F controller's unquantised train position (pulses) after each tick, rebuilt
+    from the command and the pulse counts alone (docs/model.md §1, §5.1): the count plus
+    the phase (Σ limited error − value · count) / value, held to ±1; the limited error
+    re-derived from the error limit and the law."""
+    s = trace.settings
+    d, lim, step = trace.plant.pulse_rad, s.error_limit_rad, s.value_rad / s.k
+    e_prev, total = 0.0, 0.0
+    out = np.empty(n_pulses.size)
+    before = np.concatenate([[0], n_pulses[:-1]])
+    for i, (P, n0) in enumerate(zip(trace.command_rad, before, strict=True)):
+        e = min(max(P - n0 * d, -lim), lim)
+        if s.accel_law == "slew":
+            e = min(max(e, e_prev - step), e_prev + step)
+        else:
+            if e_prev >= 0.0:
+                e = min(e, e_prev + step)
+            if e_prev <= 0.0:
+                e = max(e, e_prev - step)
+        e_prev = e
+        total += e
+        phase = (total - s.value_rad * n_pulses[i]) / s.value_rad
+        out[i] = n_pulses[i] + min(max(phase, -1.0), 1.0)
+    return out
+
+
 def measures_from_trace(trace: Any) -> dict[str, Any]:
     """The same measures from a full (undecimated) :class:`vfgym.Trace`, with numpy.
 
@@ -54,8 +80,9 @@ def measures_from_trace(trace: Any) -> dict[str, Any]:
         return int(out[-1]) if out.size else -1
 
     ss_start = max(0, n - round(measures.steady_window_s * f))
-    w = accel_window_ticks(measures, plant)
-    padded = np.concatenate([np.zeros(2 * w, dtype=np.int64), n_pulses])
+    w = accel_window_ticks(measures, plant, trace.external)
+    x = n_pulses.astype(np.float64) if trace.external else vf_position(trace, n_pulses)
+    padded = np.concatenate([np.zeros(2 * w), x])
     d2 = np.abs(padded[2 * w :] - 2 * padded[w:-w] + padded[: -2 * w])
     speed = trace.speed_rad_s
     dw = np.abs(np.diff(np.concatenate([[0.0], speed])))
@@ -101,7 +128,8 @@ def measures_from_trace(trace: Any) -> dict[str, Any]:
         "peak_accel_motor_rad_s2": float(dw.max()) / T,
         "accel_ratio_pulse": float(d2.max()) * plant.pulse_rad / (w * T) ** 2 / limit,
         "accel_ratio_motor": float(dw.max()) / T / limit,
-        "accel_quantum_rad_s2": 2.0 * plant.pulse_rad / (w * T) ** 2,
+        "accel_quantum_rad_s2": 2.0 * plant.pulse_rad / (w * T) ** 2 if trace.external else 0.0,
+        "accel_window_s": w * T,
         "torque_limit_time_s": sat * T,
         "tracking_rms_rad": float(np.sqrt(np.mean(trk**2))),
         "tracking_max_rad": float(np.abs(trk).max()),

@@ -495,9 +495,16 @@ class Measures:
     in_position_counts : float
         Half-width of the in-position window around the final command, in encoder counts
         (a servo drive's "positioning completed width"), ≥ 0.
+    accel_tolerance_pct : float
+        The acceleration constraint's stated tolerance (% of the limit), in (0, 5]: a run
+        is feasible only if the pulse train's peak acceleration is at most the limit times
+        (1 + this/100). An external train's window is lengthened until one pulse's
+        quantum 2δ/w² is at most this share of the limit (docs/model.md §5.1).
     accel_window_s : float
         Window w (s) over which the pulse train's acceleration is taken as the second
-        difference of the pulse count; its quantisation is 2δ/w². > 0.
+        difference of its position: the V-F controller's unquantised position (no
+        quantum), or an external train's count over at least this window
+        (:func:`vfgym.plant.measures.accel_window_ticks`). > 0.
     steady_window_s : float
         The steady-state error is the mean error over this last stretch (s), > 0.
     in_position_pct : float or None
@@ -511,6 +518,7 @@ class Measures:
     """
 
     in_position_counts: float = 8.0
+    accel_tolerance_pct: float = 1.0
     accel_window_s: float = 1e-3
     steady_window_s: float = 5e-3
     in_position_pct: float | None = None
@@ -526,6 +534,11 @@ class Measures:
             self,
             "in_position_counts",
             check_real("in_position_counts", self.in_position_counts, 0.0),
+        )
+        _set(
+            self,
+            "accel_tolerance_pct",
+            check_real("accel_tolerance_pct", self.accel_tolerance_pct, 0.0, 5.0, lo_open=True),
         )
         _set(
             self,

@@ -1,8 +1,9 @@
 """Golden episodes: the vector envs' rewards, scenarios and observations for one seed and
-one sequence of actions, bit for bit as main 886b643 gave them (printed there with
-``float.hex``), so that speeding up the envs' Python (scenario draws, commands, scoring,
-infos) cannot change an episode. The numbers were computed by the code before the
-change, not by the code under test."""
+one sequence of actions, bit for bit as the commit that brought in the acceleration measure
+of docs/model.md §5.1 gave them (printed there with ``float.hex``), so that speeding up the
+envs' Python (scenario draws, commands, scoring, infos) cannot change an episode. The
+numbers were computed by the code before any such change, not by the code under test; they
+change only with a change of definition, as that one was."""
 
 from __future__ import annotations
 
@@ -20,40 +21,40 @@ TUNE_SCENARIOS = [
 ]
 TUNE_REWARDS = [
     [
-        "-0x1.b2acc3fc6fecap+5",
+        "-0x1.b6619faa7b7b8p+5",
         "-0x1.6649f286840bfp+4",
-        "-0x1.f47a0b47fc8b2p+8",
-        "-0x1.18844f274038bp+2",
+        "-0x1.f614e389ee2fcp+8",
+        "-0x1.290ad2115ea0cp+2",
     ],
     ["0x0.0p+0"] * 4,  # next-step autoreset: the step that resets every sub-env
     [
-        "-0x1.02977f0cf815bp+4",
+        "-0x1.086094d3bb83fp+4",
         "-0x1.84cb4951e63e3p+2",
-        "-0x1.2f8b2ebdc85f2p+5",
+        "-0x1.31515cc21d462p+5",
         "-0x1.702c244772d71p+3",
     ],
 ]
 TUNE_OBS_SUMS = ["0x1.6f8bead200000p+4", "0x1.68f752e300000p+4", "0x1.68f752e300000p+4"]
 
-SERVO_RETURNS = ["-0x1.82b143f116e67p+7", "-0x1.3261fe3f25255p+8", "-0x1.01aa017159850p+8"]
+SERVO_RETURNS = ["-0x1.89451a810fafdp+7", "-0x1.39a66f4683f70p+8", "-0x1.04bc6bd62c4a1p+8"]
 SERVO_ENDS = [
-    (54, 1, "train-1357624910", "0x1.26bcee62a64b2p+5"),
-    (70, 0, "train-1829338325", "0x1.027ce8f7497d6p+6"),
-    (89, 2, "train-1214225396", "0x1.0a3a7460f30bbp+7"),
-    (102, 1, "train-17191595", "0x1.07a935f42fb8ap+5"),
-    (121, 2, "train-830544272", "0x1.afd9df9b75c18p+4"),
-    (155, 1, "train-318890903", "0x1.fa3f0042d96e5p+4"),
-    (198, 2, "train-766530883", "0x1.6818412932e12p+4"),
-    (201, 1, "train-828676468", "0x1.b70e4a1df9a16p+5"),
-    (242, 1, "train-611780520", "0x1.6069858c3db79p+4"),
-    (244, 0, "train-384259586", "0x1.d64ac10c26d88p+5"),
-    (281, 1, "train-177211672", "0x1.1de435797a75cp+5"),
-    (281, 2, "train-1272505875", "0x1.c4cb39df68d45p+5"),
-    (294, 0, "train-56731231", "0x1.ca5c5700dfc55p+5"),
-    (331, 1, "train-1025641960", "0x1.af8637c6144ecp+4"),
-    (371, 1, "train-1069235513", "0x1.90559703f42c5p+5"),
+    (54, 1, "train-1357624910", "0x1.2c87aaecf4768p+5"),
+    (70, 0, "train-1829338325", "0x1.08443636b168bp+6"),
+    (89, 2, "train-1214225396", "0x1.0d65ef0377a46p+7"),
+    (102, 1, "train-17191595", "0x1.0f540da704c72p+5"),
+    (121, 2, "train-830544272", "0x1.b230e83c07136p+4"),
+    (155, 1, "train-318890903", "0x1.039655b00233ep+5"),
+    (198, 2, "train-766530883", "0x1.6b7cd73197278p+4"),
+    (201, 1, "train-828676468", "0x1.bda7f700efab1p+5"),
+    (242, 1, "train-611780520", "0x1.694046087f38ep+4"),
+    (244, 0, "train-384259586", "0x1.dc25f6034adf8p+5"),
+    (281, 1, "train-177211672", "0x1.2dd831033fd9fp+5"),
+    (281, 2, "train-1272505875", "0x1.c9491507e4da4p+5"),
+    (294, 0, "train-56731231", "0x1.d23ee1a340e4dp+5"),
+    (331, 1, "train-1025641960", "0x1.b9d73dba21b44p+4"),
+    (371, 1, "train-1069235513", "0x1.95d7c539afa68p+5"),
 ]
-SERVO_OBS_SUM = "0x1.075530d7e7a00p+5"
+SERVO_OBS_SUM = "0x1.079233f7e7a00p+5"
 
 
 def test_tune_episodes_as_before() -> None:
@@ -84,11 +85,26 @@ def test_servo_episodes_as_before() -> None:
 
 
 SB3_TUNE_REWARDS = [  # float32, as the SB3 adapter returns them
-    ["-0x1.b2acc4p+5", "-0x1.664598p+4", "-0x1.f47a0ep+8", "-0x1.18845p+2"],
-    ["-0x1.6dc80cp+4", "-0x1.4a3c52p+4", "-0x1.e63b72p+2", "-0x1.2cf992p+6"],
-    ["-0x1.c8b7b4p+5", "-0x1.0932ap+4", "-0x1.c6377p+3", "-0x1.74e75cp+5"],
+    [
+        "-0x1.b661a00000000p+5",
+        "-0x1.6645980000000p+4",
+        "-0x1.f614e60000000p+8",
+        "-0x1.290ad40000000p+2",
+    ],
+    [
+        "-0x1.7250ae0000000p+4",
+        "-0x1.4a3c520000000p+4",
+        "-0x1.f5d9e40000000p+2",
+        "-0x1.2cf9920000000p+6",
+    ],
+    [
+        "-0x1.ca437a0000000p+5",
+        "-0x1.0932a00000000p+4",
+        "-0x1.c637700000000p+3",
+        "-0x1.756a2e0000000p+5",
+    ],
 ]
-SB3_TUNE_OBS_SUMS = ["0x1.68f752e3p+4", "0x1.67317c7cp+4", "0x1.91fc6385p+4"]
+SB3_TUNE_OBS_SUMS = ["0x1.68f752e300000p+4", "0x1.67317c7c00000p+4", "0x1.91fc638500000p+4"]
 SB3_TUNE_NEXT = [
     ["train-384259586", "train-17191595", "train-830544272", "train-1716092143"],
     ["train-56731231", "train-318890903", "train-766530883", "train-595477346"],

@@ -54,13 +54,13 @@ def test_lanes_end_where_the_kernel_ends(seed, count, m, steps, aligned, frictio
         for p in prms:
             p[L.P_TC] = 0.0
     size = max(int(K.ring_size(p)) for p in prms)
-    w = int(prms[0][L.P_ACC_W])
+    w = max(int(p[L.P_ACC_W]) for p in prms)  # the loaded moves have longer windows
     PRM = np.stack(prms)
     CMD = np.zeros((count, max(c.size for c in cmds)))
     for j, c in enumerate(cmds):
         CMD[j, : c.size] = c
     ST = np.zeros((count, L.N_STATE))
-    RING = np.zeros((count, size), dtype=np.int64)
+    RING = np.zeros((count, size))
     ext = np.zeros(0, dtype=np.int8)
     rec = np.zeros((L.N_ROWS, 0))
     rng = np.random.default_rng(seed)
@@ -84,7 +84,7 @@ def test_lanes_end_where_the_kernel_ends(seed, count, m, steps, aligned, frictio
     np.testing.assert_array_equal(ST, ST2)
     for j in range(count):  # the counts run_segment reads back from the ring
         i = int(ST[j, L.S_TICK])
-        slots = (i - 1 - np.arange(2 * w)) & (size - 1)
+        slots = (i - 1 - np.arange(2 * int(PRM[j, L.P_ACC_W]))) & (size - 1)
         np.testing.assert_array_equal(RING[j, slots], RING2[j, slots])
 
 
@@ -98,7 +98,7 @@ def test_a_tick_in_which_friction_stops_the_motor_takes_the_scalar_step():
     w = int(prm[L.P_ACC_W])
     PRM, CMD = prm[None, :].copy(), cmd[None, :].copy()
     ST = np.zeros((1, L.N_STATE))
-    RING = np.zeros((1, int(K.ring_size(prm))), dtype=np.int64)
+    RING = np.zeros((1, int(K.ring_size(prm))))
     K.init_state(prm, ST[0], RING[0])
     ST2, RING2 = ST.copy(), RING.copy()
     m = 500

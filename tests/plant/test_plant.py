@@ -359,14 +359,14 @@ def test_segments_with_the_same_parameters_equal_one_run():
     prm = pack(PAPER_SETTINGS, pl, DEFAULT_MEASURES, 4.0, cmd.size)
     whole = simulate(cmd, PAPER_SETTINGS, pl)
     st = np.empty(L.N_STATE)
-    ring = np.empty(K.ring_size(prm), dtype=np.int64)
+    ring = np.empty(K.ring_size(prm))
     K.init_state(prm, st, ring)
     rec = np.empty((L.N_ROWS, cmd.size))
     for start in range(0, cmd.size, 140):
         stop = min(cmd.size, start + 140)
         K.run_segment(cmd, np.zeros(0, np.int8), prm, st, ring, stop, rec[:, start:stop], 1)
     acc = K.new_acc()
-    K.finish(st, acc, cmd.size, prm[L.P_TICK_S], prm[L.P_ACC_SCALE])
+    K.finish(st, acc, cmd.size, prm)
     np.testing.assert_array_equal(acc, whole.acc)
     np.testing.assert_array_equal(rec[L.R_THETA], whole.motor_rad)
 
@@ -382,7 +382,7 @@ def test_encoder_count_is_the_exact_quotient_where_the_reciprocal_rounds_across_
     prm = pack(PAPER_SETTINGS, pl, DEFAULT_MEASURES, 0.0, cmd.size)
     prm[L.P_COUNT_RAD] = q
     st = np.empty(L.N_STATE)
-    ring = np.empty(K.ring_size(prm), dtype=np.int64)
+    ring = np.empty(K.ring_size(prm))
     K.init_state(prm, st, ring)
     st[L.S_THETA] = theta
     rec = np.empty((L.N_ROWS, cmd.size))

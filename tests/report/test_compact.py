@@ -23,20 +23,21 @@ QUICK_BEST = Settings(
 QUICK_TABLE = """\
 scenario       settings  settle ms  overshoot mrad (windows)  peak accel krad/s2  /limit    cost feasible
 ---------------------------------------------------------------------------------------------------------
-paper-step     paper         63.61           1.024      0.17               144.2   1.030  2.4306 yes
-paper-step     tuned         55.19           0.472      0.08               144.2   1.030  2.1023 yes
+paper-step     paper         63.61           1.024      0.17               140.0   1.000  2.4306 yes
+paper-step     tuned         55.19           0.472      0.08               141.7   1.012  2.1138 no
 
-short-move     paper         31.12           0.257      0.04               119.7   0.855  8.2381 yes
-short-move     tuned         23.14           0.225      0.04                67.5   0.482  6.1267 yes
+short-move     paper         31.12           0.257      0.04               114.5   0.818  8.2381 yes
+short-move     tuned         23.14           0.225      0.04                64.5   0.461  6.1267 yes
 
-long-move      paper        273.06           0.680      0.11               144.2   1.030  1.1687 yes
-long-move      tuned        314.73           0.402      0.07               144.2   1.030  1.3408 yes
+long-move      paper        273.06           0.680      0.11               140.0   1.000  1.1687 yes
+long-move      tuned        314.73           0.402      0.07               141.7   1.012  1.3504 no
 
-set (3)        paper        122.60           1.024      0.17               144.2   1.030  3.9458 3/3
-set (3)        tuned        131.02           0.472      0.08               144.2   1.030  3.1899 3/3
+set (3)        paper        122.60           1.024      0.17               140.0   1.000  3.9458 3/3
+set (3)        tuned        131.02           0.472      0.08               141.7   1.012  3.1970 1/3
 settle: settling time into the in-position window (- a moving reference; * did not arrive: \
-not settled at the end, or a sine not followed); accel: the pulse train's peak over 1 ms \
-against the limit (the loaded motor's usable acceleration)"""
+not settled at the end, or a sine not followed); accel: the pulse train's peak against the \
+limit (the loaded motor's usable acceleration), over a window whose one-pulse quantum is \
+within the tolerance; feasible: at most 1 + tolerance"""
 QUICK = ["paper-step", "short-move", "long-move"]
 
 

@@ -88,7 +88,7 @@ def test_response_figure_shows_limit_and_peaks(step_traces, tmp_path):
     assert set(lim.get_ydata()) == {140.0}
     assert any(np.all(np.asarray(ln.get_ydata()) == -140.0) for ln in axes[3].get_lines())
     pulse_line = next(ln for k, ln in acc.items() if k.startswith("pulse train"))
-    # thinned for drawing, the pulse train's peak is still near the measured 1.03× limit
+    # thinned for drawing, the pulse train's peak is still near the measured 1.000× limit
     peak = ev.metrics[0][0]["peak_accel_pulse_rad_s2"] / 1e3
     assert 0.9 * peak <= np.abs(pulse_line.get_ydata()).max() <= peak + 1e-9
     pos = _lines(axes[0])

@@ -7,6 +7,7 @@ bounds and scenarios, and on simulated moves, the compiled terms at the end of a
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -71,7 +72,7 @@ def check_against_score(stt, prm, scenario, plant, meas, w, b) -> None:
     cmd = scenario.command(plant)
     n = cmd.size
     acc = np.zeros(L.N_ACC)
-    K.finish(stt, acc, n, prm[L.P_TICK_S], prm[L.P_ACC_SCALE])
+    K.finish(stt, acc, n, prm)
     m = from_acc(acc, plant, meas, float(cmd[-1]), command_end_s(cmd, plant.tick_hz))
     s = score(m, scenario, plant, meas, w, b)
     k = CC.constants(yardsticks(scenario, plant, meas), n, w, b)
@@ -123,7 +124,7 @@ def test_compiled_cost_equals_score_term_by_term_on_simulated_moves(sc, base, me
     cmd = sc.command(plant)
     prm = pack(from_action(np.array(a)), plant, meas, float(cmd[-1]), cmd.size)
     stt = np.zeros(L.N_STATE)
-    ring = np.zeros(K.ring_size(prm), dtype=np.int64)
+    ring = np.zeros(K.ring_size(prm))
     K.init_state(prm, stt, ring)
     K.run_segment(cmd, np.zeros(0, np.int8), prm, stt, ring, cmd.size, np.zeros((L.N_ROWS, 0)), 1)
     check_against_score(stt, prm, sc, plant, meas, w, b)
@@ -131,7 +132,7 @@ def test_compiled_cost_equals_score_term_by_term_on_simulated_moves(sc, base, me
 
 def test_the_compiled_constants_are_read_from_the_scoring_inputs():
     """Each slot of the constants row holds the yardstick, weight or bound it names."""
-    sc, meas = SCENARIOS["paper-sine"], Measures(in_position_counts=3.0)
+    sc, meas = SCENARIOS["paper-sine"], Measures(in_position_counts=3.0, accel_tolerance_pct=0.7)
     plant = sc.plant()
     y = yardsticks(sc, plant, meas)
     w = CostWeights(*(float(i + 2) for i in range(len(CostWeights.__dataclass_fields__))))
@@ -151,7 +152,9 @@ def test_the_compiled_constants_are_read_from_the_scoring_inputs():
         CC.K_W_TQ: w.torque,
         CC.K_B_OV: b.overshoot_windows,
         CC.K_B_TQ: b.torque_limit_time_s,
+        CC.K_ACC_TOL: y.accel_tolerance,
     }
+    assert y.accel_tolerance == pytest.approx(0.007)
     assert sorted(expect) == list(range(CC.N_CONST))
     for slot, value in expect.items():
         assert k[slot] == value, slot

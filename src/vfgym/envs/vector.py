@@ -419,7 +419,7 @@ class VFServoVectorEnv(_BatchVectorEnv):
         self.observation_space = batch_space(self.single_observation_space, n)
         self.action_space = batch_space(self.single_action_space, n)
         self._W = np.zeros((n, self.core.width), dtype=np.float64)
-        self._RING = np.zeros((n, self.core.ring_len), dtype=np.int64)
+        self._RING = np.zeros((n, self.core.ring_len), dtype=np.float64)
         self._CMD = np.zeros((n, 1), dtype=np.float64)
         self._flags = np.zeros(n, dtype=np.int64)
         self._lanes = B.lane_scratch(n, self.core.interval_ticks, self.core.acc_window)

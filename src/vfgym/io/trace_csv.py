@@ -25,10 +25,12 @@ TRACE_FIELDS = (
     "position_counter",
     "feedback_counts",
     "speed_count",
+    "train_rad",
 )
 """Columns of a trace CSV: sample j is the state at the end of tick ``tick`` (time
 (tick+1)·T); ``pulse`` is that tick's pulse (−1, 0, +1; empty when decimated),
-``encoder_count`` = floor(θ / count angle), the count the servo sees."""
+``encoder_count`` = floor(θ / count angle), the count the servo sees; ``train_rad`` the
+pulse train's unquantised position (docs/model.md §5.1)."""
 
 
 def trace_columns(trace: Any) -> dict[str, np.ndarray]:
@@ -51,6 +53,7 @@ def trace_columns(trace: Any) -> dict[str, np.ndarray]:
         "position_counter": trace.position_counter,
         "feedback_counts": trace.feedback_counts,
         "speed_count": trace.speed_count,
+        "train_rad": trace.train_rad,
     }
     return cols
 

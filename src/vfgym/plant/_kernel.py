@@ -31,6 +31,8 @@ from vfgym.plant._jit import guard_cache, jit
 from vfgym.plant._layout import (
     A_ACC_MOTOR,
     A_ACC_PULSE,
+    A_ACC_QUANTUM,
+    A_ACC_WINDOW,
     A_FIRST_PULSE,
     A_LAST_OUT_MOTOR,
     A_LAST_OUT_PULSE,
@@ -153,6 +155,7 @@ from vfgym.plant._tick import (
     steady_state,
     torque,
     tracking,
+    train_position,
     vf_tick,
 )
 
@@ -215,7 +218,7 @@ def init_state(prm, st, ring):
     st[S_TQMX] = 0.0
     st[S_PCMX] = 0
     st[S_WMX] = 0.0
-    st[S_D2MX] = 0
+    st[S_D2MX] = 0.0
     st[S_DWMX] = 0.0
     st[S_TICK] = 0
     ring[:] = 0
@@ -262,7 +265,7 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
     pulses, reversals, min_iv = int(st[S_PULSES]), int(st[S_REV]), int(st[S_MINIV])
     first_p, last_p, last_sign = int(st[S_FIRSTP]), int(st[S_LASTP]), int(st[S_LASTSIGN])
     tq_mx, pc_mx, w_mx = st[S_TQMX], int(st[S_PCMX]), st[S_WMX]
-    d2_max, dw_max = int(st[S_D2MX]), st[S_DWMX]
+    d2_max, dw_max = st[S_D2MX], st[S_DWMX]
 
     for i in range(i0, i1):
         P = cmd[i]
@@ -297,7 +300,8 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
         p_prev = P
         last_out_m, last_out_p = in_position(i, theta, pos, target, win, last_out_m, last_out_p)
         ss_m, ss_p, ss_n = steady_state(i, ss_start, theta, pos, target, ss_m, ss_p, ss_n)
-        d2_max = pulse_accel(ring, i, n, accw, d2_max)
+        xt = train_position(n, s, value, use_ext)
+        d2_max = pulse_accel(ring, i, xt, accw, d2_max)
         dw_max = peak(abs(omega - omega_old), dw_max)
         trk_sq_m, trk_mx_m = tracking(P - theta, trk_sq_m, trk_mx_m)
         trk_sq_p, trk_mx_p = tracking(P - pos, trk_sq_p, trk_mx_p)
@@ -313,7 +317,7 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
             if rec_left == 0:
                 rec_left = dec
                 if rec_j < n_rec:
-                    record(rec, rec_j, P, pos, theta, omega, tau, u, pc, y, x)
+                    record(rec, rec_j, P, pos, theta, omega, tau, u, pc, y, x, xt * delta)
                     rec_j += 1
 
     st[S_N], st[S_SUM], st[S_EPREV] = n, s, e_prev
@@ -334,8 +338,10 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
 
 
 @jit
-def finish(st, acc, n_ticks, T, acc_scale):
-    """The accumulator row of a move from its loop state (see :mod:`vfgym.plant._layout`)."""
+def finish(st, acc, n_ticks, prm):
+    """The accumulator row of a move from its loop state and parameter row (see
+    :mod:`vfgym.plant._layout`)."""
+    T, acc_scale = prm[P_TICK_S], prm[P_ACC_SCALE]
     acc[A_OV_MOTOR] = st[S_OVM]
     acc[A_OV_PULSE] = st[S_OVP]
     acc[A_LAST_OUT_MOTOR] = st[S_LOM]
@@ -365,6 +371,8 @@ def finish(st, acc, n_ticks, T, acc_scale):
     acc[A_PC] = st[S_PC]
     acc[A_SPEED_MAX] = st[S_WMX]
     acc[A_TICKS] = n_ticks
+    acc[A_ACC_WINDOW] = prm[P_ACC_W]
+    acc[A_ACC_QUANTUM] = 2.0 * acc_scale if prm[P_USE_EXT] != 0.0 else 0.0
 
 
 @jit
@@ -381,10 +389,10 @@ def run_one(cmd, ext, prm, acc, rec, dec):
     """Simulate one whole move; stream its measures into ``acc``; write every ``dec``-th
     tick's state into ``rec`` (shape (N_ROWS, m), m = 0 for none)."""
     st = np.empty(N_STATE, dtype=np.float64)
-    ring = np.empty(ring_size(prm), dtype=np.int64)
+    ring = np.empty(ring_size(prm), dtype=np.float64)
     init_state(prm, st, ring)
     run_segment(cmd, ext, prm, st, ring, cmd.shape[0], rec, dec)
-    finish(st, acc, cmd.shape[0], prm[P_TICK_S], prm[P_ACC_SCALE])
+    finish(st, acc, cmd.shape[0], prm)
 
 
 @jit(parallel=True)

@@ -50,7 +50,7 @@ A_LAST_OUT_PULSE = 3  # the same for n·δ (tick; −1: never)
 A_SS_SUM_MOTOR = 4  # Σ (θ − target) over the steady-state window (rad)
 A_SS_SUM_PULSE = 5  # Σ (n·δ − target) over the steady-state window (rad)
 A_SS_COUNT = 6  # ticks in the steady-state window (whole)
-A_ACC_PULSE = 7  # max |second difference of n over w| · δ/(wT)² (rad/s²)
+A_ACC_PULSE = 7  # max |second difference of the train position x over w| · δ/(wT)² (rad/s²)
 A_ACC_MOTOR = 8  # max |ω_{i+1} − ω_i| / T (rad/s²)
 A_SAT_TICKS = 9  # ticks with the torque command clipped (whole)
 A_TRK_SQ_MOTOR = 10  # Σ (P − θ)² over all ticks (rad²)
@@ -72,7 +72,9 @@ A_N = 25  # final pulse count n, signed (pulses)
 A_PC = 26  # final position counter (counts)
 A_SPEED_MAX = 27  # max |ω| (rad/s)
 A_TICKS = 28  # ticks simulated (whole)
-N_ACC = 29
+A_ACC_WINDOW = 29  # w, the pulse-acceleration window (ticks, whole)
+A_ACC_QUANTUM = 30  # that measure's quantum: 0 for the V-F's train, 2δ/(wT)² for counts (rad/s²)
+N_ACC = 31
 
 # --- trace rows (one column per recorded tick) ------------------------------------------
 R_COMMAND = 0  # command P (rad)
@@ -84,7 +86,8 @@ R_ERROR = 5  # servo error u = pc − y (counts)
 R_PC = 6  # position counter pc (counts)
 R_FEEDBACK = 7  # filtered speed feedback y (counts)
 R_SPEED_COUNT = 8  # latched speed counter output x = B·count (counts)
-N_ROWS = 9
+R_TRAIN = 9  # pulse train's unquantised position x·δ (rad; docs/model.md §5.1)
+N_ROWS = 10
 
 # --- loop state (one float64 row per move; read and written by run_segment) -------------
 S_N = 0  # pulses output n, signed (pulses)
@@ -130,7 +133,7 @@ S_LASTSIGN = 39  # sign of the last pulse (+1, −1; 0: none)
 S_TQMX = 40  # running A_TORQUE_MAX (N·m)
 S_PCMX = 41  # running A_PC_MAX (counts)
 S_WMX = 42  # running A_SPEED_MAX (rad/s)
-S_D2MX = 43  # max |n_i − 2·n_(i−w) + n_(i−2w)| so far, before scaling to A_ACC_PULSE (pulses)
+S_D2MX = 43  # max |x_i − 2·x_(i−w) + x_(i−2w)| so far (x: train position; pulses)
 S_DWMX = 44  # max |ω_{i+1} − ω_i| so far, before dividing by T for A_ACC_MOTOR (rad/s)
 S_TICK = 45  # next tick to simulate (tick, whole)
 N_STATE = 46

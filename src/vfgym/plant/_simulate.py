@@ -30,7 +30,7 @@ from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import _tick as TK
 from vfgym.plant._notice import announce_compile
-from vfgym.plant.measures import command_end_s, from_acc
+from vfgym.plant.measures import accel_window_ticks, command_end_s, from_acc
 
 
 def vf_pulses(
@@ -139,7 +139,7 @@ def pack(
     prm = np.zeros(L.N_PARAMS, dtype=np.float64)
     T = plant.tick_s
     cww, cwf, ctw, ctf = motor_coefficients(plant)
-    accw = max(1, round(measures.accel_window_s * plant.tick_hz))
+    accw = accel_window_ticks(measures, plant, use_ext)
     prm[L.P_TICK_S] = T
     prm[L.P_DELTA] = plant.pulse_rad
     prm[L.P_VALUE] = settings.value_rad
@@ -235,11 +235,11 @@ def run_move(
     """
     announce_compile("simulate", "the simulation kernel", K.run_segment)
     st = np.empty(L.N_STATE, dtype=np.float64)
-    ring = np.empty(K.ring_size.py_func(prm), dtype=np.int64)
+    ring = np.empty(K.ring_size.py_func(prm), dtype=np.float64)
     K.init_state.py_func(prm, st, ring)
     K.run_segment(cmd, ext, prm, st, ring, cmd.shape[0], rec, dec)
     acc = K.new_acc()
-    K.finish.py_func(st, acc, cmd.shape[0], prm[L.P_TICK_S], prm[L.P_ACC_SCALE])
+    K.finish.py_func(st, acc, cmd.shape[0], prm)
     return acc
 
 
@@ -273,6 +273,10 @@ class Trace:
         y, the filtered speed feedback (counts).
     speed_count : numpy.ndarray
         x = B·count, the speed counter's latched output (counts).
+    train_rad : numpy.ndarray
+        The pulse train's unquantised position (rad): the V-F controller's
+        (n + sum/value)·δ, of which ``pulse_rad`` is the whole pulses; an external train's
+        n·δ (docs/model.md §5.1).
     acc : numpy.ndarray
         The measures streamed over every tick, undecoded (see :attr:`metrics`).
     settings : Settings
@@ -287,6 +291,8 @@ class Trace:
         The command's final value: the in-position target (rad).
     command_end_s : float
         Time at which the command reached its final value (s).
+    external : bool
+        An external pulse train drove the servo (``pulses`` given), not the V-F controller.
     """
 
     time_s: np.ndarray
@@ -299,6 +305,7 @@ class Trace:
     position_counter: np.ndarray
     feedback_counts: np.ndarray
     speed_count: np.ndarray
+    train_rad: np.ndarray
     acc: np.ndarray = field(repr=False)
     settings: Settings
     plant: Plant
@@ -306,6 +313,7 @@ class Trace:
     decimation: int = 1
     target_rad: float = 0.0
     command_end_s: float = 0.0
+    external: bool = False
 
     @property
     def metrics(self) -> dict[str, Any]:
@@ -397,6 +405,7 @@ def simulate(
         position_counter=rec[L.R_PC],
         feedback_counts=rec[L.R_FEEDBACK],
         speed_count=rec[L.R_SPEED_COUNT],
+        train_rad=rec[L.R_TRAIN],
         acc=acc,
         settings=settings,
         plant=plant,
@@ -404,6 +413,7 @@ def simulate(
         decimation=dec,
         target_rad=float(cmd[-1]),
         command_end_s=command_end_s(cmd, plant.tick_hz),
+        external=pulses is not None,
     )
 
 

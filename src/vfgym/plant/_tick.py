@@ -35,6 +35,7 @@ from vfgym.plant._layout import (
     R_SPEED_COUNT,
     R_THETA,
     R_TORQUE,
+    R_TRAIN,
     S_C,
 )
 
@@ -260,12 +261,29 @@ def steady_state(i, ss_start, theta, pos, target, ss_m, ss_p, ss_n):
 
 
 @jit(inline=True)
-def pulse_accel(ring, i, n, accw, d2_max):
-    """The pulse count ``n`` of tick ``i`` into the history ``ring`` (length a power of
-    two), and the peak |second difference of n over ``accw`` ticks|."""
+def train_position(n, s, value, use_ext):
+    """The pulse train's position in pulses, unquantised (docs/model.md §5.1): the V-F
+    controller's count n plus its accumulator's phase sum/value, the phase held to ±1 (a
+    controller whose error exceeds value is saturated: a pulse every tick, its sum
+    growing); an external train's count n."""
+    if use_ext:
+        return float(n)
+    ph = s / value
+    if ph > 1.0:
+        ph = 1.0
+    elif ph < -1.0:
+        ph = -1.0
+    return n + ph
+
+
+@jit(inline=True)
+def pulse_accel(ring, i, x, accw, d2_max):
+    """The train position ``x`` of tick ``i`` (:func:`train_position`) into the history
+    ``ring`` (length a power of two), and the peak |second difference of x over ``accw``
+    ticks|."""
     mask = ring.shape[0] - 1
-    ring[i & mask] = n
-    d2 = abs(n - 2 * ring[(i - accw) & mask] + ring[(i - 2 * accw) & mask])
+    ring[i & mask] = x
+    d2 = abs(x - 2.0 * ring[(i - accw) & mask] + ring[(i - 2 * accw) & mask])
     if d2 > d2_max:
         return d2
     return d2_max
@@ -304,7 +322,7 @@ def pulse_stats(p, i, pulses, min_iv, reversals, first_p, last_p, last_sign):
 
 
 @jit(inline=True)
-def record(rec, j, P, pos, theta, omega, tau, u, pc, y, x):
+def record(rec, j, P, pos, theta, omega, tau, u, pc, y, x, train):
     """The tick's state into column ``j`` of the trace ``rec``."""
     rec[R_COMMAND, j] = P
     rec[R_PULSE, j] = pos
@@ -315,3 +333,4 @@ def record(rec, j, P, pos, theta, omega, tau, u, pc, y, x):
     rec[R_PC, j] = pc
     rec[R_FEEDBACK, j] = y
     rec[R_SPEED_COUNT, j] = x
+    rec[R_TRAIN, j] = train

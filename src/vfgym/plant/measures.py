@@ -26,13 +26,18 @@ move_time_s
 steady_state_error_rad
     mean of θ − target over the last ``steady_window_s`` (and ``pulse_…`` for n·δ).
 peak_accel_pulse_rad_s2
-    max over ticks of |n_i − 2·n_(i−w) + n_(i−2w)|·δ/(w·T)², w = accel_window_s in ticks,
-    the train at rest before tick 0: the pulse train's acceleration over a window w, whose
-    one-pulse quantisation is ``accel_quantum_rad_s2`` = 2δ/(wT)².
+    max over ticks of |x_i − 2·x_(i−w) + x_(i−2w)|·δ/(w·T)², the train at rest before
+    tick 0, x the train's position in pulses (docs/model.md §5.1): for the V-F controller
+    n + sum/value, its accumulated limited error over value, of which the pulse count n
+    is the whole part (so no quantum: ``accel_quantum_rad_s2`` = 0); for an external
+    train its count n, whose one-pulse quantum ``accel_quantum_rad_s2`` is 2δ/(wT)².
+    w: :func:`accel_window_ticks`; ``accel_window_s`` reports w·T.
 peak_accel_motor_rad_s2
     max over ticks of |ω_(i+1) − ω_i|/T (exact mean acceleration over each tick).
 accel_ratio_pulse, accel_ratio_motor
-    the peaks over the motor's acceleration limit.
+    the peaks over the motor's acceleration limit. The acceleration constraint admits
+    ``accel_ratio_pulse`` up to 1 + ``accel_tolerance_pct``/100, so a feasible run never
+    reports more.
 torque_limit_time_s
     ticks at which the torque command was clipped by the torque–speed curve, times T.
 tracking_rms_rad, tracking_max_rad
@@ -78,6 +83,7 @@ NAMES = (
     "accel_ratio_pulse",
     "accel_ratio_motor",
     "accel_quantum_rad_s2",
+    "accel_window_s",
     "torque_limit_time_s",
     "tracking_rms_rad",
     "tracking_max_rad",
@@ -96,9 +102,36 @@ NAMES = (
 )
 
 
-def accel_window_ticks(measures: Measures, plant: Plant) -> int:
-    """The pulse-acceleration window w in ticks."""
-    return max(1, round(measures.accel_window_s * plant.tick_hz))
+def accel_window_ticks(measures: Measures, plant: Plant, external: bool = False) -> int:
+    """The pulse-acceleration window w in ticks (docs/model.md §5.1).
+
+    The V-F controller's train position is not quantised, so its window is
+    ``accel_window_s``. An external train is known only by its whole pulse counts, whose
+    second difference over w ticks is off by up to two pulses, a quantum of 2δ/(wT)²:
+    its window is the shortest of at least ``accel_window_s`` whose quantum is at most
+    ``accel_tolerance_pct`` % of the loaded limit a, w ≥ √(2δ / (tol·a)) · f.
+
+    Parameters
+    ----------
+    measures : Measures
+        The window and the tolerance.
+    plant : Plant
+        The plant with the move's load (δ, f and the usable acceleration).
+    external : bool
+        An external pulse train (counts only) rather than the V-F controller.
+
+    Returns
+    -------
+    int
+        w in ticks, ≥ 1.
+    """
+    f = plant.tick_hz
+    w = max(1, round(measures.accel_window_s * f))
+    if not external:
+        return w
+    tol = measures.accel_tolerance_pct / 100.0
+    shortest_s = math.sqrt(2.0 * plant.pulse_rad / (tol * plant.motor.usable_accel_rad_s2))
+    return max(w, math.ceil(shortest_s * f))
 
 
 def from_acc(
@@ -114,7 +147,7 @@ def from_acc(
     n = int(acc[L.A_TICKS])
     q = plant.motor.count_rad
     limit = plant.motor.usable_accel_rad_s2
-    w = accel_window_ticks(measures, plant)
+    w = int(acc[L.A_ACC_WINDOW])
     ov = float(acc[L.A_OV_MOTOR])
     last_out = int(acc[L.A_LAST_OUT_MOTOR])
     last_out_p = int(acc[L.A_LAST_OUT_PULSE])
@@ -139,7 +172,8 @@ def from_acc(
         "peak_accel_motor_rad_s2": float(acc[L.A_ACC_MOTOR]),
         "accel_ratio_pulse": float(acc[L.A_ACC_PULSE]) / limit,
         "accel_ratio_motor": float(acc[L.A_ACC_MOTOR]) / limit,
-        "accel_quantum_rad_s2": 2.0 * plant.pulse_rad / (w * T) ** 2,
+        "accel_quantum_rad_s2": float(acc[L.A_ACC_QUANTUM]),
+        "accel_window_s": w * T,
         "torque_limit_time_s": float(acc[L.A_SAT_TICKS]) * T,
         "tracking_rms_rad": math.sqrt(float(acc[L.A_TRK_SQ_MOTOR]) / n),
         "tracking_max_rad": float(acc[L.A_TRK_MAX_MOTOR]),

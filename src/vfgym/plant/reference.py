@@ -190,7 +190,7 @@ def reference_run(
     w = int(prm[L.P_ACC_W])
     acc_scale = float(prm[L.P_ACC_SCALE])
     ns = servo.ns
-    n_hist = [0] * (2 * w)
+    x_hist = [0.0] * (2 * w)
 
     rows: list[list[float]] = []
     a = np.zeros(L.N_ACC)
@@ -249,8 +249,11 @@ def reference_run(
             ss_m += theta - target
             ss_p += pos - target
             ss_n += 1
-        n_hist.append(n)  # n_hist[2w + i] is n after tick i; the plant was at rest before
-        acc_p = max(acc_p, abs(n - 2 * n_hist[i + w] + n_hist[i]) * acc_scale)
+        # the train's unquantised position (pulses): the V-F's n + its phase sum/value held
+        # to ±1, else n
+        x = float(n) if use_ext else vf.n + min(max(vf.sum / vf.value, -1.0), 1.0)
+        x_hist.append(x)  # x_hist[2w + i] is x after tick i; the plant was at rest before
+        acc_p = max(acc_p, abs(x - 2.0 * x_hist[i + w] + x_hist[i]) * acc_scale)
         acc_m = max(acc_m, abs(omega - omega_old) / T)
         for k, ref in ((0, theta), (2, pos)):
             d = P - ref
@@ -262,7 +265,7 @@ def reference_run(
         tq_mx = max(tq_mx, abs(tau))
         pc_mx = max(pc_mx, abs(servo.pc))
         w_mx = max(w_mx, abs(omega))
-        rows.append([P, pos, theta, omega, tau, servo.u, servo.pc, servo.y, servo.x])
+        rows.append([P, pos, theta, omega, tau, servo.u, servo.pc, servo.y, servo.x, x * delta])
 
     a[L.A_OV_MOTOR], a[L.A_OV_PULSE] = ov_m, ov_p
     a[L.A_LAST_OUT_MOTOR], a[L.A_LAST_OUT_PULSE] = last_out_m, last_out_p
@@ -281,6 +284,8 @@ def reference_run(
     a[L.A_TORQUE_MAX], a[L.A_PC_MAX], a[L.A_SPEED_MAX] = tq_mx, pc_mx, w_mx
     a[L.A_THETA], a[L.A_OMEGA], a[L.A_N], a[L.A_PC] = motor.theta, motor.omega, n, servo.pc
     a[L.A_TICKS] = len(cmd)
+    a[L.A_ACC_WINDOW] = w
+    a[L.A_ACC_QUANTUM] = 2.0 * acc_scale if use_ext else 0.0
     return a, np.array(rows, dtype=np.float64).T.reshape(L.N_ROWS, len(cmd))
 
 

@@ -482,6 +482,7 @@ def format_compact(report: Report) -> str:
     lines.append(
         "settle: settling time into the in-position window (- a moving reference; * did not "
         "arrive: not settled at the end, or a sine not followed); accel: the pulse train's "
-        "peak over 1 ms against the limit (the loaded motor's usable acceleration)"
+        "peak against the limit (the loaded motor's usable acceleration), over a window "
+        "whose one-pulse quantum is within the tolerance; feasible: at most 1 + tolerance"
     )
     return "\n".join(lines)

@@ -9,9 +9,9 @@ Derived signals (what the panels draw):
 
 - pulse-train speed: (n_i − n_(i−w))·δ/(w·T), pulses counted over a window of w ticks,
   drawn at the window's centre;
-- pulse-train acceleration: (n_i − 2·n_(i−w) + n_(i−2w))·δ/(w·T)², the signed version of
-  :mod:`vfgym.plant.measures`' peak_accel_pulse (same window by default, so the drawn peak is the
-  measured one), drawn at the centre i − w;
+- pulse-train acceleration: (x_i − 2·x_(i−w) + x_(i−2w))·δ/(w·T)² of the train's position x
+  (``Trace.train_rad``), the signed version of :mod:`vfgym.plant.measures`' peak_accel_pulse
+  (same window by default, so the drawn peak is the measured one), drawn at the centre i − w;
 - pulse frequency: pulses of either sign per window, over the window (Hz);
 - motor acceleration: the mean over each drawn interval, Δω/Δt from the trace's speed.
 
@@ -62,10 +62,18 @@ def _padded_counts(trace: Trace, pad: int) -> np.ndarray:
     return np.concatenate([np.zeros(pad, dtype=np.int64), trace.pulse_count])
 
 
+def _accel_window_samples(trace: Trace, window_s: float | None) -> int:
+    """``window_s`` in trace samples; None: the measure's own window w."""
+    if window_s is None:
+        w = accel_window_ticks(trace.measures, trace.plant, trace.external)
+        return max(1, round(w / trace.decimation))
+    return _window_samples(trace, window_s)
+
+
 def pulse_speed(trace: Trace, window_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Pulse-train speed (rad/s) over a window, at the window's centre time (s)."""
-    window_s = trace.measures.accel_window_s if window_s is None else window_s
-    ws = _window_samples(trace, window_s)
+    """Pulse-train speed (rad/s) over a window (default: the acceleration measure's w), at
+    the window's centre time (s)."""
+    ws = _accel_window_samples(trace, window_s)
     dt = trace.decimation * trace.plant.tick_s
     n = _padded_counts(trace, ws)
     v = (n[ws:] - n[:-ws]) * trace.plant.pulse_rad / (ws * dt)
@@ -73,19 +81,17 @@ def pulse_speed(trace: Trace, window_s: float | None = None) -> tuple[np.ndarray
 
 
 def pulse_accel(trace: Trace, window_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Pulse-train acceleration (rad/s²): windowed second difference at the centre time.
+    """Pulse-train acceleration (rad/s²): the windowed second difference of the train's
+    position ``train_rad`` (docs/model.md §5.1) at the centre time.
 
-    With the default window (the measures' ``accel_window_s``) and an undecimated trace,
-    max |a| equals the measure ``peak_accel_pulse_rad_s2``.
+    With the default window (the measure's, :func:`vfgym.plant.measures.accel_window_ticks`)
+    and an undecimated trace, max |a| equals the measure ``peak_accel_pulse_rad_s2``.
     """
-    if window_s is None:
-        ws = max(1, round(accel_window_ticks(trace.measures, trace.plant) / trace.decimation))
-    else:
-        ws = _window_samples(trace, window_s)
+    ws = _accel_window_samples(trace, window_s)
     dt = trace.decimation * trace.plant.tick_s
-    n = _padded_counts(trace, 2 * ws)
-    d2 = n[2 * ws :] - 2 * n[ws:-ws] + n[: -2 * ws]
-    return trace.time_s - ws * dt, d2 * trace.plant.pulse_rad / (ws * dt) ** 2
+    x = np.concatenate([np.zeros(2 * ws), trace.train_rad])
+    d2 = x[2 * ws :] - 2.0 * x[ws:-ws] + x[: -2 * ws]
+    return trace.time_s - ws * dt, d2 / (ws * dt) ** 2
 
 
 def pulse_frequency(trace: Trace, window_s: float = 0.5e-3) -> tuple[np.ndarray, np.ndarray]:
@@ -215,7 +221,8 @@ def response_figure(
 
     ax = axs[2]
     ts, vs = _thin(*pulse_speed(trace), max_points)
-    ax.plot(ts * ms, vs, color=COLORS[0], lw=1.0, label="pulse train (1 ms window)")
+    w_ms = accel_window_ticks(trace.measures, plant, trace.external) * plant.tick_s * 1e3
+    ax.plot(ts * ms, vs, color=COLORS[0], lw=1.0, label=f"pulse train ({w_ms:.3g} ms window)")
     tw, w = _thin(t, trace.speed_rad_s, max_points)
     ax.plot(tw * ms, w, color=COLORS[1], lw=1.0, label="motor ω")
     vmax = plant.pulse_top_speed_rad_s
@@ -228,7 +235,9 @@ def response_figure(
     ax = axs[3]
     k = 1e-3
     ta, a = _thin(*pulse_accel(trace), max_points)
-    ax.plot(ta * ms, a * k, color=COLORS[0], lw=1.0, label="pulse train (2nd difference, 1 ms)")
+    ax.plot(
+        ta * ms, a * k, color=COLORS[0], lw=1.0, label=f"pulse train (2nd diff., {w_ms:.3g} ms)"
+    )
     tm, am = motor_accel(trace, _stride(t.size, max_points))
     ax.plot(tm * ms, am * k, color=COLORS[1], lw=1.0, label="motor dω/dt")
     _limit_lines(ax, plant, k)

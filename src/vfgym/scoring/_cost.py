@@ -40,8 +40,12 @@ never moves is the extreme case: on the paper's 10 rad step it ends 1,630 window
 
 Constraints (feasible when ≤ 0; :class:`Bounds`):
 
-- ``accel``: peak pulse-train acceleration / limit − 1 − its one-pulse quantisation / limit,
-  the limit being the loaded motor's usable acceleration (:attr:`vfgym.Motor.usable_accel_rad_s2`)
+- ``accel``: peak pulse-train acceleration / limit − 1 − the stated tolerance
+  (``Measures.accel_tolerance_pct``, 1 %), the limit being the loaded motor's usable
+  acceleration (:attr:`vfgym.Motor.usable_accel_rad_s2`): a feasible run never reports a
+  peak above limit · (1 + tolerance). The V-F train's position is measured unquantised,
+  an external train's count over a window whose one-pulse quantum is within the tolerance
+  (:func:`vfgym.plant.measures.accel_window_ticks`, docs/model.md §5.1)
 - ``torque``: time at the torque limit − ``Bounds.torque_limit_time_s``
 - ``overshoot``: overshoot − ``Bounds.overshoot_windows`` in-position windows
 - ``arrival``: point-to-point, (|final error| − window) / window, the in-position windows
@@ -144,6 +148,9 @@ class Yardsticks(NamedTuple):
     accel_limit_rad_s2 : float
         The loaded motor's usable acceleration
         (:attr:`vfgym.Motor.usable_accel_rad_s2`), the accel constraint's yardstick.
+    accel_tolerance : float
+        The accel constraint's tolerance as a fraction of the limit
+        (``Measures.accel_tolerance_pct`` / 100).
     tracking : bool
         A moving reference, judged by tracking error.
     tracking_scale_rad : float
@@ -157,6 +164,7 @@ class Yardsticks(NamedTuple):
     ideal_time_s: float
     window_rad: float
     accel_limit_rad_s2: float
+    accel_tolerance: float
     tracking: bool
     tracking_scale_rad: float
     reference_rms_rad: float
@@ -200,6 +208,7 @@ def yardsticks(
         ideal_time_s=scenario.ideal_time_s(plant),
         window_rad=window,
         accel_limit_rad_s2=plant.motor.usable_accel_rad_s2,
+        accel_tolerance=measures.accel_tolerance_pct / 100.0,
         tracking=scenario.tracking,
         tracking_scale_rad=TRACKING_SCALE * abs(scenario.distance_rad),
         # numpy's pairwise sum, not np.dot: BLAS's threaded dot took ~15 ms a move on a
@@ -355,7 +364,7 @@ def score(
     """
     y = yardsticks(scenario, plant, measures)
     ideal, window, limit = y.ideal_time_s, y.window_rad, y.accel_limit_rad_s2
-    c_acc = m["peak_accel_pulse_rad_s2"] / limit - 1.0 - m["accel_quantum_rad_s2"] / limit
+    c_acc = m["peak_accel_pulse_rad_s2"] / limit - 1.0 - y.accel_tolerance
     c_tq = m["torque_limit_time_s"] - bounds.torque_limit_time_s
     ov_w = m["overshoot_rad"] / window if window > 0.0 else 0.0
     c_ov = ov_w - bounds.overshoot_windows

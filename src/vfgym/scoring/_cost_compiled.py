@@ -42,7 +42,8 @@ K_W_ACC = 9  # CostWeights.accel
 K_W_TQ = 10  # CostWeights.torque
 K_B_OV = 11  # Bounds.overshoot_windows
 K_B_TQ = 12  # Bounds.torque_limit_time_s
-N_CONST = 13
+K_ACC_TOL = 13  # Yardsticks.accel_tolerance
+N_CONST = 14
 
 
 def constants(y: Yardsticks, n_ticks: int, weights: CostWeights, bounds: Bounds) -> np.ndarray:
@@ -76,15 +77,14 @@ def constants(y: Yardsticks, n_ticks: int, weights: CostWeights, bounds: Bounds)
     k[K_W_TQ] = weights.torque
     k[K_B_OV] = bounds.overshoot_windows
     k[K_B_TQ] = bounds.torque_limit_time_s
+    k[K_ACC_TOL] = y.accel_tolerance
     return k
 
 
 @_jit
 def accel_excess(st, prm, k) -> float:
-    """The accel constraint on the peak so far: ratio − 1 − quantum / limit."""
-    scale = prm[L.P_ACC_SCALE]
-    limit = k[K_LIMIT]
-    return st[L.S_D2MX] * scale / limit - 1.0 - 2.0 * scale / limit
+    """The accel constraint on the peak so far: ratio − 1 − tolerance."""
+    return st[L.S_D2MX] * prm[L.P_ACC_SCALE] / k[K_LIMIT] - 1.0 - k[K_ACC_TOL]
 
 
 @_jit
