@@ -36,8 +36,8 @@ set (3)        paper        122.60           1.024      0.17               140.0
 set (3)        tuned        131.02           0.472      0.08               141.7   1.012  3.1970 1/3
 settle: settling time into the in-position window (- a moving reference; * did not arrive: \
 not settled at the end, or a sine not followed); accel: the pulse train's peak against the \
-limit (the loaded motor's usable acceleration), over a window whose one-pulse quantum is \
-within the tolerance; feasible: at most 1 + tolerance"""
+limit (the loaded motor's usable acceleration; docs/model.md §5.1); feasible: at most 1 + \
+the tolerance, Measures.accel_tolerance_pct"""
 QUICK = ["paper-step", "short-move", "long-move"]
 
 

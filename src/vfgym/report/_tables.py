@@ -482,7 +482,7 @@ def format_compact(report: Report) -> str:
     lines.append(
         "settle: settling time into the in-position window (- a moving reference; * did not "
         "arrive: not settled at the end, or a sine not followed); accel: the pulse train's "
-        "peak against the limit (the loaded motor's usable acceleration), over a window "
-        "whose one-pulse quantum is within the tolerance; feasible: at most 1 + tolerance"
+        "peak against the limit (the loaded motor's usable acceleration; docs/model.md "
+        "§5.1); feasible: at most 1 + the tolerance, Measures.accel_tolerance_pct"
     )
     return "\n".join(lines)
