@@ -54,7 +54,7 @@ def test_lanes_end_where_the_kernel_ends(seed, count, m, steps, aligned, frictio
         for p in prms:
             p[L.P_TC] = 0.0
     size = max(int(K.ring_size(p)) for p in prms)
-    w = max(int(p[L.P_ACC_W]) for p in prms)  # the loaded moves have longer windows
+    w = int(prms[0][L.P_ACC_W])
     PRM = np.stack(prms)
     CMD = np.zeros((count, max(c.size for c in cmds)))
     for j, c in enumerate(cmds):
@@ -84,7 +84,7 @@ def test_lanes_end_where_the_kernel_ends(seed, count, m, steps, aligned, frictio
     np.testing.assert_array_equal(ST, ST2)
     for j in range(count):  # the counts run_segment reads back from the ring
         i = int(ST[j, L.S_TICK])
-        slots = (i - 1 - np.arange(2 * int(PRM[j, L.P_ACC_W]))) & (size - 1)
+        slots = (i - 1 - np.arange(2 * w)) & (size - 1)
         np.testing.assert_array_equal(RING[j, slots], RING2[j, slots])
 
 

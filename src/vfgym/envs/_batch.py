@@ -326,22 +326,21 @@ spinning workers (opt-in, :data:`vfgym.plant._jit.SPINNING_WORKERS`) it paid fro
 @_jit
 def _lane_ready(w, m: int, acc_w: int) -> bool:
     """Whether this env's next interval can run in a lane: a whole interval of ``m`` ticks
-    left, the V-F controller as pulse source, an acceleration window the block's history
-    holds (at most ``acc_w``)."""
+    left, the V-F controller as pulse source, the block's acceleration window."""
     return (
         int(w[C_I]) == m
         and int(w[W_ST + L.S_TICK]) + m <= int(w[C_N])
         and w[W_PRM + L.P_USE_EXT] == 0.0
-        and int(w[W_PRM + L.P_ACC_W]) <= acc_w
+        and int(w[W_PRM + L.P_ACC_W]) == acc_w
     )
 
 
 @_jit
-def _leave_lanes(w, ring, H, e: int, g: int) -> None:
+def _leave_lanes(w, ring, H, e: int, g: int, acc_w: int) -> None:
     """If the env in lane ``e`` has its last counts in the block's history ``H`` (block
     tick ``g``), write them back into its ring, where the single-env kernel reads them."""
     if w[X_LANE] != 0.0:
-        LN.flush_history(H, e, ring, int(w[W_ST + L.S_TICK]), g, int(w[W_PRM + L.P_ACC_W]))
+        LN.flush_history(H, e, ring, int(w[W_ST + L.S_TICK]), g, acc_w)
         w[X_LANE] = 0.0
 
 
@@ -370,7 +369,7 @@ def _step_block(b: int, W, RING, CMD, active, Z, CB, H, G, lane_min: int) -> Non
         # the block's history is about to be overwritten: give the envs that leave it
         # their counts back
         if not (lanes and ready[e]):
-            _leave_lanes(W[r], RING[r], H, e, g)
+            _leave_lanes(W[r], RING[r], H, e, g, acc_w)
     if lanes:
         for e in range(LN.LANES):
             r = first + e if first + e < last and ready[e] else lead
@@ -378,10 +377,8 @@ def _step_block(b: int, W, RING, CMD, active, Z, CB, H, G, lane_min: int) -> Non
             LN.load_lane(Z, CB, e, w[W_PRM : W_PRM + L.N_PARAMS], w[W_ST : W_ST + L.N_STATE],
                          CMD[r], m)  # fmt: skip
             if r == first + e and w[X_LANE] == 0.0:
-                LN.load_history(
-                    H, e, RING[r], int(w[W_ST + L.S_TICK]), g, int(w[W_PRM + L.P_ACC_W])
-                )
-        LN.run_block(Z, CB, H, g, m)
+                LN.load_history(H, e, RING[r], int(w[W_ST + L.S_TICK]), g, acc_w)
+        LN.run_block(Z, CB, H, g, m, acc_w)
         G[b] = g + m
         for e in range(last - first):
             if ready[e]:
@@ -401,13 +398,14 @@ def _step_block(b: int, W, RING, CMD, active, Z, CB, H, G, lane_min: int) -> Non
 def _end_block(b: int, W, RING, CMD, active, flags, I0, H, G, m: int) -> None:
     """Rewards, observations and flags of block ``b``'s active envs after their interval;
     an env whose episode ended runs the rest of its move (its counts back in its ring)."""
+    acc_w = (H.shape[0] - m) // 2
     for r in range(b * LN.LANES, min((b + 1) * LN.LANES, W.shape[0])):
         if active[r]:
             w = W[r]
             cmd = CMD[r, : int(w[C_N])]
             f = interval_flags(w, cmd, I0[r])
             if f != 0:
-                _leave_lanes(w, RING[r], H, r % LN.LANES, G[b])
+                _leave_lanes(w, RING[r], H, r % LN.LANES, G[b], acc_w)
                 run_out(w, RING[r], cmd)
             set_reward(w)
             flags[r] = f

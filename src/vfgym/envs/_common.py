@@ -13,7 +13,7 @@ import numpy as np
 from vfgym._validate import check_choice, check_int
 from vfgym.moves import profiles
 from vfgym.moves.axis import Axis, load_axis
-from vfgym.moves.distribution import LOAD_DISTRIBUTION, get_scenario, random_scenario
+from vfgym.moves.distribution import get_scenario, random_scenario
 from vfgym.moves.scenarios import SPLITS, Scenario
 from vfgym.params import (
     ACCEL_LAWS,
@@ -287,22 +287,6 @@ class ScenarioSource:
             return self.episode(self.fixed)
         seed = int(rng.integers(self.seed_range[0], self.seed_range[1]))
         return self.episode(self._seeded(seed))
-
-    def heaviest_plant(self) -> Plant:
-        """The base plant with the largest load inertia this source draws or holds: its
-        acceleration limit is the lowest, so its acceleration window the longest, which
-        sizes the envs' pulse-count histories (a scenario named at reset is checked)."""
-        if self.fixed is not None:
-            ratio = self.fixed.inertia_ratio
-        else:
-            moves = None if self.axis is None else self.axis.moves.of(self.split)
-            dist = LOAD_DISTRIBUTION if moves is None else moves.random
-            if dist is not None:
-                ratio = dist.inertia_ratio[1]
-            else:
-                ratio = max(m.inertia_ratio for m in moves.moves)  # type: ignore[union-attr]
-        m = self.base.motor
-        return self.base.with_motor(inertia_ratio=m.inertia_ratio + ratio)
 
     def _named(self, scenario: Any) -> Scenario:
         sc = _check_scenario(scenario)

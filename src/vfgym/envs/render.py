@@ -25,7 +25,7 @@ def move_picture(
     pulse_rad: np.ndarray | None,
     motor_rad: np.ndarray | None,
     speed_rad_s: np.ndarray | None,
-    accel_window_ticks: int,
+    accel_window_s: float,
     title: str,
 ) -> np.ndarray:
     """An (H, W, 3) uint8 picture of one move sampled every tick.
@@ -34,7 +34,8 @@ def move_picture(
     commanded) and the motor angle θ. Speed: the pulse train's speed over 0.2 ms and the
     motor's. Acceleration: the pulse counts' over the measure's window w (within their
     quantum 2δ/w² of the measure, which reads the train's unquantised position,
-    docs/model.md §5.1) and the motor's over the same window, with the motor's limit. Without a
+    docs/model.md §5.1) and the motor's over the same window, with the motor's limit.
+    Without a
     simulated move (``motor_rad`` None) only the command is drawn.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -51,7 +52,7 @@ def move_picture(
     limit = plant.motor.usable_accel_rad_s2
     if motor_rad is not None and pulse_rad is not None and speed_rad_s is not None:
         ws = max(1, round(SPEED_WINDOW_S * f))
-        wa = accel_window_ticks
+        wa = max(1, round(accel_window_s * f))
         v_pulse = _window_diff(pulse_rad, ws) * f / ws
         a_pulse = _window_diff(_window_diff(pulse_rad, wa), wa) * (f / wa) ** 2
         a_motor = _window_diff(speed_rad_s, wa) * f / wa

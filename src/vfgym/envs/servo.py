@@ -20,7 +20,7 @@ from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import pack
 from vfgym.plant._notice import announce_compile
-from vfgym.plant.measures import accel_window_ticks, from_acc
+from vfgym.plant.measures import from_acc
 from vfgym.scoring import _cost_compiled as CC
 from vfgym.scoring import score
 from vfgym.space import SPACE, from_action, to_action
@@ -159,8 +159,7 @@ class ServoCore:
         self.source = config.scenario_source()
         self.n_obs = len(SERVO_FEATURES)
         self.width = B.width(self.n_obs)
-        # the pulse-count histories hold the longest acceleration window of any episode
-        prm = pack(PAPER_SETTINGS, self.source.heaviest_plant(), config.measures, 1.0, 1)
+        prm = pack(PAPER_SETTINGS, config.plant, config.measures, 1.0, 1)
         self.ring_len = B.ring_size(prm)
         self.acc_window = int(prm[L.P_ACC_W])
         self._dims = _space_table()
@@ -176,14 +175,9 @@ class ServoCore:
         n = ep.command.size
         w[:] = 0.0
         c = self.config
-        prm = pack(c.initial_settings, ep.plant, c.measures, ep.target_rad, n)
-        if prm[L.P_ACC_W] > self.acc_window:
-            raise ValueError(
-                f"scenario={ep.scenario.name!r} is not allowed here: its load "
-                f"(inertia ratio {ep.plant.motor.inertia_ratio:g}) is heavier than any this "
-                "env draws; make an env whose scenario or axis holds it"
-            )
-        w[B.W_PRM : B.W_PRM + L.N_PARAMS] = prm
+        w[B.W_PRM : B.W_PRM + L.N_PARAMS] = pack(
+            c.initial_settings, ep.plant, c.measures, ep.target_rad, n
+        )
         w[B.W_COST : B.W_COST + CC.N_CONST] = CC.constants(ep.yardsticks, n, c.weights, c.bounds)
         cfg = {
             B.C_N: n,
@@ -478,7 +472,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
                 None,
                 None,
                 None,
-                accel_window_ticks(self.core.config.measures, ep.plant),
+                self.core.config.measures.accel_window_s,
                 title,
             )
         return move_picture(
@@ -487,7 +481,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
             rec[L.R_PULSE],
             rec[L.R_THETA],
             rec[L.R_OMEGA],
-            accel_window_ticks(self.core.config.measures, ep.plant),
+            self.core.config.measures.accel_window_s,
             title,
         )
 

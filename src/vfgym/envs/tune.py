@@ -13,7 +13,6 @@ from vfgym._validate import check_choice
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Measures, Settings
 from vfgym.plant import simulate
-from vfgym.plant.measures import accel_window_ticks
 from vfgym.scoring import (
     Bounds,
     CostWeights,
@@ -271,13 +270,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         title = f"VFTune-v0, {ep.scenario.name}"
         if self._settings is None:
             return move_picture(
-                ep.plant,
-                ep.command,
-                None,
-                None,
-                None,
-                accel_window_ticks(self.config.measures, ep.plant),
-                title,
+                ep.plant, ep.command, None, None, None, self.config.measures.accel_window_s, title
             )
         tr = simulate(ep.command, self._settings, ep.plant, measures=self.config.measures)
         s = self._settings
@@ -289,7 +282,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
             tr.pulse_rad,
             tr.motor_rad,
             tr.speed_rad_s,
-            accel_window_ticks(self.config.measures, ep.plant),
+            self.config.measures.accel_window_s,
             title,
         )
 

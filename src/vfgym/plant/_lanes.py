@@ -20,7 +20,7 @@ What makes the loops vectorise, and must stay so:
 * no calls and no reductions across lanes in the vectorised loops; the rare tick in which
   Coulomb friction stops the motor (:func:`vfgym.plant._tick.stop_within_tick`, which calls
   ``log1p``/``expm1``) is flagged and done per lane in a scalar pass between them;
-* the pulse-count history for the acceleration measure is kept per block (``H``) and
+* the train-position history for the acceleration measure is kept per block (``H``) and
   its maximum taken after the ticks (a maximum does not depend on the order).
 
 Whole numbers of the state (counts, ticks) are held as float64, exactly (< 2**53), as
@@ -304,27 +304,27 @@ def _tick_encoder_measures(Z, k: int) -> None:
 
 
 @_jit
-def _pulse_accel_peak(Z, H, g: int, m: int) -> None:
-    """The peak |n_t − 2 n_{t−w} + n_{t−2w}| over block ticks g … g+m−1, per lane (w its
-    own window), into the state's running peak (``H`` row t mod len(H) holds the count of
-    block tick t)."""
+def _pulse_accel_peak(Z, H, g: int, m: int, w: int) -> None:
+    """The peak |x_t − 2 x_{t−w} + x_{t−2w}| over block ticks g … g+m−1, per lane, into
+    the state's running peak (``H`` row t mod len(H) holds the train position x of block
+    tick t, :func:`vfgym.plant._tick.train_position`)."""
     R = H.shape[0]
-    for e in range(LANES):
-        w = int(Z[_at(Z_PRM + L.P_ACC_W, e)])
-        mx = Z[_at(Z_ST + L.S_D2MX, e)]
-        for k in range(m):
-            t = g + k
-            d2 = abs(H[t % R, e] - 2.0 * H[(t - w) % R, e] + H[(t - 2 * w) % R, e])
-            mx = d2 if d2 > mx else mx
-        Z[_at(Z_ST + L.S_D2MX, e)] = mx
+    for k in range(m):
+        t = g + k
+        r0 = t % R
+        r1 = (t - w) % R
+        r2 = (t - 2 * w) % R
+        for e in range(LANES):
+            d2 = abs(H[r0, e] - 2.0 * H[r1, e] + H[r2, e])
+            mx = Z[_at(Z_ST + L.S_D2MX, e)]
+            Z[_at(Z_ST + L.S_D2MX, e)] = d2 if d2 > mx else mx
 
 
 @_jit
-def run_block(Z, CB, H, g: int, m: int) -> None:
+def run_block(Z, CB, H, g: int, m: int, w: int) -> None:
     """Advance every lane of the block ``Z`` by ``m`` ticks, block ticks g … g+m−1:
-    ``CB[k]`` holds the lanes' commands of tick g+k; ``H`` (≥ 2w + m rows for the lanes'
-    largest acceleration window w) is their pulse-count history, row t mod len(H) for
-    block tick t."""
+    ``CB[k]`` holds the lanes' commands of tick g+k; ``H`` (≥ 2w + m rows) is their
+    train-position history, row t mod len(H) for block tick t (w: the acceleration window)."""
     R = H.shape[0]
     friction = False
     # the lanes' sample periods in step (same length, same phase): one latch for all
@@ -357,7 +357,7 @@ def run_block(Z, CB, H, g: int, m: int) -> None:
             ph = 1.0 if ph > 1.0 else ph
             ph = -1.0 if ph < -1.0 else ph
             H[row, e] = Z[_at(Z_NOUT, e)] + ph
-    _pulse_accel_peak(Z, H, g, m)
+    _pulse_accel_peak(Z, H, g, m, w)
     for e in range(LANES):
         Z[_at(Z_ST + L.S_TICK, e)] += m
 
@@ -393,7 +393,7 @@ def load_history(H, e: int, ring, i: int, g: int, w: int) -> None:
 
 @_jit
 def flush_history(H, e: int, ring, i: int, g: int, w: int) -> None:
-    """The inverse of :func:`load_history`: the 2w counts before block tick ``g`` into the
+    """The inverse of :func:`load_history`: the 2w positions before block tick ``g`` into the
     move's ring, where :func:`vfgym.plant._kernel.run_segment` from tick ``i`` reads them."""
     R = H.shape[0]
     mask = ring.shape[0] - 1
@@ -405,24 +405,24 @@ def flush_history(H, e: int, ring, i: int, g: int, w: int) -> None:
 def advance(ids, count: int, PRM, ST, RING, CMD, m: int, Z, CB, H) -> None:
     """Advance moves ``ids[:count]`` (at most LANES; rows of ``PRM``, ``ST``, ``RING``,
     ``CMD``) by ``m`` ticks each through one block, as :func:`vfgym.plant._kernel.run_segment`
-    would: the moves must use the V-F controller, have ``m`` ticks of command left and
-    acceleration windows w with 2w + m ≤ len(H). Unused lanes repeat the first move
-    (discarded). ``Z``, ``CB``, ``H``: the block's scratch (:func:`scratch`)."""
-    g = H.shape[0] - m
+    would: the moves must share the acceleration window w, use the V-F controller and
+    have ``m`` ticks of command left. Unused lanes repeat the first move (discarded).
+    ``Z``, ``CB``, ``H``: the block's scratch (:func:`scratch`)."""
+    w = int(PRM[ids[0], L.P_ACC_W])
+    g = 2 * w
     for e in range(LANES):
         r = ids[e] if e < count else ids[0]
         load_lane(Z, CB, e, PRM[r], ST[r], CMD[r], m)
-        load_history(H, e, RING[r], int(ST[r, L.S_TICK]), g, int(PRM[r, L.P_ACC_W]))
-    run_block(Z, CB, H, g, m)
+        load_history(H, e, RING[r], int(ST[r, L.S_TICK]), g, w)
+    run_block(Z, CB, H, g, m, w)
     for e in range(count):
         r = ids[e]
         store_lane(Z, e, ST[r])
-        flush_history(H, e, RING[r], int(ST[r, L.S_TICK]), g + m, int(PRM[r, L.P_ACC_W]))
+        flush_history(H, e, RING[r], int(ST[r, L.S_TICK]), g + m, w)
 
 
 def scratch(blocks: int, m: int, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Scratch arrays (Z, CB, H) for ``blocks`` blocks of ``m`` ticks, acceleration
-    windows up to ``w``."""
+    """Scratch arrays (Z, CB, H) for ``blocks`` blocks of ``m`` ticks, window ``w``."""
     return (
         np.zeros((blocks, N_ROWS * LANES)),
         np.zeros((blocks, max(m, 1), LANES)),
