@@ -35,6 +35,26 @@ PAPER_K = PAPER_TICK_HZ**2 * PAPER_PULSE_RAD / PAPER_ACCEL_LIMIT_RAD_S2
 PAPER_STEP_RAD = 10.0
 """The step of the paper's Fig. 4 (rad)."""
 
+# --- the ranges a value can mean something in ------------------------------------------
+TICK_HZ_RANGE = (1e3, 1e7)
+"""Controller tick rates (Hz): 1 kHz to 10 MHz, above every pulse-train input of a servo
+drive (the MCX514's 8 Mpps); one tick is one step of the simulation."""
+MAX_MOVE_TICKS = 2**24
+"""The longest move a simulation holds in memory (ticks, ~16.8 million: 120 s at 140 kHz,
+1.7 s at 10 MHz); its per-tick arrays stay within a few hundred MB."""
+MAX_SAMPLE_S = 0.01
+"""The servo's longest sample period Ts (s): a digital servo samples at 100 Hz or faster."""
+MAX_PULSE_RAD = math.pi / 2.0
+"""The largest pulse equivalent δ (rad): at least four command pulses a revolution."""
+MAX_ROTOR_INERTIA_KGM2 = 1.0
+"""The largest rotor inertia (kg·m²), above the largest servomotors' (~0.1 kg·m²)."""
+MAX_INERTIA_RATIO = 200.0
+"""The largest load inertia ratio, a drive's settable range (Yaskawa Pn103: 0-20000 %)."""
+MAX_ACCEL_RAD_S2 = 1e7
+"""The largest acceleration limit (rad/s²), above any servomotor's bare-shaft peak."""
+MAX_ENCODER_LINES = 2**24
+"""The most encoder lines a revolution (2^26 counts after ×4)."""
+
 ACCEL_LAWS = ("rise", "slew")
 """``rise``: the error may grow away from zero by at most value/k a tick (the paper's
 reading, default); ``slew``: |e_i − e_prev| ≤ value/k both ways (see docs/model.md §1)."""
@@ -115,17 +135,19 @@ class Motor:
     name : str
         A label for tables.
     rotor_inertia_kgm2 : float
-        Rotor inertia (kg·m²), > 0.
+        Rotor inertia (kg·m²), in (0, 1].
     inertia_ratio : float
-        Load inertia over rotor inertia, ≥ 0; total J = rotor·(1 + ratio).
+        Load inertia over rotor inertia, in [0, 200] (a drive's settable range); total
+        J = rotor·(1 + ratio).
     viscous_nm_s_rad : float
-        Viscous friction b (N·m·s/rad), ≥ 0.
+        Viscous friction b (N·m·s/rad), ≥ 0, at most the peak torque at the knee speed.
     coulomb_nm : float
-        Coulomb friction τc (N·m), ≥ 0.
+        Coulomb friction τc (N·m), ≥ 0; τc + |load_torque_nm| below the peak torque.
     load_torque_nm : float
-        A constant torque opposing positive motion (N·m; e.g. gravity on a vertical axis).
+        A constant torque opposing positive motion (N·m; e.g. gravity on a vertical axis),
+        its size below the peak torque.
     rated_torque_nm : float
-        Rated (continuous) torque (N·m), > 0.
+        Rated (continuous) torque (N·m), in (0, ``peak_torque_nm``].
     peak_torque_nm : float
         Peak torque (N·m), > 0.
     knee_speed_rad_s : float
@@ -135,11 +157,12 @@ class Motor:
     torque_at_max_speed_nm : float
         Torque available at ``max_speed_rad_s`` (N·m), in [0, ``peak_torque_nm``].
     encoder_lines : int
-        Encoder lines per revolution (counts after ×4 decoding: 4 × lines), ≥ 1.
+        Encoder lines per revolution (counts after ×4 decoding: 4 × lines), in
+        [1, 2^24].
     accel_limit_rad_s2 : float
-        The stated acceleration limit (rad/s²; the paper's 140 krad/s²), > 0. It caps
-        :attr:`usable_accel_rad_s2`, the limit every move is held to; an axis sets its
-        own limit here.
+        The stated acceleration limit (rad/s²; the paper's 140 krad/s²), in (0, 1e7]. It
+        caps :attr:`usable_accel_rad_s2`, the limit every move is held to; an axis sets
+        its own limit here (:attr:`accel_note` says when the motor cannot reach it).
 
     Raises
     ------
@@ -162,32 +185,82 @@ class Motor:
     accel_limit_rad_s2: float = PAPER_ACCEL_LIMIT_RAD_S2
 
     def __post_init__(self) -> None:
-        for name, lo in (
-            ("rotor_inertia_kgm2", 0.0),
-            ("rated_torque_nm", 0.0),
-            ("peak_torque_nm", 0.0),
-            ("knee_speed_rad_s", 0.0),
-            ("accel_limit_rad_s2", 0.0),
+        for name, hi in (
+            ("rotor_inertia_kgm2", MAX_ROTOR_INERTIA_KGM2),
+            ("rated_torque_nm", None),
+            ("peak_torque_nm", None),
+            ("knee_speed_rad_s", None),
+            ("accel_limit_rad_s2", MAX_ACCEL_RAD_S2),
         ):
-            _set(self, name, check_real(name, getattr(self, name), lo, lo_open=True))
-        for name in ("inertia_ratio", "viscous_nm_s_rad", "coulomb_nm", "load_torque_nm"):
-            lo = None if name == "load_torque_nm" else 0.0
-            _set(self, name, check_real(name, getattr(self, name), lo))
+            _set(self, name, check_real(name, getattr(self, name), 0.0, hi, lo_open=True))
+        peak = self.peak_torque_nm
+        _set(self, "rated_torque_nm", check_real("rated_torque_nm", self.rated_torque_nm, hi=peak))
+        _set(
+            self,
+            "inertia_ratio",
+            check_real("inertia_ratio", self.inertia_ratio, 0.0, MAX_INERTIA_RATIO),
+        )
+        _set(self, "coulomb_nm", check_real("coulomb_nm", self.coulomb_nm, 0.0, peak, hi_open=True))
+        _set(
+            self,
+            "load_torque_nm",
+            check_real(
+                "load_torque_nm", self.load_torque_nm, -peak, peak, lo_open=True, hi_open=True
+            ),
+        )
         _set(
             self,
             "max_speed_rad_s",
             check_real(
-                "max_speed_rad_s", self.max_speed_rad_s, self.knee_speed_rad_s, lo_open=True
+                "max_speed_rad_s",
+                self.max_speed_rad_s,
+                self.knee_speed_rad_s,
+                lo_open=True,
+            ),
+        )
+        _set(
+            self,
+            "viscous_nm_s_rad",
+            check_real(
+                "viscous_nm_s_rad", self.viscous_nm_s_rad, 0.0, peak / self.knee_speed_rad_s
             ),
         )
         _set(
             self,
             "torque_at_max_speed_nm",
-            check_real(
-                "torque_at_max_speed_nm", self.torque_at_max_speed_nm, 0.0, self.peak_torque_nm
-            ),
+            check_real("torque_at_max_speed_nm", self.torque_at_max_speed_nm, 0.0, peak),
         )
-        _set(self, "encoder_lines", check_int("encoder_lines", self.encoder_lines, 1))
+        _set(
+            self,
+            "encoder_lines",
+            check_int("encoder_lines", self.encoder_lines, 1, MAX_ENCODER_LINES),
+        )
+        held = self.coulomb_nm + abs(self.load_torque_nm)
+        if held >= peak:
+            raise ValueError(
+                f"coulomb_nm={self.coulomb_nm!r} with load_torque_nm={self.load_torque_nm!r} "
+                f"is out of range: their sum ({held:g} N·m) must stay below "
+                f"peak_torque_nm={peak:g}, else the motor cannot move its load"
+            )
+
+    @property
+    def torque_accel_rad_s2(self) -> float:
+        """What the peak torque gives the loaded motor (rad/s²): peak torque over total
+        inertia, whatever the stated limit."""
+        return self.peak_torque_nm / self.inertia_kgm2
+
+    @property
+    def accel_note(self) -> str | None:
+        """One line when the motor cannot reach its stated limit, naming the limit it uses
+        (:attr:`usable_accel_rad_s2`); ``None`` when it can."""
+        reach = self.torque_accel_rad_s2
+        if reach >= self.accel_limit_rad_s2:
+            return None
+        return (
+            f"peak_torque_nm / total inertia = {reach / 1e3:.4g} krad/s² is below "
+            f"accel_limit_rad_s2 = {self.accel_limit_rad_s2 / 1e3:.4g} krad/s²: moves are held "
+            f"to {reach / 1e3:.4g} krad/s² (the motor's usable acceleration)"
+        )
 
     @property
     def inertia_kgm2(self) -> float:
@@ -204,7 +277,7 @@ class Motor:
         rule of thumb all use it. The bare SGME-02A can give 180 krad/s², so its limit
         is the paper's 140 krad/s²; with 3x its rotor inertia as load, 45 krad/s².
         """
-        return min(self.accel_limit_rad_s2, self.peak_torque_nm / self.inertia_kgm2)
+        return min(self.accel_limit_rad_s2, self.torque_accel_rad_s2)
 
     @property
     def counts_per_rev(self) -> int:
@@ -288,9 +361,10 @@ class Plant:
     Parameters
     ----------
     tick_hz : float
-        Controller tick rate f (Hz), > 0; one tick is T = 1/f.
+        Controller tick rate f (Hz), in [1 kHz, 10 MHz] (:data:`TICK_HZ_RANGE`); one tick
+        is T = 1/f.
     pulse_rad : float
-        Pulse equivalent δ (rad per command pulse), > 0.
+        Pulse equivalent δ (rad per command pulse), in (0, π/2].
     servo : Servo
         The digital servo.
     motor : Motor
@@ -299,8 +373,9 @@ class Plant:
     Raises
     ------
     ValueError
-        If a value is out of its range, or ``servo`` / ``motor`` is not a
-        :class:`Servo` / :class:`Motor`.
+        If a value is out of its range, the servo's sample period Ts exceeds 10 ms
+        (:data:`MAX_SAMPLE_S`), or ``servo`` / ``motor`` is not a :class:`Servo` /
+        :class:`Motor`.
     """
 
     tick_hz: float = PAPER_TICK_HZ
@@ -309,12 +384,23 @@ class Plant:
     motor: Motor = field(default_factory=Motor)
 
     def __post_init__(self) -> None:
-        _set(self, "tick_hz", check_real("tick_hz", self.tick_hz, 0.0, lo_open=True))
-        _set(self, "pulse_rad", check_real("pulse_rad", self.pulse_rad, 0.0, lo_open=True))
+        _set(self, "tick_hz", check_real("tick_hz", self.tick_hz, *TICK_HZ_RANGE))
+        _set(
+            self,
+            "pulse_rad",
+            check_real("pulse_rad", self.pulse_rad, 0.0, MAX_PULSE_RAD, lo_open=True),
+        )
         if not isinstance(self.servo, Servo):
             raise ValueError(f"servo={self.servo!r} must be a vfgym.Servo")
         if not isinstance(self.motor, Motor):
             raise ValueError(f"motor={self.motor!r} must be a vfgym.Motor")
+        if self.sample_s > MAX_SAMPLE_S:
+            most = math.floor(MAX_SAMPLE_S * self.tick_hz + 1e-9)
+            raise ValueError(
+                f"servo.sample_ticks={self.servo.sample_ticks!r} is out of range at tick_hz="
+                f"{self.tick_hz:g}: allowed whole numbers in [1, {most}] (a sample period "
+                f"Ts of at most {MAX_SAMPLE_S * 1e3:g} ms)"
+            )
 
     @property
     def tick_s(self) -> float:
@@ -494,7 +580,8 @@ class Measures:
     ----------
     in_position_counts : float
         Half-width of the in-position window around the final command, in encoder counts
-        (a servo drive's "positioning completed width"), ≥ 0.
+        (a servo drive's "positioning completed width"), > 0; an axis also holds it
+        within one revolution and below its shortest move.
     accel_window_s : float
         Window w (s) over which the pulse train's acceleration is taken as the second
         difference of the pulse count; its quantisation is 2δ/w². > 0.
@@ -502,7 +589,7 @@ class Measures:
         The steady-state error is the mean error over this last stretch (s), > 0.
     in_position_pct : float or None
         If set, the in-position half-width is this % of the move instead (as
-        python-control's ``step_info``), in (0, 100].
+        python-control's ``step_info``), in (0, 50].
 
     Raises
     ------
@@ -520,12 +607,12 @@ class Measures:
             _set(
                 self,
                 "in_position_pct",
-                check_real("in_position_pct", self.in_position_pct, 0.0, 100.0, lo_open=True),
+                check_real("in_position_pct", self.in_position_pct, 0.0, 50.0, lo_open=True),
             )
         _set(
             self,
             "in_position_counts",
-            check_real("in_position_counts", self.in_position_counts, 0.0),
+            check_real("in_position_counts", self.in_position_counts, 0.0, lo_open=True),
         )
         _set(
             self,

@@ -26,11 +26,13 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
+import sys
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
 from vfgym._validate import check_choice
+from vfgym.moves._axis_checks import check_arrives, check_measures
 from vfgym.io.runs import read_yaml, write_yaml
 from vfgym.moves.distribution import DEFAULT_DISTRIBUTION, MoveDistribution
 from vfgym.moves.scenarios import SCENARIOS, SPLITS, Scenario
@@ -44,7 +46,6 @@ from vfgym.params import (
     Plant,
     Servo,
 )
-from vfgym.plant.measures import command_end_s
 
 AXIS_FILE = "axis.yaml"
 """The axis's copy in a run folder."""
@@ -220,9 +221,19 @@ class Axis:
         for key, kind in (("plant", Plant), ("measures", Measures), ("moves", MoveSets)):
             if not isinstance(getattr(self, key), kind):
                 raise ValueError(f"{key}={getattr(self, key)!r} must be a vfgym {kind.__name__}")
-        for split in SPLITS:
-            for i, sc in enumerate(self.moves.of(split).moves):
-                _check_arrives(sc, self.plant, f"moves.{split}[{i}]")
+        listed = {
+            f"moves.{split}[{i}]": sc
+            for split in SPLITS
+            for i, sc in enumerate(self.moves.of(split).moves)
+        }
+        for key, sc in listed.items():
+            check_arrives(sc, self.plant, key)
+        drawn = {
+            f"moves.{split}.random": ms.random
+            for split in SPLITS
+            if (ms := self.moves.of(split)).random is not None
+        }
+        check_measures(self.measures, self.plant, listed, drawn)
 
     def scenarios(self, split: str) -> list[Scenario]:
         """The train or test moves.
@@ -313,35 +324,6 @@ PAPER_AXIS = Axis()
 """The paper's axis, the default: ``experiments/axes/paper.yaml`` holds the same."""
 
 
-def _check_arrives(sc: Scenario, base: Plant, key: str) -> None:
-    """A listed point-to-point move must be able to arrive within its duration."""
-    if sc.tracking:
-        return
-    plant = sc.plant(base)
-    ideal = sc.ideal_time_s(plant)
-    if sc.duration_s <= ideal:
-        raise ValueError(
-            f"{key}.duration_s={sc.duration_s!r} is too short for move {sc.name!r} to "
-            f"arrive: allowed more than its ideal move time on this axis, {ideal:.4g} s"
-        )
-    target = sum(d for d, _ in sc.moves) if sc.profile == "multi" else sc.distance_rad
-
-    def short(s: Scenario) -> bool:
-        return abs(float(s.command(plant)[-1]) - target) > plant.pulse_rad
-
-    if short(sc):
-        longer = sc
-        while short(longer) and longer.duration_s < 30.0:  # when the command ends
-            longer = replace(longer, duration_s=min(60.0, 2.0 * longer.duration_s))
-        end = command_end_s(longer.command(plant), plant.tick_hz)
-        raise ValueError(
-            f"{key}.duration_s={sc.duration_s!r} is too short for move {sc.name!r} to "
-            f"arrive: its {sc.profile} command reaches "
-            f"{float(sc.command(plant)[-1]):.4g} of {target:.4g} rad by then; allowed "
-            f"more than the {end:.4g} s the command takes"
-        )
-
-
 # --- the file ----------------------------------------------------------------------------
 
 
@@ -354,13 +336,12 @@ def _make(cls: type, data: Any, key: str, **given: Any) -> Any:
             f"{key or 'the file'}={data!r} is not allowed: give a mapping of "
             f"vfgym.{cls.__name__} fields"
         )
-    names = [f.name for f in fields(cls)]
+    names = [f.name for f in fields(cls)]  # the given ones too: they were taken out of data
     for k, v in data.items():
         if k not in names or k in given:
-            allowed = [n for n in names if n not in given]
             raise ValueError(
                 f"{prefix}{k}={v!r} is not a key of vfgym.{cls.__name__}: allowed "
-                f"{', '.join(allowed)}"
+                f"{', '.join(names)}"
             )
     for f in fields(cls):
         v = data.get(f.name)
@@ -576,9 +557,13 @@ def load_axis(path: str | Path) -> Axis:
 def _load(path: str, stamp: tuple[int, int] | None) -> Axis:
     data = read_yaml(path)  # a missing or malformed file: "PATH: ..."
     try:
-        return axis_from_dict(data, Path(path).stem)
+        axis = axis_from_dict(data, Path(path).stem)
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
+    note = axis.plant.motor.accel_note
+    if note is not None:  # once a file: the load is cached
+        print(f"vfgym: note: {path}: plant.motor: {note}", file=sys.stderr, flush=True)
+    return axis
 
 
 def write_axis(axis: Axis, path: str | Path) -> Path:

@@ -18,7 +18,7 @@ import numpy as np
 
 from vfgym._validate import check_choice, check_real
 from vfgym.moves import profiles
-from vfgym.params import PAPER_PLANT, PAPER_STEP_RAD, Plant
+from vfgym.params import MAX_MOVE_TICKS, PAPER_PLANT, PAPER_STEP_RAD, Plant
 
 PAPER_SINE_AMPLITUDE_RAD = 5.0
 """Fig. 5's sine: the text gives no numbers. 5 rad at 10 Hz peaks at 314 rad/s (73 % of
@@ -161,7 +161,23 @@ class Scenario:
         -------
         numpy.ndarray
             float64, read-only: every caller simulates the same array.
+
+        Raises
+        ------
+        ValueError
+            If the move is longer than a simulation holds (:data:`vfgym.params.MAX_MOVE_TICKS`
+            ticks at the plant's tick rate).
         """
+        span = self.duration_s
+        if self.profile == "multi":
+            span = max(span, sum(dwell for _, dwell in self.moves))
+        ticks = span * plant.tick_hz
+        if ticks > MAX_MOVE_TICKS:
+            raise ValueError(
+                f"duration_s={span:g} at tick_hz={plant.tick_hz:g} is out of range: "
+                f"{ticks:.4g} ticks; allowed at most {MAX_MOVE_TICKS} ticks a move "
+                f"({MAX_MOVE_TICKS / plant.tick_hz:.4g} s at this tick rate)"
+            )
         return _command(self, plant)
 
     def speed(self, plant: Plant) -> float:
