@@ -32,8 +32,8 @@ from pathlib import Path
 from typing import Any
 
 from vfgym._validate import check_choice
-from vfgym.moves._axis_checks import check_arrives, check_measures
 from vfgym.io.runs import read_yaml, write_yaml
+from vfgym.moves._axis_checks import check_arrives, check_measures
 from vfgym.moves.distribution import DEFAULT_DISTRIBUTION, MoveDistribution
 from vfgym.moves.scenarios import SCENARIOS, SPLITS, Scenario
 from vfgym.params import (
