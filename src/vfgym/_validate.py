@@ -154,15 +154,22 @@ def check_name(option: str, name: Any) -> str:
 
 
 def check_output_path(
-    option: str, path: str | os.PathLike, *, folder: bool = False, shown: Any = None
+    option: str,
+    path: str | os.PathLike,
+    *,
+    folder: bool = False,
+    shown: Any = None,
+    root: str | os.PathLike | None = None,
 ) -> Path:
-    """Return ``path`` if vfgym can write it: a file (or, with ``folder``, a folder) whose
-    nearest existing ancestor is a folder this process may write into.
+    """Return ``path`` if vfgym can write it: a file in an existing folder (or, with
+    ``folder``, a folder made under ``root``, whose own folder exists), in a folder this
+    process may write into.
 
     Refused with a ``ValueError`` naming ``option`` and ``shown`` (the value given, if the
     path is made from it; default ``path``): an empty path, a folder where a file is wanted
-    (or the reverse), a file where a folder must be made, a folder without write permission
-    or on a read-only file system. Nothing is created.
+    (or the reverse), a file where a folder must be made, a missing folder (a typo must not
+    make folders), a folder without write permission or on a read-only file system.
+    Nothing is created.
 
     Parameters
     ----------
@@ -174,6 +181,9 @@ def check_output_path(
         True if ``path`` is a folder to be made (or reused), False for a file.
     shown
         The value to quote in the message, when ``path`` was made from it.
+    root
+        With ``folder``: the folder the user named (``--runs-dir``), under which ``path``
+        is made; it may be missing, the folder it is in may not.
 
     Returns
     -------
@@ -195,6 +205,9 @@ def check_output_path(
         anc = anc.parent
     if not anc.is_dir():
         raise ValueError(f"{head}: {anc} is a file, so no {want} can be made in it")
+    must = p.parent if not folder else (None if root is None else Path(root).parent)
+    if must is not None and not must.is_dir():
+        raise ValueError(f"{head}: folder {must} does not exist; create it first")
     if not os.access(anc, os.W_OK | os.X_OK):
         read_only = False
         with contextlib.suppress(OSError):

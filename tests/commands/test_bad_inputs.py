@@ -241,6 +241,7 @@ def test_an_unwritable_output_found_late_is_still_one_line(ws, capsys, monkeypat
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
     monkeypatch.setattr(Figure, "savefig", full)
+    (ws / "figs").mkdir()
     assert main(["plot", "scurve", "--out", "figs/s.png"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err
