@@ -41,14 +41,18 @@ def check_real(
     *,
     lo_open: bool = False,
     hi_open: bool = False,
+    text: bool = False,
 ) -> float:
     """Return ``value`` as a finite float inside the interval, else raise ``ValueError``.
 
-    An empty ``name`` leaves the name out of the message (argparse adds the option's)."""
+    A bool is not a number, nor is a string unless ``text`` (the command line's text,
+    read as a number: ``1e3``); every config file and dataclass is held to this. An empty
+    ``name`` leaves the name out of the message (argparse adds the option's)."""
     # the messages are formatted only when one is raised: the envs check ~40 numbers a move
-    if isinstance(value, bool):
+    if isinstance(value, bool) or (not text and isinstance(value, (str, bytes))):
         raise ValueError(
-            f"{_what(name, value)} must be a real number in {_interval(lo, hi, lo_open, hi_open)}"
+            f"{_what(name, value)} must be a real number in "
+            f"{_interval(lo, hi, lo_open, hi_open)}{_not_text(value)}"
         )
     try:
         x = float(value)
@@ -72,10 +76,19 @@ def _whole_numbers(lo: int | None, hi: int | None) -> str:
     return f"whole numbers in {_interval(lo, hi, False, False)}"
 
 
-def check_int(name: str, value: Any, lo: int | None = None, hi: int | None = None) -> int:
-    """Return ``value`` as an int inside ``[lo, hi]``; a float must be whole."""
-    if isinstance(value, bool):
-        raise ValueError(f"{_what(name, value)} must be one of the {_whole_numbers(lo, hi)}")
+def _not_text(value: Any) -> str:
+    return ", not a string" if isinstance(value, (str, bytes)) else ""
+
+
+def check_int(
+    name: str, value: Any, lo: int | None = None, hi: int | None = None, *, text: bool = False
+) -> int:
+    """Return ``value`` as an int inside ``[lo, hi]``; a float must be whole. A bool is not
+    a number, nor is a string unless ``text`` (as :func:`check_real`)."""
+    if isinstance(value, bool) or (not text and isinstance(value, (str, bytes))):
+        raise ValueError(
+            f"{_what(name, value)} must be one of the {_whole_numbers(lo, hi)}{_not_text(value)}"
+        )
     if isinstance(value, (int, np.integer)):
         n = int(value)
     else:
@@ -98,6 +111,30 @@ def check_bool(name: str, value: Any) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name}={value!r} must be true or false")
     return bool(value)
+
+
+def number_from_text(text: Any) -> Any:
+    """A command-line value read as a number where it is one (``'70'``: 70, ``'1e3'``:
+    1000.0, ``'nan'``: nan), else as it is, so the check that follows names it.
+
+    Parameters
+    ----------
+    text
+        The option's text (anything else is returned as it is).
+
+    Returns
+    -------
+    Any
+        An int, a float, or ``text``.
+    """
+    if not isinstance(text, str):
+        return text
+    for kind in (int, float):
+        try:
+            return kind(text.strip())
+        except ValueError:
+            pass
+    return text
 
 
 def check_choice(name: str, value: Any, choices: Iterable[str]) -> str:

@@ -26,7 +26,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
-import sys
+import warnings
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
@@ -49,6 +49,21 @@ from vfgym.params import (
 
 AXIS_FILE = "axis.yaml"
 """The axis's copy in a run folder."""
+
+
+class AxisNote(UserWarning):
+    """Something true of an axis file a user should know, though the file is valid: a
+    motor that cannot reach its stated acceleration limit, and the limit it is held to
+    instead. ``vfgym`` prints each as one ``note:`` line once its command has finished.
+
+    Parameters
+    ----------
+    message : str
+        The note: the file, the key and what follows from its value.
+    """
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message)
 
 
 @dataclass(frozen=True)
@@ -562,7 +577,7 @@ def _load(path: str, stamp: tuple[int, int] | None) -> Axis:
         raise ValueError(f"{path}: {exc}") from None
     note = axis.plant.motor.accel_note
     if note is not None:  # once a file: the load is cached
-        print(f"vfgym: note: {path}: plant.motor: {note}", file=sys.stderr, flush=True)
+        warnings.warn(f"{path}: plant.motor: {note}", AxisNote, stacklevel=3)
     return axis
 
 
@@ -588,6 +603,7 @@ __all__ = [
     "AXIS_FILE",
     "PAPER_AXIS",
     "Axis",
+    "AxisNote",
     "MoveSet",
     "MoveSets",
     "axis_digest",
