@@ -399,7 +399,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     if best is not None and not interrupted:  # the report ends with the held-out verdict
         v = axis_verdict(tuning.trial_settings(best), cfg.load_axis(), tuned_on=scenarios)
         summary["verdict"] = v.to_dict()
-        lines += ["", format_verdict(v)]
+        lines += ["", format_verdict(v, axis_file=cfg.axis)]
     text = "\n".join(lines)
     write_text(run_dir / "report.txt", text + "\n")
     write_yaml(run_dir / "summary.yaml", summary)
