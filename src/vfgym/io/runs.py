@@ -8,6 +8,7 @@ never leaves a half-written result behind.
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import shlex
@@ -71,7 +72,10 @@ def write_atomically(path: str | Path, write: Callable[[Path], Any], suffix: str
         os.replace(tmp, path)
     except OSError as exc:
         _discard(tmp)
-        raise OSError(exc.errno, exc.strerror, str(path)) from None
+        code = exc.errno
+        if code == errno.ENOENT and path.parent.is_dir():  # a folder that takes no new file
+            code = errno.EPERM  # (/proc, /sys): "no such file" would mislead
+        raise OSError(code, os.strerror(code) if code else str(exc), str(path)) from None
     except BaseException:
         _discard(tmp)
         raise
