@@ -15,6 +15,15 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from vfgym._limits import (
+    MAX_ACCEL_RAD_S2,
+    MAX_ENCODER_LINES,
+    MAX_INERTIA_RATIO,
+    MAX_PULSE_RAD,
+    MAX_ROTOR_INERTIA_KGM2,
+    MAX_SAMPLE_S,
+    TICK_HZ_RANGE,
+)
 from vfgym._validate import check_bool, check_choice, check_int, check_real
 
 
@@ -34,26 +43,6 @@ PAPER_K = PAPER_TICK_HZ**2 * PAPER_PULSE_RAD / PAPER_ACCEL_LIMIT_RAD_S2
 """k = a_max / a_motor with a_max = f²·δ (paper eq. 1): ≈ 429.5."""
 PAPER_STEP_RAD = 10.0
 """The step of the paper's Fig. 4 (rad)."""
-
-# --- the ranges a value can mean something in ------------------------------------------
-TICK_HZ_RANGE = (1e3, 1e7)
-"""Controller tick rates (Hz): 1 kHz to 10 MHz, above every pulse-train input of a servo
-drive (the MCX514's 8 Mpps); one tick is one step of the simulation."""
-MAX_MOVE_TICKS = 2**24
-"""The longest move a simulation holds in memory (ticks, ~16.8 million: 120 s at 140 kHz,
-1.7 s at 10 MHz); its per-tick arrays stay within a few hundred MB."""
-MAX_SAMPLE_S = 0.01
-"""The servo's longest sample period Ts (s): a digital servo samples at 100 Hz or faster."""
-MAX_PULSE_RAD = math.pi / 2.0
-"""The largest pulse equivalent δ (rad): at least four command pulses a revolution."""
-MAX_ROTOR_INERTIA_KGM2 = 1.0
-"""The largest rotor inertia (kg·m²), above the largest servomotors' (~0.1 kg·m²)."""
-MAX_INERTIA_RATIO = 200.0
-"""The largest load inertia ratio, a drive's settable range (Yaskawa Pn103: 0-20000 %)."""
-MAX_ACCEL_RAD_S2 = 1e7
-"""The largest acceleration limit (rad/s²), above any servomotor's bare-shaft peak."""
-MAX_ENCODER_LINES = 2**24
-"""The most encoder lines a revolution (2^26 counts after ×4)."""
 
 ACCEL_LAWS = ("rise", "slew")
 """``rise``: the error may grow away from zero by at most value/k a tick (the paper's
@@ -186,55 +175,27 @@ class Motor:
 
     def __post_init__(self) -> None:
         for name, hi in (
-            ("rotor_inertia_kgm2", MAX_ROTOR_INERTIA_KGM2),
-            ("rated_torque_nm", None),
             ("peak_torque_nm", None),
+            ("rotor_inertia_kgm2", MAX_ROTOR_INERTIA_KGM2),
             ("knee_speed_rad_s", None),
             ("accel_limit_rad_s2", MAX_ACCEL_RAD_S2),
         ):
             _set(self, name, check_real(name, getattr(self, name), 0.0, hi, lo_open=True))
         peak = self.peak_torque_nm
-        _set(self, "rated_torque_nm", check_real("rated_torque_nm", self.rated_torque_nm, hi=peak))
-        _set(
-            self,
-            "inertia_ratio",
-            check_real("inertia_ratio", self.inertia_ratio, 0.0, MAX_INERTIA_RATIO),
-        )
-        _set(self, "coulomb_nm", check_real("coulomb_nm", self.coulomb_nm, 0.0, peak, hi_open=True))
-        _set(
-            self,
-            "load_torque_nm",
-            check_real(
-                "load_torque_nm", self.load_torque_nm, -peak, peak, lo_open=True, hi_open=True
-            ),
-        )
-        _set(
-            self,
-            "max_speed_rad_s",
-            check_real(
-                "max_speed_rad_s",
-                self.max_speed_rad_s,
-                self.knee_speed_rad_s,
-                lo_open=True,
-            ),
-        )
-        _set(
-            self,
-            "viscous_nm_s_rad",
-            check_real(
-                "viscous_nm_s_rad", self.viscous_nm_s_rad, 0.0, peak / self.knee_speed_rad_s
-            ),
-        )
-        _set(
-            self,
-            "torque_at_max_speed_nm",
-            check_real("torque_at_max_speed_nm", self.torque_at_max_speed_nm, 0.0, peak),
-        )
-        _set(
-            self,
-            "encoder_lines",
-            check_int("encoder_lines", self.encoder_lines, 1, MAX_ENCODER_LINES),
-        )
+        # (name, lo, hi, lo_open, hi_open): each range in the terms of the ones before it
+        for name, lo, hi, lo_open, hi_open in (
+            ("rated_torque_nm", 0.0, peak, True, False),
+            ("inertia_ratio", 0.0, MAX_INERTIA_RATIO, False, False),
+            ("coulomb_nm", 0.0, peak, False, True),
+            ("load_torque_nm", -peak, peak, True, True),
+            ("max_speed_rad_s", self.knee_speed_rad_s, None, True, False),
+            ("viscous_nm_s_rad", 0.0, peak / self.knee_speed_rad_s, False, False),
+            ("torque_at_max_speed_nm", 0.0, peak, False, False),
+        ):
+            value = check_real(name, getattr(self, name), lo, hi, lo_open=lo_open, hi_open=hi_open)
+            _set(self, name, value)
+        lines = check_int("encoder_lines", self.encoder_lines, 1, MAX_ENCODER_LINES)
+        _set(self, "encoder_lines", lines)
         held = self.coulomb_nm + abs(self.load_torque_nm)
         if held >= peak:
             raise ValueError(
@@ -361,7 +322,7 @@ class Plant:
     Parameters
     ----------
     tick_hz : float
-        Controller tick rate f (Hz), in [1 kHz, 10 MHz] (:data:`TICK_HZ_RANGE`); one tick
+        Controller tick rate f (Hz), in [1 kHz, 10 MHz] ; one tick
         is T = 1/f.
     pulse_rad : float
         Pulse equivalent δ (rad per command pulse), in (0, π/2].
@@ -374,7 +335,7 @@ class Plant:
     ------
     ValueError
         If a value is out of its range, the servo's sample period Ts exceeds 10 ms
-        (:data:`MAX_SAMPLE_S`), or ``servo`` / ``motor`` is not a :class:`Servo` /
+        , or ``servo`` / ``motor`` is not a :class:`Servo` /
         :class:`Motor`.
     """
 

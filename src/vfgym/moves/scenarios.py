@@ -16,9 +16,10 @@ from typing import Any
 
 import numpy as np
 
+from vfgym._limits import MAX_MOVE_TICKS
 from vfgym._validate import check_choice, check_real
 from vfgym.moves import profiles
-from vfgym.params import MAX_MOVE_TICKS, PAPER_PLANT, PAPER_STEP_RAD, Plant
+from vfgym.params import PAPER_PLANT, PAPER_STEP_RAD, Plant
 
 PAPER_SINE_AMPLITUDE_RAD = 5.0
 """Fig. 5's sine: the text gives no numbers. 5 rad at 10 Hz peaks at 314 rad/s (73 % of
@@ -165,8 +166,8 @@ class Scenario:
         Raises
         ------
         ValueError
-            If the move is longer than a simulation holds (:data:`vfgym.params.MAX_MOVE_TICKS`
-            ticks at the plant's tick rate).
+            If the move is longer than a simulation holds (2^24 ticks at the
+            plant's tick rate: 120 s at 140 kHz).
         """
         span = self.duration_s
         if self.profile == "multi":

@@ -101,7 +101,7 @@ class _Options:
             if not isinstance(file_data, dict):
                 raise ValueError(f"{source}: expected a mapping of options")
             data.update(_keys(file_data, cls, source))
-        numeric = {f.name for f in fields(cls) if re.search(r"\b(int|float)\b", str(f.type))}
+        numeric = _number_fields(cls)
         data.update(
             {
                 k: number_from_text(v) if k in numeric else v
@@ -266,6 +266,12 @@ class SweepConfig(_Options):
         s(self, "heartbeat", check_int("heartbeat", self.heartbeat, 1))
         if self.grace is not None:
             s(self, "grace", check_int("grace", self.grace, 1))
+
+
+def _number_fields(cls: type) -> set[str]:
+    """The fields of a configuration that hold a number (``int``, ``float``, or either or
+    ``None``): the command line's text is read as a number for these."""
+    return {f.name for f in fields(cls) if re.search(r"\b(int|float)\b", str(f.type))}
 
 
 def _keys(data: dict, cls: type, source: str) -> dict[str, Any]:
