@@ -27,7 +27,7 @@ ARCHITECTURE_DOC = REPO / "docs" / "architecture.md"
 
 # Lowest first. The reasons are in docs/architecture.md ("Dependency direction").
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("_validate", "params", "space", "io"),  # the shared vocabulary; io: files in and out
+    ("_validate", "_limits", "params", "space", "io"),  # shared vocabulary; io: files in/out
     ("plant",),  # params -> Trace
     ("moves",),  # what the plant is asked to do
     ("scoring",),  # measures -> constraints -> cost

@@ -41,14 +41,18 @@ def check_real(
     *,
     lo_open: bool = False,
     hi_open: bool = False,
+    text: bool = False,
 ) -> float:
     """Return ``value`` as a finite float inside the interval, else raise ``ValueError``.
 
-    An empty ``name`` leaves the name out of the message (argparse adds the option's)."""
+    A bool is not a number, nor is a string unless ``text`` (the command line's text,
+    read as a number: ``1e3``); every config file and dataclass is held to this. An empty
+    ``name`` leaves the name out of the message (argparse adds the option's)."""
     # the messages are formatted only when one is raised: the envs check ~40 numbers a move
-    if isinstance(value, bool):
+    if isinstance(value, bool) or (not text and isinstance(value, (str, bytes))):
         raise ValueError(
-            f"{_what(name, value)} must be a real number in {_interval(lo, hi, lo_open, hi_open)}"
+            f"{_what(name, value)} must be a real number in "
+            f"{_interval(lo, hi, lo_open, hi_open)}{_not_text(value)}"
         )
     try:
         x = float(value)
@@ -72,10 +76,19 @@ def _whole_numbers(lo: int | None, hi: int | None) -> str:
     return f"whole numbers in {_interval(lo, hi, False, False)}"
 
 
-def check_int(name: str, value: Any, lo: int | None = None, hi: int | None = None) -> int:
-    """Return ``value`` as an int inside ``[lo, hi]``; a float must be whole."""
-    if isinstance(value, bool):
-        raise ValueError(f"{_what(name, value)} must be one of the {_whole_numbers(lo, hi)}")
+def _not_text(value: Any) -> str:
+    return ", not a string" if isinstance(value, (str, bytes)) else ""
+
+
+def check_int(
+    name: str, value: Any, lo: int | None = None, hi: int | None = None, *, text: bool = False
+) -> int:
+    """Return ``value`` as an int inside ``[lo, hi]``; a float must be whole. A bool is not
+    a number, nor is a string unless ``text`` (as :func:`check_real`)."""
+    if isinstance(value, bool) or (not text and isinstance(value, (str, bytes))):
+        raise ValueError(
+            f"{_what(name, value)} must be one of the {_whole_numbers(lo, hi)}{_not_text(value)}"
+        )
     if isinstance(value, (int, np.integer)):
         n = int(value)
     else:
@@ -98,6 +111,30 @@ def check_bool(name: str, value: Any) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name}={value!r} must be true or false")
     return bool(value)
+
+
+def number_from_text(text: Any) -> Any:
+    """A command-line value read as a number where it is one (``'70'``: 70, ``'1e3'``:
+    1000.0, ``'nan'``: nan), else as it is, so the check that follows names it.
+
+    Parameters
+    ----------
+    text
+        The option's text (anything else is returned as it is).
+
+    Returns
+    -------
+    Any
+        An int, a float, or ``text``.
+    """
+    if not isinstance(text, str):
+        return text
+    for kind in (int, float):
+        try:
+            return kind(text.strip())
+        except ValueError:
+            pass
+    return text
 
 
 def check_choice(name: str, value: Any, choices: Iterable[str]) -> str:
@@ -154,15 +191,22 @@ def check_name(option: str, name: Any) -> str:
 
 
 def check_output_path(
-    option: str, path: str | os.PathLike, *, folder: bool = False, shown: Any = None
+    option: str,
+    path: str | os.PathLike,
+    *,
+    folder: bool = False,
+    shown: Any = None,
+    root: str | os.PathLike | None = None,
 ) -> Path:
-    """Return ``path`` if vfgym can write it: a file (or, with ``folder``, a folder) whose
-    nearest existing ancestor is a folder this process may write into.
+    """Return ``path`` if vfgym can write it: a file in an existing folder (or, with
+    ``folder``, a folder made under ``root``, whose own folder exists), in a folder this
+    process may write into.
 
     Refused with a ``ValueError`` naming ``option`` and ``shown`` (the value given, if the
     path is made from it; default ``path``): an empty path, a folder where a file is wanted
-    (or the reverse), a file where a folder must be made, a folder without write permission
-    or on a read-only file system. Nothing is created.
+    (or the reverse), a file where a folder must be made, a missing folder (a typo must not
+    make folders), a folder without write permission or on a read-only file system.
+    Nothing is created.
 
     Parameters
     ----------
@@ -174,6 +218,9 @@ def check_output_path(
         True if ``path`` is a folder to be made (or reused), False for a file.
     shown
         The value to quote in the message, when ``path`` was made from it.
+    root
+        With ``folder``: the folder the user named (``--runs-dir``), under which ``path``
+        is made; it may be missing, the folder it is in may not.
 
     Returns
     -------
@@ -195,6 +242,9 @@ def check_output_path(
         anc = anc.parent
     if not anc.is_dir():
         raise ValueError(f"{head}: {anc} is a file, so no {want} can be made in it")
+    must = p.parent if not folder else (None if root is None else Path(root).parent)
+    if must is not None and not must.is_dir():
+        raise ValueError(f"{head}: folder {must} does not exist; create it first")
     if not os.access(anc, os.W_OK | os.X_OK):
         read_only = False
         with contextlib.suppress(OSError):

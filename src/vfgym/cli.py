@@ -30,6 +30,7 @@ import pkgutil
 import re
 import sys
 import traceback
+import warnings
 from typing import Any, NoReturn
 
 from vfgym import commands
@@ -99,11 +100,27 @@ def main(argv: list[str] | None = None) -> int:
         stderr), 130 after an interrupt, 1 for a bug (with its traceback).
     """
     from vfgym.io.runs import set_command_line
+    from vfgym.moves.axis import AxisNote
 
     guard = _StdoutGuard(sys.stdout)
     sys.stdout = guard
+    notes: list[str] = []
+    show = warnings.showwarning
+
+    def keep(message: Any, category: type[Warning], *rest: Any, **kw: Any) -> None:
+        if issubclass(category, AxisNote):
+            notes.append(str(message))
+        else:
+            show(message, category, *rest, **kw)
+
     try:
-        code = _run(argv, guard)
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", AxisNote)
+            warnings.showwarning = keep
+            code = _run(argv, guard)
+        if code == 0:  # a note after the output, and none after an error's one line
+            for note in dict.fromkeys(notes):
+                _error_line(f"vfgym: note: {note}")
     finally:
         sys.stdout = guard.stream
         set_command_line(None)

@@ -15,6 +15,15 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from vfgym._limits import (
+    MAX_ACCEL_RAD_S2,
+    MAX_ENCODER_LINES,
+    MAX_INERTIA_RATIO,
+    MAX_PULSE_RAD,
+    MAX_ROTOR_INERTIA_KGM2,
+    MAX_SAMPLE_S,
+    TICK_HZ_RANGE,
+)
 from vfgym._validate import check_bool, check_choice, check_int, check_real
 
 
@@ -115,17 +124,19 @@ class Motor:
     name : str
         A label for tables.
     rotor_inertia_kgm2 : float
-        Rotor inertia (kg·m²), > 0.
+        Rotor inertia (kg·m²), in (0, 1].
     inertia_ratio : float
-        Load inertia over rotor inertia, ≥ 0; total J = rotor·(1 + ratio).
+        Load inertia over rotor inertia, in [0, 200] (a drive's settable range); total
+        J = rotor·(1 + ratio).
     viscous_nm_s_rad : float
-        Viscous friction b (N·m·s/rad), ≥ 0.
+        Viscous friction b (N·m·s/rad), ≥ 0, at most the peak torque at the knee speed.
     coulomb_nm : float
-        Coulomb friction τc (N·m), ≥ 0.
+        Coulomb friction τc (N·m), ≥ 0; τc + |load_torque_nm| below the peak torque.
     load_torque_nm : float
-        A constant torque opposing positive motion (N·m; e.g. gravity on a vertical axis).
+        A constant torque opposing positive motion (N·m; e.g. gravity on a vertical axis),
+        its size below the peak torque.
     rated_torque_nm : float
-        Rated (continuous) torque (N·m), > 0.
+        Rated (continuous) torque (N·m), in (0, ``peak_torque_nm``].
     peak_torque_nm : float
         Peak torque (N·m), > 0.
     knee_speed_rad_s : float
@@ -135,11 +146,12 @@ class Motor:
     torque_at_max_speed_nm : float
         Torque available at ``max_speed_rad_s`` (N·m), in [0, ``peak_torque_nm``].
     encoder_lines : int
-        Encoder lines per revolution (counts after ×4 decoding: 4 × lines), ≥ 1.
+        Encoder lines per revolution (counts after ×4 decoding: 4 × lines), in
+        [1, 2^24].
     accel_limit_rad_s2 : float
-        The stated acceleration limit (rad/s²; the paper's 140 krad/s²), > 0. It caps
-        :attr:`usable_accel_rad_s2`, the limit every move is held to; an axis sets its
-        own limit here.
+        The stated acceleration limit (rad/s²; the paper's 140 krad/s²), in (0, 1e7]. It
+        caps :attr:`usable_accel_rad_s2`, the limit every move is held to; an axis sets
+        its own limit here (:attr:`accel_note` says when the motor cannot reach it).
 
     Raises
     ------
@@ -162,32 +174,54 @@ class Motor:
     accel_limit_rad_s2: float = PAPER_ACCEL_LIMIT_RAD_S2
 
     def __post_init__(self) -> None:
-        for name, lo in (
-            ("rotor_inertia_kgm2", 0.0),
-            ("rated_torque_nm", 0.0),
-            ("peak_torque_nm", 0.0),
-            ("knee_speed_rad_s", 0.0),
-            ("accel_limit_rad_s2", 0.0),
+        for name, hi in (
+            ("peak_torque_nm", None),
+            ("rotor_inertia_kgm2", MAX_ROTOR_INERTIA_KGM2),
+            ("knee_speed_rad_s", None),
+            ("accel_limit_rad_s2", MAX_ACCEL_RAD_S2),
         ):
-            _set(self, name, check_real(name, getattr(self, name), lo, lo_open=True))
-        for name in ("inertia_ratio", "viscous_nm_s_rad", "coulomb_nm", "load_torque_nm"):
-            lo = None if name == "load_torque_nm" else 0.0
-            _set(self, name, check_real(name, getattr(self, name), lo))
-        _set(
-            self,
-            "max_speed_rad_s",
-            check_real(
-                "max_speed_rad_s", self.max_speed_rad_s, self.knee_speed_rad_s, lo_open=True
-            ),
+            _set(self, name, check_real(name, getattr(self, name), 0.0, hi, lo_open=True))
+        peak = self.peak_torque_nm
+        # (name, lo, hi, lo_open, hi_open): each range in the terms of the ones before it
+        for name, lo, hi, lo_open, hi_open in (
+            ("rated_torque_nm", 0.0, peak, True, False),
+            ("inertia_ratio", 0.0, MAX_INERTIA_RATIO, False, False),
+            ("coulomb_nm", 0.0, peak, False, True),
+            ("load_torque_nm", -peak, peak, True, True),
+            ("max_speed_rad_s", self.knee_speed_rad_s, None, True, False),
+            ("viscous_nm_s_rad", 0.0, peak / self.knee_speed_rad_s, False, False),
+            ("torque_at_max_speed_nm", 0.0, peak, False, False),
+        ):
+            value = check_real(name, getattr(self, name), lo, hi, lo_open=lo_open, hi_open=hi_open)
+            _set(self, name, value)
+        lines = check_int("encoder_lines", self.encoder_lines, 1, MAX_ENCODER_LINES)
+        _set(self, "encoder_lines", lines)
+        held = self.coulomb_nm + abs(self.load_torque_nm)
+        if held >= peak:
+            raise ValueError(
+                f"coulomb_nm={self.coulomb_nm!r} with load_torque_nm={self.load_torque_nm!r} "
+                f"is out of range: their sum ({held:g} N·m) must stay below "
+                f"peak_torque_nm={peak:g}, else the motor cannot move its load"
+            )
+
+    @property
+    def torque_accel_rad_s2(self) -> float:
+        """What the peak torque gives the loaded motor (rad/s²): peak torque over total
+        inertia, whatever the stated limit."""
+        return self.peak_torque_nm / self.inertia_kgm2
+
+    @property
+    def accel_note(self) -> str | None:
+        """One line when the motor cannot reach its stated limit, naming the limit it uses
+        (:attr:`usable_accel_rad_s2`); ``None`` when it can."""
+        reach = self.torque_accel_rad_s2
+        if reach >= self.accel_limit_rad_s2:
+            return None
+        return (
+            f"peak_torque_nm / total inertia = {reach / 1e3:.4g} krad/s² is below "
+            f"accel_limit_rad_s2 = {self.accel_limit_rad_s2 / 1e3:.4g} krad/s²: moves are held "
+            f"to {reach / 1e3:.4g} krad/s² (the motor's usable acceleration)"
         )
-        _set(
-            self,
-            "torque_at_max_speed_nm",
-            check_real(
-                "torque_at_max_speed_nm", self.torque_at_max_speed_nm, 0.0, self.peak_torque_nm
-            ),
-        )
-        _set(self, "encoder_lines", check_int("encoder_lines", self.encoder_lines, 1))
 
     @property
     def inertia_kgm2(self) -> float:
@@ -204,7 +238,7 @@ class Motor:
         rule of thumb all use it. The bare SGME-02A can give 180 krad/s², so its limit
         is the paper's 140 krad/s²; with 3x its rotor inertia as load, 45 krad/s².
         """
-        return min(self.accel_limit_rad_s2, self.peak_torque_nm / self.inertia_kgm2)
+        return min(self.accel_limit_rad_s2, self.torque_accel_rad_s2)
 
     @property
     def counts_per_rev(self) -> int:
@@ -288,9 +322,10 @@ class Plant:
     Parameters
     ----------
     tick_hz : float
-        Controller tick rate f (Hz), > 0; one tick is T = 1/f.
+        Controller tick rate f (Hz), in [1 kHz, 10 MHz] ; one tick
+        is T = 1/f.
     pulse_rad : float
-        Pulse equivalent δ (rad per command pulse), > 0.
+        Pulse equivalent δ (rad per command pulse), in (0, π/2].
     servo : Servo
         The digital servo.
     motor : Motor
@@ -299,8 +334,9 @@ class Plant:
     Raises
     ------
     ValueError
-        If a value is out of its range, or ``servo`` / ``motor`` is not a
-        :class:`Servo` / :class:`Motor`.
+        If a value is out of its range, the servo's sample period Ts exceeds 10 ms
+        , or ``servo`` / ``motor`` is not a :class:`Servo` /
+        :class:`Motor`.
     """
 
     tick_hz: float = PAPER_TICK_HZ
@@ -309,12 +345,23 @@ class Plant:
     motor: Motor = field(default_factory=Motor)
 
     def __post_init__(self) -> None:
-        _set(self, "tick_hz", check_real("tick_hz", self.tick_hz, 0.0, lo_open=True))
-        _set(self, "pulse_rad", check_real("pulse_rad", self.pulse_rad, 0.0, lo_open=True))
+        _set(self, "tick_hz", check_real("tick_hz", self.tick_hz, *TICK_HZ_RANGE))
+        _set(
+            self,
+            "pulse_rad",
+            check_real("pulse_rad", self.pulse_rad, 0.0, MAX_PULSE_RAD, lo_open=True),
+        )
         if not isinstance(self.servo, Servo):
             raise ValueError(f"servo={self.servo!r} must be a vfgym.Servo")
         if not isinstance(self.motor, Motor):
             raise ValueError(f"motor={self.motor!r} must be a vfgym.Motor")
+        if self.sample_s > MAX_SAMPLE_S:
+            most = math.floor(MAX_SAMPLE_S * self.tick_hz + 1e-9)
+            raise ValueError(
+                f"servo.sample_ticks={self.servo.sample_ticks!r} is out of range at tick_hz="
+                f"{self.tick_hz:g}: allowed whole numbers in [1, {most}] (a sample period "
+                f"Ts of at most {MAX_SAMPLE_S * 1e3:g} ms)"
+            )
 
     @property
     def tick_s(self) -> float:
@@ -494,7 +541,8 @@ class Measures:
     ----------
     in_position_counts : float
         Half-width of the in-position window around the final command, in encoder counts
-        (a servo drive's "positioning completed width"), ≥ 0.
+        (a servo drive's "positioning completed width"), > 0; an axis also holds it
+        within one revolution and below its shortest move.
     accel_tolerance_pct : float
         The acceleration constraint's stated tolerance (% of the limit), in (0, 5]: a run
         is feasible only if the pulse train's peak acceleration is at most the limit times
@@ -509,7 +557,7 @@ class Measures:
         The steady-state error is the mean error over this last stretch (s), > 0.
     in_position_pct : float or None
         If set, the in-position half-width is this % of the move instead (as
-        python-control's ``step_info``), in (0, 100].
+        python-control's ``step_info``), in (0, 50].
 
     Raises
     ------
@@ -528,28 +576,15 @@ class Measures:
             _set(
                 self,
                 "in_position_pct",
-                check_real("in_position_pct", self.in_position_pct, 0.0, 100.0, lo_open=True),
+                check_real("in_position_pct", self.in_position_pct, 0.0, 50.0, lo_open=True),
             )
-        _set(
-            self,
-            "in_position_counts",
-            check_real("in_position_counts", self.in_position_counts, 0.0),
-        )
-        _set(
-            self,
-            "accel_tolerance_pct",
-            check_real("accel_tolerance_pct", self.accel_tolerance_pct, 0.0, 5.0, lo_open=True),
-        )
-        _set(
-            self,
-            "accel_window_s",
-            check_real("accel_window_s", self.accel_window_s, 0.0, lo_open=True),
-        )
-        _set(
-            self,
-            "steady_window_s",
-            check_real("steady_window_s", self.steady_window_s, 0.0, lo_open=True),
-        )
+        for name, hi in (
+            ("in_position_counts", None),
+            ("accel_tolerance_pct", 5.0),
+            ("accel_window_s", None),
+            ("steady_window_s", None),
+        ):
+            _set(self, name, check_real(name, getattr(self, name), 0.0, hi, lo_open=True))
 
 
 DEFAULT_MEASURES = Measures()

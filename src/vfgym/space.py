@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from vfgym._validate import check_choice
+from vfgym._validate import check_choice, check_int
 from vfgym.params import ACCEL_LAWS, Settings
 
 if TYPE_CHECKING:
@@ -114,9 +114,9 @@ def grid(
     axes = []
     for d in SPACE:
         if d.name in fixed:
-            axes.append([float(fixed[d.name])])
+            axes.append([fixed[d.name]])  # Settings checks it (a string is not a number)
             continue
-        n = points.get(d.name, 8) if isinstance(points, dict) else int(points)
+        n = check_int("points", points.get(d.name, 8) if isinstance(points, dict) else points, 1)
         u = np.linspace(-1.0, 1.0, max(1, n)) if n > 1 else np.array([0.0])
         axes.append([d.from_unit(x) for x in u])
     return [

@@ -160,7 +160,7 @@ def test_servo_constant_action_scores_exactly_as_evaluate_and_returns_minus_the_
 
 
 def test_servo_passes_its_scoring_inputs_to_the_scoring_path():
-    measures = Measures(in_position_counts=0.0, accel_window_s=5e-4)  # a zero window too
+    measures = Measures(in_position_counts=0.5, accel_window_s=5e-4)  # under one count
     weights = CostWeights(time=2.0, overshoot=0.3, unsettled=1.0)
     bounds = Bounds(overshoot_windows=3.0)
     kw = {"measures": measures, "weights": weights, "bounds": bounds}

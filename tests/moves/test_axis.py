@@ -253,12 +253,12 @@ BAD = [
     (
         "out of range",
         {"plant": {"motor": {"inertia_ratio": -1.0}}},
-        "plant.motor.inertia_ratio=-1.0 is out of range: allowed [0, inf)",
+        "plant.motor.inertia_ratio=-1.0 is out of range: allowed [0, 200]",
     ),
     (
         "out of range measures",
         {"measures": {"in_position_counts": -2}},
-        "measures.in_position_counts=-2 is out of range: allowed [0, inf)",
+        "measures.in_position_counts=-2 is out of range: allowed (0, inf)",
     ),
     (
         "preset",

@@ -377,7 +377,7 @@ def test_encoder_count_is_the_exact_quotient_where_the_reciprocal_rounds_across_
     A motor held by Coulomb friction at θ = 0.3 must read count 2, every tick."""
     theta, q = 0.3, 0.1
     assert math.floor(theta * (1.0 / q)) == 3 and math.floor(theta / q) == 2
-    pl = PAPER_PLANT.with_motor(coulomb_nm=1e3)
+    pl = PAPER_PLANT.with_motor(coulomb_nm=1.5)  # below the peak torque: it can move
     cmd = np.zeros(5)
     prm = pack(PAPER_SETTINGS, pl, DEFAULT_MEASURES, 0.0, cmd.size)
     prm[L.P_COUNT_RAD] = q

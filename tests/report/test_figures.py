@@ -225,7 +225,7 @@ def test_history_and_pareto_from_sweep_folders(tmp_path, capsys):
     ],
 )
 def test_plot_cli(tmp_path, capsys, argv):
-    out = tmp_path / "sub" / "fig.png"
+    out = tmp_path / "fig.png"  # in an existing folder: a missing one is refused
     assert main(["plot", *argv, "--out", str(out), "--dpi", "30"]) == 0
     assert out.read_bytes()[:8] == PNG
     assert str(out) in capsys.readouterr().out

@@ -94,6 +94,26 @@ def test_the_printed_verdict_shows_the_numbers(held_out):
     assert f"beats paper on {p.wins}/{p.wins + p.losses + p.ties}" in text
 
 
+def test_a_setting_that_loses_on_most_moves_is_told_so_plainly(held_out):
+    """The last line names the baseline it loses to on most moves and points to per-move
+    settings; a setting that wins has no such line."""
+    assert held_out.losing_to() == ()
+    assert "loses to" not in format_verdict(held_out) and "vfgym fit" not in format_verdict(
+        held_out
+    )
+    poor = Settings(value_rad=3.0, error_limit_rad=3.0, k=900.0, ts_over_tf=0.1)
+    v = held_out_verdict(poor, MOVES[:6], baselines=("paper", "scurve"))
+    assert [r.label for r in v.losing_to()] == ["paper", "scurve"]
+    last = format_verdict(v, axis_file="belt.yaml").splitlines()[-1]
+    w = v.row("paper").versus
+    assert last.startswith(f"tuned loses to paper on {w.losses}/{w.wins + w.losses + w.ties}")
+    assert "scurve on" in last and last.endswith("vfgym fit --axis belt.yaml")
+    # most, not some: half the moves lost is not most
+    half = dataclasses.replace(w, outcomes=("win", "loss") * 3)
+    row = dataclasses.replace(v.row("paper"), versus=half)
+    assert dataclasses.replace(v, rows=(v.rows[0], row)).losing_to() == ()
+
+
 def test_moves_tuned_on_are_named_whatever_their_name():
     moves = scenario_set("test", 3, 0)
     renamed = [dataclasses.replace(moves[1], name="mine")]
@@ -136,7 +156,7 @@ def test_a_sweep_ends_with_the_held_out_verdict(tmp_path, capsys):
     run = tmp_path / "sweep" / "s"
     axis = load_axis(path)
     best = load_settings(str(run / "best.yaml"))
-    want = format_verdict(axis_verdict(best, axis, tuned_on=axis.scenarios("train")))
+    want = format_verdict(axis_verdict(best, axis, tuned_on=axis.scenarios("train")), path)
     assert out.rstrip().endswith(want)  # the report ends with it, as printed
     assert (run / "report.txt").read_text().rstrip().endswith(want)
     assert (

@@ -56,16 +56,11 @@ def test_point_to_point_arrival_is_settled_and_counts_windows_to_go():
     assert ev.cost[0, 0] == pytest.approx(expect)
 
 
-def test_with_a_zero_window_arrival_counts_encoder_counts():
-    meas = Measures(in_position_counts=0.0)
-    ev = evaluate([NEVER_MOVES, PAPER_SETTINGS], ["short-move"], measures=meas)
-    sc = SCENARIOS["short-move"]
-    q = sc.plant().motor.count_rad
-    for ci in range(2):
-        m = ev.metrics[ci][0]
-        c = ev.constraints[ci, 0, ARRIVAL]
-        assert c == pytest.approx(abs(m["final_error_rad"]) / q)
-        assert m["settled"] == (c <= 0.0) == m["arrived"]
+def test_a_zero_window_is_refused():
+    """An in-position window of zero width has no meaning (every overshoot is infinitely
+    many windows); the measures refuse it where it is made."""
+    with pytest.raises(ValueError, match=r"in_position_counts=0.0 is out of range: allowed \(0"):
+        Measures(in_position_counts=0.0)
 
 
 def test_a_sine_arrives_when_followed_within_the_3db_bandwidth():

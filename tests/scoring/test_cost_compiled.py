@@ -44,7 +44,7 @@ bases = st.builds(
 measures = st.one_of(
     st.builds(
         Measures,
-        in_position_counts=st.sampled_from([0.0, 1.0, 8.0, 40.0]),
+        in_position_counts=st.sampled_from([0.5, 1.0, 8.0, 40.0]),
         accel_window_s=st.sampled_from([5e-4, 1e-3, 2e-3]),
     ),
     st.builds(Measures, in_position_pct=st.floats(0.1, 5.0)),

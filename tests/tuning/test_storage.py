@@ -61,3 +61,32 @@ def test_plot_reads_a_journal_sweep_and_names_a_missing_storage(tmp_path, capsys
     assert cli.main([*bad, "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert "/nowhere/x.db: no such file" in err and "\n" not in err
+
+
+def test_the_claim_lock_file_is_removed_and_still_excludes(tmp_path):
+    """A worker removes the lock file when it closes; a worker that locked the removed
+    file must take the path's new one, so that two workers never hold the lock at once."""
+    import threading
+
+    from vfgym.tuning._storage import _FileLock
+
+    base = str(tmp_path / "study.db")
+    a, b = _FileLock(base), _FileLock(base)
+    a.acquire()
+    a.release()
+    b.acquire()
+    b.release()
+    a.close()
+    assert not (tmp_path / "study.db.vfgym-lock").exists()
+    b.acquire()  # its descriptor is of the removed file
+    c = _FileLock(base)
+    got = threading.Event()
+    t = threading.Thread(target=lambda: (c.acquire(), got.set()))
+    t.start()
+    assert not got.wait(0.5)  # b holds it: c waits
+    b.release()
+    assert got.wait(10)
+    c.close()
+    t.join()
+    b.close()
+    assert list(tmp_path.iterdir()) == []

@@ -251,7 +251,9 @@ def test_storage_urls(tmp_path):
     pg = r("postgresql://me:pw@db.example:5433/opt", tmp_path)
     assert pg.kind == "postgresql" and pg.display == "postgresql://me:***@db.example:5433/opt"
     assert r("postgresql+psycopg://me@h/opt", tmp_path).url == "postgresql+psycopg://me@h/opt"
-    for bad in ("", "redis://h", "sqlite://", "journal:", "postgresql://h/db", "file.db"):
+    assert r("postgresql://h/db", tmp_path).url == "postgresql://h/db"  # the default user
+    bad_urls = ("", "redis://h", "sqlite://", "journal:", "file.db", "postgres://u@h/db")
+    for bad in (*bad_urls, "postgresql+asyncpg://h/db", "postgresql://h:70000/db"):
         with pytest.raises(ValueError, match="storage"):
             r(bad, tmp_path)
 

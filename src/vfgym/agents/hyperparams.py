@@ -98,7 +98,7 @@ def _entropy(name: str, v: Any) -> Any:
         if v == "auto":
             return v
         if v.startswith("auto_"):
-            check_real(f"{name} initial value", v[5:], 0.0, lo_open=True)
+            check_real(f"{name} initial value", v[5:], 0.0, lo_open=True, text=True)
             return v
         raise ValueError(f"{name}={v!r} is not allowed: a number >= 0, 'auto' or 'auto_X'")
     return check_real(name, v, 0.0)

@@ -50,7 +50,7 @@ def whole(lo: int | None = None, hi: int | None = None) -> Callable[[str], int]:
 
     def parse(text: str) -> int:
         try:
-            return check_int("", text, lo, hi)
+            return check_int("", text, lo, hi, text=True)
         except ValueError as exc:
             raise argparse.ArgumentTypeError(str(exc)) from None
 
@@ -66,7 +66,7 @@ def real(
 
     def parse(text: str) -> float:
         try:
-            return check_real("", text, lo, hi, lo_open=lo_open)
+            return check_real("", text, lo, hi, lo_open=lo_open, text=True)
         except ValueError as exc:
             raise argparse.ArgumentTypeError(str(exc)) from None
 

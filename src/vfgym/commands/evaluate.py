@@ -133,6 +133,7 @@ def run(args: argparse.Namespace) -> int:
         Path(args.runs_dir) / "evaluate" / (args.name or ""),
         folder=True,
         shown=args.runs_dir,
+        root=args.runs_dir,
     )
     against = args.against.strip()
     if against in ("all", ""):

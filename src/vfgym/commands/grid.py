@@ -66,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     scenarios = cfg.scenario_list()
     name = cfg.name or _default_name(cfg)
     run_dir = Path(cfg.runs_dir) / "grid" / name
-    check_output_path("runs_dir", run_dir, folder=True, shown=cfg.runs_dir)
+    check_output_path("runs_dir", run_dir, folder=True, shown=cfg.runs_dir, root=cfg.runs_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
     write_yaml(run_dir / "config.yaml", {"command": "grid", **cfg.to_dict(), "name": name})
     axis = cfg.load_axis()

@@ -230,6 +230,7 @@ def own_trace(ev: Any, scenario: Any) -> Any:
 
 def run(args: argparse.Namespace) -> int:
     from vfgym._validate import check_output_path
+    from vfgym.io.runs import write_atomically
 
     out = args.out
     if out is None:
@@ -240,9 +241,6 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--out={out!r} is not allowed: give a .png file")
     check_output_path("--out", out_path)
     fig = build_figure(args)
-    out_path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out_path.with_name(f".{out_path.name}.tmp.png")
-    fig.savefig(tmp, dpi=args.dpi)
-    tmp.replace(out_path)
+    write_atomically(out_path, lambda tmp: fig.savefig(tmp, dpi=args.dpi), suffix=".png")
     print(f"wrote {out_path}")
     return 0

@@ -45,8 +45,10 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.params import PAPER_PLANT
     from vfgym.space import settings_to_dict
 
-    refine_n = None if args.refine is None else check_int("--refine", args.refine, 1, 100_000)
-    seed = check_int("--seed", args.seed, 0, 2**31 - 1)
+    refine_n = (
+        None if args.refine is None else check_int("--refine", args.refine, 1, 100_000, text=True)
+    )
+    seed = check_int("--seed", args.seed, 0, 2**31 - 1, text=True)
     axis = axis_from_args(args)
     scenario = scenario_from_args(args, axis)
     if args.out is not None:

@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     tuning.check_sampler(cfg)
     name = cfg.study or _default_name(args.config, cfg.runs_dir)
     run_dir = Path(cfg.runs_dir) / "sweep" / name
-    check_output_path("runs_dir", run_dir, folder=True, shown=cfg.runs_dir)
+    check_output_path("runs_dir", run_dir, folder=True, shown=cfg.runs_dir, root=cfg.runs_dir)
     spec = tuning.resolve_storage(cfg.storage, run_dir)
     _check_storage_file(cfg.storage, spec)
     axis = cfg.load_axis()
@@ -161,19 +161,11 @@ def _check_storage_file(text: str, spec) -> None:
     """A storage file named by the user (sqlite:///FILE, journal:FILE) must go in an
     existing folder: a typo must not make folders silently. The defaults ``sqlite`` and
     ``journal`` live in the run folder, which the sweep makes."""
-    from pathlib import Path
-
     from vfgym._validate import check_output_path
 
     if spec.path is None or str(text).strip() in ("sqlite", "journal"):
         return
-    folder = Path(spec.path).parent
-    check_output_path("storage", spec.path, shown=text)  # a file in the way, read-only, ...
-    if not folder.is_dir():
-        raise ValueError(
-            f"storage={text!r} is not allowed: folder {folder} does not exist; create it "
-            "first, or give storage 'sqlite' to keep the study in the run folder"
-        )
+    check_output_path("storage", spec.path, shown=text)  # a missing folder, a file in the way
 
 
 def _open_study(cfg, spec, name, run_dir, scenarios):
@@ -407,7 +399,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     if best is not None and not interrupted:  # the report ends with the held-out verdict
         v = axis_verdict(tuning.trial_settings(best), cfg.load_axis(), tuned_on=scenarios)
         summary["verdict"] = v.to_dict()
-        lines += ["", format_verdict(v)]
+        lines += ["", format_verdict(v, axis_file=cfg.axis)]
     text = "\n".join(lines)
     write_text(run_dir / "report.txt", text + "\n")
     write_yaml(run_dir / "summary.yaml", summary)

@@ -73,7 +73,11 @@ def run(args: argparse.Namespace) -> int:
         check_name("--name", args.name)
     name = args.name or f"{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}"
     check_output_path(
-        "--runs-dir", Path(args.runs_dir) / "train" / name, folder=True, shown=args.runs_dir
+        "--runs-dir",
+        Path(args.runs_dir) / "train" / name,
+        folder=True,
+        shown=args.runs_dir,
+        root=args.runs_dir,
     )
     from vfgym.agents.training import check_same_run, train
     from vfgym.io.runs import new_run_dir, record_command

@@ -8,12 +8,14 @@ never leaves a half-written result behind.
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import shlex
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -36,21 +38,58 @@ def new_run_dir(root: str | Path, kind: str, name: str | None = None) -> Path:
     return path
 
 
-def write_text(path: str | Path, text: str) -> Path:
-    """Write ``text`` atomically."""
+def write_atomically(path: str | Path, write: Callable[[Path], Any], suffix: str = ".tmp") -> Path:
+    """Write ``path`` through a temporary file beside it, then rename it into place, so
+    an interrupted write leaves no half-written file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write (its folder is made if missing).
+    write : callable
+        Writes the content to the temporary path it is given.
+    suffix : str
+        The temporary file's ending (a writer may choose its format by it: ``.png``).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    OSError
+        Naming ``path`` (never the temporary file), if the file cannot be written.
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    tmp: str | None = None
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+        os.close(fd)
+        write(Path(tmp))
         os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; give the usual file mode
         os.replace(tmp, path)
+    except OSError as exc:
+        _discard(tmp)
+        code = exc.errno
+        if code == errno.ENOENT and path.parent.is_dir():  # a folder that takes no new file
+            code = errno.EPERM  # (/proc, /sys): "no such file" would mislead
+        raise OSError(code, os.strerror(code) if code else str(exc), str(path)) from None
     except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        _discard(tmp)
         raise
     return path
+
+
+def _discard(tmp: str | None) -> None:
+    if tmp is not None and os.path.exists(tmp):
+        os.unlink(tmp)
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """Write ``text`` atomically (:func:`write_atomically`)."""
+    return write_atomically(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 
 def write_yaml(path: str | Path, data: Any) -> Path:

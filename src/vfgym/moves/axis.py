@@ -26,13 +26,15 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
-from dataclasses import asdict, dataclass, field, fields, replace
+import warnings
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-from vfgym._validate import check_choice
 from vfgym.io.runs import read_yaml, write_yaml
-from vfgym.moves.distribution import DEFAULT_DISTRIBUTION, MoveDistribution
+from vfgym.moves._axis_checks import check_arrives, check_measures
+from vfgym.moves._move_sets import MoveSet, MoveSets
+from vfgym.moves.distribution import MoveDistribution
 from vfgym.moves.scenarios import SCENARIOS, SPLITS, Scenario
 from vfgym.params import (
     DEFAULT_MEASURES,
@@ -44,139 +46,24 @@ from vfgym.params import (
     Plant,
     Servo,
 )
-from vfgym.plant.measures import command_end_s
 
 AXIS_FILE = "axis.yaml"
 """The axis's copy in a run folder."""
 
 
-@dataclass(frozen=True)
-class MoveSet:
-    """The moves of one split: a list of moves, or a seeded random distribution.
+class AxisNote(UserWarning):
+    """Something true of an axis file a user should know, though the file is valid: a
+    motor that cannot reach its stated acceleration limit, and the limit it is held to
+    instead. ``vfgym`` prints each as one ``note:`` line once its command has finished.
 
     Parameters
     ----------
-    moves : tuple of Scenario
-        The moves (names unique within the set); give these or ``random``.
-    random : MoveDistribution or None
-        A distribution; its set is ``count`` draws from ``first_seed``.
-
-    Raises
-    ------
-    ValueError
-        If neither or both are given, a move is not a :class:`vfgym.Scenario`, or two
-        moves share a name.
+    message : str
+        The note: the file, the key and what follows from its value.
     """
 
-    moves: tuple[Scenario, ...] = ()
-    random: MoveDistribution | None = None
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "moves", tuple(self.moves))
-        if (self.random is None) == (not self.moves):
-            raise ValueError(
-                f"moves={list(self.moves)!r}, random={self.random!r} is not allowed: give "
-                "one or more moves (vfgym.Scenario fields) or random: a MoveDistribution"
-            )
-        if self.random is not None and not isinstance(self.random, MoveDistribution):
-            raise ValueError(f"random={self.random!r} must be a MoveDistribution")
-        names = [m.name for m in self.moves]
-        for i, m in enumerate(self.moves):
-            if not isinstance(m, Scenario):
-                raise ValueError(f"moves[{i}]={m!r} must be a vfgym.Scenario")
-            if names.index(m.name) != i:
-                raise ValueError(
-                    f"moves[{i}].name={m.name!r} is not allowed: the name of moves"
-                    f"[{names.index(m.name)}] already; give each move its own name"
-                )
-
-    def scenarios(self, split: str, base: Plant = PAPER_PLANT) -> list[Scenario]:
-        """The set as scenarios.
-
-        Parameters
-        ----------
-        split : str
-            ``train`` or ``test``: the split a distribution draws from.
-        base : Plant
-            The axis's plant (a distribution's loads are drawn on it).
-
-        Returns
-        -------
-        list of Scenario
-            The listed moves, or the distribution's ``count`` draws of ``split``.
-        """
-        if self.random is not None:
-            return self.random.scenarios(split, base)
-        return list(self.moves)
-
-    def pick(self, seed: int, split: str, base: Plant = PAPER_PLANT) -> Scenario:
-        """The move of a seed, as the environments draw them.
-
-        Parameters
-        ----------
-        seed : int
-            The scenario seed.
-        split : str
-            ``train`` or ``test``: the split a distribution draws from.
-        base : Plant
-            The axis's plant.
-
-        Returns
-        -------
-        Scenario
-            The distribution's draw, or for a list the move ``seed mod len(moves)``
-            (seeds cycle through a listed set).
-        """
-        if self.random is not None:
-            return self.random.draw(seed, split, base)
-        return self.moves[int(seed) % len(self.moves)]
-
-
-@dataclass(frozen=True)
-class MoveSets:
-    """An axis's train moves and test moves.
-
-    Parameters
-    ----------
-    train : MoveSet
-        What a sweep tunes on, the envs' train split (default: 16 draws of the default
-        random distribution).
-    test : MoveSet
-        What ``vfgym evaluate`` judges on by default, the envs' test split (default: 32
-        draws).
-
-    Raises
-    ------
-    ValueError
-        If either is not a :class:`MoveSet`.
-    """
-
-    train: MoveSet = field(
-        default_factory=lambda: MoveSet(random=replace(DEFAULT_DISTRIBUTION, count=16))
-    )
-    test: MoveSet = field(
-        default_factory=lambda: MoveSet(random=replace(DEFAULT_DISTRIBUTION, count=32))
-    )
-
-    def __post_init__(self) -> None:
-        for split in SPLITS:
-            if not isinstance(getattr(self, split), MoveSet):
-                raise ValueError(f"{split}={getattr(self, split)!r} must be a MoveSet")
-
-    def of(self, split: str) -> MoveSet:
-        """The move set of a split.
-
-        Parameters
-        ----------
-        split : str
-            ``train`` or ``test``.
-
-        Returns
-        -------
-        MoveSet
-            Its moves.
-        """
-        return getattr(self, check_choice("split", split, SPLITS))
+    def __init__(self, message: str) -> None:
+        super().__init__(message)
 
 
 @dataclass(frozen=True)
@@ -220,9 +107,19 @@ class Axis:
         for key, kind in (("plant", Plant), ("measures", Measures), ("moves", MoveSets)):
             if not isinstance(getattr(self, key), kind):
                 raise ValueError(f"{key}={getattr(self, key)!r} must be a vfgym {kind.__name__}")
-        for split in SPLITS:
-            for i, sc in enumerate(self.moves.of(split).moves):
-                _check_arrives(sc, self.plant, f"moves.{split}[{i}]")
+        listed = {
+            f"moves.{split}[{i}]": sc
+            for split in SPLITS
+            for i, sc in enumerate(self.moves.of(split).moves)
+        }
+        for key, sc in listed.items():
+            check_arrives(sc, self.plant, key)
+        drawn = {
+            f"moves.{split}.random": ms.random
+            for split in SPLITS
+            if (ms := self.moves.of(split)).random is not None
+        }
+        check_measures(self.measures, self.plant, listed, drawn)
 
     def scenarios(self, split: str) -> list[Scenario]:
         """The train or test moves.
@@ -313,35 +210,6 @@ PAPER_AXIS = Axis()
 """The paper's axis, the default: ``experiments/axes/paper.yaml`` holds the same."""
 
 
-def _check_arrives(sc: Scenario, base: Plant, key: str) -> None:
-    """A listed point-to-point move must be able to arrive within its duration."""
-    if sc.tracking:
-        return
-    plant = sc.plant(base)
-    ideal = sc.ideal_time_s(plant)
-    if sc.duration_s <= ideal:
-        raise ValueError(
-            f"{key}.duration_s={sc.duration_s!r} is too short for move {sc.name!r} to "
-            f"arrive: allowed more than its ideal move time on this axis, {ideal:.4g} s"
-        )
-    target = sum(d for d, _ in sc.moves) if sc.profile == "multi" else sc.distance_rad
-
-    def short(s: Scenario) -> bool:
-        return abs(float(s.command(plant)[-1]) - target) > plant.pulse_rad
-
-    if short(sc):
-        longer = sc
-        while short(longer) and longer.duration_s < 30.0:  # when the command ends
-            longer = replace(longer, duration_s=min(60.0, 2.0 * longer.duration_s))
-        end = command_end_s(longer.command(plant), plant.tick_hz)
-        raise ValueError(
-            f"{key}.duration_s={sc.duration_s!r} is too short for move {sc.name!r} to "
-            f"arrive: its {sc.profile} command reaches "
-            f"{float(sc.command(plant)[-1]):.4g} of {target:.4g} rad by then; allowed "
-            f"more than the {end:.4g} s the command takes"
-        )
-
-
 # --- the file ----------------------------------------------------------------------------
 
 
@@ -354,13 +222,12 @@ def _make(cls: type, data: Any, key: str, **given: Any) -> Any:
             f"{key or 'the file'}={data!r} is not allowed: give a mapping of "
             f"vfgym.{cls.__name__} fields"
         )
-    names = [f.name for f in fields(cls)]
+    names = [f.name for f in fields(cls)]  # the given ones too: they were taken out of data
     for k, v in data.items():
         if k not in names or k in given:
-            allowed = [n for n in names if n not in given]
             raise ValueError(
                 f"{prefix}{k}={v!r} is not a key of vfgym.{cls.__name__}: allowed "
-                f"{', '.join(allowed)}"
+                f"{', '.join(names)}"
             )
     for f in fields(cls):
         v = data.get(f.name)
@@ -576,9 +443,13 @@ def load_axis(path: str | Path) -> Axis:
 def _load(path: str, stamp: tuple[int, int] | None) -> Axis:
     data = read_yaml(path)  # a missing or malformed file: "PATH: ..."
     try:
-        return axis_from_dict(data, Path(path).stem)
+        axis = axis_from_dict(data, Path(path).stem)
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
+    note = axis.plant.motor.accel_note
+    if note is not None:  # once a file: the load is cached
+        warnings.warn(f"{path}: plant.motor: {note}", AxisNote, stacklevel=3)
+    return axis
 
 
 def write_axis(axis: Axis, path: str | Path) -> Path:
@@ -603,6 +474,7 @@ __all__ = [
     "AXIS_FILE",
     "PAPER_AXIS",
     "Axis",
+    "AxisNote",
     "MoveSet",
     "MoveSets",
     "axis_digest",

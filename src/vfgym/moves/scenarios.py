@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from vfgym._limits import MAX_MOVE_TICKS
 from vfgym._validate import check_choice, check_real
 from vfgym.moves import profiles
 from vfgym.params import PAPER_PLANT, PAPER_STEP_RAD, Plant
@@ -161,7 +162,23 @@ class Scenario:
         -------
         numpy.ndarray
             float64, read-only: every caller simulates the same array.
+
+        Raises
+        ------
+        ValueError
+            If the move is longer than a simulation holds (2^24 ticks at the
+            plant's tick rate: 120 s at 140 kHz).
         """
+        span = self.duration_s
+        if self.profile == "multi":
+            span = max(span, sum(dwell for _, dwell in self.moves))
+        ticks = span * plant.tick_hz
+        if ticks > MAX_MOVE_TICKS:
+            raise ValueError(
+                f"duration_s={span:g} at tick_hz={plant.tick_hz:g} is out of range: "
+                f"{ticks:.4g} ticks; allowed at most {MAX_MOVE_TICKS} ticks a move "
+                f"({MAX_MOVE_TICKS / plant.tick_hz:.4g} s at this tick rate)"
+            )
         return _command(self, plant)
 
     def speed(self, plant: Plant) -> float:

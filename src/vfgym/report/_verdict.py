@@ -106,6 +106,22 @@ class Verdict:
                 return r
         raise ValueError(f"controller={label!r} is not in this verdict")
 
+    def losing_to(self) -> tuple[VerdictRow, ...]:
+        """The baselines the tuned setting loses to on most moves.
+
+        Returns
+        -------
+        tuple of VerdictRow
+            The baselines with more losses than half the moves both run (wins, losses
+            and ties; a move a baseline cannot run is left out), in row order.
+        """
+        return tuple(
+            r
+            for r in self.rows
+            if r.versus is not None
+            and 2 * r.versus.losses > r.versus.wins + r.versus.losses + r.versus.ties
+        )
+
     def to_dict(self) -> dict[str, Any]:
         """The verdict as plain data (for a run folder's ``summary.yaml``).
 
@@ -280,19 +296,23 @@ def _num(x: float) -> str:
     return "n/a" if not math.isfinite(x) else f"{x:.3g}"
 
 
-def format_verdict(v: Verdict) -> str:
+def format_verdict(v: Verdict, axis_file: str | None = None) -> str:
     """The verdict as text: one row per controller, then the tuned setting's summary.
 
     Parameters
     ----------
     v : Verdict
         The verdict.
+    axis_file : str or None
+        The axis file tuned on, for the pointer to per-move settings (default: ``FILE``).
 
     Returns
     -------
     str
         The table and a closing line (the tuned setting's win rate against each baseline
-        and its feasible share).
+        and its feasible share); when it loses to a baseline on most moves
+        (:meth:`Verdict.losing_to`), a last line says so, names the baseline and points to
+        per-move settings (``vfgym fit --axis FILE``).
     """
     n = len(v.report.scenarios)
     held = "not tuned on" if not v.seen else f"{len(v.seen)} of them also tuned on"
@@ -338,4 +358,30 @@ def format_verdict(v: Verdict) -> str:
         "n/a: the baseline cannot run it); CI: bootstrap of the mean paired difference "
         f"({v.report.resamples} resamples)"
     )
+    losing = v.losing_to()
+    if losing:
+        lines.append(_losing_line(v, losing, axis_file))
     return "\n".join(lines)
+
+
+def _losing_line(v: Verdict, losing: Sequence[VerdictRow], axis_file: str | None) -> str:
+    """The plain statement a verdict ends with when the tuned setting loses on most moves:
+    the baselines it loses to (the most losses first), on how many moves."""
+
+    def share(r: VerdictRow) -> float:
+        w = r.versus
+        assert w is not None  # losing_to keeps baselines only
+        return w.losses / (w.wins + w.losses + w.ties)
+
+    ranked = sorted(losing, key=share, reverse=True)
+    parts = []
+    for r in ranked:
+        w = r.versus
+        assert w is not None
+        mean = " (though its mean cost is lower)" if w.cost_diff.mean < 0 else ""
+        parts.append(f"{r.label} on {w.losses}/{w.wins + w.losses + w.ties}{mean}")
+    return (
+        f"{v.tuned} loses to {' and to '.join(parts)} of the held-out moves: "
+        f"{ranked[0].label} does better on most of these moves than the one tuned setting; "
+        f"for settings fitted per move, run vfgym fit --axis {axis_file or 'FILE'}"
+    )

@@ -5,8 +5,10 @@ from __future__ import annotations
 import json
 import signal
 import sys
+import warnings
 from dataclasses import asdict
 
+from vfgym.moves.axis import AxisNote
 from vfgym.tuning._config import SweepConfig
 from vfgym.tuning._storage import StorageSpec
 from vfgym.tuning._workers import run_worker
@@ -14,6 +16,7 @@ from vfgym.tuning._workers import run_worker
 
 def _worker_main() -> int:
     """Entry of a worker process (``python -m vfgym.tuning``): its job as JSON on stdin."""
+    warnings.simplefilter("ignore", AxisNote)  # the parent process says it once
     job = json.loads(sys.stdin.read())
     cfg = SweepConfig(**job["config"])
     spec = StorageSpec(**job["storage"])

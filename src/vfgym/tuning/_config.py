@@ -4,10 +4,18 @@ the command line (in that order).
 
 from __future__ import annotations
 
+import re
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-from vfgym._validate import check_choice, check_int, check_name, check_real
+from vfgym._validate import (
+    check_bool,
+    check_choice,
+    check_int,
+    check_name,
+    check_real,
+    number_from_text,
+)
 from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.distribution import scenario_set
 from vfgym.moves.scenarios import Scenario
@@ -53,17 +61,6 @@ def _check_scenario_fields(cfg: Any) -> None:
     s(cfg, "laws", _laws(cfg.laws))
 
 
-def _bool(name: str, v: Any) -> bool:
-    if isinstance(v, bool):
-        return v
-    s = str(v).strip().lower()
-    if s in ("1", "true", "yes", "on"):
-        return True
-    if s in ("0", "false", "no", "off"):
-        return False
-    raise ValueError(f"{name}={v!r} is not allowed: give true or false")
-
-
 class _Options:
     """Shared by the sweep and grid configurations: merging sources, plain dicts, scenarios."""
 
@@ -83,7 +80,9 @@ class _Options:
         file_data : dict or None
             A config file's mapping (``-`` in keys read as ``_``); unknown keys raise.
         cli : dict or None
-            Command-line options; those that are ``None`` (not given) are skipped.
+            Command-line options; those that are ``None`` (not given) are skipped. Their
+            text is read as a number for a number field (:func:`number_from_text`); a
+            config file's values are taken as YAML typed them (``"70"`` is not a number).
         source : str
             Names the file in error messages.
 
@@ -102,7 +101,14 @@ class _Options:
             if not isinstance(file_data, dict):
                 raise ValueError(f"{source}: expected a mapping of options")
             data.update(_keys(file_data, cls, source))
-        data.update({k: v for k, v in (cli or {}).items() if v is not None})
+        numeric = _number_fields(cls)
+        data.update(
+            {
+                k: number_from_text(v) if k in numeric else v
+                for k, v in (cli or {}).items()
+                if v is not None
+            }
+        )
         return cls(**data)
 
     def to_dict(self) -> dict[str, Any]:
@@ -255,11 +261,17 @@ class SweepConfig(_Options):
         s(self, "grid_points", check_int("grid_points", self.grid_points, 2, 64))
         if self.batch is not None:
             s(self, "batch", check_int("batch", self.batch, 1, 1024))
-        s(self, "plots", _bool("plots", self.plots))
-        s(self, "progress", _bool("progress", self.progress))
+        s(self, "plots", check_bool("plots", self.plots))
+        s(self, "progress", check_bool("progress", self.progress))
         s(self, "heartbeat", check_int("heartbeat", self.heartbeat, 1))
         if self.grace is not None:
             s(self, "grace", check_int("grace", self.grace, 1))
+
+
+def _number_fields(cls: type) -> set[str]:
+    """The fields of a configuration that hold a number (``int``, ``float``, or either or
+    ``None``): the command line's text is read as a number for these."""
+    return {f.name for f in fields(cls) if re.search(r"\b(int|float)\b", str(f.type))}
 
 
 def _keys(data: dict, cls: type, source: str) -> dict[str, Any]:

@@ -15,13 +15,13 @@ from typing import Any
 import numpy as np
 
 from vfgym import space
-from vfgym._validate import check_int
+from vfgym._validate import check_bool, check_int, check_name
 from vfgym.io.runs import write_text
 from vfgym.moves.axis import axis_digest, axis_kwargs
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.scoring import CONSTRAINTS, evaluate
-from vfgym.tuning._config import _bool, _check_scenario_fields, _Options, check_name
+from vfgym.tuning._config import _check_scenario_fields, _Options
 from vfgym.tuning._objective import aggregate, settings_key
 
 
@@ -82,7 +82,7 @@ class GridConfig(_Options):
         if self.name is not None:
             s(self, "name", check_name("name", self.name))
         s(self, "runs_dir", str(self.runs_dir))
-        s(self, "progress", _bool("progress", self.progress))
+        s(self, "progress", check_bool("progress", self.progress))
 
 
 @dataclass(frozen=True, eq=False)

@@ -22,7 +22,9 @@ from vfgym.tuning._recovery import RetryStale
 if TYPE_CHECKING:
     from optuna.storages import BaseStorage, RDBStorage
 
-STORAGE_HELP = "sqlite, journal, sqlite:///FILE, journal:FILE or postgresql://USER:PASS@HOST/DB"
+STORAGE_HELP = (
+    "sqlite, journal, sqlite:///FILE, journal:FILE or postgresql://USER:PASS@HOST:PORT/DB?OPTIONS"
+)
 
 
 @dataclass(frozen=True)
@@ -60,9 +62,16 @@ def mask_url(url: str) -> str:
     Returns
     -------
     str
-        ``url`` with any password replaced by ``***``.
+        ``url`` with any password replaced by ``***`` (SQLAlchemy's rendering of it; a
+        text it cannot read as a URL has anything between ``user:`` and ``@`` masked).
     """
-    return re.sub(r"^([a-z0-9+]+://[^:/@]*):[^@/]*@", r"\1:***@", url)
+    from sqlalchemy.engine import make_url
+
+    try:
+        parsed = make_url(url)
+        return url if parsed.password is None else parsed.render_as_string(hide_password=True)
+    except Exception:  # not a URL SQLAlchemy reads (ArgumentError, a bad port, ...)
+        return re.sub(r"^([^:/]*://[^:/@]*):[^@]*@", r"\1:***@", url)
 
 
 def _file_spec(kind: str, path: Path) -> StorageSpec:
@@ -74,11 +83,16 @@ def _file_spec(kind: str, path: Path) -> StorageSpec:
 def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
     """The storage named by ``--storage``.
 
+    A URL is read by SQLAlchemy (:func:`sqlalchemy.engine.make_url`): every SQLite file
+    URL and every PostgreSQL URL it takes is taken (a query such as ``?sslmode=require``,
+    an IPv6 host ``[::1]``, a Unix socket ``postgresql:///db``), with a synchronous driver.
+
     Parameters
     ----------
     text : str
-        ``sqlite``, ``journal``, ``sqlite:///FILE``, ``journal:FILE`` or
-        ``postgresql://USER:PASS@HOST/DB`` (:data:`STORAGE_HELP`).
+        ``sqlite``, ``journal``, ``sqlite:///FILE``, ``journal:FILE`` or a PostgreSQL URL
+        ``postgresql[+DRIVER]://[USER[:PASS]@][HOST[:PORT]]/DB[?OPTIONS]``
+        (:data:`STORAGE_HELP`).
     run_dir : pathlib.Path
         The run folder, where ``sqlite`` and ``journal`` put their file.
 
@@ -90,8 +104,11 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
     Raises
     ------
     ValueError
-        If the text names no storage, or a driver vfgym does not support.
+        If the text names no storage, a database other than SQLite and PostgreSQL, an
+        in-memory SQLite database, or a driver vfgym cannot use; the password masked.
     """
+    from sqlalchemy.engine import make_url
+
     t = str(text).strip()
     if t == "sqlite":
         return _file_spec("sqlite", run_dir / "study.db")
@@ -103,24 +120,43 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
         if not rest or rest.endswith("/"):
             raise ValueError(f"storage={text!r} is not allowed: give journal:FILE")
         return _file_spec("journal", Path(rest).expanduser())
-    m = re.match(r"^sqlite:///(.+)$", t)
-    if m:
-        return _file_spec("sqlite", Path(m.group(1)).expanduser())
-    m = re.match(
-        r"^postgres(?:ql)?(\+[a-z0-9]+)?://([^:@/\s]+)(:[^@/\s]*)?@([^:/\s]+)(:\d{1,5})?/(\w[\w.-]*)$",
-        t,
-    )
-    if m:
-        driver, user, pw, host, port, db = m.groups()
-        if driver not in (None, "+psycopg2", "+psycopg"):
-            raise ValueError(
-                f"storage={mask_url(t)!r} is not allowed: driver {driver[1:]} is not "
-                "supported (use postgresql:// or postgresql+psycopg2://)"
-            )
-        return StorageSpec(
-            "postgresql", f"postgresql{driver or ''}://{user}{pw or ''}@{host}{port or ''}/{db}"
+    head = f"storage={mask_url(t)!r} is not allowed"
+    try:
+        url = make_url(t)
+        backend = url.get_backend_name()
+        port = url.port
+    except Exception:  # sqlalchemy's ArgumentError; a port that is not a number
+        raise ValueError(f"{head}: give {STORAGE_HELP}") from None
+    if backend == "postgres":
+        raise ValueError(f"{head}: SQLAlchemy names it postgresql://, not postgres://")
+    try:
+        dialect = url.get_dialect() if backend in ("sqlite", "postgresql") else None
+    except Exception:  # NoSuchModuleError
+        raise ValueError(
+            f"{head}: SQLAlchemy has no {backend} driver {url.get_driver_name()!r}"
+        ) from None
+    if dialect is None:
+        raise ValueError(
+            f"{head}: vfgym keeps studies in SQLite or PostgreSQL; give {STORAGE_HELP}"
         )
-    raise ValueError(f"storage={mask_url(t)!r} is not allowed: give {STORAGE_HELP}")
+    if getattr(dialect, "is_async", False):
+        raise ValueError(
+            f"{head}: driver {url.get_driver_name()} is asynchronous; give a synchronous one "
+            "(postgresql://, postgresql+psycopg:// or postgresql+psycopg2://)"
+        )
+    if backend == "sqlite":
+        if url.database in (None, "", ":memory:"):
+            raise ValueError(
+                f"{head}: an in-memory database is lost when the sweep ends; give sqlite:///FILE"
+            )
+        path = Path(url.database).expanduser().resolve()
+        url = url.set(database=str(path))
+        return StorageSpec("sqlite", url.render_as_string(hide_password=False), str(path))
+    if port is not None and not 1 <= port <= 65535:
+        raise ValueError(
+            f"{head}: port {port} is out of range: allowed whole numbers in [1, 65535]"
+        )
+    return StorageSpec("postgresql", url.render_as_string(hide_password=False))
 
 
 def find_storage(text: str, run_dir: Path) -> StorageSpec:
@@ -274,7 +310,12 @@ def _sqlite_wal(storage: RDBStorage) -> None:
 
 
 class _FileLock:
-    """An exclusive ``flock`` on a file beside a SQLite or journal file (one machine)."""
+    """An exclusive ``flock`` on a file beside a SQLite or journal file (one machine).
+
+    A holder removes the file when it closes (holding the lock), so no empty lock file
+    stays in the run folder once the workers are done. A holder that finds the path no
+    longer names the file it locked (another worker removed it on closing) opens the
+    path again, so two workers never hold locks on two different files."""
 
     def __init__(self, path: str) -> None:
         self._path = path + ".vfgym-lock"
@@ -284,10 +325,20 @@ class _FileLock:
     def acquire(self) -> None:
         import fcntl
 
-        if self._fd is None:
-            self._fd = os.open(self._path, os.O_RDWR | os.O_CREAT, 0o644)
-        fcntl.flock(self._fd, fcntl.LOCK_EX)
-        self.held = True
+        while True:
+            if self._fd is None:
+                self._fd = os.open(self._path, os.O_RDWR | os.O_CREAT, 0o644)
+            fcntl.flock(self._fd, fcntl.LOCK_EX)
+            mine = os.fstat(self._fd)
+            try:
+                now = os.stat(self._path)
+            except FileNotFoundError:
+                now = None
+            if now is not None and (now.st_dev, now.st_ino) == (mine.st_dev, mine.st_ino):
+                self.held = True
+                return
+            os.close(self._fd)  # the file was removed under us: lock the path's new one
+            self._fd = None
 
     def release(self) -> None:
         import fcntl
@@ -297,10 +348,13 @@ class _FileLock:
         self.held = False
 
     def close(self) -> None:
+        if self._fd is None:
+            return
+        self.acquire()  # removed only while held: a waiter then finds it gone and reopens
+        os.unlink(self._path)
         self.release()
-        if self._fd is not None:
-            os.close(self._fd)
-            self._fd = None
+        os.close(self._fd)
+        self._fd = None
 
 
 class _PgLock:
