@@ -1,6 +1,7 @@
 """``vfgym predict``: the settings an amortised tuner picks for a move, as YAML. The tuner
-is the settings model vfgym ships (a regression from the move's features to its optimal
-settings, no training needed), another settings model (JSON), or a trained VFTune-v0
+is the settings model vfgym ships (a neighbour look-up: of the optima of the train moves
+nearest the move in feature space, the one of least mean cost over them; no training
+needed), another settings model (JSON), or a trained VFTune-v0
 agent (``.zip``); ``--refine N`` then runs a short sweep on the move from those
 settings."""
 
