@@ -1,16 +1,18 @@
-"""Every ``vfgym`` command line README.md shows runs and exits 0.
+"""Every ``vfgym`` command line README.md and the documentation pages show runs and exits 0.
 
-``README_RUNS`` maps each command line of the README (as shown, whitespace collapsed) to the
+``README_RUNS`` maps each command line of README.md and of ``docs/**/*.md`` (as shown,
+whitespace collapsed) to the
 concrete runs that stand for it: a template (``--algo ppo|sac|td3``, ``NAME``) is filled in
 with real values, and lines that take minutes are budget-trimmed by appending options that
 override the README's (argparse keeps an option's last value, ``--hyperparams`` its last
 key). Every trim is listed in ``TRIMS`` with the reason. A README line without an entry
-here, or an entry whose line left the README, fails ``test_every_readme_command_has_a_run``.
+here, or an entry whose line left every page, fails ``test_every_readme_command_has_a_run``.
 
 The runs share one working folder (``experiments/`` and ``agents/`` linked in from the
 repository, run folders under ``runs/``) and depend on each other as a user's would:
 ``evaluate --settings best.yaml`` reads the main job's ``best.yaml``, ``plot history`` its
-study, ``predict`` and ``evaluate --model`` the trained PPO agent.
+study, ``predict`` and ``evaluate --model`` the trained PPO agent; the README's worked
+examples read the files earlier examples wrote (``runs/sweep/belt``, ``test-3.yaml``).
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ import pytest
 from vfgym.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
+PAGES = ("README.md", "docs")  # the README and every Markdown page under docs/
 HAS_SB3 = importlib.util.find_spec("stable_baselines3") is not None
 
 TRIMS = {
@@ -88,7 +91,115 @@ def _sweep(key: str, *extra: str, needs: tuple[str, ...] = ()) -> Run:
     return Run(key, argv, needs, (f"runs/sweep/{key}/best.yaml",))
 
 
+BELT = "runs/sweep/belt/best.yaml"
 README_RUNS: dict[str, list[Run]] = {
+    # the README's worked examples, in the order a user runs them
+    "vfgym sweep --config experiments/quick.yaml --axis experiments/axes/belt.yaml --study belt": [
+        Run(
+            "belt",
+            [
+                "sweep",
+                "--config",
+                "experiments/quick.yaml",
+                "--axis",
+                "experiments/axes/belt.yaml",
+                "--study",
+                "belt",
+                *SWEEP_TRIM,
+            ],
+            writes=(BELT, "runs/sweep/belt/study.db"),
+            trim="trials",
+        ),
+    ],
+    "vfgym evaluate --settings runs/sweep/belt/best.yaml --axis experiments/axes/belt.yaml": [
+        Run(
+            "eval-belt",
+            [
+                "evaluate",
+                "--settings",
+                BELT,
+                "--axis",
+                "experiments/axes/belt.yaml",
+                "--bootstrap",
+                "200",
+            ],
+            ("belt",),
+            trim="evaluate",
+        ),
+    ],
+    "vfgym evaluate --settings runs/sweep/belt/best.yaml --against paper,scurve "
+    "--scenarios named": [
+        Run(
+            "eval-belt-named",
+            [
+                "evaluate",
+                "--settings",
+                BELT,
+                "--against",
+                "paper,scurve",
+                "--scenarios",
+                "named",
+                "--bootstrap",
+                "200",
+            ],
+            ("belt",),
+            trim="evaluate",
+        ),
+    ],
+    "vfgym plot compare --scenario paper-step --settings runs/sweep/belt/best.yaml": [
+        Run(
+            "plot-belt",
+            ["plot", "compare", "--scenario", "paper-step", "--settings", BELT],
+            ("belt",),
+            ("compare-paper-step.png",),
+        ),
+    ],
+    "vfgym plot history --sweep runs/sweep/belt": [
+        Run("history-belt", ["plot", "history", "--sweep", "runs/sweep/belt"], ("belt",)),
+    ],
+    "vfgym predict --scenario test-3 --out test-3.yaml": [
+        Run(
+            "predict-out",
+            ["predict", "--scenario", "test-3", "--out", "test-3.yaml"],
+            writes=("test-3.yaml",),
+        ),
+    ],
+    "vfgym predict --scenario short-move --refine 20": [
+        Run("predict-refine-20", ["predict", "--scenario", "short-move", "--refine", "20"]),
+    ],
+    "vfgym simulate --scenario test-3 --settings test-3.yaml": [
+        Run(
+            "sim-test-3",
+            ["simulate", "--scenario", "test-3", "--settings", "test-3.yaml"],
+            ("predict-out",),
+        ),
+    ],
+    "vfgym train --algo ppo --env vfgym/VFTune-v0 --name tune-ppo": [
+        Run(
+            "tune-ppo",
+            train_trim(
+                ["train", "--algo", "ppo", "--env", "vfgym/VFTune-v0", "--name", "tune-ppo"]
+            ),
+            writes=("runs/train/tune-ppo/best_model.zip", "runs/train/tune-ppo/tb"),
+            trim="train",
+            agents=True,
+        ),
+    ],
+    "vfgym predict --model runs/train/tune-ppo/best_model.zip --scenario test-3": [
+        Run(
+            "predict-tune-ppo",
+            ["predict", "--model", "runs/train/tune-ppo/best_model.zip", "--scenario", "test-3"],
+            ("tune-ppo",),
+            agents=True,
+        ),
+    ],
+    "vfgym export --format vcd --scenario paper-step": [
+        Run(
+            "export-vcd-readme",
+            ["export", "--format", "vcd", "--scenario", "paper-step"],
+            writes=("paper-step-paper.vcd",),
+        ),
+    ],
     "vfgym sweep --config experiments/quick.yaml": [
         Run("quick", ["sweep", "--config", "experiments/quick.yaml", *SWEEP_TRIM], trim="trials"),
     ],
@@ -329,10 +440,23 @@ def readme_commands(text: str) -> set[str]:
     return found
 
 
+def pages(root: Path) -> list[Path]:
+    """README.md and every Markdown page of the documentation under ``root``."""
+    found = []
+    for name in PAGES:
+        path = root / name
+        found += sorted(path.rglob("*.md")) if path.is_dir() else [path]
+    return found
+
+
 def test_every_readme_command_has_a_run(repo_root):
-    shown = readme_commands((repo_root / "README.md").read_text(encoding="utf-8"))
-    assert shown - set(README_RUNS) == set(), "README lines without a run in README_RUNS"
-    assert set(README_RUNS) - shown == set(), "README_RUNS lines no longer in README.md"
+    shown: set[str] = set()
+    for page in pages(repo_root):
+        lines = readme_commands(page.read_text(encoding="utf-8"))
+        missing = lines - set(README_RUNS)
+        assert not missing, f"{page.name}: lines without a run in README_RUNS: {missing}"
+        shown |= lines
+    assert set(README_RUNS) - shown == set(), "README_RUNS lines on no page any more"
     for run in RUNS.values():
         assert run.trim is None or run.trim in TRIMS
 
@@ -392,4 +516,4 @@ def test_readme_command_runs(key, workspace, monkeypatch):
         pytest.skip("the gp sampler needs torch")
     assert _run(key, workspace, monkeypatch) == 0
     for path in run.writes:
-        assert (workspace["path"] / path).is_file(), path
+        assert (workspace["path"] / path).exists(), path
