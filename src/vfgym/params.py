@@ -259,7 +259,7 @@ class Motor:
 #   the nearest documented Σ-series 200 W motor, as the issue directs.
 #   torque at maximum speed 0.8 N·m: read off the shape of the Σ-series 200 W
 #   torque–speed curve (intermittent zone narrowing to about 40 % of peak at 4500 rpm);
-#   an assumption, stated here and in the README.
+#   an assumption, stated here and in docs/axes.md.
 #   No friction or load by default (a bare shaft); scenarios add them.
 SGME_02A = Motor()
 
@@ -282,7 +282,7 @@ class Servo:
         servo's position gain is Kv = 1/(B·Ts).
     torque_per_count_nm : float
         K3, the PWM + power amplifier gain (N·m per count of error), > 0, tuned for the
-        bare motor (see README, "Motor preset and servo defaults").
+        bare motor (see docs/axes.md, "Motor preset and servo defaults").
     follows_load : bool
         True (default): the drive scales K3 with the total inertia, K3·(1 + inertia_ratio),
         as a drive does once its inertia ratio is set, so a loaded loop keeps the bare

@@ -52,7 +52,7 @@ COLD_COMPILE_S = {
     "vector env, threads": 39.1,
 }
 """CPU seconds a first call compiles for, with numba's cache empty, per entry point
-(measured on the README's 2-core machine at load ≈ 5–6, so on the high side:
+(measured on a 2-core machine, docs/speed.md, at load ≈ 5–6, so on the high side:
 ``python benchmarks/bench_plant.py --cold``; the vector env's two entries the median of
 three runs); what :func:`announce_compile` tells the user."""
 

@@ -90,14 +90,14 @@ class CompassOptions:
     ``experiments/trials_to_reference.py`` existed); the local model points of each compass
     generation and their reach in steps, the composite poll, the model batches at most per
     stall (0: until one beats the centre) and the model's cap on log costs: all off by
-    default, which is the search measured best overall (README, "Trials to the grid
-    optimum"); :data:`LOCAL` turns them on. ``split_constraints``: one feasibility model
+    default, which is the search measured best overall (docs/tuning.md, "Samplers: trials
+    to the grid optimum"); :data:`LOCAL` turns them on. ``split_constraints``: one feasibility model
     per constraint a trial broke, not one on the worst; ``explore_gap``: a model point of
     another basin within this fraction of the centre's cost gets a compass (0: off);
     ``diagonal``: the fifth poll direction (value and L/value together); ``patience``: a
     compass whose last generation moved goes on past ``compass_trials`` (50: five
-    generations of ten polls, as 40 were of eight). All four on by default since issue 13
-    (README, "Trials to the grid optimum")."""
+    generations of ten polls, as 40 were of eight). All four on by default
+    (docs/tuning.md, "Samplers: trials to the grid optimum")."""
 
     n_init: int = 6
     step0: float = 0.4
@@ -122,7 +122,7 @@ LOCAL = CompassOptions(search=2, composite=True, model_rounds=2, cap_model=True,
                        split_constraints=False, explore_gap=0.0)  # fmt: skip
 """The compass with its local model step: faster on ``heavy-load`` (within 1.5 % after 200
 trials, against 4.6 %), slower on ``paper-step``, ``multi-move`` and ``short-move``
-(README); chosen on ``short-move`` and ``heavy-load`` among a few variants over 5 seeds,
+(docs/tuning.md); chosen on ``short-move`` and ``heavy-load`` among a few variants over 5 seeds,
 before ``split_constraints``, ``explore_gap``, ``diagonal`` and ``patience`` (off here:
 the search as measured)."""
 
