@@ -205,7 +205,7 @@ def test_yaml_numbers_in_any_notation(ws):
         from vfgym.agents import hyperparams as hp
 
         over = hp.parse_overrides(["n_timesteps=1e3", "learning_rate=3e-4"])
-        params = hp.load("ppo", "vfgym/VFTune-v0", REPO / "agents/hyperparams/ppo.yml", over)
+        params = hp.load("ppo", "vfgym/VFTune-v0", hp.HYPERPARAMS_DIR / "ppo.yml", over)
         assert params["n_timesteps"] == 1000 and isinstance(params["n_timesteps"], int)
         assert params["learning_rate"] == 3e-4
 
