@@ -216,7 +216,7 @@ def checkpointed_optima(
     plant: Plant = PAPER_PLANT,
     measures: Measures = DEFAULT_MEASURES,
     chunk: int = 16,
-    progress: Callable[[int], None] | None = None,
+    progress: Callable[[int], object] | None = None,
 ) -> list[MoveOptimum]:
     """Per-move optima, ``chunk`` moves at a time, each chunk appended to ``path``; the
     optima already there (of the same moves, in order) are kept, not searched again.
