@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import hashlib
 import time
-import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -280,32 +279,12 @@ def best_fixed(scenarios: Sequence[Scenario], axis: Axis, trials: int) -> Settin
     Settings
         The best trial's settings (feasible first).
     """
-    import optuna
-
     from vfgym.params import PAPER_SETTINGS
-    from vfgym.tuning import (
-        Objective,
-        SweepConfig,
-        baseline_params,
-        best_trial,
-        make_sampler,
-        trial_settings,
-    )
 
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
-    cfg = SweepConfig(seed=0, plots=False)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        sampler = make_sampler(cfg, cfg.seed, list(scenarios))
-        study = optuna.create_study(direction="minimize", sampler=sampler)
-    study.enqueue_trial(baseline_params(cfg.laws, PAPER_SETTINGS))
-    objective = Objective(
-        list(scenarios), cfg.laws, "cost", plant=axis.plant, measures=axis.measures
-    )
-    study.optimize(objective, n_trials=trials)
-    best = best_trial(study)
-    assert best is not None  # trials ≥ 1 completed
-    return trial_settings(best)
+    from .refine import short_sweep
+
+    kw = {"plant": axis.plant, "measures": axis.measures}
+    return short_sweep(scenarios, PAPER_SETTINGS, trials, **kw).settings
 
 
 def fit_axis(
