@@ -103,3 +103,16 @@ def test_the_cost_table_is_each_optimum_on_each_move(tmp_path):
                for i in range(3))  # fmt: skip
     assert cost.shape == feas.shape == (3, 3)
     json.dumps(cost.tolist())
+
+
+def test_bad_fit_input_is_one_line_and_makes_no_run_folder(tmp_path, capsys):
+    belt = str(REPO / "experiments/axes/belt.yaml")
+    for args, needle in (
+        (["--axis", belt, "--moves", "3"], "--moves='3' is out of range"),
+        (["--axis", str(tmp_path / "none.yaml")], "none.yaml"),
+        (["--axis", belt, "--name", "a/b"], "--name"),
+    ):
+        assert main(["fit", *args, "--runs-dir", str(tmp_path / "runs")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert needle in err and "\n" not in err and err.startswith("vfgym fit: error:"), err
+    assert not (tmp_path / "runs").exists()
