@@ -154,6 +154,16 @@ CASES = [
     (["predict", "--refine", "many"], "--refine='many' must be"),
     (["predict", "--refine", "nan"], "--refine='nan' is not allowed"),
     (["predict", "--refine", "3", "--seed", "-1"], "--seed='-1' is out of range"),
+    (["fit"], "the following arguments are required: --axis"),
+    (["fit", "--axis", "missing.yaml"], "missing.yaml"),
+    (
+        ["fit", "--axis", str(REPO / "experiments/axes/belt.yaml"), "--moves", "7"],
+        "--moves='7' is out of range",
+    ),
+    (
+        ["fit", "--axis", str(REPO / "experiments/axes/belt.yaml"), "--runs-dir", "afile"],
+        "afile is a file",
+    ),
 ]
 
 
