@@ -1,6 +1,6 @@
 """Training throughput: prints figures, asserts nothing (machines are noisy).
 
-PPO with the shipped hyperparameters (agents/hyperparams/ppo.yml: VFServo-v0 16 envs ×
+PPO with the shipped hyperparameters (vfgym/agents/hyperparams_files/ppo.yml: VFServo-v0 16 envs ×
 128 steps, VFTune-v0 32 envs × 8 steps, a 64-64 tanh MLP, CPU), on one thread as
 ``vfgym train --threads 1`` runs it (``--threads N``: as ``vfgym train --threads N``,
 torch's and numba's threads); each measurement in a fresh process, after one rollout and

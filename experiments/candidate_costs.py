@@ -7,8 +7,8 @@ settings model picks from (:mod:`vfgym.agents.supervised`).
 Candidate j = the optimum of train move j in the model's coordinates (its k relative to
 the move's k_a, :func:`vfgym.agents.supervised.settings_targets`); entry [i, j] = the cost
 on train move i of those coordinates made settings on move i's plant, all
-pairs through the batched kernel (:func:`vfgym.scoring.score_pairs`, the scoring path),
-with the feasibility of each pair.
+pairs through the batched kernel (:func:`vfgym.agents.fit.candidate_costs`, what
+``vfgym fit`` uses), with the feasibility of each pair.
 """
 
 from __future__ import annotations
@@ -19,10 +19,9 @@ import time
 import numpy as np
 
 from vfgym import get_scenario
+from vfgym.agents.fit import candidate_costs
 from vfgym.agents.optima import read_optima
-from vfgym.agents.supervised import settings_targets, target_settings
 from vfgym.moves import LOAD_DISTRIBUTION
-from vfgym.scoring import Move, score_pairs
 
 
 def main() -> None:
@@ -32,25 +31,17 @@ def main() -> None:
     ap.add_argument("--batch", type=int, default=20_000)
     args = ap.parse_args()
     optima = read_optima(args.optima)
-    moves = [Move.of(get_scenario(o.scenario, LOAD_DISTRIBUTION)) for o in optima]
-    cand = [settings_targets(o.settings, mv.plant) for o, mv in zip(optima, moves, strict=True)]
-    n = len(optima)
-    pairs = [(i, j) for i in range(n) for j in range(n)]
-    cost = np.empty((n, n))
-    feas = np.empty((n, n), dtype=bool)
+    scenarios = [get_scenario(o.scenario, LOAD_DISTRIBUTION) for o in optima]
     t0 = time.time()
-    for a in range(0, len(pairs), args.batch):
-        chunk = pairs[a : a + args.batch]
-        ctrls = [target_settings(cand[j], moves[i].plant) for i, j in chunk]
-        res = score_pairs(ctrls, [moves[i] for i, _ in chunk])
-        for (i, j), r in zip(chunk, res, strict=True):
-            assert r is not None
-            cost[i, j] = r.cost
-            feas[i, j] = bool(np.all(r.constraints <= 0.0))
-        print(f"{time.time() - t0:7.1f} s  {a + len(chunk)}/{len(pairs)} pairs", flush=True)
+    cost, feas = candidate_costs(
+        scenarios,
+        optima,
+        batch=args.batch,
+        progress=lambda done, n: print(f"{time.time() - t0:7.1f} s  {done}/{n} pairs", flush=True),
+    )
     names = np.array([o.scenario for o in optima])
     np.savez_compressed(args.out, scenarios=names, cost=cost, feasible=feas)
-    print(f"{n} x {n} costs -> {args.out}")
+    print(f"{len(optima)} x {len(optima)} costs -> {args.out}")
 
 
 if __name__ == "__main__":

@@ -1,5 +1,8 @@
 """Train a settings model on per-move optima and write it with its config and the
-command that made it (the shipped one: ``src/vfgym/agents/pretrained/``):
+command that made it (the shipped one: ``src/vfgym/agents/pretrained/``). For any axis
+file the whole pipeline (optima, cost table, pick model, held-out verdict) is one
+command, ``vfgym fit --axis FILE`` (:func:`vfgym.agents.fit.fit_axis`, which this and
+``move_optima.py``, ``candidate_costs.py`` share their code with):
 
     python experiments/train_settings_model.py --kind pick --neighbours 6 --library 64 \
         --out src/vfgym/agents/pretrained

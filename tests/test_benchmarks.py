@@ -25,3 +25,16 @@ def test_bench_envs_runs_to_the_end_on_a_small_budget():
     assert out.returncode == 0, out.stderr[-2000:]
     assert "VFServo-v0 step" in out.stdout
     assert "VFTune-v0 on paper-step" in out.stdout
+
+
+def test_bench_fit_runs_to_the_end_on_a_small_budget():
+    args = ["--axes", "experiments/axes/belt.yaml", "--moves", "8", "--reference-points", "2"]
+    out = subprocess.run(
+        [sys.executable, "benchmarks/bench_fit.py", *args, "--reference-rounds", "0"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "| belt | 32 |" in out.stdout

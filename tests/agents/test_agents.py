@@ -33,7 +33,7 @@ def tiny(algo: str, env_id: str, **extra) -> dict:
         "checkpoint_freq": 32,
         "policy_kwargs": {"net_arch": [16, 16]},
     }
-    return hp.load(algo, env_id, REPO / "agents" / "hyperparams" / f"{algo}.yml", over | extra)
+    return hp.load(algo, env_id, hp.HYPERPARAMS_DIR / f"{algo}.yml", over | extra)
 
 
 @pytest.mark.parametrize("env_id", ["vfgym/VFTune-v0", "vfgym/VFServo-v0"])
@@ -123,7 +123,7 @@ def test_cli_train_then_predict_gives_a_settings_file_evaluate_reads(tmp_path, c
             "t",
             "--no-progress",
             "--hyperparams-file",
-            str(REPO / "agents/hyperparams/ppo.yml"),
+            str(hp.HYPERPARAMS_DIR / "ppo.yml"),
             "--hyperparams",
             "n_timesteps=32",
             "n_envs=4",
@@ -222,3 +222,16 @@ def test_train_threads_sets_torch_and_numba_and_records_them(tmp_path):
     finally:
         torch.set_num_threads(before[0])
         numba.set_num_threads(before[1])
+
+
+def test_a_working_folders_own_hyperparameter_file_is_read_before_the_shipped_one(
+    tmp_path, monkeypatch
+):
+    monkeypatch.chdir(tmp_path)
+    assert hp.default_file("ppo") == hp.HYPERPARAMS_DIR / "ppo.yml"
+    assert hp.load("ppo", "vfgym/VFTune-v0")["gamma"] == 0.0  # the shipped file's
+    own = tmp_path / "agents" / "hyperparams" / "ppo.yml"
+    own.parent.mkdir(parents=True)
+    own.write_text("vfgym/VFTune-v0:\n  gamma: 0.5\n")
+    assert hp.default_file("ppo") == Path("agents/hyperparams/ppo.yml")
+    assert hp.load("ppo", "vfgym/VFTune-v0")["gamma"] == 0.5

@@ -12,6 +12,7 @@ import yaml
 pytest.importorskip("stable_baselines3")
 
 from vfgym.agents import policy_settings
+from vfgym.agents.hyperparams import HYPERPARAMS_DIR
 from vfgym.agents.training import VALIDATION_SEED0, validation_scenarios
 from vfgym.cli import main
 from vfgym.commands._common import load_settings
@@ -42,7 +43,7 @@ def test_cli_train_on_an_axis_then_predict_on_it(tmp_path, capsys):
     path.write_text(yaml.safe_dump(SMALL))
     args = ["train", "--algo", "ppo", "--axis", str(path), "--runs-dir", str(tmp_path)]
     args += ["--name", "t", "--no-progress", "--hyperparams-file",
-             str(REPO / "agents/hyperparams/ppo.yml"), "--hyperparams", "n_timesteps=32",
+             str(HYPERPARAMS_DIR / "ppo.yml"), "--hyperparams", "n_timesteps=32",
              "n_envs=4", "n_steps=8", "batch_size=16", "eval_freq=16",
              "n_eval_scenarios=2"]  # fmt: skip
     assert main(args) == 0

@@ -211,6 +211,16 @@ CASES = [
     (["predict", "--refine", "many"], "--refine='many' must be"),
     (["predict", "--refine", "nan"], "--refine='nan' is not allowed"),
     (["predict", "--refine", "3", "--seed", "-1"], "--seed='-1' is out of range"),
+    (["fit"], "the following arguments are required: --axis"),
+    (["fit", "--axis", "missing.yaml"], "missing.yaml"),
+    (
+        ["fit", "--axis", str(REPO / "experiments/axes/belt.yaml"), "--moves", "7"],
+        "--moves='7' is out of range",
+    ),
+    (
+        ["fit", "--axis", str(REPO / "experiments/axes/belt.yaml"), "--runs-dir", "afile"],
+        "afile is a file",
+    ),
 ]
 
 
@@ -264,7 +274,7 @@ def test_yaml_numbers_in_any_notation(ws):
         from vfgym.agents import hyperparams as hp
 
         over = hp.parse_overrides(["n_timesteps=1e3", "learning_rate=3e-4"])
-        params = hp.load("ppo", "vfgym/VFTune-v0", REPO / "agents/hyperparams/ppo.yml", over)
+        params = hp.load("ppo", "vfgym/VFTune-v0", hp.HYPERPARAMS_DIR / "ppo.yml", over)
         assert params["n_timesteps"] == 1000 and isinstance(params["n_timesteps"], int)
         assert params["learning_rate"] == 3e-4
 

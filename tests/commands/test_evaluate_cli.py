@@ -1,5 +1,5 @@
 """``vfgym evaluate`` end to end: the run folder, its numbers against vfgym.evaluate, an
-agent plugged in through vfgym.agents.policy_settings, and one-line errors on bad input."""
+agent plugged in through vfgym.agents.load_tuner, and one-line errors on bad input."""
 
 from __future__ import annotations
 
@@ -74,12 +74,12 @@ def test_model_plugs_in_through_vfgym_agents(tmp_path, capsys, monkeypatch):
     model.write_bytes(b"not really a model")
     seen = []
 
-    def policy_settings(path):
+    def load_tuner(path, axis=None, warn=None):
         seen.append(path)
         return lambda sc: rule_of_thumb(sc.plant())
 
     fake = types.ModuleType("vfgym.agents")
-    fake.policy_settings = policy_settings
+    fake.load_tuner = load_tuner
     monkeypatch.setitem(sys.modules, "vfgym.agents", fake)
     args = ["--model", str(model), "--against", "rule-of-thumb", "--scenarios", "named"]
     assert run_eval(tmp_path, *args, "--name", "m") == 0

@@ -1,6 +1,8 @@
 """stable-baselines3 agents for the vfgym environments (needs the ``agents`` extra:
 ``pip install -c constraints.txt -e ".[agents]"``).
 
+:func:`load_tuner` makes any tuner (the shipped settings model, a fitted one, a
+VFTune-v0 agent) a callable from a move to settings (:mod:`vfgym.agents.tuners`).
 :func:`load_model` reads a saved model (its algorithm from the run folder's config, or
 tried in turn); :func:`policy_settings` turns a VFTune-v0 agent into a function from a
 scenario to the settings it picks in one forward pass, which ``vfgym evaluate --model``
@@ -13,7 +15,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from vfgym.agents.tuners import Tuner, TunerWarning, load_tuner
 from vfgym.io.runs import read_yaml
+from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 
@@ -46,7 +50,7 @@ def load_model(model_path: str | Path) -> tuple[Any, dict[str, Any]]:
 
 
 def policy_settings(
-    model_path: str | Path, axis: str | None = None
+    model_path: str | Path, axis: str | Axis | None = None
 ) -> Callable[[Scenario | str], Settings]:
     """A VFTune-v0 agent as a function: scenario → the settings it picks (deterministic).
     ``axis``: an axis file the moves belong to (default: the one the agent was trained
@@ -75,4 +79,4 @@ def policy_settings(
     return settings_for
 
 
-__all__ = ["load_model", "policy_settings"]
+__all__ = ["Tuner", "TunerWarning", "load_model", "load_tuner", "policy_settings"]

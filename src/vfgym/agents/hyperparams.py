@@ -1,5 +1,7 @@
-"""Hyperparameters in YAML, rl-baselines3-zoo style: one file per algorithm under
-``agents/hyperparams/``, one section per environment id, overridable from the command line.
+"""Hyperparameters in YAML, rl-baselines3-zoo style: one file per algorithm, one section
+per environment id, overridable from the command line. The default files ship with vfgym
+(:data:`HYPERPARAMS_DIR`); a file ``agents/hyperparams/<algo>.yml`` in the working folder
+is read instead when there is one (:func:`default_file`).
 
 Everything is checked before any training starts: unknown keys, values of the wrong type
 or outside the range stable-baselines3 documents for them (:data:`RANGES`: a discount in
@@ -151,7 +153,29 @@ clip ranges and gradient norms > 0, coefficients and noises >= 0, counts >= 1
 (``learning_starts`` >= 0; ``gradient_steps`` -1 for "as many as collected";
 ``sde_sample_freq`` -1 for "once per rollout"). Each check returns the value normalised
 (a whole float as an int)."""
-HYPERPARAMS_DIR = Path(__file__).resolve().parents[3] / "agents" / "hyperparams"
+HYPERPARAMS_DIR = Path(__file__).resolve().parent / "hyperparams_files"
+"""The shipped hyperparameter files, ``<algo>.yml`` (package data)."""
+LOCAL_DIR = Path("agents") / "hyperparams"
+"""Where a working folder's own hyperparameter files are looked for first."""
+
+
+def default_file(algo: str) -> Path:
+    """The hyperparameter file of ``algo`` when none is given: the working folder's
+    ``agents/hyperparams/<algo>.yml`` if there is one, else the shipped file.
+
+    Parameters
+    ----------
+    algo : str
+        ``ppo``, ``sac`` or ``td3``.
+
+    Returns
+    -------
+    Path
+        The file.
+    """
+    algo_class(algo)
+    local = LOCAL_DIR / f"{algo}.yml"
+    return local if local.is_file() else HYPERPARAMS_DIR / f"{algo}.yml"
 
 
 def algo_class(algo: str) -> Any:
@@ -339,7 +363,7 @@ def load(
     algo_class(algo)
     if env_id not in ENV_IDS:
         raise ValueError(f"env={env_id!r} is not known: choose one of {', '.join(ENV_IDS)}")
-    file = Path(path) if path else HYPERPARAMS_DIR / f"{algo}.yml"
+    file = Path(path) if path else default_file(algo)
     data = read_yaml(file)
     if not isinstance(data, dict):
         raise ValueError(f"{file}: expected a mapping of environment ids to hyperparameters")

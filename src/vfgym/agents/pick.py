@@ -99,6 +99,9 @@ class PickModel(TargetModel):
         (features,): each standardised feature's weight in the distance (0: ignored).
     accel_law : str
         The law of the picked settings.
+    trained_on : dict or None
+        The axis it was fitted on (:func:`vfgym.agents.tuners.trained_on`); ``None``: the
+        paper's plant and measures.
     """
 
     neighbours: int
@@ -109,6 +112,7 @@ class PickModel(TargetModel):
     ratios: np.ndarray
     weights: np.ndarray
     accel_law: str = "rise"
+    trained_on: dict[str, str] | None = None
 
     def pick(self, features: np.ndarray) -> int:
         """The library row picked for one move's features.
@@ -145,15 +149,19 @@ class PickModel(TargetModel):
 
     def to_dict(self) -> dict[str, Any]:
         """The model as plain data (what :meth:`save` writes)."""
-        return model_head(PICK_KIND, self.accel_law) | {
-            "neighbours": self.neighbours,
-            "mean": self.mean.tolist(),
-            "scale": self.scale.tolist(),
-            "weights": self.weights.tolist(),
-            "library": self.library.tolist(),
-            "points": self.points.tolist(),
-            "ratios": self.ratios.tolist(),
-        }
+        return (
+            model_head(PICK_KIND, self.accel_law)
+            | {
+                "neighbours": self.neighbours,
+                "mean": self.mean.tolist(),
+                "scale": self.scale.tolist(),
+                "weights": self.weights.tolist(),
+                "library": self.library.tolist(),
+                "points": self.points.tolist(),
+                "ratios": self.ratios.tolist(),
+            }
+            | ({} if self.trained_on is None else {"trained_on": dict(self.trained_on)})
+        )
 
 
 def fit_pick_model(

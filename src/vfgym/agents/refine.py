@@ -11,6 +11,7 @@ the refined settings are never worse than the prediction.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from vfgym._validate import check_int
@@ -79,6 +80,39 @@ def refine(
     ValueError
         If ``trials`` is not a whole number ≥ 1.
     """
+    trials = check_int("refine", trials, 1)
+    return short_sweep([scenario], start, trials, plant=plant, measures=measures, seed=seed)
+
+
+def short_sweep(
+    scenarios: Sequence[Scenario],
+    start: Settings,
+    trials: int,
+    *,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+    seed: int | None = 0,
+) -> Refinement:
+    """``trials`` trials of the default sampler on moves (the mean cost), ``start`` first.
+
+    Parameters
+    ----------
+    scenarios : sequence of Scenario
+        The moves.
+    start : Settings
+        The settings enqueued first; their law is the one searched.
+    trials : int
+        Trials in all, ≥ 1.
+    plant, measures : Plant, Measures
+        The axis's plant and measures.
+    seed : int or None
+        The sampler's seed.
+
+    Returns
+    -------
+    Refinement
+        The best trial (feasible first, as a sweep picks it) and every trial's cost.
+    """
     import optuna
 
     from vfgym.tuning import (
@@ -90,16 +124,15 @@ def refine(
         trial_settings,
     )
 
-    trials = check_int("refine", trials, 1)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     laws = (start.accel_law,)
     cfg = SweepConfig(laws=laws, seed=seed, plots=False)  # its sampler: the default
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        sampler = make_sampler(cfg, cfg.seed, [scenario])  # coordinates from this move
+        sampler = make_sampler(cfg, cfg.seed, list(scenarios))  # coordinates from the moves
         study = optuna.create_study(direction="minimize", sampler=sampler)
     study.enqueue_trial(baseline_params(laws, start))
-    objective = Objective([scenario], laws, "cost", plant=plant, measures=measures)
+    objective = Objective(list(scenarios), laws, "cost", plant=plant, measures=measures)
     study.optimize(objective, n_trials=trials)
     done = study.trials
     best = best_trial(study)
@@ -113,4 +146,4 @@ def refine(
     )
 
 
-__all__ = ["Refinement", "refine"]
+__all__ = ["Refinement", "refine", "short_sweep"]

@@ -169,6 +169,7 @@ def load_settings_model(path: str | Path = PRETRAINED) -> PickModel | SettingsMo
             ratios=np.array(d["ratios"], dtype=np.float64),
             weights=np.array(d["weights"], dtype=np.float64),
             accel_law=str(d["accel_law"]),
+            trained_on=d.get("trained_on"),
         )
     return SettingsModel(
         degree=int(d["degree"]),

@@ -44,6 +44,17 @@ def controller_from_args(args: argparse.Namespace) -> Any:
     return Baseline(getattr(args, "baseline", None) or "paper")
 
 
+def warn_line(command: str) -> Callable[[str], None]:
+    """A warning printer for a sub-command: one line on stderr, ``vfgym COMMAND:
+    warning: ...``."""
+    import sys
+
+    def warn(message: str) -> None:
+        print(f"vfgym {command}: warning: {message}", file=sys.stderr, flush=True)
+
+    return warn
+
+
 def whole(lo: int | None = None, hi: int | None = None) -> Callable[[str], int]:
     """argparse type: a whole number in ``[lo, hi]``, checked by
     :func:`vfgym._validate.check_int` (so ``1e3`` is 1000 and ``2.5`` is refused)."""

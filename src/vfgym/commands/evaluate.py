@@ -35,8 +35,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--model",
         action="append",
         default=[],
-        metavar="MODEL.zip",
-        help="trained agent: picks settings per scenario (needs the agents extra)",
+        metavar="MODEL",
+        help="a tuner that picks settings per scenario: a settings model (.json, e.g. "
+        "runs/fit/NAME/settings_model.json of vfgym fit) or a trained VFTune-v0 agent "
+        "(.zip, needs the agents extra); repeat to compare several",
     )
     p.add_argument(
         "--against",
@@ -85,21 +87,24 @@ def _labels(paths: list[str], taken: set[str]) -> list[str]:
     return out
 
 
-def load_policy(model_path: str, axis: str | None = None) -> Any:
-    """The per-scenario settings policy of a trained agent (``vfgym.agents``), on an axis
-    file if given, imported only when asked for; without the agents extra this is a
+def load_policy(model_path: str, axis: str | None = None, command: str = "evaluate") -> Any:
+    """A tuner that picks settings per scenario (:func:`vfgym.agents.load_tuner`): a
+    settings model (``.json``) or a trained agent (``.zip``), on an axis file if given;
+    its warnings are one line each on stderr. Without the agents extra an agent is a
     one-line ``ValueError``."""
+    from vfgym.commands._common import warn_line
+
     p = Path(model_path)
     if not p.is_file():
         raise ValueError(f"{model_path}: no such file")
     try:
-        from vfgym.agents import policy_settings
+        from vfgym.agents import load_tuner
     except ImportError as exc:
         raise ValueError(
             f"--model {model_path}: agent support is not installed ({exc}); install the "
             f"agents extra: {AGENTS_HINT}"
         ) from None
-    return policy_settings(str(p)) if axis is None else policy_settings(str(p), axis)
+    return load_tuner(str(p), axis, warn=warn_line(command))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -116,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.space import settings_to_dict
 
     if not args.settings and not args.model:
-        raise ValueError("nothing to evaluate: give --settings FILE.yaml and/or --model MODEL.zip")
+        raise ValueError("nothing to evaluate: give --settings FILE.yaml and/or --model MODEL")
     axis = axis_from_args(args)
     for opt, v in (("--count", args.count), ("--first-seed", args.first_seed)):
         if axis is not None and v is not None:
@@ -142,7 +147,10 @@ def run(args: argparse.Namespace) -> int:
     settings = [load_settings(f) for f in args.settings]
     taken = {b.label for b in base}
     s_labels = _labels(args.settings, taken)
-    m_labels = [f"agent:{lab}" for lab in _labels(args.model, taken)]
+    m_labels = [
+        f"{'agent' if m.endswith('.zip') else 'model'}:{lab}"
+        for m, lab in zip(args.model, _labels(args.model, taken), strict=True)
+    ]
     policies = [load_policy(m, args.axis) for m in args.model]
     if axis is None:
         scenarios = scenario_set(args.scenarios, count, first_seed)

@@ -1,9 +1,9 @@
 """``vfgym predict``: the settings an amortised tuner picks for a move, as YAML. The tuner
 is the settings model vfgym ships (a neighbour look-up: of the optima of the train moves
 nearest the move in feature space, the one of least mean cost over them; no training
-needed), another settings model (JSON), or a trained VFTune-v0
-agent (``.zip``); ``--refine N`` then runs a short sweep on the move from those
-settings."""
+needed), a settings model of ``vfgym fit`` (JSON) for an axis, or a trained VFTune-v0 agent
+(``.zip``); one used on another axis than its own, or on a move unlike its training moves,
+says so on stderr. ``--refine N`` then runs a short sweep on the move from those settings."""
 
 from __future__ import annotations
 
@@ -21,8 +21,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--model",
-        help="a settings model (.json) or a VFTune-v0 agent (.zip, e.g. RUN/best_model.zip); "
-        "default: the pretrained settings model shipped with vfgym",
+        help="a settings model (.json, e.g. runs/fit/NAME/settings_model.json) or a "
+        "VFTune-v0 agent (.zip, e.g. runs/train/NAME/best_model.zip); default: the "
+        "pretrained settings model shipped with vfgym",
     )
     p.add_argument("--scenario", default="paper-step", help="scenario name (or test-<seed>)")
     p.add_argument(
@@ -40,10 +41,8 @@ def run(args: argparse.Namespace) -> int:
     import yaml
 
     from vfgym._validate import check_int, check_output_path
-    from vfgym.agents.supervised import PRETRAINED, load_settings_model
-    from vfgym.commands._common import axis_from_args, scenario_from_args
+    from vfgym.commands._common import axis_from_args, scenario_from_args, warn_line
     from vfgym.moves.axis import axis_kwargs
-    from vfgym.params import PAPER_PLANT
     from vfgym.space import settings_to_dict
 
     refine_n = (
@@ -54,21 +53,16 @@ def run(args: argparse.Namespace) -> int:
     scenario = scenario_from_args(args, axis)
     if args.out is not None:
         check_output_path("--out", args.out)
-    model_path = PRETRAINED if args.model is None else args.model
-    if str(model_path).endswith(".zip"):
-        try:
-            from vfgym.agents import policy_settings
-        except ImportError as exc:  # pragma: no cover - depends on the install
-            raise ValueError(
-                f"agent support needs the agents extra ({exc.name} missing): "
-                'pip install -c constraints.txt -e ".[agents]"'
-            ) from None
-        settings = policy_settings(model_path, args.axis)(scenario)
-        source = f"agent {model_path}"
+    if args.model is None:
+        from vfgym.agents.tuners import load_tuner
+
+        tuner = load_tuner(None, axis, warn=warn_line("predict"))
     else:
-        plant = axis.plant if axis is not None else PAPER_PLANT
-        settings = load_settings_model(model_path).settings(scenario, plant)
-        source = "pretrained settings model" if args.model is None else f"model {model_path}"
+        from vfgym.commands.evaluate import load_policy
+
+        tuner = load_policy(args.model, args.axis, "predict")
+    settings = tuner(scenario)
+    source = tuner.source
     doc = {"settings": settings_to_dict(settings), "source": source, "scenario": scenario.name}
     if refine_n is not None:
         from vfgym.agents.refine import refine

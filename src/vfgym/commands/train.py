@@ -16,16 +16,21 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "train",
         help="train a PPO, SAC or TD3 agent (agents extra)",
-        description=__doc__ + " Hyperparameters come from "
-        "agents/hyperparams/<algo>.yml (one section per env), overridable "
-        "with --hyperparams key=value. Starting a run again continues it "
+        description=__doc__ + " Hyperparameters come from the "
+        "<algo>.yml file shipped with vfgym (one section per env; "
+        "agents/hyperparams/<algo>.yml in the working folder instead, if there is one), "
+        "overridable with --hyperparams key=value. Starting a run again continues it "
         "from its last checkpoint.",
     )
     p.add_argument("--algo", required=True, help="ppo, sac or td3")
     p.add_argument(
         "--env", default="vfgym/VFTune-v0", help="vfgym/VFTune-v0 (default) or vfgym/VFServo-v0"
     )
-    p.add_argument("--hyperparams-file", help="YAML file (default agents/hyperparams/ALGO.yml)")
+    p.add_argument(
+        "--hyperparams-file",
+        help="YAML file (default: agents/hyperparams/ALGO.yml in the working folder if "
+        "there is one, else the one shipped with vfgym)",
+    )
     p.add_argument(
         "--hyperparams",
         nargs="*",
@@ -58,11 +63,7 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.agents import hyperparams as hp
     from vfgym.commands._common import Interrupted
 
-    if args.hyperparams_file is None:
-        local = Path("agents/hyperparams") / f"{args.algo}.yml"
-        file = local if local.is_file() else None
-    else:
-        file = args.hyperparams_file
+    file = args.hyperparams_file
     params = hp.load(args.algo, args.env, file, hp.parse_overrides(args.hyperparams))
     if args.axis:  # the envs draw their moves from the axis (env_kwargs: axis=FILE)
         from vfgym.commands._common import axis_from_args
