@@ -43,12 +43,14 @@ TRIMS = {
         "evaluate 269 543 settings in ~3 min)"
     ),
     "evaluate": "evaluate: 4 test scenarios and 200 bootstrap resamples (README: 32 and 2000)",
+    "fit": "fit: 8 training moves (the default 160 take ~3-4 min here)",
     "train": (
         "train: 64 timesteps on 2 envs with tiny batches, one held-out scenario (README: "
         "50 k-400 k timesteps, 25 min)"
     ),
 }
 SWEEP_TRIM = ["--trials", "4"]
+FIT_TRIM = ["--moves", "8", "--no-progress"]
 GRID_TRIM = ["--points", "3", "--refine", "1"]
 EVAL_TRIM = ["--count", "4", "--bootstrap", "200"]
 EVERY = ["eval_freq=64", "n_eval_scenarios=1", "checkpoint_freq=64", "n_timesteps=64", "n_envs=2"]
@@ -156,6 +158,23 @@ README_RUNS: dict[str, list[Run]] = {
     ],
     "vfgym plot history --sweep runs/sweep/belt": [
         Run("history-belt", ["plot", "history", "--sweep", "runs/sweep/belt"], ("belt",)),
+    ],
+    "vfgym fit --axis experiments/axes/belt.yaml --name belt": [
+        Run(
+            "fit-belt",
+            ["fit", "--axis", "experiments/axes/belt.yaml", "--name", "belt", *FIT_TRIM],
+            writes=("runs/fit/belt/settings_model.json",),
+            trim="fit",
+        ),
+    ],
+    "vfgym predict --model runs/fit/belt/settings_model.json --axis experiments/axes/belt.yaml "
+    "--scenario test-3": [
+        Run(
+            "predict-fit-belt",
+            ["predict", "--model", "runs/fit/belt/settings_model.json"]
+            + ["--axis", "experiments/axes/belt.yaml", "--scenario", "test-3"],
+            ("fit-belt",),
+        ),
     ],
     "vfgym predict --scenario test-3 --out test-3.yaml": [
         Run(

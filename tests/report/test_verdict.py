@@ -108,6 +108,9 @@ def test_a_setting_that_loses_on_most_moves_is_told_so_plainly(held_out):
     w = v.row("paper").versus
     assert last.startswith(f"tuned loses to paper on {w.losses}/{w.wins + w.losses + w.ties}")
     assert "scurve on" in last and last.endswith("vfgym fit --axis belt.yaml")
+    # a fitted per-move model's verdict names the baseline without sending the user to fit
+    fitted = format_verdict(v, axis_file="belt.yaml", per_move=True).splitlines()[-1]
+    assert fitted.startswith("tuned loses to paper") and "vfgym fit" not in fitted
     # most, not some: half the moves lost is not most
     half = dataclasses.replace(w, outcomes=("win", "loss") * 3)
     row = dataclasses.replace(v.row("paper"), versus=half)

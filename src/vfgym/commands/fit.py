@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
             f"the optima found so far are saved in {run_dir / 'optima.csv'}; the same "
             "command continues from them"
         ) from None
-    text = format_verdict(res.verdict)
+    text = format_verdict(res.verdict, per_move=True)
     write_text(run_dir / "verdict.txt", text + "\n")
     write_yaml(
         run_dir / "summary.yaml",

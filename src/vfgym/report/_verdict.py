@@ -296,7 +296,7 @@ def _num(x: float) -> str:
     return "n/a" if not math.isfinite(x) else f"{x:.3g}"
 
 
-def format_verdict(v: Verdict, axis_file: str | None = None) -> str:
+def format_verdict(v: Verdict, axis_file: str | None = None, per_move: bool = False) -> str:
     """The verdict as text: one row per controller, then the tuned setting's summary.
 
     Parameters
@@ -305,6 +305,9 @@ def format_verdict(v: Verdict, axis_file: str | None = None) -> str:
         The verdict.
     axis_file : str or None
         The axis file tuned on, for the pointer to per-move settings (default: ``FILE``).
+    per_move : bool
+        The tuned side is already per-move settings (``vfgym fit``'s model): the losing
+        line then names the baseline without pointing to ``vfgym fit``.
 
     Returns
     -------
@@ -360,11 +363,13 @@ def format_verdict(v: Verdict, axis_file: str | None = None) -> str:
     )
     losing = v.losing_to()
     if losing:
-        lines.append(_losing_line(v, losing, axis_file))
+        lines.append(_losing_line(v, losing, axis_file, per_move))
     return "\n".join(lines)
 
 
-def _losing_line(v: Verdict, losing: Sequence[VerdictRow], axis_file: str | None) -> str:
+def _losing_line(
+    v: Verdict, losing: Sequence[VerdictRow], axis_file: str | None, per_move: bool
+) -> str:
     """The plain statement a verdict ends with when the tuned setting loses on most moves:
     the baselines it loses to (the most losses first), on how many moves."""
 
@@ -380,8 +385,10 @@ def _losing_line(v: Verdict, losing: Sequence[VerdictRow], axis_file: str | None
         assert w is not None
         mean = " (though its mean cost is lower)" if w.cost_diff.mean < 0 else ""
         parts.append(f"{r.label} on {w.losses}/{w.wins + w.losses + w.ties}{mean}")
-    return (
-        f"{v.tuned} loses to {' and to '.join(parts)} of the held-out moves: "
+    head = f"{v.tuned} loses to {' and to '.join(parts)} of the held-out moves: "
+    if per_move:
+        return head + f"{ranked[0].label} does better on most of these moves than the fitted model"
+    return head + (
         f"{ranked[0].label} does better on most of these moves than the one tuned setting; "
         f"for settings fitted per move, run vfgym fit --axis {axis_file or 'FILE'}"
     )
