@@ -74,12 +74,12 @@ def test_model_plugs_in_through_vfgym_agents(tmp_path, capsys, monkeypatch):
     model.write_bytes(b"not really a model")
     seen = []
 
-    def policy_settings(path):
+    def agent_policy(path):
         seen.append(path)
         return lambda sc: rule_of_thumb(sc.plant())
 
     fake = types.ModuleType("vfgym.agents")
-    fake.policy_settings = policy_settings
+    fake.agent_policy = agent_policy
     monkeypatch.setitem(sys.modules, "vfgym.agents", fake)
     args = ["--model", str(model), "--against", "rule-of-thumb", "--scenarios", "named"]
     assert run_eval(tmp_path, *args, "--name", "m") == 0

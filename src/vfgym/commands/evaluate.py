@@ -36,7 +36,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         action="append",
         default=[],
         metavar="MODEL.zip",
-        help="trained agent: picks settings per scenario (needs the agents extra)",
+        help="trained agent: a VFTune-v0 agent picks settings per move, a VFServo-v0 agent "
+        "schedules them during each move (needs the agents extra)",
     )
     p.add_argument(
         "--against",
@@ -86,20 +87,21 @@ def _labels(paths: list[str], taken: set[str]) -> list[str]:
 
 
 def load_policy(model_path: str, axis: str | None = None) -> Any:
-    """The per-scenario settings policy of a trained agent (``vfgym.agents``), on an axis
+    """The policy of a trained agent (``vfgym.agents``): a VFTune-v0 agent's settings per
+    move, a VFServo-v0 agent's scheduled move; on an axis
     file if given, imported only when asked for; without the agents extra this is a
     one-line ``ValueError``."""
     p = Path(model_path)
     if not p.is_file():
         raise ValueError(f"{model_path}: no such file")
     try:
-        from vfgym.agents import policy_settings
+        from vfgym.agents import agent_policy
     except ImportError as exc:
         raise ValueError(
             f"--model {model_path}: agent support is not installed ({exc}); install the "
             f"agents extra: {AGENTS_HINT}"
         ) from None
-    return policy_settings(str(p)) if axis is None else policy_settings(str(p), axis)
+    return agent_policy(str(p)) if axis is None else agent_policy(str(p), axis)
 
 
 def run(args: argparse.Namespace) -> int:
