@@ -88,3 +88,20 @@ def test_evaluate_runs_a_servo_agent_as_a_scheduler(servo_run, tmp_path, capsys)
     for r in rows:
         assert r["cost"] == rollout_info(agent, env, r["scenario"])["cost"]
     assert len(rows) == 2
+
+
+def test_predict_prints_a_servo_agents_schedule(servo_run, tmp_path, capsys):
+    run, _ = servo_run
+    out = tmp_path / "s.yaml"
+    args = ["predict", "--model", str(run / "best_model.zip"), "--scenario", "short-move",
+            "--out", str(out)]  # fmt: skip
+    assert main(args) == 0
+    doc = yaml.safe_load(out.read_text())
+    assert doc["schedule"][0]["from_ms"] == 0.0
+    times = [r["from_ms"] for r in doc["schedule"]]
+    assert times == sorted(times) and len(set(times)) == len(times)
+    agent = load_agent(run / "best_model.zip")
+    env = make_env("vfgym/VFServo-v0", agent.env_kwargs())
+    assert doc["cost"] == rollout_info(agent, env, "short-move")["cost"]
+    assert main([*args[:-2], "--refine", "3"]) == 2
+    assert "VFServo-v0 agent" in capsys.readouterr().err

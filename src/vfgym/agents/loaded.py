@@ -197,3 +197,44 @@ def scheduler_policy(agent: Agent, axis: str | None = None) -> Callable[[Any], S
         return ScheduledMove(float(info["cost"]), cons, metrics)
 
     return schedule
+
+
+def schedule_of(agent: Agent, scenario: Scenario | str, axis: str | None = None) -> dict[str, Any]:
+    """A VFServo-v0 agent's schedule on one move, as plain data: each control interval's
+    start (ms) and the settings in force through it (read back from the observation's
+    ``setting_*`` entries, float32), then the scored move's cost and feasibility.
+
+    Parameters
+    ----------
+    agent : Agent
+        A VFServo-v0 agent.
+    scenario : Scenario or str
+        The move.
+    axis : str or None
+        An axis file the move belongs to (default: the agent's).
+
+    Returns
+    -------
+    dict
+        ``{"schedule": [{"from_ms": ..., "settings": {...}}, ...], "cost": ...,
+        "feasible": ...}``, a row where the settings change.
+    """
+    from vfgym.agents.training import make_env
+    from vfgym.envs.servo import SERVO_FEATURES
+    from vfgym.space import from_action, settings_to_dict
+
+    env = make_env(agent.env_id, agent.env_kwargs(axis))
+    law = env.unwrapped.accel_law
+    interval_ms = env.unwrapped.core.config.interval_s * 1e3
+    first = SERVO_FEATURES.index("setting_value")
+    obs, _ = env.reset(options={"scenario": scenario})
+    rows: list[dict[str, Any]] = []
+    step = 0
+    while True:
+        obs, _, terminated, truncated, info = env.step(agent.act(obs))
+        s = settings_to_dict(from_action(obs[first : first + 4], law))
+        if not rows or rows[-1]["settings"] != s:  # a change of settings starts a row
+            rows.append({"from_ms": round(step * interval_ms, 6), "settings": s})
+        step += 1
+        if terminated or truncated:
+            return {"schedule": rows, "cost": float(info["cost"]), "feasible": info["feasible"]}

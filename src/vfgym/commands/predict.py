@@ -2,7 +2,8 @@
 is the settings model vfgym ships (a regression from the move's features to its optimal
 settings, no training needed), another settings model (JSON), or a trained VFTune-v0
 agent (``.zip``); ``--refine N`` then runs a short sweep on the move from those
-settings."""
+settings. A VFServo-v0 agent (``.zip``) prints the schedule it runs on the move instead:
+each change of settings with the time it takes effect, and the move's cost."""
 
 from __future__ import annotations
 
@@ -20,7 +21,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--model",
-        help="a settings model (.json) or a VFTune-v0 agent (.zip, e.g. RUN/best_model.zip); "
+        help="a settings model (.json), a VFTune-v0 agent (.zip, e.g. RUN/best_model.zip) or "
+        "a VFServo-v0 agent (.zip: its schedule on the move); "
         "default: the pretrained settings model shipped with vfgym",
     )
     p.add_argument("--scenario", default="paper-step", help="scenario name (or test-<seed>)")
@@ -36,8 +38,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import yaml
-
     from vfgym._validate import check_int, check_output_path
     from vfgym.agents.supervised import PRETRAINED, load_settings_model
     from vfgym.commands._common import axis_from_args, scenario_from_args
@@ -60,6 +60,17 @@ def run(args: argparse.Namespace) -> int:
                 f"agent support needs the agents extra ({exc.name} missing): "
                 'pip install -c constraints.txt -e ".[agents]"'
             ) from None
+        from vfgym.agents.loaded import load_agent, schedule_of
+
+        agent = load_agent(model_path)
+        if agent.env_id == "vfgym/VFServo-v0":
+            if refine_n is not None:
+                raise ValueError(
+                    f"--refine {refine_n} is not allowed with a VFServo-v0 agent: its "
+                    "settings change during the move"
+                )
+            doc = {"source": f"agent {model_path}", "scenario": scenario.name}
+            return _emit(doc | schedule_of(agent, scenario, args.axis), args.out)
         settings = policy_settings(model_path, args.axis)(scenario)
         source = f"agent {model_path}"
     else:
@@ -79,10 +90,17 @@ def run(args: argparse.Namespace) -> int:
             "feasible": r.feasible,
             "predicted": {"settings": settings_to_dict(settings), "cost": r.start_cost},
         }
+    return _emit(doc, args.out)
+
+
+def _emit(doc: dict, out: str | None) -> int:
+    """Print ``doc`` as YAML (and write it to ``out``)."""
+    import yaml
+
     text = yaml.safe_dump(doc, sort_keys=False)
     print(text, end="")
-    if args.out:
+    if out:
         from vfgym.io.runs import write_text
 
-        write_text(args.out, text)
+        write_text(out, text)
     return 0
