@@ -1,5 +1,5 @@
 """``vfgym evaluate`` end to end: the run folder, its numbers against vfgym.evaluate, an
-agent plugged in through vfgym.agents.policy_settings, and one-line errors on bad input."""
+agent plugged in through vfgym.agents.agent_policy, and one-line errors on bad input."""
 
 from __future__ import annotations
 
