@@ -14,7 +14,7 @@ import yaml
 pytest.importorskip("stable_baselines3")
 
 from vfgym.agents import hyperparams as hp
-from vfgym.agents.loaded import load_agent, rollout_info, vecnormalize_path
+from vfgym.agents.loaded import Agent, load_agent, rollout_info, vecnormalize_path
 from vfgym.agents.training import make_env, train
 from vfgym.cli import main
 
@@ -105,3 +105,19 @@ def test_predict_prints_a_servo_agents_schedule(servo_run, tmp_path, capsys):
     assert doc["cost"] == rollout_info(agent, env, "short-move")["cost"]
     assert main([*args[:-2], "--refine", "3"]) == 2
     assert "VFServo-v0 agent" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
+def test_a_residual_agent_starts_as_its_base(algo):
+    from vfgym import PAPER_SETTINGS, evaluate
+    from vfgym.agents.hyperparams import algo_class
+    from vfgym.agents.training import start_at_base
+
+    env = make_env("vfgym/VFServo-v0", {"residual": True, "residual_base": "paper"})
+    model = algo_class(algo)("MlpPolicy", env, seed=0, device="cpu")
+    start_at_base(model)
+    agent = Agent(model, {}, None, "vfgym/VFServo-v0")
+    obs = np.random.default_rng(0).uniform(-3, 3, (4, *env.observation_space.shape))
+    assert not np.any(agent.act(obs.astype(np.float32)))
+    info = rollout_info(agent, env, "short-move")
+    assert info["cost"] == evaluate(PAPER_SETTINGS, "short-move").cost[0, 0]

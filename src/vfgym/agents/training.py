@@ -362,6 +362,8 @@ def train(
             verbose=0,
             **kwargs,
         )
+        if env_kwargs.get("residual"):
+            start_at_base(model)
     remaining = total - model.num_timesteps
     if remaining > 0:
         cbs = _callbacks(run, params, env_id, n_envs, progress, total, env_kwargs, normalizer)
@@ -388,6 +390,29 @@ def train(
     log(result.text())
     write_yaml(run / "heldout.yaml", result.as_dict())
     return model
+
+
+def start_at_base(model: Any) -> None:
+    """Zero the last layer of the policy's action output (PPO's ``action_net``, SAC's and
+    TD3's ``actor.mu``), so that the untrained policy's deterministic action is 0: with
+    residual actions, exactly the base setting (residual policy learning, Silver et al.
+    2018). The layer still learns: its gradient is the hidden activations'.
+
+    Parameters
+    ----------
+    model : PPO, SAC or TD3
+        A freshly made model.
+    """
+    import torch
+
+    policy = model.policy
+    head = policy.action_net if hasattr(policy, "action_net") else model.actor.mu
+    linear = [m for m in head.modules() if isinstance(m, torch.nn.Linear)][-1]
+    with torch.no_grad():
+        linear.weight.zero_()
+        linear.bias.zero_()
+    if getattr(model, "actor_target", None) is not None:
+        model.actor_target.load_state_dict(model.actor.state_dict())
 
 
 def _wrap(venv: Any, params: dict[str, Any], cls: Any, ckpt: tuple[Path, int] | None) -> Any:
