@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vfgym import PAPER_SETTINGS, Settings, evaluate
+from vfgym import PAPER_PLANT, PAPER_SETTINGS, Settings, evaluate
 from vfgym.envs.servo import ServoConfig, VFServoEnv
 from vfgym.envs.vector import VFServoVectorEnv
 from vfgym.space import SPACE, from_action, to_action
@@ -40,14 +40,15 @@ def test_zero_residual_reproduces_a_tuned_base_and_a_per_move_base():
 
     def per_move(scenario, plant):
         seen.append(scenario.name)
-        return TUNED.replace(k=20.0 * (1.0 + plant.motor.inertia_ratio))
+        assert plant == PAPER_PLANT  # the env's plant, before the move's load
+        return TUNED.replace(k=20.0 * (1.0 + scenario.inertia_ratio))
 
     env = VFServoEnv(residual=True, residual_base=per_move)
     for seed in (3, 4):
         cost, _ = episode_cost(env, ZERO, options={"scenario_seed": seed})
         sc = env.episode.scenario
         assert sc.name == seen[-1]
-        assert cost == evaluate(per_move(sc, env.episode.plant), sc).cost[0, 0]
+        assert cost == evaluate(per_move(sc, PAPER_PLANT), sc).cost[0, 0]
     assert seen[0] != seen[-1]
 
 

@@ -116,7 +116,8 @@ class ServoConfig(EnvConfig):
         The largest offset of a residual action, in unit coordinates, in (0, 2].
     residual_base : Settings, callable or None
         The base of residual actions: fixed settings, a callable ``(scenario, plant) ->
-        Settings`` giving each move's (a per-move settings model), or None for
+        Settings`` giving each move's (a per-move settings model; asked with ``plant``,
+        before the move's load), or None for
         ``initial_settings``. Its law is replaced by ``accel_law``.
 
     Raises
@@ -165,15 +166,16 @@ class ServoConfig(EnvConfig):
                 "(scenario, plant) -> Settings, or None"
             )
 
-    def base_settings(self, scenario: Scenario, plant: Plant) -> Settings:
+    def base_settings(self, scenario: Scenario) -> Settings:
         """The settings in force before the first action (with residual actions, their
-        base) on a move of ``scenario`` whose loaded plant is ``plant``."""
+        base) on a move of ``scenario``; a per-move base is asked with the env's plant
+        (before the scenario's load, as a settings model takes it)."""
         base = self.residual_base
         if not self.residual or base is None:
             return self.initial_settings
         if isinstance(base, Settings):
             return base
-        out = base(scenario, plant)
+        out = base(scenario, self.plant)
         if not isinstance(out, Settings):
             raise ValueError(
                 f"residual_base returned {out!r} for scenario {scenario.name!r}: "
@@ -222,7 +224,7 @@ class ServoCore:
         n = ep.command.size
         w[:] = 0.0
         c = self.config
-        set0 = c.base_settings(ep.scenario, ep.plant)
+        set0 = c.base_settings(ep.scenario)
         prm = pack(set0, ep.plant, c.measures, ep.target_rad, n)
         if prm[L.P_ACC_W] > self.acc_window:
             raise ValueError(
