@@ -114,7 +114,7 @@ def _normalize(name: str, v: Any) -> Any:
     """``normalize``: true/false, or a mapping of :data:`NORMALIZE_KEYS`."""
     if isinstance(v, bool):
         return v
-    out = {}
+    out: dict[str, Any] = {}
     for key, x in v.items():
         if key not in NORMALIZE_KEYS:
             raise ValueError(f"{name}.{key} is not known: allowed {', '.join(NORMALIZE_KEYS)}")

@@ -391,20 +391,21 @@ def evaluate_policy(
     cons = np.full((len(scens), len(CONSTRAINTS)), np.nan)
     metrics: list[dict[str, Any]] = [{} for _ in scens]
     for i, sc in enumerate(scens):
-        s = policy(sc)
-        if isinstance(s, ScheduledMove):
-            cost[i], cons[i], metrics[i] = s.cost, s.constraints, s.metrics
-            s = None
-        elif not isinstance(s, Settings):
+        out = policy(sc)
+        if isinstance(out, ScheduledMove):
+            cost[i], cons[i], metrics[i] = out.cost, out.constraints, out.metrics
+            chosen.append(None)
+        elif isinstance(out, Settings):
+            chosen.append(out)
+        else:
             raise ValueError(
-                f"policy returned {s!r} for scenario {sc.name!r}: expected vfgym.Settings "
+                f"policy returned {out!r} for scenario {sc.name!r}: expected vfgym.Settings "
                 "or a ScheduledMove"
             )
-        chosen.append(s)
     groups: dict[Settings, list[int]] = {}
-    for i, s in enumerate(chosen):
-        if s is not None:
-            groups.setdefault(s, []).append(i)
+    for i, picked in enumerate(chosen):
+        if picked is not None:
+            groups.setdefault(picked, []).append(i)
     for s, idx in groups.items():
         ev = evaluate(
             s,
