@@ -21,8 +21,8 @@ import numpy as np
 from amortised_report import optuna_best
 
 from vfgym import PAPER_SETTINGS, SCENARIOS, evaluate, random_scenario
-from vfgym.agents import load_model
-from vfgym.agents.training import make_env, rollout_cost
+from vfgym.agents.loaded import load_agent, rollout_info
+from vfgym.agents.training import make_env
 
 
 def main() -> None:
@@ -33,12 +33,12 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
 
-    model, cfg = load_model(args.model)
-    env = make_env("vfgym/VFServo-v0", (cfg.get("hyperparams") or {}).get("env_kwargs"))
+    pol = load_agent(args.model)  # behind its VecNormalize statistics, if trained so
+    env = make_env("vfgym/VFServo-v0", pol.env_kwargs())
     names = ["paper-step", "short-move", "long-move", "heavy-load", "friction"]
     scenarios = [SCENARIOS[n] for n in names]
     scenarios += [random_scenario(seed, "test") for seed in range(args.count)]
-    agent = np.array([float(rollout_cost(model, env, sc)["cost"]) for sc in scenarios])
+    agent = np.array([float(rollout_info(pol, env, sc)["cost"]) for sc in scenarios])
     paper = evaluate(PAPER_SETTINGS, scenarios).cost[0]
     fixed = np.array(
         [optuna_best(sc, args.trials, args.seed + i) for i, sc in enumerate(scenarios)]

@@ -205,7 +205,7 @@ def test_the_graph_is_read_from_the_source() -> None:
     assert "vfgym.plant._layout" in GRAPH["vfgym.plant._kernel"]
     assert "vfgym.moves.scenarios" in GRAPH["vfgym.scoring._cost"]
     # a lazy import inside a function, and an entry-point string
-    assert "vfgym.agents.training" in GRAPH["vfgym.agents"]
+    assert "vfgym.agents.loaded" in GRAPH["vfgym.agents"]
     assert "vfgym.envs.tune" in GRAPH["vfgym.envs"]
     # f"vfgym.commands.{name}" imports the commands package
     assert "vfgym.commands" in GRAPH["vfgym.cli"]

@@ -38,3 +38,22 @@ def test_bench_fit_runs_to_the_end_on_a_small_budget():
     )
     assert out.returncode == 0, out.stderr[-2000:]
     assert "| belt | 32 |" in out.stdout
+
+
+def test_bench_agents_runs_to_the_end_on_a_few_hundred_steps(tmp_path):
+    tiny = ["n_envs=4", "n_steps=8", "batch_size=16", "n_epochs=1", "eval_freq=64",
+            "n_eval_scenarios=2"]  # fmt: skip
+    args = ["--algos", "ppo", "--envs", "VFTune-v0,VFServo-v0", "--seeds", "0",
+            "--steps", "128", "--moves", "2", "--out", str(tmp_path)]  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "benchmarks/bench_agents.py", *args, "--hyperparams", *tiny],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    md = (tmp_path / "benchmark.md").read_text()
+    assert "| ppo | VFTune-v0 | 128 |" in md and "| ppo | VFServo-v0 | 128 |" in md
+    assert md.count("vfgym train --algo ppo") == 2
+    assert (tmp_path / "learning_curves.png").stat().st_size > 1000

@@ -80,6 +80,7 @@ def test_model_plugs_in_through_vfgym_agents(tmp_path, capsys, monkeypatch):
 
     fake = types.ModuleType("vfgym.agents")
     fake.load_tuner = load_tuner
+    fake.servo_agent = lambda path: None  # not a VFServo-v0 agent
     monkeypatch.setitem(sys.modules, "vfgym.agents", fake)
     args = ["--model", str(model), "--against", "rule-of-thumb", "--scenarios", "named"]
     assert run_eval(tmp_path, *args, "--name", "m") == 0

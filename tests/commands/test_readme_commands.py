@@ -171,8 +171,15 @@ README_RUNS: dict[str, list[Run]] = {
     "--scenario test-3": [
         Run(
             "predict-fit-belt",
-            ["predict", "--model", "runs/fit/belt/settings_model.json"]
-            + ["--axis", "experiments/axes/belt.yaml", "--scenario", "test-3"],
+            [
+                "predict",
+                "--model",
+                "runs/fit/belt/settings_model.json",
+                "--axis",
+                "experiments/axes/belt.yaml",
+                "--scenario",
+                "test-3",
+            ],
             ("fit-belt",),
         ),
     ],

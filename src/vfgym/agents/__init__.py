@@ -5,8 +5,10 @@
 VFTune-v0 agent) a callable from a move to settings (:mod:`vfgym.agents.tuners`).
 :func:`load_model` reads a saved model (its algorithm from the run folder's config, or
 tried in turn); :func:`policy_settings` turns a VFTune-v0 agent into a function from a
-scenario to the settings it picks in one forward pass, which ``vfgym evaluate --model``
-and ``vfgym predict`` use.
+scenario to the settings it picks in one forward pass, which ``vfgym predict`` uses;
+:func:`agent_policy` also runs a VFServo-v0 agent as a scheduler on each move, which
+``vfgym evaluate --model`` uses. A model trained with ``normalize`` acts behind the
+``VecNormalize`` statistics saved beside it (:mod:`vfgym.agents.loaded`).
 """
 
 from __future__ import annotations
@@ -55,28 +57,56 @@ def policy_settings(
     """A VFTune-v0 agent as a function: scenario → the settings it picks (deterministic).
     ``axis``: an axis file the moves belong to (default: the one the agent was trained
     on, if any), which the observations describe and names resolve on."""
-    from vfgym.agents.training import make_env
-    from vfgym.envs.tune import action_settings
+    from vfgym.agents.loaded import load_agent, settings_policy
 
-    model, cfg = load_model(model_path)
-    env_id = cfg.get("env", "vfgym/VFTune-v0")
-    if env_id != "vfgym/VFTune-v0":
+    agent = load_agent(model_path)
+    if agent.env_id != "vfgym/VFTune-v0":
         raise ValueError(
-            f"--model {model_path}: an agent for {env_id}; settings per move "
+            f"--model {model_path}: an agent for {agent.env_id}; settings per move "
             "come from vfgym/VFTune-v0 agents"
         )
-    env_kwargs = dict((cfg.get("hyperparams") or {}).get("env_kwargs") or {})
-    if axis is not None:
-        env_kwargs["axis"] = axis
-    env = make_env(env_id, env_kwargs)
-    law = env.unwrapped.accel_law
-
-    def settings_for(scenario: Scenario | str) -> Settings:
-        obs, _ = env.reset(options={"scenario": scenario})
-        action, _ = model.predict(obs, deterministic=True)
-        return action_settings(action, law)
-
-    return settings_for
+    return settings_policy(agent, axis)
 
 
-__all__ = ["Tuner", "TunerWarning", "load_model", "load_tuner", "policy_settings"]
+def agent_policy(model_path: str | Path, axis: str | None = None) -> Callable[[Any], Any]:
+    """Any trained agent as a policy :func:`vfgym.report.compare` scores: a VFTune-v0
+    agent's settings per move (:func:`policy_settings`), or a VFServo-v0 agent's move,
+    scheduled interval by interval and scored (a :class:`vfgym.report.ScheduledMove`)."""
+    from vfgym.agents.loaded import load_agent, scheduler_policy, settings_policy
+
+    agent = load_agent(model_path)
+    if agent.env_id == "vfgym/VFServo-v0":
+        return scheduler_policy(agent, axis)
+    return settings_policy(agent, axis)
+
+
+def servo_agent(model_path: str | Path) -> Any:
+    """The VFServo-v0 agent saved at ``model_path`` (a ``.zip``, loaded with its saved
+    normalisation, :func:`vfgym.agents.loaded.load_agent`), or None for any other model (a
+    settings model, a VFTune-v0 agent), which :func:`load_tuner` reads."""
+    if Path(model_path).suffix != ".zip":
+        return None
+    from vfgym.agents.loaded import load_agent
+
+    agent = load_agent(model_path)
+    return agent if agent.env_id == "vfgym/VFServo-v0" else None
+
+
+def scheduler_policy(agent: Any, axis: str | None = None) -> Callable[[Any], Any]:
+    """A VFServo-v0 agent (:func:`servo_agent`) as a policy :func:`vfgym.report.compare`
+    scores: each move scheduled interval by interval (:class:`vfgym.report.ScheduledMove`)."""
+    from vfgym.agents import loaded
+
+    return loaded.scheduler_policy(agent, axis)
+
+
+__all__ = [
+    "Tuner",
+    "TunerWarning",
+    "agent_policy",
+    "load_model",
+    "load_tuner",
+    "policy_settings",
+    "scheduler_policy",
+    "servo_agent",
+]

@@ -34,6 +34,7 @@ RUN_KEYS: dict[str, tuple[type, ...]] = {
     "eval_freq": (int,),
     "n_eval_scenarios": (int,),
     "checkpoint_freq": (int,),
+    "normalize": (bool, dict),
 }
 # constructor arguments the run sets itself
 RESERVED = {
@@ -106,6 +107,28 @@ def _entropy(name: str, v: Any) -> Any:
     return check_real(name, v, 0.0)
 
 
+NORMALIZE_KEYS = ("norm_obs", "norm_reward", "clip_obs", "clip_reward", "epsilon")
+"""What ``normalize`` may set of SB3's ``VecNormalize`` (rl-baselines3-zoo's option); its
+``gamma`` is always the agent's."""
+
+
+def _normalize(name: str, v: Any) -> Any:
+    """``normalize``: true/false, or a mapping of :data:`NORMALIZE_KEYS`."""
+    if isinstance(v, bool):
+        return v
+    out: dict[str, Any] = {}
+    for key, x in v.items():
+        if key not in NORMALIZE_KEYS:
+            raise ValueError(f"{name}.{key} is not known: allowed {', '.join(NORMALIZE_KEYS)}")
+        if key.startswith("norm_"):
+            if not isinstance(x, bool):
+                raise ValueError(f"{name}.{key}={x!r} must be true or false")
+            out[key] = x
+        else:
+            out[key] = check_real(f"{name}.{key}", x, 0.0, lo_open=True)
+    return out
+
+
 def _target_entropy(name: str, v: Any) -> Any:
     return v if v == "auto" else check_real(name, v)
 
@@ -119,6 +142,7 @@ RANGES: dict[str, Callable[[str, Any], Any]] = {
     "checkpoint_freq": _count(1),
     "action_noise_std": _real(0.0),
     "policy": lambda name, v: check_choice(name, v, POLICIES),
+    "normalize": lambda name, v: _normalize(name, v),
     # constructor arguments (stable-baselines3's documentation of PPO, SAC and TD3)
     "learning_rate": _real(0.0, lo_open=True),
     "n_steps": _count(1),

@@ -55,28 +55,59 @@ def _activation(name: str) -> Any:
     }[name]
 
 
+def env_options(env_kwargs: dict[str, Any] | None) -> dict[str, Any]:
+    """The env arguments of a hyperparameter file made objects: VFServo-v0's
+    ``residual_base`` written as ``paper`` (the paper's settings), ``model`` (the shipped
+    per-move settings model's, move by move) or a settings file (a mapping of the
+    settings, or one under ``settings:`` as ``best.yaml``)."""
+    kw = dict(env_kwargs or {})
+    base = kw.get("residual_base")
+    if isinstance(base, str):
+        kw["residual_base"] = _residual_base(base)
+    return kw
+
+
+def _residual_base(spec: str) -> Any:
+    from vfgym.params import PAPER_SETTINGS
+    from vfgym.space import settings_from_dict
+
+    if spec == "paper":
+        return PAPER_SETTINGS
+    if spec == "model":
+        from vfgym.agents.supervised import load_settings_model
+
+        return load_settings_model().settings
+    if not Path(spec).is_file():
+        raise ValueError(f"residual_base={spec!r} is not allowed: paper, model or a settings file")
+    data = read_yaml(spec)
+    data = data["settings"] if isinstance(data, dict) and "settings" in data else data
+    return settings_from_dict(data, source=spec)
+
+
 def make_env(env_id: str, env_kwargs: dict[str, Any] | None = None, **kw: Any) -> Any:
-    """One (non-vector) environment."""
+    """One (non-vector) environment (``env_kwargs`` through :func:`env_options`)."""
     import gymnasium as gym
 
     import vfgym.envs  # noqa: F401  (registers the ids)
 
-    return gym.make(env_id, **(env_kwargs or {}), **kw)
+    return gym.make(env_id, **env_options(env_kwargs), **kw)
 
 
-def rollout_cost(model: Any, env: Any, scenario: Scenario) -> dict[str, Any]:
-    """Run the policy (deterministic) on one scenario; the scoring path's info at the end."""
-    obs, _ = env.reset(options={"scenario": scenario})
-    while True:
-        action, _ = model.predict(obs, deterministic=True)
-        obs, _, terminated, truncated, info = env.step(action)
-        if terminated or truncated:
-            return info
+def rollout_cost(
+    model: Any, env: Any, scenario: Scenario, normalizer: Any = None
+) -> dict[str, Any]:
+    """Run the policy (deterministic) on one scenario, its observations through
+    ``normalizer`` (a ``VecNormalize``) if given; the scoring path's info at the end."""
+    from vfgym.agents.loaded import Agent, rollout_info
+
+    return rollout_info(Agent(model, {}, normalizer, ""), env, scenario)
 
 
-def evaluate_policy_costs(model: Any, env: Any, scenarios: list[Scenario]) -> np.ndarray:
+def evaluate_policy_costs(
+    model: Any, env: Any, scenarios: list[Scenario], normalizer: Any = None
+) -> np.ndarray:
     """The scoring path's cost of the policy on each scenario."""
-    return np.array([float(rollout_cost(model, env, sc)["cost"]) for sc in scenarios])
+    return np.array([float(rollout_cost(model, env, sc, normalizer)["cost"]) for sc in scenarios])
 
 
 def _callbacks(
@@ -87,8 +118,11 @@ def _callbacks(
     progress: bool,
     total: int,
     env_kwargs: dict[str, Any],
+    normalizer: Any,
 ) -> list[Any]:
     from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback
+
+    from vfgym.agents.loaded import vecnormalize_path
 
     class HeldOutEval(BaseCallback):
         """Every ``eval_freq`` steps: mean cost on the held-out scenarios; the best model
@@ -104,13 +138,15 @@ def _callbacks(
         def _on_step(self) -> bool:
             if self.num_timesteps >= self.next_at:
                 self.next_at = self.num_timesteps + self.freq
-                costs = evaluate_policy_costs(self.model, self.env, self.scenarios)
+                costs = evaluate_policy_costs(self.model, self.env, self.scenarios, normalizer)
                 mean = float(np.mean(costs))
                 self.logger.record("eval/mean_cost", mean)
                 new = not np.isfinite(self.best) or mean < self.best
                 if new:
                     self.best = mean
                     self.model.save(run / "best_model.zip")
+                    if normalizer is not None:
+                        normalizer.save(str(vecnormalize_path(run / "best_model.zip")))
                 _append_eval(run, self.num_timesteps, mean, float(np.median(costs)), new)
             return True
 
@@ -150,6 +186,7 @@ def _callbacks(
         save_path=str(run / "checkpoints"),
         name_prefix="model",
         save_replay_buffer=True,
+        save_vecnormalize=True,
     )
     cbs = [ckpt, evaluator]
     if progress:
@@ -182,11 +219,15 @@ def latest_checkpoint(run: Path) -> tuple[Path, int] | None:
     return best
 
 
-def _save_checkpoint(model: Any, run: Path) -> None:
+def _save_checkpoint(model: Any, run: Path, normalizer: Any) -> None:
+    from vfgym.agents.loaded import vecnormalize_path
+
     steps = model.num_timesteps
     path = run / "checkpoints" / f"model_{steps}_steps.zip"
     path.parent.mkdir(parents=True, exist_ok=True)
     model.save(path)
+    if normalizer is not None:
+        normalizer.save(str(vecnormalize_path(path)))
     if hasattr(model, "save_replay_buffer") and getattr(model, "replay_buffer", None):
         model.save_replay_buffer(run / "checkpoints" / f"model_replay_buffer_{steps}_steps.pkl")
 
@@ -269,7 +310,8 @@ def train(
     n_envs = int(params.get("n_envs", 1))
     total = int(params.get("n_timesteps", 10_000))
     env_kwargs = dict(params.get("env_kwargs") or {})
-    venv = make_sb3_vec_env(env_id, n_envs=n_envs, seed=seed, **env_kwargs)
+    venv = make_sb3_vec_env(env_id, n_envs=n_envs, seed=seed, **env_options(env_kwargs))
+    venv, normalizer = _wrap(venv, params, cls, latest_checkpoint(run))
     kwargs = {
         k: v
         for k, v in params.items()
@@ -284,6 +326,7 @@ def train(
             "eval_freq",
             "n_eval_scenarios",
             "checkpoint_freq",
+            "normalize",
         )
     }
     pk = dict(params.get("policy_kwargs") or {})
@@ -319,19 +362,78 @@ def train(
             verbose=0,
             **kwargs,
         )
+        if env_kwargs.get("residual"):
+            start_at_base(model)
     remaining = total - model.num_timesteps
     if remaining > 0:
-        cbs = _callbacks(run, params, env_id, n_envs, progress, total, env_kwargs)
+        cbs = _callbacks(run, params, env_id, n_envs, progress, total, env_kwargs, normalizer)
         try:
             model.learn(
                 remaining, callback=cbs, reset_num_timesteps=ckpt is None, tb_log_name="run"
             )
         except KeyboardInterrupt:
-            _save_checkpoint(model, run)
+            _save_checkpoint(model, run, normalizer)
             raise
-        _save_checkpoint(model, run)
-    model.save(run / "final_model.zip")
-    if not (run / "best_model.zip").is_file():
-        model.save(run / "best_model.zip")
+        _save_checkpoint(model, run, normalizer)
+    from vfgym.agents.loaded import vecnormalize_path
+
+    for name in ("final_model.zip", "best_model.zip"):
+        if name == "best_model.zip" and (run / name).is_file():
+            continue
+        model.save(run / name)
+        if normalizer is not None:
+            normalizer.save(str(vecnormalize_path(run / name)))
     venv.close()
+    from vfgym.agents.heldout import heldout_result
+
+    result = heldout_result(run / "best_model.zip", params)
+    log(result.text())
+    write_yaml(run / "heldout.yaml", result.as_dict())
     return model
+
+
+def start_at_base(model: Any) -> None:
+    """Zero the last layer of the policy's action output (PPO's ``action_net``, SAC's and
+    TD3's ``actor.mu``), so that the untrained policy's deterministic action is 0: with
+    residual actions, exactly the base setting (residual policy learning, Silver et al.
+    2018). The layer still learns: its gradient is the hidden activations'.
+
+    Parameters
+    ----------
+    model : PPO, SAC or TD3
+        A freshly made model.
+    """
+    import torch
+
+    policy = model.policy
+    head = policy.action_net if hasattr(policy, "action_net") else model.actor.mu
+    linear = [m for m in head.modules() if isinstance(m, torch.nn.Linear)][-1]
+    with torch.no_grad():
+        linear.weight.zero_()
+        linear.bias.zero_()
+    if getattr(model, "actor_target", None) is not None:
+        model.actor_target.load_state_dict(model.actor.state_dict())
+
+
+def _wrap(venv: Any, params: dict[str, Any], cls: Any, ckpt: tuple[Path, int] | None) -> Any:
+    """The training env in ``VecMonitor`` (episode returns and lengths for TensorBoard's
+    ``rollout/ep_rew_mean``) and, with ``normalize``, in ``VecNormalize`` (its gamma the
+    agent's; continued from the checkpoint's statistics): (env, the VecNormalize or None)."""
+    import inspect
+
+    from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
+
+    venv = VecMonitor(venv)
+    norm = params.get("normalize", False)
+    if not norm:
+        return venv, None
+    from vfgym.agents.loaded import vecnormalize_path
+
+    if ckpt is not None and vecnormalize_path(ckpt[0]).is_file():
+        normalizer = VecNormalize.load(str(vecnormalize_path(ckpt[0])), venv)
+        normalizer.training = True
+        return normalizer, normalizer
+    gamma = params.get("gamma", inspect.signature(cls.__init__).parameters["gamma"].default)
+    kw = norm if isinstance(norm, dict) else {}
+    normalizer = VecNormalize(venv, gamma=gamma, **kw)
+    return normalizer, normalizer

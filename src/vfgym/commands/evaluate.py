@@ -38,7 +38,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="MODEL",
         help="a tuner that picks settings per scenario: a settings model (.json, e.g. "
         "runs/fit/NAME/settings_model.json of vfgym fit) or a trained VFTune-v0 agent "
-        "(.zip, needs the agents extra); repeat to compare several",
+        "(.zip), or a VFServo-v0 agent (.zip) that schedules settings during each move "
+        "(agents need the agents extra); repeat to compare several",
     )
     p.add_argument(
         "--against",
@@ -89,8 +90,9 @@ def _labels(paths: list[str], taken: set[str]) -> list[str]:
 
 def load_policy(model_path: str, axis: str | None = None, command: str = "evaluate") -> Any:
     """A tuner that picks settings per scenario (:func:`vfgym.agents.load_tuner`): a
-    settings model (``.json``) or a trained agent (``.zip``), on an axis file if given;
-    its warnings are one line each on stderr. Without the agents extra an agent is a
+    settings model (``.json``) or a trained VFTune-v0 agent (``.zip``); or a VFServo-v0
+    agent's scheduled move (:func:`vfgym.agents.loaded.scheduler_policy`); on an axis file
+    if given, its warnings one line each on stderr. Without the agents extra an agent is a
     one-line ``ValueError``."""
     from vfgym.commands._common import warn_line
 
@@ -98,12 +100,18 @@ def load_policy(model_path: str, axis: str | None = None, command: str = "evalua
     if not p.is_file():
         raise ValueError(f"{model_path}: no such file")
     try:
-        from vfgym.agents import load_tuner
+        from vfgym.agents import load_tuner, servo_agent
+
+        agent = servo_agent(p)
     except ImportError as exc:
         raise ValueError(
             f"--model {model_path}: agent support is not installed ({exc}); install the "
             f"agents extra: {AGENTS_HINT}"
         ) from None
+    if agent is not None:
+        from vfgym.agents import scheduler_policy
+
+        return scheduler_policy(agent, axis)
     return load_tuner(str(p), axis, warn=warn_line(command))
 
 

@@ -3,7 +3,9 @@ is the settings model vfgym ships (a neighbour look-up: of the optima of the tra
 nearest the move in feature space, the one of least mean cost over them; no training
 needed), a settings model of ``vfgym fit`` (JSON) for an axis, or a trained VFTune-v0 agent
 (``.zip``); one used on another axis than its own, or on a move unlike its training moves,
-says so on stderr. ``--refine N`` then runs a short sweep on the move from those settings."""
+says so on stderr. ``--refine N`` then runs a short sweep on the move from those settings.
+A VFServo-v0 agent (``.zip``) prints the schedule it runs on the move instead: each change
+of settings with the time it takes effect, and the move's cost."""
 
 from __future__ import annotations
 
@@ -21,9 +23,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--model",
-        help="a settings model (.json, e.g. runs/fit/NAME/settings_model.json) or a "
-        "VFTune-v0 agent (.zip, e.g. runs/train/NAME/best_model.zip); default: the "
-        "pretrained settings model shipped with vfgym",
+        help="a settings model (.json, e.g. runs/fit/NAME/settings_model.json), a VFTune-v0 "
+        "agent (.zip, e.g. runs/train/NAME/best_model.zip) or a VFServo-v0 agent (.zip: its "
+        "schedule on the move); default: the pretrained settings model shipped with vfgym",
     )
     p.add_argument("--scenario", default="paper-step", help="scenario name (or test-<seed>)")
     p.add_argument(
@@ -38,8 +40,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import yaml
-
     from vfgym._validate import check_int, check_output_path
     from vfgym.commands._common import axis_from_args, scenario_from_args, warn_line
     from vfgym.moves.axis import axis_kwargs
@@ -58,9 +58,22 @@ def run(args: argparse.Namespace) -> int:
 
         tuner = load_tuner(None, axis, warn=warn_line("predict"))
     else:
+        from vfgym.agents.tuners import Tuner
         from vfgym.commands.evaluate import load_policy
 
         tuner = load_policy(args.model, args.axis, "predict")
+        if not isinstance(tuner, Tuner):  # a VFServo-v0 agent's scheduler
+            from vfgym.agents.loaded import load_agent, schedule_of
+
+            agent = load_agent(args.model)
+
+            if refine_n is not None:
+                raise ValueError(
+                    f"--refine {refine_n} is not allowed with a VFServo-v0 agent: its "
+                    "settings change during the move"
+                )
+            doc = {"source": f"agent {args.model}", "scenario": scenario.name}
+            return _emit(doc | schedule_of(agent, scenario, args.axis), args.out)
     settings = tuner(scenario)
     source = tuner.source
     doc = {"settings": settings_to_dict(settings), "source": source, "scenario": scenario.name}
@@ -76,10 +89,17 @@ def run(args: argparse.Namespace) -> int:
             "feasible": r.feasible,
             "predicted": {"settings": settings_to_dict(settings), "cost": r.start_cost},
         }
+    return _emit(doc, args.out)
+
+
+def _emit(doc: dict, out: str | None) -> int:
+    """Print ``doc`` as YAML (and write it to ``out``)."""
+    import yaml
+
     text = yaml.safe_dump(doc, sort_keys=False)
     print(text, end="")
-    if args.out:
+    if out:
         from vfgym.io.runs import write_text
 
-        write_text(args.out, text)
+        write_text(out, text)
     return 0

@@ -70,7 +70,9 @@ C_SHAPE = _c + 6  # tracking-error shaping weight
 C_VIOL = _c + 7  # 1: end the episode on a constraint violation
 C_DIMS = _c + 8  # 4 × (action index, low, high, log) for value, error limit, k, Ts/Tf;
 # for a log dimension low and high are stored as log(low), log(high)
-_x = C_DIMS + 16
+C_RES = C_DIMS + 16  # residual actions: the offset's scale in unit coordinates (0: absolute)
+C_BASE = C_RES + 1  # residual actions: the base settings (4 slots, in SETTING_FIELDS order)
+_x = C_BASE + 4
 # per-step results and running values
 X_COST = _x + 0  # running cost after the last interval
 X_COST_PREV = _x + 1  # running cost before the last interval
@@ -139,6 +141,33 @@ def action_ok(act) -> bool:
 
 
 @_jit
+def setting_at(u: float, f: int, w) -> tuple[float, float]:
+    """Setting ``f`` (value, L, k, Ts/Tf) for action entry ``u``, and its unit coordinate.
+
+    Absolute actions (``C_RES`` 0): ``u`` is the unit coordinate, as the search space maps
+    it. Residual actions: ``u`` × ``C_RES`` is an offset in unit coordinates from the base
+    setting ``C_BASE + f``; a zero offset gives the base exactly (no round trip through the
+    unit coordinate), any other is clipped to the space."""
+    b = C_DIMS + 4 * f
+    lo = w[b + 1]
+    hi = w[b + 2]
+    log = w[b + 3] != 0.0
+    c = min(max(u, -1.0), 1.0)
+    scale = w[C_RES]
+    if scale == 0.0:
+        return from_unit(c, lo, hi, log), c
+    base = w[C_BASE + f]
+    x0 = math.log(base) if log else base
+    t0 = (x0 - lo) / (hi - lo)
+    d = scale * c
+    x = base
+    if d != 0.0:
+        x = x0 + d * (hi - lo) / 2.0
+        x = math.exp(min(max(x, lo), hi)) if log else min(max(x, lo), hi)
+    return x, min(max(2.0 * t0 - 1.0 + d, -1.0), 1.0)
+
+
+@_jit
 def apply_action(act, w) -> bool:
     """Set the settings in force from an action in [-1, 1]⁴; False (nothing set) if bad."""
     if act.shape[0] != 4 or not action_ok(act):
@@ -148,11 +177,9 @@ def apply_action(act, w) -> bool:
     x2 = 0.0
     x3 = 0.0
     for f in range(4):
-        b = C_DIMS + 4 * f
-        j = int(w[b])
-        u = float(act[j])
-        x = from_unit(u, w[b + 1], w[b + 2], w[b + 3] != 0.0)
-        w[X_SET + j] = min(max(u, -1.0), 1.0)
+        j = int(w[C_DIMS + 4 * f])
+        x, unit = setting_at(float(act[j]), f, w)
+        w[X_SET + j] = unit
         if f == 0:
             x0 = x
         elif f == 1:

@@ -45,6 +45,10 @@ SERVO_TRACKING_WEIGHT = 0.0
 """Weight of the per-interval tracking-error shaping term (0: the return is −cost)."""
 SERVO_VIOLATION_PENALTY = 5.0
 """Subtracted at a constraint violation when ``terminate_on_violation`` is on."""
+SERVO_RESIDUAL_SCALE = 0.25
+"""With residual actions, an action of ±1 moves a setting this far (in the search space's
+unit coordinates, [-1, 1]) from its base: an eighth of each setting's (log) range either
+way."""
 RESET_OPTIONS = ("scenario", "scenario_seed")
 
 # scales of the scenario features: the random distribution's ranges (vfgym.moves.scenarios)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -14,6 +15,7 @@ from vfgym._validate import check_choice, check_real
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import (
     PAPER_SETTINGS,
+    Plant,
     Settings,
 )
 from vfgym.plant import _kernel as K
@@ -30,6 +32,7 @@ from ._common import (
     OBS_BOUND,
     SCENARIO_FEATURES,
     SERVO_INTERVAL_S,
+    SERVO_RESIDUAL_SCALE,
     SERVO_SETTLE_TIME_S,
     SERVO_TRACKING_WEIGHT,
     SERVO_VIOLATION_PENALTY,
@@ -105,6 +108,17 @@ class ServoConfig(EnvConfig):
         End the episode on a constraint violation.
     violation_penalty : float
         The extra negative reward of such an end, ≥ 0.
+    residual : bool
+        Residual actions: the action times ``residual_scale`` is an offset, in the search
+        space's unit coordinates, from the base setting, so the zero action holds the base
+        setting exactly; the base is also in force before the first action.
+    residual_scale : float
+        The largest offset of a residual action, in unit coordinates, in (0, 2].
+    residual_base : Settings, callable or None
+        The base of residual actions: fixed settings, a callable ``(scenario, plant) ->
+        Settings`` giving each move's (a per-move settings model; asked with ``plant``,
+        before the move's load), or None for
+        ``initial_settings``. Its law is replaced by ``accel_law``.
 
     Raises
     ------
@@ -118,6 +132,9 @@ class ServoConfig(EnvConfig):
     tracking_weight: float = SERVO_TRACKING_WEIGHT
     terminate_on_violation: bool = False
     violation_penalty: float = SERVO_VIOLATION_PENALTY
+    residual: bool = False
+    residual_scale: float = SERVO_RESIDUAL_SCALE
+    residual_base: Settings | Callable[[Scenario, Plant], Settings] | None = None
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -133,6 +150,38 @@ class ServoConfig(EnvConfig):
                 f"terminate_on_violation={self.terminate_on_violation!r} must be a bool"
             )
         s(self, "violation_penalty", check_real("violation_penalty", self.violation_penalty, 0.0))
+        if not isinstance(self.residual, bool):
+            raise ValueError(f"residual={self.residual!r} must be a bool")
+        s(
+            self,
+            "residual_scale",
+            check_real("residual_scale", self.residual_scale, 0.0, 2.0, lo_open=True),
+        )
+        base = self.residual_base
+        if isinstance(base, Settings):
+            s(self, "residual_base", base.replace(accel_law=self.accel_law))
+        elif base is not None and not callable(base):
+            raise ValueError(
+                f"residual_base={base!r} must be a vfgym.Settings, a callable "
+                "(scenario, plant) -> Settings, or None"
+            )
+
+    def base_settings(self, scenario: Scenario) -> Settings:
+        """The settings in force before the first action (with residual actions, their
+        base) on a move of ``scenario``; a per-move base is asked with the env's plant
+        (before the scenario's load, as a settings model takes it)."""
+        base = self.residual_base
+        if not self.residual or base is None:
+            return self.initial_settings
+        if isinstance(base, Settings):
+            return base
+        out = base(scenario, self.plant)
+        if not isinstance(out, Settings):
+            raise ValueError(
+                f"residual_base returned {out!r} for scenario {scenario.name!r}: "
+                "expected vfgym.Settings"
+            )
+        return out.replace(accel_law=self.accel_law)
 
     @property
     def interval_ticks(self) -> int:
@@ -163,7 +212,6 @@ class ServoCore:
         self.ring_len = B.ring_size(prm)
         self.acc_window = int(prm[L.P_ACC_W])
         self._dims = _space_table()
-        self._set0 = to_action(config.initial_settings).astype(np.float64)
 
     @property
     def accel_law(self) -> str:
@@ -175,9 +223,8 @@ class ServoCore:
         n = ep.command.size
         w[:] = 0.0
         c = self.config
-        w[B.W_PRM : B.W_PRM + L.N_PARAMS] = pack(
-            c.initial_settings, ep.plant, c.measures, ep.target_rad, n
-        )
+        set0 = c.base_settings(ep.scenario)
+        w[B.W_PRM : B.W_PRM + L.N_PARAMS] = pack(set0, ep.plant, c.measures, ep.target_rad, n)
         w[B.W_COST : B.W_COST + CC.N_CONST] = CC.constants(ep.yardsticks, n, c.weights, c.bounds)
         cfg = {
             B.C_N: n,
@@ -192,7 +239,9 @@ class ServoCore:
         for k, v in cfg.items():
             w[k] = v
         w[B.C_DIMS : B.C_DIMS + 16] = self._dims
-        w[B.X_SET : B.X_SET + 4] = self._set0
+        w[B.C_RES] = c.residual_scale if c.residual else 0.0
+        w[B.C_BASE : B.C_BASE + 4] = [getattr(set0, f) for f in SETTING_FIELDS]
+        w[B.X_SET : B.X_SET + 4] = to_action(set0).astype(np.float64)
         w[B.W_OBS + B.N_DYN : B.W_OBS + self.n_obs] = ep.features
         B.reset_row(w, ring, cmd)
 
@@ -233,8 +282,12 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ``Box(-1, 1, (4,), float32)``: value, error limit L, k and Ts/Tf for the next
     interval, mapped onto their ranges by the search space (:data:`vfgym.space.SPACE`, log
-    scales). The acceleration law is the ``accel_law`` argument. NaN or out-of-box actions
-    raise ``ValueError``.
+    scales). With ``residual=True`` the action is instead an offset from a base setting
+    (``residual_base``: the paper's by default, fixed tuned settings, or a per-move model's):
+    each setting's unit coordinate is the base's plus ``residual_scale`` × the action, so
+    the zero action holds the base exactly, and the return of zero actions is minus the
+    base's cost bit for bit. The acceleration law is the ``accel_law`` argument. NaN or
+    out-of-box actions raise ``ValueError``.
 
     ## Observation Space
 
@@ -297,7 +350,8 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     ``gymnasium.make("vfgym/VFServo-v0", scenario=None, split="train", seed_range=None,
     accel_law="rise", interval_s=1e-3, settle_time_s=5e-3,
     initial_settings=PAPER_SETTINGS, tracking_weight=0.0, terminate_on_violation=False,
-    violation_penalty=5.0, plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
+    violation_penalty=5.0, residual=False, residual_scale=0.25, residual_base=None,
+    plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
     weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None, axis=None)``; see
     Parameters.
 

@@ -31,7 +31,7 @@ from vfgym.scoring import (
     evaluate,
 )
 
-Policy = Callable[[Scenario], Settings]
+Policy = Callable[[Scenario], "Settings | ScheduledMove"]
 """A per-scenario controller: the settings an agent picks for a scenario."""
 EXTRA_METRICS = ("ideal_time_s", "time_ratio", "window_rad", "arrived")
 """Measures :func:`vfgym.evaluate` adds to :data:`vfgym.plant.measures.NAMES`."""
@@ -283,9 +283,12 @@ def _column_from_rows(
     cand: Candidate,
     scenarios: list[Scenario],
     plant: Plant,
-    results: list[tuple[Controller | Baseline, float, np.ndarray, dict[str, Any]]],
+    results: list[tuple[Controller | Baseline | None, float, np.ndarray, dict[str, Any]]],
 ) -> Column:
-    ctrls = [resolve(c, sc.plant(plant)) for (c, *_), sc in zip(results, scenarios, strict=True)]
+    ctrls = [
+        None if c is None else resolve(c, sc.plant(plant))
+        for (c, *_), sc in zip(results, scenarios, strict=True)
+    ]
     return Column(
         label=cand.label,
         role=cand.role,
@@ -299,6 +302,25 @@ def _column_from_rows(
     )
 
 
+class ScheduledMove(NamedTuple):
+    """A move a scheduler ran itself (the settings changing during the move), scored by
+    the scoring path: what a policy may return instead of :class:`~vfgym.Settings`.
+
+    Attributes
+    ----------
+    cost : float
+        The move's cost.
+    constraints : numpy.ndarray
+        Its constraint values, (len(CONSTRAINTS),).
+    metrics : dict
+        Its measures, as :func:`vfgym.evaluate` reports them.
+    """
+
+    cost: float
+    constraints: np.ndarray
+    metrics: dict[str, Any]
+
+
 class PolicyRun(NamedTuple):
     """A policy's settings and scores on each scenario (arrays indexed by scenario).
 
@@ -306,8 +328,8 @@ class PolicyRun(NamedTuple):
 
     Attributes
     ----------
-    settings : list of Settings
-        The settings the policy picked, per scenario.
+    settings : list of Settings or None
+        The settings the policy picked, per scenario (None for a scheduled move).
     cost : numpy.ndarray
         Cost per scenario, (S,).
     constraints : numpy.ndarray
@@ -316,7 +338,7 @@ class PolicyRun(NamedTuple):
         The measures :func:`vfgym.evaluate` returned, per scenario.
     """
 
-    settings: list[Settings]
+    settings: list[Settings | None]
     cost: np.ndarray
     constraints: np.ndarray
     metrics: list[dict[str, Any]]
@@ -338,7 +360,8 @@ def evaluate_policy(
     Parameters
     ----------
     policy : Policy
-        A callable ``scenario -> Settings``.
+        A callable ``scenario -> Settings``, or ``scenario -> ScheduledMove`` for a
+        scheduler that runs and scores the move itself.
     scenarios : str, Scenario, or a sequence of these
         The scenario set (see :func:`vfgym.scenario_set`).
     plant : Plant
@@ -359,23 +382,30 @@ def evaluate_policy(
     Raises
     ------
     ValueError
-        If the policy returns something other than :class:`~vfgym.Settings`.
+        If the policy returns something other than :class:`~vfgym.Settings` or
+        :class:`ScheduledMove`.
     """
     scens = scenario_set(scenarios)
-    chosen: list[Settings] = []
-    for sc in scens:
-        s = policy(sc)
-        if not isinstance(s, Settings):
-            raise ValueError(
-                f"policy returned {s!r} for scenario {sc.name!r}: expected vfgym.Settings"
-            )
-        chosen.append(s)
-    groups: dict[Settings, list[int]] = {}
-    for i, s in enumerate(chosen):
-        groups.setdefault(s, []).append(i)
+    chosen: list[Settings | None] = []
     cost = np.full(len(scens), np.nan)
     cons = np.full((len(scens), len(CONSTRAINTS)), np.nan)
     metrics: list[dict[str, Any]] = [{} for _ in scens]
+    for i, sc in enumerate(scens):
+        out = policy(sc)
+        if isinstance(out, ScheduledMove):
+            cost[i], cons[i], metrics[i] = out.cost, out.constraints, out.metrics
+            chosen.append(None)
+        elif isinstance(out, Settings):
+            chosen.append(out)
+        else:
+            raise ValueError(
+                f"policy returned {out!r} for scenario {sc.name!r}: expected vfgym.Settings "
+                "or a ScheduledMove"
+            )
+    groups: dict[Settings, list[int]] = {}
+    for i, picked in enumerate(chosen):
+        if picked is not None:
+            groups.setdefault(picked, []).append(i)
     for s, idx in groups.items():
         ev = evaluate(
             s,

@@ -1,0 +1,102 @@
+"""The result a training run ends with: its agent on held-out moves (the test split, never
+drawn in training nor in the choice of ``best_model.zip``) against the paper's settings
+and the shipped per-move settings model, through the one scoring path."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+HELDOUT_COUNT = 16
+"""Held-out moves a run is judged on when its hyperparameters set no ``n_eval_scenarios``."""
+
+
+@dataclass(frozen=True)
+class HeldOutResult:
+    """Mean costs on the held-out moves.
+
+    Parameters
+    ----------
+    moves : int
+        Held-out moves scored.
+    agent_cost, paper_cost, model_cost : float
+        Mean cost of the agent, of the paper's settings and of the shipped per-move model.
+    agent_feasible : int
+        Moves on which the agent met every constraint.
+    beats_paper, beats_model : int
+        Moves on which the agent's cost is lower than the paper's / the model's.
+    """
+
+    moves: int
+    agent_cost: float
+    paper_cost: float
+    model_cost: float
+    agent_feasible: int
+    beats_paper: int
+    beats_model: int
+
+    def text(self) -> str:
+        """One paragraph, as a training run prints it."""
+        n = self.moves
+        return (
+            f"held-out ({n} test moves): agent mean cost {self.agent_cost:.4g} "
+            f"(feasible {self.agent_feasible}/{n}); paper's settings {self.paper_cost:.4g} "
+            f"(agent {self.agent_cost / self.paper_cost:.3f}x, lower on {self.beats_paper}/{n}); "
+            f"shipped per-move model {self.model_cost:.4g} "
+            f"(agent {self.agent_cost / self.model_cost:.3f}x, lower on {self.beats_model}/{n})"
+        )
+
+    def as_dict(self) -> dict[str, Any]:
+        """The fields, as plain numbers (for ``heldout.yaml``)."""
+        return {k: (float(v) if isinstance(v, float) else int(v)) for k, v in vars(self).items()}
+
+
+def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutResult:
+    """Score a saved agent on the test split's first ``n_eval_scenarios`` moves (on its
+    axis's test moves if it trained on one) against the paper's settings and the shipped
+    per-move settings model.
+
+    Parameters
+    ----------
+    model_path : str or Path
+        The agent (``RUN/best_model.zip``).
+    params : dict
+        Its hyperparameters (``n_eval_scenarios``, ``env_kwargs.axis``).
+
+    Returns
+    -------
+    HeldOutResult
+        The mean costs and win counts.
+    """
+    from vfgym.agents import agent_policy
+    from vfgym.agents.supervised import load_settings_model
+    from vfgym.moves.axis import axis_kwargs, load_axis
+    from vfgym.moves.distribution import scenario_set
+    from vfgym.params import PAPER_PLANT
+    from vfgym.report import Candidate, compare
+
+    n = int(params.get("n_eval_scenarios", HELDOUT_COUNT))
+    axis_file = (params.get("env_kwargs") or {}).get("axis")
+    axis = load_axis(axis_file) if axis_file else None
+    scenarios = scenario_set("test", n, 0) if axis is None else axis.scenario_set("test")[:n]
+    plant = PAPER_PLANT if axis is None else axis.plant
+    shipped = load_settings_model()
+    cands = [
+        Candidate("agent", policy=agent_policy(model_path, axis_file)),
+        Candidate("model", policy=lambda sc: shipped.settings(sc, plant)),
+    ]
+    rep = compare(cands, "paper", scenarios, resamples=1, **axis_kwargs(axis))
+    agent, model, paper = (rep.column(c).cost for c in ("agent", "model", "paper"))
+    feasible = np.all(rep.column("agent").constraints <= 0.0, axis=1)
+    return HeldOutResult(
+        moves=len(scenarios),
+        agent_cost=float(agent.mean()),
+        paper_cost=float(paper.mean()),
+        model_cost=float(model.mean()),
+        agent_feasible=int(feasible.sum()),
+        beats_paper=int(np.sum(agent < paper)),
+        beats_model=int(np.sum(agent < model)),
+    )

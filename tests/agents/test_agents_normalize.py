@@ -1,0 +1,123 @@
+"""``normalize`` (VecNormalize saved beside the model and used to act), VecMonitor's episode
+statistics, the held-out result a run ends with, and VFServo-v0 agents as schedulers in
+``vfgym evaluate --model``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+pytest.importorskip("stable_baselines3")
+
+from vfgym.agents import hyperparams as hp
+from vfgym.agents.loaded import Agent, load_agent, rollout_info, vecnormalize_path
+from vfgym.agents.training import make_env, train
+from vfgym.cli import main
+
+REPO = Path(__file__).resolve().parents[2]
+TINY = {
+    "n_envs": 2,
+    "n_steps": 16,
+    "batch_size": 32,
+    "n_epochs": 1,
+    "n_timesteps": 64,
+    "eval_freq": 32,
+    "n_eval_scenarios": 2,
+    "checkpoint_freq": 32,
+    "policy_kwargs": {"net_arch": [8]},
+}
+
+
+@pytest.fixture(scope="module")
+def servo_run(tmp_path_factory):
+    run = tmp_path_factory.mktemp("servo") / "run"
+    run.mkdir()
+    params = hp.load("ppo", "vfgym/VFServo-v0", REPO / "agents/hyperparams/ppo.yml", TINY)
+    assert params["normalize"] is True and params["env_kwargs"]["residual"] is True
+    logs = []
+    train("ppo", "vfgym/VFServo-v0", params, run, seed=0, progress=False, log=logs.append)
+    return run, logs
+
+
+def test_normalized_run_saves_its_statistics_and_acts_behind_them(servo_run):
+    run, logs = servo_run
+    for name in ("vecnormalize.pkl", "final_model_vecnormalize.pkl", "heldout.yaml"):
+        assert (run / name).is_file(), name
+    assert list((run / "checkpoints").glob("model_vecnormalize_*_steps.pkl"))
+    agent = load_agent(run / "best_model.zip")
+    assert agent.normalizer is not None and not agent.normalizer.training
+    obs = np.full(agent.model.observation_space.shape, 0.5, dtype=np.float32)
+    normed = agent.normalizer.normalize_obs(obs)
+    assert not np.allclose(normed, obs)
+    a1 = agent.act(obs)
+    a2, _ = agent.model.predict(normed, deterministic=True)
+    np.testing.assert_array_equal(a1, a2)
+    held = yaml.safe_load((run / "heldout.yaml").read_text())
+    assert held["moves"] == 2 and held["paper_cost"] > 0
+    assert any("held-out (2 test moves)" in line for line in logs)
+
+
+def test_tensorboard_has_episode_returns(servo_run):
+    run, _ = servo_run
+    events = b"".join(p.read_bytes() for p in (run / "tb").rglob("events.out.tfevents.*"))
+    assert b"rollout/ep_rew_mean" in events
+
+
+def test_vecnormalize_path_names():
+    assert vecnormalize_path("r/best_model.zip") == Path("r/vecnormalize.pkl")
+    assert vecnormalize_path("r/final_model.zip") == Path("r/final_model_vecnormalize.pkl")
+    assert vecnormalize_path("c/model_64_steps.zip") == Path("c/model_vecnormalize_64_steps.pkl")
+
+
+def test_evaluate_runs_a_servo_agent_as_a_scheduler(servo_run, tmp_path, capsys):
+    run, _ = servo_run
+    args = ["evaluate", "--model", str(run / "best_model.zip"), "--scenarios",
+            "paper-step,short-move", "--against", "paper", "--bootstrap", "10",
+            "--runs-dir", str(tmp_path), "--name", "e"]  # fmt: skip
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "agent:best_model" in out
+    data = json.loads((tmp_path / "evaluate" / "e" / "results.json").read_text())
+    rows = [r for r in data["per_scenario"] if r["controller"] == "agent:best_model"]
+    agent = load_agent(run / "best_model.zip")
+    env = make_env("vfgym/VFServo-v0", agent.env_kwargs())
+    for r in rows:
+        assert r["cost"] == rollout_info(agent, env, r["scenario"])["cost"]
+    assert len(rows) == 2
+
+
+def test_predict_prints_a_servo_agents_schedule(servo_run, tmp_path, capsys):
+    run, _ = servo_run
+    out = tmp_path / "s.yaml"
+    args = ["predict", "--model", str(run / "best_model.zip"), "--scenario", "short-move",
+            "--out", str(out)]  # fmt: skip
+    assert main(args) == 0
+    doc = yaml.safe_load(out.read_text())
+    assert doc["schedule"][0]["from_ms"] == 0.0
+    times = [r["from_ms"] for r in doc["schedule"]]
+    assert times == sorted(times) and len(set(times)) == len(times)
+    agent = load_agent(run / "best_model.zip")
+    env = make_env("vfgym/VFServo-v0", agent.env_kwargs())
+    assert doc["cost"] == rollout_info(agent, env, "short-move")["cost"]
+    assert main([*args[:-2], "--refine", "3"]) == 2
+    assert "VFServo-v0 agent" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
+def test_a_residual_agent_starts_as_its_base(algo):
+    from vfgym import PAPER_SETTINGS, evaluate
+    from vfgym.agents.hyperparams import algo_class
+    from vfgym.agents.training import start_at_base
+
+    env = make_env("vfgym/VFServo-v0", {"residual": True, "residual_base": "paper"})
+    model = algo_class(algo)("MlpPolicy", env, seed=0, device="cpu")
+    start_at_base(model)
+    agent = Agent(model, {}, None, "vfgym/VFServo-v0")
+    obs = np.random.default_rng(0).uniform(-3, 3, (4, *env.observation_space.shape))
+    assert not np.any(agent.act(obs.astype(np.float32)))
+    info = rollout_info(agent, env, "short-move")
+    assert info["cost"] == evaluate(PAPER_SETTINGS, "short-move").cost[0, 0]

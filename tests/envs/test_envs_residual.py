@@ -1,0 +1,97 @@
+"""VFServo-v0's residual actions: an offset from a base setting, the zero action holding the
+base exactly (the paper's, fixed tuned settings, or a per-move model's)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vfgym import PAPER_PLANT, PAPER_SETTINGS, Settings, evaluate
+from vfgym.envs.servo import ServoConfig, VFServoEnv
+from vfgym.envs.vector import VFServoVectorEnv
+from vfgym.space import SPACE, from_action, to_action
+
+ZERO = np.zeros(4, dtype=np.float32)
+TUNED = Settings(value_rad=0.7, error_limit_rad=1.3, k=37.0, ts_over_tf=0.31)
+
+
+def episode_cost(env: VFServoEnv, action, **reset_kw) -> tuple[float, float]:
+    """(the episode's cost, its return) with a constant action."""
+    env.reset(**reset_kw)
+    total = 0.0
+    while True:
+        _, r, term, trunc, info = env.step(action)
+        total += r
+        if term or trunc:
+            return info["cost"], total
+
+
+@pytest.mark.parametrize("scenario", ["paper-step", "reversal", "train-5"])
+def test_zero_residual_reproduces_the_paper_settings_bit_for_bit(scenario):
+    cost, ret = episode_cost(VFServoEnv(scenario, residual=True), ZERO)
+    assert cost == evaluate(PAPER_SETTINGS, scenario).cost[0, 0]
+    assert ret == pytest.approx(-cost, rel=1e-9, abs=1e-12)
+
+
+def test_zero_residual_reproduces_a_tuned_base_and_a_per_move_base():
+    cost, _ = episode_cost(VFServoEnv("short-move", residual=True, residual_base=TUNED), ZERO)
+    assert cost == evaluate(TUNED, "short-move").cost[0, 0]
+    seen = []
+
+    def per_move(scenario, plant):
+        seen.append(scenario.name)
+        assert plant == PAPER_PLANT  # the env's plant, before the move's load
+        return TUNED.replace(k=20.0 * (1.0 + scenario.inertia_ratio))
+
+    env = VFServoEnv(residual=True, residual_base=per_move)
+    for seed in (3, 4):
+        cost, _ = episode_cost(env, ZERO, options={"scenario_seed": seed})
+        sc = env.episode.scenario
+        assert sc.name == seen[-1]
+        assert cost == evaluate(per_move(sc, PAPER_PLANT), sc).cost[0, 0]
+    assert seen[0] != seen[-1]
+
+
+def test_vector_env_takes_the_same_residual_steps():
+    env = VFServoEnv("paper-step", residual=True)
+    venv = VFServoVectorEnv(2, "paper-step", residual=True)
+    venv.reset(seed=0)
+    env.reset(seed=0)
+    act = np.array([0.3, -0.2, 0.5, -1.0], dtype=np.float32)
+    for _ in range(5):
+        o1, r1, *_ = env.step(act)
+        o2, r2, *_ = venv.step(np.stack([act, act]))
+        assert r2[0] == r1 and np.array_equal(o2[1], o1)
+
+
+def test_residual_offset_moves_the_unit_coordinates_by_the_scale():
+    env = VFServoEnv("paper-step", residual=True, residual_scale=0.5)
+    env.reset()
+    a = np.array([0.4, -0.6, 1.0, 0.0])
+    obs, *_ = env.step(a)
+    expected = np.clip(to_action(PAPER_SETTINGS) + 0.5 * a, -1.0, 1.0)
+    np.testing.assert_allclose(obs[14:18], expected, atol=1e-6)
+    # a setting moved off its base lands where the search space maps its unit coordinate
+    w = env._w
+    from vfgym.envs import _batch as B
+    from vfgym.plant import _layout as L
+
+    s = from_action(expected)
+    assert w[B.W_PRM + L.P_VALUE] == pytest.approx(s.value_rad, rel=1e-6)  # to_action is float32
+    assert w[B.W_PRM + L.P_A] == PAPER_SETTINGS.ts_over_tf  # a zero offset: the base exactly
+    assert w[B.W_PRM + L.P_VALUE] != PAPER_SETTINGS.value_rad
+    assert len(SPACE) == 4
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"residual": 1}, "residual"),
+        ({"residual_scale": 0.0}, "residual_scale"),
+        ({"residual_scale": 2.5}, "residual_scale"),
+        ({"residual_base": "paper"}, "residual_base"),
+    ],
+)
+def test_bad_residual_arguments_name_themselves(kwargs, name):
+    with pytest.raises(ValueError, match=name):
+        ServoConfig(**kwargs)
