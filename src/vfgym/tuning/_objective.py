@@ -298,13 +298,12 @@ _RESULT_ATTRS = ("settings", "cost", "constraints", "feasible", "objectives")
 
 def set_constraints(trial: Any, values: dict[str, float]) -> None:
     """Set the trial's constraints, as ``trial.set_constraint`` does (Optuna 5 reads them
-    from the trial; its ``constraints_func`` is deprecated), with one read of the trial
-    instead of one per constraint: on an RDB storage each read rebuilds the whole trial.
-    A retried trial carries its first run's (identical) constraints: those stay."""
-    have = trial.constraints
+    from the trial; its ``constraints_func`` is deprecated), without reading the trial
+    first: on an RDB storage each read rebuilds the whole trial. A retried trial carries
+    its first run's constraints, which are written again with the same values (the same
+    settings, so the same result)."""
     for name, v in values.items():
-        if name not in have:
-            v = float(v)
-            if math.isnan(v):
-                raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
-            trial.storage.set_trial_system_attr(trial._trial_id, f"{_CONSTRAINTS_KEY}:{name}", v)
+        v = float(v)
+        if math.isnan(v):
+            raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
+        trial.storage.set_trial_system_attr(trial._trial_id, f"{_CONSTRAINTS_KEY}:{name}", v)
