@@ -58,7 +58,7 @@ import numpy as np
 import optuna
 
 from vfgym import space
-from vfgym.tuning._gp import GaussianProcess, expected_improvement, norm_cdf
+from vfgym.tuning._gp import GaussianProcess, log_expected_improvement, log_norm_cdf
 
 ATTR = "vfgym:compass"
 """System attribute of each trial the sampler draws: its generation's state and role."""
@@ -534,17 +534,22 @@ class _Fit(NamedTuple):
     best: float | None
 
     def choose(self, n: int, candidates: Any) -> list[np.ndarray]:
-        """``n`` points, each the best of fresh ``candidates()`` by expected improvement
-        times probability of feasibility, then believed at its predicted values."""
+        """``n`` points, each the best of fresh ``candidates()`` by the logarithm of
+        expected improvement times probability of feasibility, then believed at its
+        predicted values."""
         out = []
         for _ in range(n):
             c = candidates()
             mu, sd = self.gp.predict(c)
-            pf = np.ones(len(c))
+            log_pf = np.zeros(len(c))
             for m in self.cgps:
                 cm, cs = m.predict(c)
-                pf *= norm_cdf(-cm / np.maximum(cs, 1e-9))
-            acq = pf if self.best is None else expected_improvement(self.best, mu, sd) * pf
+                log_pf += log_norm_cdf(-cm / np.maximum(cs, 1e-9))
+            # In logs: EI × P(feasible) underflows to 0 on every candidate far from the
+            # best, where argmax would silently take the first.
+            acq = log_pf
+            if self.best is not None:
+                acq = acq + log_expected_improvement(self.best, mu, sd)
             j = int(np.argmax(acq))
             out.append(c[j])
             for m in (self.gp, *self.cgps):
