@@ -20,6 +20,7 @@ import json
 import tempfile
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 from vfgym import evaluate, space, tuning
 from vfgym.io.runs import read_yaml
@@ -28,7 +29,21 @@ from vfgym.moves.axis import axis_kwargs
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def sweep_seconds(config: Path, trials: int, folder: Path, dump: str = "") -> tuple[float, list]:
+class Seconds(NamedTuple):
+    """Wall-clock and CPU seconds (the process's, all threads)."""
+
+    wall: float
+    cpu: float
+
+    def __str__(self) -> str:
+        return f"{self.wall:.2f} s wall, {self.cpu:.2f} s CPU"
+
+    def over(self, other: Seconds) -> str:
+        """Their ratios, wall and CPU."""
+        return f"{self.wall / other.wall:.1f}x wall, {self.cpu / other.cpu:.1f}x CPU"
+
+
+def sweep_seconds(config: Path, trials: int, folder: Path, dump: str = "") -> tuple[Seconds, list]:
     """Seconds of ``trials`` trials of the config's sweep in ``folder``, and the settings
     of its completed trials."""
     import optuna
@@ -42,9 +57,9 @@ def sweep_seconds(config: Path, trials: int, folder: Path, dump: str = "") -> tu
     study, _ = tuning.create_or_load(storage, "bench", cfg, cfg.scenario_list())
     scenarios = cfg.scenario_list()
     evaluate(space.Settings(), scenarios[:1], **axis_kwargs(cfg.load_axis()))  # compiled
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     tuning.run_worker(cfg, spec, "bench")
-    seconds = time.perf_counter() - t
+    seconds = Seconds(time.perf_counter() - t, time.process_time() - c)
     if dump:
         params = [tr.params for tr in study.get_trials(deepcopy=False)]
         Path(dump).write_text(json.dumps(params, indent=0))
@@ -52,16 +67,16 @@ def sweep_seconds(config: Path, trials: int, folder: Path, dump: str = "") -> tu
     return seconds, [space.settings_from_dict(tr.user_attrs["settings"]) for tr in done]
 
 
-def kernel_seconds(config: Path, settings: list) -> float:
+def kernel_seconds(config: Path, settings: list) -> Seconds:
     """Seconds to simulate each setting on the config's moves, one setting a call."""
     cfg = tuning.SweepConfig.resolve(read_yaml(config), {}, source=str(config))
     scenarios = cfg.scenario_list()
     on_axis = axis_kwargs(cfg.load_axis())
     evaluate(settings[0], scenarios, **on_axis)  # compiled
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     for s in settings:
         evaluate(s, scenarios, **on_axis)
-    return time.perf_counter() - t
+    return Seconds(time.perf_counter() - t, time.process_time() - c)
 
 
 def main() -> None:
@@ -74,14 +89,14 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         sweep_s, settings = sweep_seconds(a.config, a.trials, Path(tmp) / "short", a.dump)
         kernel_s = kernel_seconds(a.config, settings)
-        print(f"sweep, {len(settings)} trials ({a.config.name}, sqlite): {sweep_s:.2f} s")
-        print(f"kernel, the same {len(settings)} settings one a call: {kernel_s:.2f} s")
-        print(f"sweep / kernel: {sweep_s / kernel_s:.1f}x (target <= 4x)")
+        print(f"sweep, {len(settings)} trials ({a.config.name}, sqlite): {sweep_s}")
+        print(f"kernel, the same {len(settings)} settings one a call: {kernel_s}")
+        print(f"sweep / kernel: {sweep_s.over(kernel_s)} (target <= 4x)")
         if a.long:
             long_s, done = sweep_seconds(a.config, a.long, Path(tmp) / "long")
-            print(f"sweep, {len(done)} trials: {long_s:.2f} s")
+            print(f"sweep, {len(done)} trials: {long_s}")
             print(
-                f"{len(done)} / {len(settings)} trials, time: {long_s / sweep_s:.1f}x "
+                f"{len(done)} / {len(settings)} trials, time: {long_s.over(sweep_s)} "
                 f"(target <= {12 * len(done) // (10 * len(settings))}x)"
             )
 

@@ -152,6 +152,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         b = relative.bounds()
         self._lo, self._span = b[:, 0], b[:, 1] - b[:, 0]
         self._queue: list[dict[str, Any]] = []
+        self._checked = -1  # the number of the next trial, when the queue was last checked
         # Poll directions: the four axes, and with ``diagonal`` value and L/value moved
         # together (L/value² held: the tail's deceleration at top speed, δ²f²·L/value²).
         self._dirs = np.eye(4)
@@ -165,7 +166,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
     def sample_relative(self, study: Any, trial: Any, search_space: dict[str, Any]) -> dict:
         if not search_space or "fixed_params" in trial.system_attrs:
             return {}  # an enqueued trial (a warm start, a retry) keeps its settings
-        item = self._next(study)
+        item = self._next(study, trial.number)
         study._storage.set_trial_system_attr(trial._trial_id, ATTR, item["tag"])
         s = self.relative.settings(self._to_unit(np.asarray(item["x"])), item["law"])
         params = {d.name: getattr(s, d.name) for d in space.SPACE}
@@ -202,10 +203,14 @@ class CompassSampler(optuna.samplers.BaseSampler):
             return waiting + len(queue)
         return self.options.extra_batch
 
-    def _next(self, study: Any) -> dict[str, Any]:
-        queue = self._queue_for(study)
+    def _next(self, study: Any, number: int) -> dict[str, Any]:
+        # No trial made since the queue was checked but this one (numbers count the
+        # study's trials): no other worker drew a generation since, the queue stands.
+        fresh = self._queue and number == self._checked
+        queue = self._queue if fresh else self._queue_for(study)
         if not queue:  # asked beyond the plan while it runs (another worker, a retry)
             queue = self._queue = self._extra_plan(study)
+        self._checked = number + 1
         return queue.pop(0)
 
     def _queue_for(self, study: Any) -> list[dict[str, Any]]:
@@ -214,6 +219,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         import optuna
 
         trials = study.get_trials(deepcopy=False)
+        self._checked = len(trials)
         tagged = [t for t in trials if ATTR in t.system_attrs]
         last = max((t.system_attrs[ATTR]["gen"] for t in tagged), default=-1)
         if self._queue and self._queue[0]["tag"]["gen"] in (last, last + 1):
