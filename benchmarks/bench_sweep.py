@@ -97,7 +97,7 @@ def main() -> None:
             print(f"sweep, {len(done)} trials: {long_s}")
             print(
                 f"{len(done)} / {len(settings)} trials, time: {long_s.over(sweep_s)} "
-                f"(target <= {12 * len(done) // (10 * len(settings))}x)"
+                f"(target <= {1.2 * len(done) / len(settings):.1f}x: 12x for 1,000 / 100)"
             )
 
 

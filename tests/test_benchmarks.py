@@ -25,3 +25,16 @@ def test_bench_envs_runs_to_the_end_on_a_small_budget():
     assert out.returncode == 0, out.stderr[-2000:]
     assert "VFServo-v0 step" in out.stdout
     assert "VFTune-v0 on paper-step" in out.stdout
+
+
+def test_bench_sweep_runs_to_the_end_on_a_small_budget():
+    out = subprocess.run(
+        [sys.executable, "benchmarks/bench_sweep.py", "--trials", "10", "--long", "12"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "sweep / kernel:" in out.stdout
+    assert "12 / 10 trials, time:" in out.stdout

@@ -98,9 +98,12 @@ class GaussianProcess:
             chol = np.linalg.cholesky(k)
         except np.linalg.LinAlgError:
             return 1e25, np.zeros_like(theta)
-        alpha = np.linalg.solve(chol.T, np.linalg.solve(chol, self.y))
+        # K⁻¹ = L⁻ᵀL⁻¹ from one inverse of the factor (four general solves before: each
+        # factors L again; this step dominates a long sweep's model batches).
+        linv = np.linalg.inv(chol)
+        alpha = linv.T @ (linv @ self.y)
         nll = 0.5 * float(self.y @ alpha) + float(np.log(np.diag(chol)).sum())
-        kinv = np.linalg.solve(chol.T, np.linalg.solve(chol, np.eye(n)))
+        kinv = linv.T @ linv
         w = np.outer(alpha, alpha) - kinv  # d nll / d K = -w / 2
         grad = np.empty_like(theta)
         common = var * (5.0 / 3.0) * (1.0 + SQRT5 * r) * e
@@ -138,7 +141,8 @@ class GaussianProcess:
         self.lengths, self.var, self.noise = lengths, var, noise
         k = var * matern52(self.x, self.x, lengths) + (noise + 1e-10) * np.eye(len(self.x))
         self.chol = np.linalg.cholesky(k)
-        self.alpha = np.linalg.solve(self.chol.T, np.linalg.solve(self.chol, self.y))
+        self.linv = np.linalg.inv(self.chol)  # L⁻¹: predictions multiply, not solve
+        self.alpha = self.linv.T @ (self.linv @ self.y)
 
     def condition(self, x: np.ndarray, y: float) -> None:
         """Add one observation, keeping the hyperparameters (a batch's "believed" points)."""
@@ -150,7 +154,7 @@ class GaussianProcess:
         """Posterior mean and standard deviation at the rows of ``xs``, in ``y``'s units."""
         ks = self.var * matern52(xs, self.x, self.lengths)
         mu = ks @ self.alpha
-        v = np.linalg.solve(self.chol, ks.T)
+        v = self.linv @ ks.T
         sd = np.sqrt(np.maximum(self.var - (v * v).sum(0), 1e-18))
         return mu * self.scale + self.mean, sd * self.scale
 
