@@ -14,27 +14,26 @@ ROOT = Path(__file__).resolve().parents[1]
 SMALL_BUDGET = ["--seconds", "0.01", "--rounds", "1", "--envs", "16"]
 
 
-def test_bench_envs_runs_to_the_end_on_a_small_budget():
+def _run(script: str, *args: str) -> str:
+    """A benchmark's stdout; it must exit 0."""
     out = subprocess.run(
-        [sys.executable, "benchmarks/bench_envs.py", *SMALL_BUDGET],
+        [sys.executable, f"benchmarks/{script}", *args],
         cwd=ROOT,
         capture_output=True,
         text=True,
         timeout=900,
     )
     assert out.returncode == 0, out.stderr[-2000:]
-    assert "VFServo-v0 step" in out.stdout
-    assert "VFTune-v0 on paper-step" in out.stdout
+    return out.stdout
+
+
+def test_bench_envs_runs_to_the_end_on_a_small_budget():
+    stdout = _run("bench_envs.py", *SMALL_BUDGET)
+    assert "VFServo-v0 step" in stdout
+    assert "VFTune-v0 on paper-step" in stdout
 
 
 def test_bench_sweep_runs_to_the_end_on_a_small_budget():
-    out = subprocess.run(
-        [sys.executable, "benchmarks/bench_sweep.py", "--trials", "10", "--long", "12"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=900,
-    )
-    assert out.returncode == 0, out.stderr[-2000:]
-    assert "sweep / kernel:" in out.stdout
-    assert "12 / 10 trials, time:" in out.stdout
+    stdout = _run("bench_sweep.py", "--trials", "10", "--long", "12")
+    assert "sweep / kernel:" in stdout
+    assert "12 / 10 trials, time:" in stdout
