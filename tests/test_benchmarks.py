@@ -14,30 +14,35 @@ ROOT = Path(__file__).resolve().parents[1]
 SMALL_BUDGET = ["--seconds", "0.01", "--rounds", "1", "--envs", "16"]
 
 
-def test_bench_envs_runs_to_the_end_on_a_small_budget():
+def _run(script: str, *args: str) -> str:
+    """A benchmark's stdout; it must exit 0."""
     out = subprocess.run(
-        [sys.executable, "benchmarks/bench_envs.py", *SMALL_BUDGET],
+        [sys.executable, f"benchmarks/{script}", *args],
         cwd=ROOT,
         capture_output=True,
         text=True,
         timeout=900,
     )
     assert out.returncode == 0, out.stderr[-2000:]
-    assert "VFServo-v0 step" in out.stdout
-    assert "VFTune-v0 on paper-step" in out.stdout
+    return out.stdout
+
+
+def test_bench_envs_runs_to_the_end_on_a_small_budget():
+    stdout = _run("bench_envs.py", *SMALL_BUDGET)
+    assert "VFServo-v0 step" in stdout
+    assert "VFTune-v0 on paper-step" in stdout
+
+
+def test_bench_sweep_runs_to_the_end_on_a_small_budget():
+    stdout = _run("bench_sweep.py", "--trials", "10", "--long", "12")
+    assert "sweep / kernel:" in stdout
+    assert "12 / 10 trials, time:" in stdout
 
 
 def test_bench_fit_runs_to_the_end_on_a_small_budget():
     args = ["--axes", "experiments/axes/belt.yaml", "--moves", "8", "--reference-points", "2"]
-    out = subprocess.run(
-        [sys.executable, "benchmarks/bench_fit.py", *args, "--reference-rounds", "0"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=900,
-    )
-    assert out.returncode == 0, out.stderr[-2000:]
-    assert "| belt | 32 |" in out.stdout
+    stdout = _run("bench_fit.py", *args, "--reference-rounds", "0")
+    assert "| belt | 32 |" in stdout
 
 
 def test_bench_agents_runs_to_the_end_on_a_few_hundred_steps(tmp_path):
@@ -45,14 +50,7 @@ def test_bench_agents_runs_to_the_end_on_a_few_hundred_steps(tmp_path):
             "n_eval_scenarios=2"]  # fmt: skip
     args = ["--algos", "ppo", "--envs", "VFTune-v0,VFServo-v0", "--seeds", "0",
             "--steps", "128", "--moves", "2", "--out", str(tmp_path)]  # fmt: skip
-    out = subprocess.run(
-        [sys.executable, "benchmarks/bench_agents.py", *args, "--hyperparams", *tiny],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=900,
-    )
-    assert out.returncode == 0, out.stderr[-2000:]
+    _run("bench_agents.py", *args, "--hyperparams", *tiny)
     md = (tmp_path / "benchmark.md").read_text()
     assert "| ppo | VFTune-v0 | 128 |" in md and "| ppo | VFServo-v0 | 128 |" in md
     assert md.count("vfgym train --algo ppo") == 2

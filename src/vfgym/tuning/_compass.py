@@ -58,7 +58,7 @@ import numpy as np
 import optuna
 
 from vfgym import space
-from vfgym.tuning._gp import GaussianProcess, expected_improvement, norm_cdf
+from vfgym.tuning._gp import GaussianProcess, log_expected_improvement, log_norm_cdf
 
 ATTR = "vfgym:compass"
 """System attribute of each trial the sampler draws: its generation's state and role."""
@@ -152,6 +152,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         b = relative.bounds()
         self._lo, self._span = b[:, 0], b[:, 1] - b[:, 0]
         self._queue: list[dict[str, Any]] = []
+        self._checked = -1  # the number of the next trial, when the queue was last checked
         # Poll directions: the four axes, and with ``diagonal`` value and L/value moved
         # together (L/value² held: the tail's deceleration at top speed, δ²f²·L/value²).
         self._dirs = np.eye(4)
@@ -165,7 +166,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
     def sample_relative(self, study: Any, trial: Any, search_space: dict[str, Any]) -> dict:
         if not search_space or "fixed_params" in trial.system_attrs:
             return {}  # an enqueued trial (a warm start, a retry) keeps its settings
-        item = self._next(study)
+        item = self._next(study, trial.number)
         study._storage.set_trial_system_attr(trial._trial_id, ATTR, item["tag"])
         s = self.relative.settings(self._to_unit(np.asarray(item["x"])), item["law"])
         params = {d.name: getattr(s, d.name) for d in space.SPACE}
@@ -202,10 +203,14 @@ class CompassSampler(optuna.samplers.BaseSampler):
             return waiting + len(queue)
         return self.options.extra_batch
 
-    def _next(self, study: Any) -> dict[str, Any]:
-        queue = self._queue_for(study)
+    def _next(self, study: Any, number: int) -> dict[str, Any]:
+        # No trial made since the queue was checked but this one (numbers count the
+        # study's trials): no other worker drew a generation since, the queue stands.
+        fresh = self._queue and number == self._checked
+        queue = self._queue if fresh else self._queue_for(study)
         if not queue:  # asked beyond the plan while it runs (another worker, a retry)
             queue = self._queue = self._extra_plan(study)
+        self._checked = number + 1
         return queue.pop(0)
 
     def _queue_for(self, study: Any) -> list[dict[str, Any]]:
@@ -214,6 +219,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         import optuna
 
         trials = study.get_trials(deepcopy=False)
+        self._checked = len(trials)
         tagged = [t for t in trials if ATTR in t.system_attrs]
         last = max((t.system_attrs[ATTR]["gen"] for t in tagged), default=-1)
         if self._queue and self._queue[0]["tag"]["gen"] in (last, last + 1):
@@ -534,17 +540,22 @@ class _Fit(NamedTuple):
     best: float | None
 
     def choose(self, n: int, candidates: Any) -> list[np.ndarray]:
-        """``n`` points, each the best of fresh ``candidates()`` by expected improvement
-        times probability of feasibility, then believed at its predicted values."""
+        """``n`` points, each the best of fresh ``candidates()`` by the logarithm of
+        expected improvement times probability of feasibility, then believed at its
+        predicted values."""
         out = []
         for _ in range(n):
             c = candidates()
             mu, sd = self.gp.predict(c)
-            pf = np.ones(len(c))
+            log_pf = np.zeros(len(c))
             for m in self.cgps:
                 cm, cs = m.predict(c)
-                pf *= norm_cdf(-cm / np.maximum(cs, 1e-9))
-            acq = pf if self.best is None else expected_improvement(self.best, mu, sd) * pf
+                log_pf += log_norm_cdf(-cm / np.maximum(cs, 1e-9))
+            # In logs: EI × P(feasible) underflows to 0 on every candidate far from the
+            # best, where argmax would silently take the first.
+            acq = log_pf
+            if self.best is not None:
+                acq = acq + log_expected_improvement(self.best, mu, sd)
             j = int(np.argmax(acq))
             out.append(c[j])
             for m in (self.gp, *self.cgps):

@@ -152,6 +152,9 @@ class Objective:
         self.on_enter: Callable[[], None] | None = None
         self.guard: Callable[[], Any] = nullcontext
         self.current: int | None = None
+        self._found: dict[tuple, Result] = {}
+        self._seen: set[int] = set()
+        self._found_in: tuple | None = None
 
     def __call__(self, trial: Trial) -> float | list[float]:
         self.current = trial.number
@@ -273,19 +276,27 @@ class Objective:
         return out
 
     def _completed(self, study: Study) -> dict[tuple, Result]:
-        """Results of the study's completed trials, by settings (the first trial of each)."""
+        """Results of the study's completed trials, by settings (the lowest-numbered of each).
+
+        A completed trial never changes: each is read once (per study), so a batch costs
+        the trials completed since the last, not the whole study."""
         import optuna
 
-        found: dict[tuple, Result] = {}
+        if self._found_in != (id(study), study.study_name):
+            self._found, self._seen, self._found_in = {}, set(), (id(study), study.study_name)
+        found, seen = self._found, self._seen
         for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,)):
+            if t.number in seen:
+                continue
+            seen.add(t.number)
             cons = t.user_attrs.get("constraints")
             if "cost" not in t.user_attrs or "settings" not in t.user_attrs:
                 continue
             if len(cons or ()) != len(CONSTRAINTS):  # scored with other constraints
                 continue
             key = settings_key(space.settings_from_dict(t.user_attrs["settings"]))
-            if key in found:
-                continue
+            if key in found and found[key].attrs["cached_from"] <= t.number:
+                continue  # (a lower-numbered one may complete later, on another worker)
             attrs = {k: t.user_attrs[k] for k in _RESULT_ATTRS if k in t.user_attrs}
             attrs["cached_from"] = t.user_attrs.get("cached_from", t.number)
             values = float(t.value) if self.form == "cost" else [float(v) for v in t.values]
@@ -298,13 +309,12 @@ _RESULT_ATTRS = ("settings", "cost", "constraints", "feasible", "objectives")
 
 def set_constraints(trial: Any, values: dict[str, float]) -> None:
     """Set the trial's constraints, as ``trial.set_constraint`` does (Optuna 5 reads them
-    from the trial; its ``constraints_func`` is deprecated), with one read of the trial
-    instead of one per constraint: on an RDB storage each read rebuilds the whole trial.
-    A retried trial carries its first run's (identical) constraints: those stay."""
-    have = trial.constraints
+    from the trial; its ``constraints_func`` is deprecated), without reading the trial
+    first: on an RDB storage each read rebuilds the whole trial. A retried trial carries
+    its first run's constraints, which are written again with the same values (the same
+    settings, so the same result)."""
     for name, v in values.items():
-        if name not in have:
-            v = float(v)
-            if math.isnan(v):
-                raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
-            trial.storage.set_trial_system_attr(trial._trial_id, f"{_CONSTRAINTS_KEY}:{name}", v)
+        v = float(v)
+        if math.isnan(v):
+            raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
+        trial.storage.set_trial_system_attr(trial._trial_id, f"{_CONSTRAINTS_KEY}:{name}", v)

@@ -22,8 +22,15 @@ WORKER_ATTR = "worker"
 
 
 def _worker_id() -> str:
-    """host/pid/start-time of this process (the start time guards against pid reuse)."""
-    return f"{socket.gethostname()}/{os.getpid()}/{_proc_start(os.getpid())}"
+    """host/pid/start-time of this process (the start time guards against pid reuse);
+    read once per process (a forked child has another pid, so reads its own)."""
+    pid = os.getpid()
+    if pid not in _WORKER_IDS:
+        _WORKER_IDS[pid] = f"{socket.gethostname()}/{pid}/{_proc_start(pid)}"
+    return _WORKER_IDS[pid]
+
+
+_WORKER_IDS: dict[int, str] = {}
 
 
 def _proc_start(pid: int) -> str:

@@ -1,0 +1,127 @@
+"""The compass's Gaussian process (``tuning/_gp.py``) against scikit-learn's on the same data
+with the same Matérn-5/2 kernel and hyperparameters, and its acquisition in logs."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.stats import norm
+
+from vfgym.tuning._compass import _Fit
+from vfgym.tuning._gp import (
+    GaussianProcess,
+    expected_improvement,
+    log_expected_improvement,
+    log_norm_cdf,
+    matern52,
+)
+
+sklearn_gp = pytest.importorskip("sklearn.gaussian_process")
+kernels = pytest.importorskip("sklearn.gaussian_process.kernels")
+
+LENGTHS = np.array([0.2, 0.5, 0.35, 1.3])
+VAR, NOISE = 1.7, 1e-3
+
+
+def _data(n: int = 40, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    x = rng.random((n, 4))
+    y = np.log1p(np.exp(3.0 * x[:, 0] - 2.0 * x[:, 1] ** 2 + np.sin(6.0 * x[:, 2]))) + x[:, 3]
+    return x, y
+
+
+def _sklearn(x: np.ndarray, y: np.ndarray):
+    kernel = kernels.ConstantKernel(VAR, "fixed") * kernels.Matern(
+        LENGTHS, "fixed", nu=2.5
+    ) + kernels.WhiteKernel(NOISE + 1e-10, "fixed")
+    return sklearn_gp.GaussianProcessRegressor(kernel, optimizer=None, normalize_y=True).fit(x, y)
+
+
+def _ours(x: np.ndarray, y: np.ndarray) -> GaussianProcess:
+    theta = np.r_[np.log(LENGTHS), math.log(VAR), math.log(NOISE)]
+    return GaussianProcess(x, y, start=theta, fit=False)
+
+
+def test_the_kernel_is_scikit_learns_matern_five_halves():
+    x, _ = _data()
+    b = np.random.default_rng(1).random((7, 4))
+    ref = kernels.Matern(LENGTHS, nu=2.5)(x, b)
+    np.testing.assert_allclose(matern52(x, b, LENGTHS), ref, rtol=1e-12, atol=1e-14)
+
+
+def test_posterior_matches_scikit_learn_with_the_same_hyperparameters():
+    x, y = _data()
+    xs = np.random.default_rng(2).random((300, 4))
+    mu, sd = _ours(x, y).predict(xs)
+    # White noise belongs to the observations only: scikit-learn's predictive std adds it
+    # back at new points, ours is of the latent function.
+    ref_mu, ref_sd = _sklearn(x, y).predict(xs, return_std=True)
+    np.testing.assert_allclose(mu, ref_mu, rtol=1e-8, atol=1e-8)
+    ref_sd = np.sqrt(np.maximum(ref_sd**2 - (NOISE + 1e-10) * y.std() ** 2, 0.0))
+    np.testing.assert_allclose(sd, ref_sd, rtol=1e-5, atol=1e-6)
+
+
+def test_marginal_likelihood_and_its_gradient_match_scikit_learn():
+    x, y = _data(30)
+    gp = _ours(x, y)
+    ref = _sklearn(x, y)
+    nll, grad = gp._nll(gp.theta)
+    # scikit-learn's theta: log variance, log lengths, log noise; its likelihood keeps
+    # the n/2·log 2π ours drops.
+    lml = ref.log_marginal_likelihood(ref.kernel_.theta)
+    assert nll == pytest.approx(-lml - 0.5 * len(x) * math.log(2 * math.pi), rel=1e-8)
+    # The kernel is fixed there, so it gives no gradient: central differences instead.
+    h = 1e-6
+    for i in range(len(gp.theta)):
+        e = np.zeros_like(gp.theta)
+        e[i] = h
+        fd = (gp._nll(gp.theta + e)[0] - gp._nll(gp.theta - e)[0]) / (2 * h)
+        assert grad[i] == pytest.approx(fd, rel=1e-4, abs=1e-6)
+
+
+def test_the_fit_raises_the_marginal_likelihood_over_its_start():
+    x, y = _data(50, seed=3)
+    start = np.r_[np.full(4, math.log(0.3)), 0.0, math.log(1e-3)]
+    fitted = GaussianProcess(x, y)
+    assert fitted._nll(fitted.theta)[0] < fitted._nll(start)[0] - 1.0
+
+
+def test_log_norm_cdf_is_scipys_and_finite_far_in_the_tail():
+    z = np.array([-1e4, -300.0, -40.0, -20.0001, -19.9999, -5.0, 0.0, 2.0, 9.0])
+    np.testing.assert_allclose(log_norm_cdf(z), norm.logcdf(z), rtol=1e-10)
+
+
+def test_log_expected_improvement_is_the_log_of_it_where_that_is_finite():
+    mu = np.linspace(-5.0, 30.0, 500)
+    sd = np.full_like(mu, 1.3)
+    ref = np.log(expected_improvement(0.0, mu, sd))
+    np.testing.assert_allclose(log_expected_improvement(0.0, mu, sd), ref, rtol=1e-9)
+
+
+def test_log_expected_improvement_ranks_where_the_improvement_underflows():
+    mu = np.array([60.0, 45.0, 80.0, 45.0])
+    sd = np.array([1.0, 1.0, 1.0, 1.1])
+    assert not expected_improvement(0.0, mu, sd).any()  # all zero: argmax would take 0
+    log_ei = log_expected_improvement(0.0, mu, sd)
+    assert np.isfinite(log_ei).all()
+    assert int(np.argmax(log_ei)) == 3  # nearest, widest
+    assert log_ei[1] > log_ei[0] > log_ei[2]
+    # across the switch to the tail series: continuous and decreasing
+    t = np.array([19.9999, 20.0, 20.0001]) * 2.0
+    v = log_expected_improvement(0.0, t, np.full(3, 2.0))
+    assert v[0] > v[1] > v[2] and v[0] - v[2] < 1e-2
+
+
+def test_a_model_batch_takes_the_best_candidate_when_every_product_underflows():
+    x, y = _data(30)
+    gp = _ours(x, y)
+    cand = np.random.default_rng(4).random((64, 4))
+    mu, sd = gp.predict(cand)
+    best = float(mu.min() - 60.0 * sd.max())  # far below every candidate
+    assert not expected_improvement(best, mu, sd).any()
+    want = int(np.argmax(log_expected_improvement(best, mu, sd)))
+    assert want != 0
+    (chosen,) = _Fit(gp, [], best).choose(1, lambda: cand)
+    np.testing.assert_array_equal(chosen, cand[want])
