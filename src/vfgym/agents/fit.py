@@ -283,8 +283,9 @@ def best_fixed(scenarios: Sequence[Scenario], axis: Axis, trials: int) -> Settin
 
     from .refine import short_sweep
 
-    kw = {"plant": axis.plant, "measures": axis.measures}
-    return short_sweep(scenarios, PAPER_SETTINGS, trials, **kw).settings
+    return short_sweep(
+        scenarios, PAPER_SETTINGS, trials, plant=axis.plant, measures=axis.measures
+    ).settings
 
 
 def fit_axis(

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 from vfgym.report import ScheduledMove
@@ -85,7 +86,7 @@ class Agent:
         action, _ = self.model.predict(obs, deterministic=True)
         return action
 
-    def env_kwargs(self, axis: str | None = None) -> dict[str, Any]:
+    def env_kwargs(self, axis: str | Axis | None = None) -> dict[str, Any]:
         """The env arguments it was trained with (``axis`` replacing the trained one)."""
         kw = dict((self.config.get("hyperparams") or {}).get("env_kwargs") or {})
         if axis is not None:
@@ -161,7 +162,7 @@ def rollout_info(agent: Agent, env: Any, scenario: Scenario | str) -> dict[str, 
             return info
 
 
-def settings_policy(agent: Agent, axis: str | None = None) -> Callable[[Any], Settings]:
+def settings_policy(agent: Agent, axis: str | Axis | None = None) -> Callable[[Any], Settings]:
     """A VFTune-v0 agent as a function: scenario → the settings it picks."""
     from vfgym.agents.training import make_env
     from vfgym.envs.tune import action_settings
