@@ -36,7 +36,7 @@ TINY = {
 def servo_run(tmp_path_factory):
     run = tmp_path_factory.mktemp("servo") / "run"
     run.mkdir()
-    params = hp.load("ppo", "vfgym/VFServo-v0", REPO / "agents/hyperparams/ppo.yml", TINY)
+    params = hp.load("ppo", "vfgym/VFServo-v0", hp.HYPERPARAMS_DIR / "ppo.yml", TINY)
     assert params["normalize"] is True and params["env_kwargs"]["residual"] is True
     logs = []
     train("ppo", "vfgym/VFServo-v0", params, run, seed=0, progress=False, log=logs.append)

@@ -6,7 +6,7 @@ Each option numba takes is decided here, once, with its reason:
     On where numba can write machine code (next to the source, in ``NUMBA_CACHE_DIR`` or
     the user's cache directory): a new process then loads the kernel instead of compiling
     it for several seconds. Off on a read-only install with nowhere to write, so that the
-    package imports and compiles every session instead of failing (:data:`CACHE`).
+    package imports and compiles in every process instead of failing (:data:`CACHE`).
     numba keys a cached function on its own file only, so a module whose machine code
     takes in code or constants of other modules guards its cache with
     :func:`guard_cache`.

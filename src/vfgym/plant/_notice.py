@@ -102,7 +102,7 @@ def announce_compile(entry: str, what: str, *dispatchers: Any) -> bool:
     _ANNOUNCED.add(entry)
     if all(is_compiled(d) for d in dispatchers):
         return False
-    where = "cached for later runs" if CACHE else "no cache here: again next session"
+    where = "cached for later runs" if CACHE else "not cached here: compiled again next run"
     print(
         f"vfgym: compiling {what} once (about {COLD_COMPILE_S[entry]:.0f} s; {where}) ...",
         file=sys.stderr,
