@@ -56,3 +56,16 @@ def test_reference_basin_prints_a_row_per_box(refs):
     for row in rows:
         feasible, within1, within2 = (float(v) for v in row.split()[2:5])
         assert 0.0 <= within1 <= within2 <= feasible <= 1.0, row
+
+
+def test_accel_feasibility_runs_and_counts_no_feasible_run_above_the_limit():
+    out = subprocess.run(
+        [sys.executable, "experiments/accel_feasibility.py", "--controllers", "4", "--moves", "2"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    lines = [ln for ln in out.stdout.splitlines() if "runs feasible" in ln]
+    assert len(lines) == 2 and all(ln.endswith("above 1.01x: 0") for ln in lines)
