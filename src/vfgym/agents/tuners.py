@@ -10,8 +10,6 @@ through ``warn`` (default: :func:`warnings.warn` with :class:`TunerWarning`).
 
 from __future__ import annotations
 
-import hashlib
-import json
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -21,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
-from vfgym.moves.axis import PAPER_AXIS, Axis, axis_to_dict, load_axis
+from vfgym.moves.axis import PAPER_AXIS, Axis, axis_to_dict, content_digest, load_axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 
@@ -48,8 +46,7 @@ def machine_digest(axis: Axis) -> str:
         12 hex digits of the SHA-256 of the plant and measures of :func:`axis_to_dict`.
     """
     d = axis_to_dict(axis)
-    text = json.dumps({"plant": d["plant"], "measures": d["measures"]}, sort_keys=True)
-    return hashlib.sha256(text.encode()).hexdigest()[:12]
+    return content_digest({"plant": d["plant"], "measures": d["measures"]})
 
 
 def trained_on(axis: Axis) -> dict[str, str]:

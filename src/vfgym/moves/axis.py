@@ -398,6 +398,13 @@ def axis_kwargs(axis: Axis | None) -> dict[str, Any]:
     return {} if axis is None else {"plant": axis.plant, "measures": axis.measures}
 
 
+def content_digest(data: Any) -> str:
+    """12 hex digits of the SHA-256 of ``data`` as key-sorted JSON: the fingerprint of a
+    run folder's axis (:func:`axis_digest`) and of a tuner's machine
+    (:func:`vfgym.agents.tuners.machine_digest`)."""
+    return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:12]
+
+
 def axis_digest(axis: Axis | None) -> str | None:
     """A fingerprint of everything the axis holds.
 
@@ -416,8 +423,7 @@ def axis_digest(axis: Axis | None) -> str | None:
     """
     if axis is None:
         return None
-    text = json.dumps(axis_to_dict(axis), sort_keys=True)
-    return f"{axis.name}:{hashlib.sha256(text.encode()).hexdigest()[:12]}"
+    return f"{axis.name}:{content_digest(axis_to_dict(axis))}"
 
 
 def load_axis(path: str | Path) -> Axis:

@@ -30,7 +30,6 @@ from matplotlib.ticker import NullLocator
 
 from vfgym.moves.baselines import usable_accel
 from vfgym.params import PAPER_PLANT, Plant, in_position_rad
-from vfgym.plant.measures import accel_window_ticks
 from vfgym.report._style import COLORS
 from vfgym.report._sweep_figures import (
     history_figure,
@@ -63,11 +62,8 @@ def _padded_counts(trace: Trace, pad: int) -> np.ndarray:
 
 
 def _accel_window_samples(trace: Trace, window_s: float | None) -> int:
-    """``window_s`` in trace samples; None: the measure's own window w."""
-    if window_s is None:
-        w = accel_window_ticks(trace.measures, trace.plant, trace.external)
-        return max(1, round(w / trace.decimation))
-    return _window_samples(trace, window_s)
+    """``window_s`` in trace samples; None: the window w the run's measure used."""
+    return _window_samples(trace, trace.metrics["accel_window_s"] if window_s is None else window_s)
 
 
 def pulse_speed(trace: Trace, window_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -84,8 +80,9 @@ def pulse_accel(trace: Trace, window_s: float | None = None) -> tuple[np.ndarray
     """Pulse-train acceleration (rad/s²): the windowed second difference of the train's
     position ``train_rad`` (docs/model.md §5.1) at the centre time.
 
-    With the default window (the measure's, :func:`vfgym.plant.measures.accel_window_ticks`)
-    and an undecimated trace, max |a| equals the measure ``peak_accel_pulse_rad_s2``.
+    With the default window (the one the run's measure used, ``accel_window_s``,
+    :func:`vfgym.plant.measures.accel_window_ticks`) and an undecimated trace, max |a|
+    equals the measure ``peak_accel_pulse_rad_s2``.
     """
     ws = _accel_window_samples(trace, window_s)
     dt = trace.decimation * trace.plant.tick_s
@@ -221,7 +218,7 @@ def response_figure(
 
     ax = axs[2]
     ts, vs = _thin(*pulse_speed(trace), max_points)
-    w_ms = accel_window_ticks(trace.measures, plant, trace.external) * plant.tick_s * 1e3
+    w_ms = trace.metrics["accel_window_s"] * 1e3
     ax.plot(ts * ms, vs, color=COLORS[0], lw=1.0, label=f"pulse train ({w_ms:.3g} ms window)")
     tw, w = _thin(t, trace.speed_rad_s, max_points)
     ax.plot(tw * ms, w, color=COLORS[1], lw=1.0, label="motor ω")
