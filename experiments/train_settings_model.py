@@ -1,35 +1,47 @@
 """Train a settings model on per-move optima and write it with its config and the
-command that made it (the shipped one: ``src/vfgym/agents/pretrained/``). For any axis
-file the whole pipeline (optima, cost table, pick model, held-out verdict) is one
-command, ``vfgym fit --axis FILE`` (:func:`vfgym.agents.fit.fit_axis`, which this and
-``move_optima.py``, ``candidate_costs.py`` share their code with):
+command that made it. The model vfgym ships (``src/vfgym/agents/pretrained/``) is rebuilt
+from nothing by one command:
 
-    python experiments/train_settings_model.py --kind pick --neighbours 6 --library 64 \
-        --out src/vfgym/agents/pretrained
+    python experiments/train_settings_model.py --build 320 --check 8
+
+``--build N`` first makes the inputs: the per-move optima of ``train-0 ... train-<N-1>`` of
+the environments' distribution (varied loads on the paper's plant), the full search
+(:class:`vfgym.agents.optima.OptimumSearch`), checkpointed into ``--optima`` 16 moves at a
+time (:func:`vfgym.agents.fit.checkpointed_optima`: an interrupted build loses nothing, the
+same command continues it, and optima already there for the same moves and search are
+kept; about 30 min from scratch on 2 cores), then their cost table ``--costs``
+(:func:`vfgym.agents.fit.candidate_costs`, about a minute). For any axis file the whole
+pipeline with a held-out verdict is ``vfgym fit --axis FILE``
+(:func:`vfgym.agents.fit.fit_axis`, the same code). Without ``--build`` the model is
+trained on the files as they are:
+
     python experiments/train_settings_model.py --kind ridge --degree 2 --ridge 1.0 \
         --out runs/ridge-model
 
 ``pick`` (:class:`vfgym.agents.supervised.PickModel`): the library candidate with the
-least mean cost ratio over the move's nearest training moves, from the cost table of
-``experiments/candidate_costs.py``; ``ridge`` (:class:`~vfgym.agents.supervised.SettingsModel`):
-a ridge regression from the features to the optimal settings. Both fit in seconds,
-deterministically. ``--cv K`` first prints, for the pick model, K-fold cross-validated
-figures on the training moves (costs looked up in the table, no simulation): the mean
-cost over the optima's, the median gap and the feasible share, for a few neighbour
-counts and library sizes (model selection on train moves only).
+least mean cost ratio over the move's nearest training moves, with ``--check K`` the best
+on the move itself of the K best-ranked; ``ridge``
+(:class:`~vfgym.agents.supervised.SettingsModel`): a ridge regression from the features
+to the optimal settings. Both fit in seconds, deterministically. ``--cv K`` first prints,
+for the pick model, K-fold cross-validated figures on the training moves (costs looked
+up in the table, no simulation): the mean cost over the optima's, the median gap and the
+feasible share, for a few neighbour counts and library sizes (model selection on train
+moves only).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 
-from vfgym import PAPER_PLANT, get_scenario
-from vfgym.agents.optima import read_optima
+from vfgym import PAPER_PLANT, get_scenario, scenario_set
+from vfgym.agents.fit import candidate_costs, checkpointed_optima
+from vfgym.agents.optima import OptimumSearch, read_optima
 from vfgym.agents.supervised import (
     TrainConfig,
     fit_pick_model,
@@ -79,6 +91,21 @@ def _library_columns(model, cost, feas, best) -> list[int]:
     return list(greedy_library(np.round(ratio_table(cost, feas, best), 6), model.library.shape[0]))
 
 
+def build_inputs(cfg: TrainConfig, count: int) -> None:
+    """The optima of train-0 ... train-<count-1> (checkpointed, resumed) and their costs."""
+    scenarios = scenario_set("train", count, 0, LOAD_DISTRIBUTION)
+    t0 = time.time()
+
+    def progress(done: int) -> None:
+        print(f"{time.time() - t0:7.1f} s  +{done} optima", file=sys.stderr, flush=True)
+
+    optima = checkpointed_optima(scenarios, OptimumSearch(), ROOT / cfg.optima, progress=progress)
+    cost, feas = candidate_costs(scenarios, optima)
+    names = np.array([o.scenario for o in optima])
+    np.savez_compressed(ROOT / cfg.costs, scenarios=names, cost=cost, feasible=feas)
+    print(f"{time.time() - t0:7.1f} s  {count} x {count} costs -> {cfg.costs}", file=sys.stderr)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     d = TrainConfig()
@@ -90,12 +117,17 @@ def main() -> None:
     ap.add_argument("--ignore", default=",".join(d.ignore))
     ap.add_argument("--degree", type=int, default=d.degree)
     ap.add_argument("--ridge", type=float, default=d.ridge)
+    ap.add_argument("--check", type=int, default=d.check)
     ap.add_argument("--cv", type=int, default=0)
+    ap.add_argument("--build", type=int, default=0, metavar="N",
+                    help="first build the optima of N train moves and their costs")  # fmt: skip
     ap.add_argument("--out", default="src/vfgym/agents/pretrained")
     args = ap.parse_args()
     ignore = tuple(x for x in args.ignore.split(",") if x)
     cfg = TrainConfig(args.kind, args.optima, args.costs, args.neighbours, args.library,
-                      ignore, args.degree, args.ridge)  # fmt: skip
+                      ignore, args.degree, args.ridge, args.check)  # fmt: skip
+    if args.build:
+        build_inputs(cfg, args.build)
     if args.cv:
         cross_validate(cfg, args.cv)
     model = train_settings_model(cfg, ROOT)
@@ -105,7 +137,8 @@ def main() -> None:
     argv = ["python", "experiments/train_settings_model.py", "--kind", cfg.kind,
             "--optima", cfg.optima, "--costs", cfg.costs, "--neighbours", str(cfg.neighbours),
             "--library", str(cfg.library), "--ignore", ",".join(cfg.ignore),
-            "--degree", str(cfg.degree), "--ridge", repr(cfg.ridge), "--out", args.out]  # fmt: skip
+            "--degree", str(cfg.degree), "--ridge", repr(cfg.ridge), "--check", str(cfg.check),
+            *(["--build", str(args.build)] if args.build else []), "--out", args.out]  # fmt: skip
     write_text(out / "command.txt", " ".join(argv) + "\n")
     print(f"model -> {out / 'settings_model.json'}", file=sys.stderr)
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import itertools
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, evaluate, get_scenario, scenario_set
+from vfgym.agents.fit import optima_key
 from vfgym.agents.optima import MoveOptimum, OptimumSearch, move_optima, read_optima, write_optima
 from vfgym.agents.refine import refine
 from vfgym.agents.supervised import (
@@ -30,6 +32,7 @@ from vfgym.agents.supervised import (
 from vfgym.cli import main
 from vfgym.envs._common import scenario_features
 from vfgym.moves import LOAD_DISTRIBUTION as LOAD
+from vfgym.params import DEFAULT_MEASURES
 from vfgym.space import SPACE, from_action
 
 REPO = Path(__file__).resolve().parents[2]
@@ -122,8 +125,14 @@ def test_shipped_model_is_reproduced_by_its_training_command():
     assert command[:2] == ["python", "experiments/train_settings_model.py"]
     for flag, value in (("--kind", cfg.kind), ("--optima", cfg.optima), ("--costs", cfg.costs),
                         ("--neighbours", str(cfg.neighbours)), ("--library", str(cfg.library)),
-                        ("--ignore", ",".join(cfg.ignore))):  # fmt: skip
+                        ("--ignore", ",".join(cfg.ignore)),
+                        ("--check", str(cfg.check))):  # fmt: skip
         assert command[command.index(flag) + 1] == value
+    # one command builds it from nothing: the optima file is its checkpoint of these moves
+    count = int(command[command.index("--build") + 1])
+    moves = scenario_set("train", count, 0, LOAD)
+    key = optima_key(moves, OptimumSearch(), PAPER_PLANT, DEFAULT_MEASURES)
+    assert (REPO / cfg.optima).read_text().partition("\n")[0] == f"# {key}"
     again = train_settings_model(cfg, REPO).to_dict()
     shipped = json.loads(PRETRAINED.read_text())
     assert again.keys() == shipped.keys()
@@ -152,6 +161,25 @@ def test_pick_model_picks_the_candidate_best_on_the_nearest_moves():
     m3 = fit_pick_model(moves, opt, cost, feas, neighbours=3, library=3, ignore=())
     # mean ratios with the infeasible penalty: [4/3+1/3, 5.5/3, 3.3/3] -> candidate 2
     assert m3.pick(x[0]) == lib.index(targets[2])
+
+
+def test_a_checked_pick_is_the_best_on_the_move_of_its_best_ranked_candidates():
+    """With ``check`` = K the model returns, of its K best-ranked candidates, the one
+    best on the move as :func:`vfgym.evaluate` scores them: feasible first, then cost."""
+    model = load_settings_model()
+    assert model.check == 8
+    plain = replace(model, check=0)
+    for name in ("paper-step", "short-move", "test-3", "test-11", "test-40"):
+        sc = get_scenario(name, LOAD)
+        loaded = sc.plant(PAPER_PLANT)
+        top = plain.ranked(scenario_features(sc, PAPER_PLANT, loaded))[:5]
+        cands = [target_settings(model.library[j], loaded, model.accel_law) for j in top]
+        ev = evaluate(cands, [sc])
+        key = [(not ev.feasible[i, 0], ev.cost[i, 0], i) for i in range(5)]
+        assert replace(model, check=5).settings(sc) == cands[min(key)[2]]
+        assert plain.settings(sc) == replace(model, check=1).settings(sc) == cands[0]
+    with pytest.raises(ValueError, match="check=65 is out of range"):
+        replace(model, check=65)
 
 
 def test_refine_starts_from_the_prediction_and_never_ends_worse():

@@ -11,7 +11,7 @@ import yaml
 
 pytest.importorskip("stable_baselines3")
 
-from vfgym.agents import policy_settings
+from vfgym.agents import load_tuner, policy_settings
 from vfgym.agents.hyperparams import HYPERPARAMS_DIR
 from vfgym.agents.training import VALIDATION_SEED0, validation_scenarios
 from vfgym.cli import main
@@ -58,6 +58,13 @@ def test_cli_train_on_an_axis_then_predict_on_it(tmp_path, capsys):
     assert yaml.safe_load(capsys.readouterr().out)["scenario"] == "up"
     # the agent's own config names the axis: predicting without --axis resolves the same
     assert policy_settings(model)("up") == load_settings(str(out))
+    # as a tuner: quiet on a move like its training draws, one line on a longer one
+    seen: list[str] = []
+    tuner = load_tuner(model, warn=seen.append)
+    tuner(load_axis(path).moves.train.random.draw(12345, "train", load_axis(path).plant))
+    assert seen == []
+    assert tuner("up") == load_settings(str(out))
+    assert len(seen) == 1 and "is outside its training moves (log_distance" in seen[0], seen
     # a bad axis file fails before a run folder is made
     bad = tmp_path / "bad.yaml"
     bad.write_text(yaml.safe_dump({"measures": {"in_position_counts": -1}}))

@@ -52,6 +52,9 @@ class FitConfig:
         The per-move search (default :data:`FIT_SEARCH`).
     neighbours, library : int
         The pick model's neighbours and library size (at most ``moves``).
+    check : int
+        Best-ranked candidates the model simulates on each new move, the best returned
+        (:class:`vfgym.agents.pick.PickModel`), 0 to ``library``.
     sweep_trials : int
         Trials of the sweep for the best fixed setting, 1 to 10000.
     chunk : int
@@ -62,6 +65,7 @@ class FitConfig:
     search: OptimumSearch = FIT_SEARCH
     neighbours: int = 6
     library: int = 64
+    check: int = 8
     sweep_trials: int = 60
     chunk: int = 16
 
@@ -70,6 +74,7 @@ class FitConfig:
         s(self, "moves", check_int("moves", self.moves, 8, 5000))
         s(self, "neighbours", check_int("neighbours", self.neighbours, 1, self.moves))
         s(self, "library", check_int("library", self.library, 1, self.moves))
+        s(self, "check", check_int("check", self.check, 0, self.library))
         s(self, "sweep_trials", check_int("sweep_trials", self.sweep_trials, 1, 10_000))
         s(self, "chunk", check_int("chunk", self.chunk, 1))
         if isinstance(self.search, dict):
@@ -207,6 +212,30 @@ def candidate_costs(
     return cost, feas
 
 
+def optima_key(
+    scenarios: Sequence[Scenario], search: OptimumSearch, plant: Plant, measures: Measures
+) -> str:
+    """The first line of a checkpointed optima file: a digest of what they were searched
+    for (the moves, the search, the plant and the measures).
+
+    Parameters
+    ----------
+    scenarios : sequence of Scenario
+        The moves, in order.
+    search : OptimumSearch
+        The per-move search.
+    plant, measures : Plant, Measures
+        The axis's plant and measures.
+
+    Returns
+    -------
+    str
+        ``moves-key: `` and 16 hex digits.
+    """
+    text = repr((search, plant, measures, [asdict(sc) for sc in scenarios]))
+    return f"moves-key: {hashlib.sha256(text.encode()).hexdigest()[:16]}"
+
+
 def checkpointed_optima(
     scenarios: Sequence[Scenario],
     search: OptimumSearch,
@@ -242,8 +271,7 @@ def checkpointed_optima(
     """
 
     def key(n: int) -> str:  # what the first n optima were searched for
-        text = repr((search, plant, measures, [asdict(sc) for sc in scenarios[:n]]))
-        return f"moves-key: {hashlib.sha256(text.encode()).hexdigest()[:16]}"
+        return optima_key(scenarios[:n], search, plant, measures)
 
     done: list[MoveOptimum] = read_optima(path) if path.is_file() else []
     first = path.read_text().partition("\n")[0] if done else ""
@@ -340,7 +368,7 @@ def fit_axis(
         seconds["costs"] = time.perf_counter() - t0 - sum(seconds.values())
         model = fit_pick_model(train, optima, cost, feas, neighbours=cfg.neighbours,
                                library=cfg.library, plant=axis.plant)  # fmt: skip
-        model = replace(model, trained_on=trained_on(axis))
+        model = replace(model, trained_on=trained_on(axis), check=cfg.check)
         model.save(run / "settings_model.json")
         seconds["model"] = time.perf_counter() - t0 - sum(seconds.values())
         bar.set_postfix_str("fixed-setting sweep")
@@ -348,7 +376,8 @@ def fit_axis(
         bar.update(1)
         seconds["sweep"] = time.perf_counter() - t0 - sum(seconds.values())
         bar.set_postfix_str("verdict")
-        tuner = Tuner("fitted", axis, axis.name, lambda sc: model.settings(sc, axis.plant),
+        tuner = Tuner("fitted", axis, axis.name,
+                      lambda sc: model.settings(sc, axis.plant, axis.measures),
                       lambda sc: None, lambda msg: None)  # fmt: skip
         test = axis.scenarios("test")
         report = compare(
@@ -392,4 +421,5 @@ __all__ = [
     "fit_axis",
     "fit_distribution",
     "fit_moves",
+    "optima_key",
 ]

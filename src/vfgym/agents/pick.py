@@ -1,5 +1,10 @@
 """The pick model: settings for a new move picked from a library of training moves'
 optima, by their cost on the training moves most like it (the shipped settings model).
+
+With ``check`` > 1 the model also simulates its ``check`` best-ranked candidates on the
+move itself (one batched compiled call, a few milliseconds) and returns the best of them,
+feasible first: the plant is known exactly, so a candidate that breaks a constraint on
+this move, or one beaten by the next, is never returned on the ranking's word alone.
 """
 
 from __future__ import annotations
@@ -13,10 +18,10 @@ import numpy as np
 from vfgym._validate import check_choice, check_int
 from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_PLANT, Plant
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 
 from .optima import MoveOptimum
-from .targets import TargetModel, model_head, settings_targets
+from .targets import TargetModel, model_head, settings_targets, target_settings
 
 PICK_KIND = "vfgym-settings-pick"
 INFEASIBLE_PENALTY = 1.0
@@ -102,6 +107,9 @@ class PickModel(TargetModel):
     trained_on : dict or None
         The axis it was fitted on (:func:`vfgym.agents.tuners.trained_on`); ``None``: the
         paper's plant and measures.
+    check : int
+        Best-ranked candidates simulated on the move itself, the best of them returned
+        (module doc); 0 or 1: the best-ranked one, unsimulated.
     """
 
     neighbours: int
@@ -113,9 +121,32 @@ class PickModel(TargetModel):
     weights: np.ndarray
     accel_law: str = "rise"
     trained_on: dict[str, str] | None = None
+    check: int = 0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "check", check_int("check", self.check, 0, len(self.library)))
+
+    def ranked(self, features: np.ndarray) -> np.ndarray:
+        """The library rows by their mean cost ratio over the move's nearest training
+        moves, best first (ties: the lower row).
+
+        Parameters
+        ----------
+        features : numpy.ndarray
+            (len(SCENARIO_FEATURES),).
+
+        Returns
+        -------
+        numpy.ndarray
+            int, every row once.
+        """
+        z = (np.asarray(features, dtype=np.float64) - self.mean) / self.scale
+        d = np.sum(((self.points - z) * self.weights) ** 2, axis=1)
+        near = np.argsort(d, kind="stable")[: self.neighbours]
+        return np.argsort(self.ratios[near].mean(axis=0), kind="stable")
 
     def pick(self, features: np.ndarray) -> int:
-        """The library row picked for one move's features.
+        """The library row ranked first for one move's features.
 
         Parameters
         ----------
@@ -127,10 +158,49 @@ class PickModel(TargetModel):
         int
             The candidate's row.
         """
-        z = (np.asarray(features, dtype=np.float64) - self.mean) / self.scale
-        d = np.sum(((self.points - z) * self.weights) ** 2, axis=1)
-        near = np.argsort(d, kind="stable")[: self.neighbours]
-        return int(np.argmin(self.ratios[near].mean(axis=0)))
+        return int(self.ranked(features)[0])
+
+    def settings(
+        self,
+        scenario: Scenario,
+        plant: Plant = PAPER_PLANT,
+        measures: Measures = DEFAULT_MEASURES,
+    ) -> Settings:
+        """The settings the model picks for a move: the best-ranked candidate, or with
+        :attr:`check` > 1 the best on the move of the ``check`` best-ranked (feasible
+        first, then the least cost; ties: the better ranked).
+
+        Parameters
+        ----------
+        scenario : Scenario
+            The move.
+        plant : Plant
+            The base plant (an axis's), before the move's load.
+        measures : Measures
+            The axis's measures, which the check scores with.
+
+        Returns
+        -------
+        Settings
+            Inside the search space.
+        """
+        from vfgym.scoring import Move, score_pairs
+
+        loaded = scenario.plant(plant)
+        order = self.ranked(scenario_features(scenario, plant, loaded))
+        cands = [target_settings(self.library[j], loaded, self.accel_law)
+                 for j in order[: max(self.check, 1)]]  # fmt: skip
+        if len(cands) == 1:
+            return cands[0]
+        move = Move.of(scenario, plant)
+        scores = score_pairs(cands, [move] * len(cands), measures=measures)
+
+        def key(i: int) -> tuple[bool, float, int]:
+            r = scores[i]
+            assert r is not None  # V-F settings run every move
+            return (not bool(np.all(r.constraints <= 0.0)), float(r.cost), i)
+
+        return cands[min(range(len(cands)), key=key)]
 
     def targets_of(self, features: np.ndarray) -> np.ndarray:
         """The picked candidate's targets for one move's features.
@@ -161,6 +231,7 @@ class PickModel(TargetModel):
                 "ratios": self.ratios.tolist(),
             }
             | ({} if self.trained_on is None else {"trained_on": dict(self.trained_on)})
+            | ({"check": self.check} if self.check else {})
         )
 
 

@@ -19,13 +19,13 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from vfgym._validate import check_choice
+from vfgym._validate import check_choice, check_int
 from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_PLANT, Plant
@@ -170,6 +170,7 @@ def load_settings_model(path: str | Path = PRETRAINED) -> PickModel | SettingsMo
             weights=np.array(d["weights"], dtype=np.float64),
             accel_law=str(d["accel_law"]),
             trained_on=d.get("trained_on"),
+            check=int(d.get("check", 0)),
         )
     return SettingsModel(
         degree=int(d["degree"]),
@@ -266,6 +267,9 @@ class TrainConfig:
         Features the pick model's distance leaves out.
     degree, ridge : int, float
         The ridge regression's degree (1 or 2) and penalty (≥ 0).
+    check : int
+        The pick model's candidates simulated on each new move
+        (:attr:`PickModel.check`), 0 to ``library``.
 
     Raises
     ------
@@ -281,10 +285,12 @@ class TrainConfig:
     ignore: tuple[str, ...] = ("direction",)
     degree: int = 2
     ridge: float = 1.0
+    check: int = 0
 
     def __post_init__(self) -> None:
         check_choice("kind", self.kind, KINDS)
         object.__setattr__(self, "ignore", tuple(self.ignore))
+        object.__setattr__(self, "check", check_int("check", self.check, 0, self.library))
 
 
 def train_settings_model(cfg: TrainConfig, root: str | Path = ".") -> PickModel | SettingsModel:
@@ -312,7 +318,7 @@ def train_settings_model(cfg: TrainConfig, root: str | Path = ".") -> PickModel 
     table = np.load(Path(root) / cfg.costs)
     if list(table["scenarios"]) != [o.scenario for o in optima]:
         raise ValueError(f"{cfg.costs}: a cost table of other moves than {cfg.optima}'s")
-    return fit_pick_model(
+    model = fit_pick_model(
         scenarios,
         optima,
         table["cost"],
@@ -321,6 +327,7 @@ def train_settings_model(cfg: TrainConfig, root: str | Path = ".") -> PickModel 
         library=cfg.library,
         ignore=cfg.ignore,
     )
+    return replace(model, check=cfg.check)
 
 
 __all__ = [

@@ -19,7 +19,7 @@ from vfgym import space
 from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
 from vfgym.io.runs import write_text
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import PAPER_PLANT, Plant, Settings, usable_k
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings, usable_k
 
 TARGETS = ("value_rad", "error_limit_rad", "log10_k_over_ka", "ts_over_tf")
 """What the regression predicts (module doc)."""
@@ -102,7 +102,12 @@ class TargetModel:
         """The model as plain data (what :meth:`save` writes); each model's own."""
         raise NotImplementedError
 
-    def settings(self, scenario: Scenario, plant: Plant = PAPER_PLANT) -> Settings:
+    def settings(
+        self,
+        scenario: Scenario,
+        plant: Plant = PAPER_PLANT,
+        measures: Measures = DEFAULT_MEASURES,
+    ) -> Settings:
         """The settings the model picks for a move.
 
         Parameters
@@ -111,6 +116,8 @@ class TargetModel:
             The move.
         plant : Plant
             The base plant (an axis's), before the move's load.
+        measures : Measures
+            The axis's measures (for a model that scores candidates on the move).
 
         Returns
         -------

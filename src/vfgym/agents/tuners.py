@@ -26,6 +26,8 @@ from vfgym.params import Settings
 RANGE_MARGIN = 0.02
 """A feature counts as outside the training moves' range beyond this share of the range."""
 SHIPPED_SOURCE = "pretrained settings model"
+AGENT_DRAWS = 512
+"""Training moves drawn to know an agent's training ranges (its env's own draws)."""
 
 
 class TunerWarning(UserWarning):
@@ -124,25 +126,41 @@ def _default_warn(message: str) -> None:
     warnings.warn(message, TunerWarning, stacklevel=3)
 
 
-def _feature_ranges(model: Any) -> tuple[np.ndarray, np.ndarray] | None:
+def _model_ranges(model: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     points = getattr(model, "points", None)
     if points is None:
         return None
     x = np.asarray(points) * model.scale + model.mean
-    return x.min(axis=0), x.max(axis=0)
+    return x.min(axis=0), x.max(axis=0), np.asarray(model.weights) > 0
 
 
-def _outside_ranges(model: Any, axis: Axis) -> Callable[[Scenario], str | None]:
-    ranges = _feature_ranges(model)
+def _agent_ranges(
+    env_kwargs: dict[str, Any], own: Axis | None, draws: int = AGENT_DRAWS
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The feature ranges of an agent's training moves: ``draws`` moves drawn as its
+    training env drew them (its split, seed range and axis)."""
+    from vfgym.envs._common import EnvConfig
 
+    keys = ("scenario", "split", "seed_range", "plant")
+    kw = {k: env_kwargs[k] for k in keys if k in env_kwargs}
+    src = EnvConfig(axis=own, **kw).scenario_source()
+    lo, _ = src.seed_range
+    moves = [src.fixed] if src.fixed is not None else [src.seeded(lo + i) for i in range(draws)]
+    x = np.array([scenario_features(sc, src.base, sc.plant(src.base)) for sc in moves])
+    return x.min(axis=0), x.max(axis=0), np.ones(x.shape[1], dtype=bool)
+
+
+def _outside_ranges(
+    ranges: tuple[np.ndarray, np.ndarray, np.ndarray] | None, axis: Axis
+) -> Callable[[Scenario], str | None]:
     def outside(sc: Scenario) -> str | None:
         if ranges is None:
             return None
-        lo, hi = ranges
+        lo, hi, used = ranges
         f = scenario_features(sc, axis.plant, sc.plant(axis.plant))
         pad = RANGE_MARGIN * (hi - lo) + 1e-9
         for j, name in enumerate(SCENARIO_FEATURES):
-            if model.weights[j] > 0 and not lo[j] - pad[j] <= f[j] <= hi[j] + pad[j]:
+            if used[j] and not lo[j] - pad[j] <= f[j] <= hi[j] + pad[j]:
                 return f"{name} {f[j]:.3g}, trained on {lo[j]:.3g} to {hi[j]:.3g}"
         return None
 
@@ -197,8 +215,8 @@ def load_tuner(
         source,
         ax,
         str(own.get("axis")),
-        lambda sc: model.settings(sc, plant),
-        _outside_ranges(model, ax),
+        lambda sc: model.settings(sc, plant, ax.measures),
+        _outside_ranges(_model_ranges(model), ax),
         warn,
     )
 
@@ -208,7 +226,8 @@ def _agent_tuner(path: Path, ax: Axis | None, warn: Callable[[str], None]) -> Tu
 
     if not path.is_file():
         raise ValueError(f"--model {path}: no such file")
-    own_file = ((_config(path).get("hyperparams") or {}).get("env_kwargs") or {}).get("axis")
+    env_kwargs = (_config(path).get("hyperparams") or {}).get("env_kwargs") or {}
+    own_file = env_kwargs.get("axis")
     own = load_axis(own_file) if own_file and Path(own_file).is_file() else PAPER_AXIS
     source = f"agent {path}"
     if ax is not None and machine_digest(own) != machine_digest(ax):
@@ -217,10 +236,13 @@ def _agent_tuner(path: Path, ax: Axis | None, warn: Callable[[str], None]) -> Tu
             "plant or measures; its observations describe moves it never saw"
         )
     policy = policy_settings(path, ax)
-    return Tuner(source, ax or own, own.name, policy, lambda sc: None, warn)
+    axis = ax or own
+    ranges = _agent_ranges(env_kwargs, None if own is PAPER_AXIS else own)
+    return Tuner(source, axis, own.name, policy, _outside_ranges(ranges, axis), warn)
 
 
 __all__ = [
+    "AGENT_DRAWS",
     "RANGE_MARGIN",
     "Tuner",
     "TunerWarning",

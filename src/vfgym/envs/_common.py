@@ -292,6 +292,10 @@ class ScenarioSource:
         seed = int(rng.integers(self.seed_range[0], self.seed_range[1]))
         return self.episode(self._seeded(seed))
 
+    def seeded(self, seed: int) -> Scenario:
+        """The scenario a draw of ``seed`` gives (on the source's split and axis)."""
+        return self._seeded(seed)
+
     def _named(self, scenario: Any) -> Scenario:
         sc = _check_scenario(scenario)
         return get_scenario(sc) if self.axis is None else self.axis.scenario(sc)
