@@ -44,6 +44,7 @@ TRIMS = {
     ),
     "evaluate": "evaluate: 4 test scenarios and 200 bootstrap resamples (README: 32 and 2000)",
     "fit": "fit: 8 training moves (the default 160 take ~3-4 min here)",
+    "refine": "refine: 3 trials (the docs' 150 on a long belt move take a minute or more)",
     "train": (
         "train: 64 timesteps on 2 envs with tiny batches, one held-out scenario (README: "
         "50 k-400 k timesteps, 25 min)"
@@ -181,6 +182,27 @@ README_RUNS: dict[str, list[Run]] = {
                 "test-3",
             ],
             ("fit-belt",),
+        ),
+    ],
+    "vfgym predict --model runs/fit/belt/settings_model.json --axis experiments/axes/belt.yaml "
+    "--scenario test-10 --refine 150": [
+        Run(
+            "predict-fit-belt-refine",
+            [
+                "predict",
+                "--model",
+                "runs/fit/belt/settings_model.json",
+                "--axis",
+                "experiments/axes/belt.yaml",
+                "--scenario",
+                "test-10",
+                "--refine",
+                "150",
+                "--refine",
+                "3",
+            ],
+            ("fit-belt",),
+            trim="refine",
         ),
     ],
     "vfgym predict --scenario test-3 --out test-3.yaml": [
