@@ -45,7 +45,8 @@ Every choice is a deterministic function of the seed and the study's completed t
 and each sampled trial records its generation (system attribute ``vfgym:compass``), so a
 study resumed in a new process, or shared by several workers, continues the same search;
 a worker that asks while another's generation is still running gets model points that
-take the running trials into account.
+take the running trials into account. A model batch's tag keeps its models' fitted
+hyperparameters (``theta``), where the next batch's fits start (:func:`last_thetas`).
 """
 
 from __future__ import annotations
@@ -135,6 +136,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         self._lo, self._span = b[:, 0], b[:, 1] - b[:, 0]
         self._queue: list[dict[str, Any]] = []
         self._checked = -1  # the number of the next trial, when the queue was last checked
+        self._starts: dict[str, list[float]] = {}  # the last model batch's hyperparameters
         # Poll directions: the four axes, and with ``diagonal`` value and L/value moved
         # together (L/value² held: the tail's deceleration at top speed, δ²f²·L/value²).
         self._dirs = np.eye(4)
@@ -150,11 +152,66 @@ class CompassSampler(optuna.samplers.BaseSampler):
             return {}  # an enqueued trial (a warm start, a retry) keeps its settings
         item = self._next(study, trial.number)
         study._storage.set_trial_system_attr(trial._trial_id, ATTR, item["tag"])
+        return self._params(item)
+
+    def _params(self, item: dict[str, Any]) -> dict[str, Any]:
         s = self.relative.settings(self._to_unit(np.asarray(item["x"])), item["law"])
         params = {d.name: getattr(s, d.name) for d in space.SPACE}
         if len(self.laws) > 1:
             params["accel_law"] = s.accel_law
         return params
+
+    # --- trials made in one write ---------------------------------------------------------
+    def plan_trial(self, study: Any, first: bool) -> optuna.trial.FrozenTrial:
+        """The next trial of the search as a running trial to create in one write
+        (``storage.create_new_trial(study_id, template)``: its parameters and generation
+        with it), where :meth:`sample_relative` costs a write per parameter after the
+        trial's own; the same trial as ``study.ask()`` would draw.
+
+        Call under the claim lock, and create each trial before asking for the next (the
+        plan counts the study's trials); then :meth:`created` with its number.
+
+        Parameters
+        ----------
+        study : optuna.Study
+            The study.
+        first : bool
+            The first of a batch: the study is read again (another worker may have
+            drawn since).
+
+        Returns
+        -------
+        optuna.trial.FrozenTrial
+            The trial (state ``RUNNING``), numbered as the study's next.
+        """
+        import datetime
+
+        if first or self._checked < 0:
+            self._queue_for(study)
+        number = self._checked
+        item = self._next(study, number)
+        params = self._params(item)
+        dists = space.distributions(self.laws)
+        return optuna.trial.FrozenTrial(
+            number=number,
+            state=optuna.trial.TrialState.RUNNING,
+            value=None,
+            datetime_start=datetime.datetime.now(),
+            datetime_complete=None,
+            params=params,
+            distributions={k: dists[k] for k in params},
+            user_attrs={},
+            system_attrs={ATTR: item["tag"]},
+            intermediate_values={},
+            trial_id=-1,
+        )
+
+    def created(self, number: int) -> None:
+        """The trial :meth:`plan_trial` planned was created with this number (another
+        than planned: a trial made meanwhile, outside the claim lock; the next plan reads
+        the study again)."""
+        if number + 1 != self._checked:
+            self._checked = -1
 
     def sample_independent(self, study: Any, trial: Any, name: str, dist: Any) -> Any:
         rng = np.random.default_rng([self.seed, trial.number, 7])
@@ -210,6 +267,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
             return []  # its retries wait, or another worker runs it
         done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
         obs = [o for o in (self._observe(t) for t in done) if o is not None]
+        self._starts = last_thetas(tagged)
         self._queue = self._generation(obs, tagged, last)
         return self._queue
 
@@ -223,6 +281,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         obs = [o for o in (self._observe(t) for t in done) if o is not None]
         running = optuna.trial.TrialState.RUNNING
         pending = [self._x_of(t) for t in trials if t.state == running and self._has_params(t)]
+        self._starts = last_thetas([t for t in trials if ATTR in t.system_attrs])
         return self._extra(obs, pending, last, len(trials))
 
     # --- the search ---------------------------------------------------------------------
@@ -377,10 +436,11 @@ class CompassSampler(optuna.samplers.BaseSampler):
                rounds: int = 1) -> list[dict[str, Any]]:  # fmt: skip
         o = self.options
         rng = self._rng(gen, 2 + len(pending))
-        pts = propose(self._inputs(obs), obs, [self._input(x, law) for x, law in pending],
-                      n or o.model_batch, o.xi, rng, len(self.laws), o.cap_model,
-                      o.split_constraints)  # fmt: skip
-        tag = self._tag(gen, "model", role, centre, steps, since, rounds)
+        pts, thetas = propose(self._inputs(obs), obs,
+                              [self._input(x, law) for x, law in pending],
+                              n or o.model_batch, o.xi, rng, len(self.laws), o.cap_model,
+                              o.split_constraints, self._starts)  # fmt: skip
+        tag = self._tag(gen, "model", role, centre, steps, since, rounds) | {"theta": thetas}
         return [{"x": self._from_unit(p[:4]), "law": self._law_of(p), "tag": tag} for p in pts]
 
     def _extra(self, obs: list[Observation], pending: list, last: int, k: int) -> list:
@@ -426,6 +486,19 @@ class CompassSampler(optuna.samplers.BaseSampler):
         cons = np.array([float(v) for _, v in sorted(trial.constraints.items())])
         viol = float(np.maximum(cons, 0.0).sum()) if cons.size else 0.0
         return Observation(trial.number, x, law, float(trial.value), viol, viol <= 0.0, cons)
+
+
+def last_thetas(tagged: list[Any]) -> dict[str, list[float]]:
+    """The models' log hyperparameters of the latest model batch among the trials (its
+    tag's ``theta``; empty if none): where the next batch's fits start, so that they
+    take :data:`vfgym.tuning._gp.WARM_STEPS` steps, not ``COLD_STEPS``; read from the
+    study, so a resumed or shared search starts them the same."""
+    best: tuple[int, dict[str, list[float]]] = (-1, {})
+    for t in tagged:
+        tag = t.system_attrs[ATTR]
+        if "theta" in tag and tag["gen"] > best[0]:
+            best = (tag["gen"], tag["theta"])
+    return best[1]
 
 
 def latin_hypercube(n: int, dim: int, rng: np.random.Generator) -> np.ndarray:

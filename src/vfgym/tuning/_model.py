@@ -42,29 +42,41 @@ MODEL_POINTS = 160
 
 def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
             xi: float, rng: np.random.Generator, n_laws: int = 1,
-            cap: bool = False, split: bool = True) -> list[np.ndarray]:  # fmt: skip
+            cap: bool = False, split: bool = True,
+            starts: dict[str, list[float]] | None = None) -> Proposal:  # fmt: skip
     """``n`` points (unit coordinates) of highest expected improvement (by at least
     ``xi`` over the best feasible cost) times probability of feasibility, each conditioned
     on the previous ones and on ``pending`` at their predicted values. Gaussian
     processes: log cost (on the feasible points once there are three) and the
     constraints (signed log, :func:`_constraint_targets`); ``cap``: log costs above their
-    median taken as the median; ``split``: one model per broken constraint.
+    median taken as the median; ``split``: one model per broken constraint; ``starts``:
+    each model's fit starts from these log hyperparameters (a previous batch's
+    :attr:`Proposal.thetas`, by model) and takes fewer steps.
     Linear algebra on one thread: OpenBLAS's threads spin on matrices this small, 30x
     slower on a busy machine (measured, 150 points)."""
     from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
     with threadpool_limits(1, user_api="blas"):
-        return _propose(x, obs, pending, n, xi, rng, n_laws, cap, split)
+        return _propose(x, obs, pending, n, xi, rng, n_laws, cap, split, starts)
+
+
+class Proposal(NamedTuple):
+    """A model batch's points (unit coordinates) and each model's fitted log
+    hyperparameters (``cost``, and ``c0``, ``c1``, … per constraint or ``worst``)."""
+
+    points: list[np.ndarray]
+    thetas: dict[str, list[float]]
 
 
 def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
              xi: float, rng: np.random.Generator, n_laws: int,
-             cap: bool, split: bool) -> list[np.ndarray]:  # fmt: skip
+             cap: bool, split: bool,
+             starts: dict[str, list[float]] | None) -> Proposal:  # fmt: skip
     if len(obs) > MODEL_POINTS:
         order = sorted(range(len(obs)), key=lambda i: rank(obs[i]))
         keep = sorted(set(order[: MODEL_POINTS // 2]) | set(range(len(obs))[-MODEL_POINTS // 2 :]))
         x, obs = x[keep], [obs[i] for i in keep]
-    fit = _fit(x, obs, xi, pending, cap, split)
+    fit = _fit(x, obs, xi, pending, cap, split, starts)
     feas = np.array([o.feasible for o in obs])
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     top = x[np.argsort(np.where(feas, y, np.inf), kind="stable")[:3]]
@@ -82,7 +94,7 @@ def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n
             c[:, 4] = np.round(c[:, 4] * (n_laws - 1)) / (n_laws - 1)
         return c
 
-    return fit.choose(n, candidates)
+    return Proposal(fit.choose(n, candidates), fit.thetas())
 
 
 LOCAL_POINTS = 60
@@ -122,6 +134,12 @@ class _Fit(NamedTuple):
     gp: GaussianProcess
     cgps: list[GaussianProcess]
     best: float | None
+    keys: tuple[str, ...] = ()
+
+    def thetas(self) -> dict[str, list[float]]:
+        """Each model's log hyperparameters, by name (``cost``, then :attr:`keys`)."""
+        models = zip(("cost", *self.keys), (self.gp, *self.cgps), strict=False)
+        return {k: [float(t) for t in m.theta] for k, m in models}
 
     def choose(self, n: int, candidates: Any) -> list[np.ndarray]:
         """``n`` points of one set of ``candidates()``, each the best by the logarithm of
@@ -153,10 +171,12 @@ class _Fit(NamedTuple):
 
 
 def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndarray],
-         cap: bool = False, split: bool = True) -> _Fit:  # fmt: skip
+         cap: bool = False, split: bool = True,
+         starts: dict[str, list[float]] | None = None) -> _Fit:  # fmt: skip
     """Gaussian processes on log cost (on the feasible points once there are three) and
     on the constraints (signed log, :func:`_constraint_targets`), conditioned on ``pending``
-    at their predicted values.
+    at their predicted values; each fit from ``starts``' hyperparameters of its name, if
+    given (:meth:`_Fit.thetas`).
     ``cap``: log costs above their median taken as the median, so that the model spends
     itself on the good half of a space whose costs span decades."""
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
@@ -164,13 +184,15 @@ def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndar
     cons = np.array([o.constraints for o in obs])
     fit = feas if feas.sum() >= 3 else np.ones(len(obs), dtype=bool)
     yf = np.minimum(y[fit], np.median(y[fit])) if cap else y[fit]
-    gp = GaussianProcess(x[fit], yf)
-    cgps = [GaussianProcess(x, _signed_log(c)) for c in _constraint_targets(cons, split)]
+    starts = starts or {}
+    gp = GaussianProcess(x[fit], yf, start=starts.get("cost"))
+    keyed = _constraint_models(cons, split)
+    cgps = [GaussianProcess(x, _signed_log(c), start=starts.get(k)) for k, c in keyed]
     best = y[feas].min() + math.log1p(-xi) if feas.any() else None
     for p in pending:
         for m in (gp, *cgps):
             m.condition(p[None], float(m.predict(p[None])[0][0]))
-    return _Fit(gp, cgps, best)
+    return _Fit(gp, cgps, best, tuple(k for k, _ in keyed))
 
 
 def _constraint_targets(cons: np.ndarray, split: bool) -> list[np.ndarray]:
@@ -180,12 +202,17 @@ def _constraint_targets(cons: np.ndarray, split: bool) -> list[np.ndarray]:
     from one constraint's surface to another's: on ``short-move`` the worst's model took
     the region of the better basin (lower value and L/value, where the acceleration
     constraint gives way) as infeasible."""
+    return [c for _, c in _constraint_models(cons, split)]
+
+
+def _constraint_models(cons: np.ndarray, split: bool) -> list[tuple[str, np.ndarray]]:
+    """:func:`_constraint_targets`, each named: ``c<i>`` for constraint i, ``worst``."""
     if not cons.size:
         return []
     if split:
-        return [c for c in cons.T if (c > 0).any()]
+        return [(f"c{i}", c) for i, c in enumerate(cons.T) if (c > 0).any()]
     worst = cons.max(axis=1)
-    return [worst] if (worst > 0).any() else []
+    return [("worst", worst)] if (worst > 0).any() else []
 
 
 def _signed_log(v: np.ndarray) -> np.ndarray:
