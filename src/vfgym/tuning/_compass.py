@@ -80,7 +80,11 @@ class CompassOptions:
     ``diagonal``: the fifth poll direction (value and L/value together); ``patience``: a
     compass whose last generation moved goes on past ``compass_trials`` (50: five
     generations of ten polls, as 40 were of eight). All four on by default
-    (docs/tuning.md, "Samplers: trials to the grid optimum")."""
+    (docs/tuning.md, "Samplers: trials to the grid optimum"). ``refit_growth``: a model
+    batch fits its Gaussian processes' hyperparameters again (from the last fit's) once
+    the completed trials number this many times those of the last fit, else keeps them
+    (a long sweep's model batches, one per 8 trials, cost a factorisation, not a fit:
+    docs/speed.md)."""
 
     n_init: int = 6
     step0: float = 0.4
@@ -98,6 +102,7 @@ class CompassOptions:
     patience: bool = True
     split_constraints: bool = True
     explore_gap: float = 0.1
+    refit_growth: float = 1.25
 
 
 LOCAL = CompassOptions(search=2, composite=True, model_rounds=2, cap_model=True,
@@ -136,7 +141,10 @@ class CompassSampler(optuna.samplers.BaseSampler):
         self._lo, self._span = b[:, 0], b[:, 1] - b[:, 0]
         self._queue: list[dict[str, Any]] = []
         self._checked = -1  # the number of the next trial, when the queue was last checked
-        self._starts: dict[str, list[float]] = {}  # the last model batch's hyperparameters
+        self._seen: dict[int, Observation | None] = {}  # completed trials, by number
+        self._seen_in: tuple[int, str] | None = None  # the study they are of
+        # The last model batch's hyperparameters, and the trials they were fitted on.
+        self._starts: tuple[dict[str, list[float]], int] = ({}, 0)
         # Poll directions: the four axes, and with ``diagonal`` value and L/value moved
         # together (L/value² held: the tail's deceleration at top speed, δ²f²·L/value²).
         self._dirs = np.eye(4)
@@ -266,7 +274,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         if any(t.system_attrs[ATTR]["gen"] == last and not t.state.is_finished() for t in tagged):
             return []  # its retries wait, or another worker runs it
         done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
-        obs = [o for o in (self._observe(t) for t in done) if o is not None]
+        obs = self._observations(study, done)
         self._starts = last_thetas(tagged)
         self._queue = self._generation(obs, tagged, last)
         return self._queue
@@ -278,7 +286,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         last = max((t.system_attrs[ATTR]["gen"] for t in trials if ATTR in t.system_attrs),
                    default=0)  # fmt: skip
         done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
-        obs = [o for o in (self._observe(t) for t in done) if o is not None]
+        obs = self._observations(study, done)
         running = optuna.trial.TrialState.RUNNING
         pending = [self._x_of(t) for t in trials if t.state == running and self._has_params(t)]
         self._starts = last_thetas([t for t in trials if ATTR in t.system_attrs])
@@ -436,11 +444,18 @@ class CompassSampler(optuna.samplers.BaseSampler):
                rounds: int = 1) -> list[dict[str, Any]]:  # fmt: skip
         o = self.options
         rng = self._rng(gen, 2 + len(pending))
+        starts, fitted_at = self._starts
+        # The hyperparameters are fitted again once the trials have grown by refit_growth
+        # since their last fit; in between they are kept, the models only factored.
+        refit = not starts or len(obs) >= o.refit_growth * fitted_at
         pts, thetas = propose(self._inputs(obs), obs,
                               [self._input(x, law) for x, law in pending],
                               n or o.model_batch, o.xi, rng, len(self.laws), o.cap_model,
-                              o.split_constraints, self._starts)  # fmt: skip
-        tag = self._tag(gen, "model", role, centre, steps, since, rounds) | {"theta": thetas}
+                              o.split_constraints, starts, refit)  # fmt: skip
+        tag = self._tag(gen, "model", role, centre, steps, since, rounds) | {
+            "theta": thetas,
+            "theta_n": len(obs) if refit else fitted_at,
+        }
         return [{"x": self._from_unit(p[:4]), "law": self._law_of(p), "tag": tag} for p in pts]
 
     def _extra(self, obs: list[Observation], pending: list, last: int, k: int) -> list:
@@ -479,6 +494,19 @@ class CompassSampler(optuna.samplers.BaseSampler):
     def _has_params(self, trial: Any) -> bool:
         return all(d.name in trial.params for d in space.SPACE)
 
+    def _observations(self, study: Any, done: list[Any]) -> list[Observation]:
+        """The completed trials as observations; each read once (per study): a completed
+        trial never changes, and reading them all for each generation made a long
+        sweep's cost per trial grow with its size."""
+        key = (id(study), study.study_name)
+        if self._seen_in != key:
+            self._seen, self._seen_in = {}, key
+        seen = self._seen
+        for t in done:
+            if t.number not in seen:
+                seen[t.number] = self._observe(t)
+        return [o for o in (seen[t.number] for t in done) if o is not None]
+
     def _observe(self, trial: Any) -> Observation | None:
         if trial.value is None or not self._has_params(trial):
             return None
@@ -488,17 +516,18 @@ class CompassSampler(optuna.samplers.BaseSampler):
         return Observation(trial.number, x, law, float(trial.value), viol, viol <= 0.0, cons)
 
 
-def last_thetas(tagged: list[Any]) -> dict[str, list[float]]:
+def last_thetas(tagged: list[Any]) -> tuple[dict[str, list[float]], int]:
     """The models' log hyperparameters of the latest model batch among the trials (its
-    tag's ``theta``; empty if none): where the next batch's fits start, so that they
-    take :data:`vfgym.tuning._gp.WARM_STEPS` steps, not ``COLD_STEPS``; read from the
-    study, so a resumed or shared search starts them the same."""
-    best: tuple[int, dict[str, list[float]]] = (-1, {})
+    tag's ``theta``; empty if none), and the completed trials they were fitted on: where
+    the next batch's fits start, so that they take :data:`vfgym.tuning._gp.WARM_STEPS`
+    steps, not ``COLD_STEPS`` (or none, :attr:`CompassOptions.refit_growth`); read from
+    the study, so a resumed or shared search starts them the same."""
+    best: tuple[int, dict[str, list[float]], int] = (-1, {}, 0)
     for t in tagged:
         tag = t.system_attrs[ATTR]
         if "theta" in tag and tag["gen"] > best[0]:
-            best = (tag["gen"], tag["theta"])
-    return best[1]
+            best = (tag["gen"], tag["theta"], int(tag.get("theta_n", 0)))
+    return best[1], best[2]
 
 
 def latin_hypercube(n: int, dim: int, rng: np.random.Generator) -> np.ndarray:

@@ -43,7 +43,8 @@ MODEL_POINTS = 160
 def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
             xi: float, rng: np.random.Generator, n_laws: int = 1,
             cap: bool = False, split: bool = True,
-            starts: dict[str, list[float]] | None = None) -> Proposal:  # fmt: skip
+            starts: dict[str, list[float]] | None = None,
+            refit: bool = True) -> Proposal:  # fmt: skip
     """``n`` points (unit coordinates) of highest expected improvement (by at least
     ``xi`` over the best feasible cost) times probability of feasibility, each conditioned
     on the previous ones and on ``pending`` at their predicted values. Gaussian
@@ -51,13 +52,14 @@ def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n:
     constraints (signed log, :func:`_constraint_targets`); ``cap``: log costs above their
     median taken as the median; ``split``: one model per broken constraint; ``starts``:
     each model's fit starts from these log hyperparameters (a previous batch's
-    :attr:`Proposal.thetas`, by model) and takes fewer steps.
+    :attr:`Proposal.thetas`, by model) and takes fewer steps; not ``refit``: a model
+    with a start keeps it, unfitted (only factored on the points).
     Linear algebra on one thread: OpenBLAS's threads spin on matrices this small, 30x
     slower on a busy machine (measured, 150 points)."""
     from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
     with threadpool_limits(1, user_api="blas"):
-        return _propose(x, obs, pending, n, xi, rng, n_laws, cap, split, starts)
+        return _propose(x, obs, pending, n, xi, rng, n_laws, cap, split, starts, refit)
 
 
 class Proposal(NamedTuple):
@@ -71,12 +73,12 @@ class Proposal(NamedTuple):
 def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
              xi: float, rng: np.random.Generator, n_laws: int,
              cap: bool, split: bool,
-             starts: dict[str, list[float]] | None) -> Proposal:  # fmt: skip
+             starts: dict[str, list[float]] | None, refit: bool) -> Proposal:  # fmt: skip
     if len(obs) > MODEL_POINTS:
         order = sorted(range(len(obs)), key=lambda i: rank(obs[i]))
         keep = sorted(set(order[: MODEL_POINTS // 2]) | set(range(len(obs))[-MODEL_POINTS // 2 :]))
         x, obs = x[keep], [obs[i] for i in keep]
-    fit = _fit(x, obs, xi, pending, cap, split, starts)
+    fit = _fit(x, obs, xi, pending, cap, split, starts, refit)
     feas = np.array([o.feasible for o in obs])
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     top = x[np.argsort(np.where(feas, y, np.inf), kind="stable")[:3]]
@@ -172,11 +174,11 @@ class _Fit(NamedTuple):
 
 def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndarray],
          cap: bool = False, split: bool = True,
-         starts: dict[str, list[float]] | None = None) -> _Fit:  # fmt: skip
+         starts: dict[str, list[float]] | None = None, refit: bool = True) -> _Fit:  # fmt: skip
     """Gaussian processes on log cost (on the feasible points once there are three) and
     on the constraints (signed log, :func:`_constraint_targets`), conditioned on ``pending``
     at their predicted values; each fit from ``starts``' hyperparameters of its name, if
-    given (:meth:`_Fit.thetas`).
+    given (:meth:`_Fit.thetas`); not ``refit``: kept as they are where given.
     ``cap``: log costs above their median taken as the median, so that the model spends
     itself on the good half of a space whose costs span decades."""
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
@@ -185,9 +187,14 @@ def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndar
     fit = feas if feas.sum() >= 3 else np.ones(len(obs), dtype=bool)
     yf = np.minimum(y[fit], np.median(y[fit])) if cap else y[fit]
     starts = starts or {}
-    gp = GaussianProcess(x[fit], yf, start=starts.get("cost"))
+
+    def model(xs: np.ndarray, ys: np.ndarray, key: str) -> GaussianProcess:
+        start = starts.get(key)
+        return GaussianProcess(xs, ys, start=start, fit=refit or start is None)
+
+    gp = model(x[fit], yf, "cost")
     keyed = _constraint_models(cons, split)
-    cgps = [GaussianProcess(x, _signed_log(c), start=starts.get(k)) for k, c in keyed]
+    cgps = [model(x, _signed_log(c), k) for k, c in keyed]
     best = y[feas].min() + math.log1p(-xi) if feas.any() else None
     for p in pending:
         for m in (gp, *cgps):
