@@ -272,8 +272,9 @@ def claim(
     out = []
     for i in range(n):
         if maker is not None and i >= waiting:
-            trial, trial_id = maker.make(study, i == waiting, objective.laws)
+            trial, settings = maker.make(study, i == waiting, objective.laws)
             beats.add(trial)
+            trial_id: int | None = trial._trial_id
         else:
             with warnings.catch_warnings():  # heartbeats are ours (:class:`Heartbeats`)
                 warnings.filterwarnings("ignore", message="Heartbeat of storage is supposed")
@@ -281,8 +282,9 @@ def claim(
             trial_id = None
             beats.add(trial)
             trial.set_user_attr(WORKER_ATTR, _worker_id())
+            settings = space.suggest(trial, objective.laws)
         objective.current = trial.number
-        out.append(Claimed(trial, space.suggest(trial, objective.laws), trial_id))
+        out.append(Claimed(trial, settings, trial_id))
     return out
 
 
@@ -296,20 +298,24 @@ class OneWrite(NamedTuple):
     storage: Any
     study_id: int
 
-    def make(self, study: Any, first: bool, laws: tuple[str, ...]) -> tuple[Any, int]:
-        """The next planned trial, created running with its parameters, generation and
-        this worker's name; and its id."""
-        import optuna
-
+    def make(self, study: Any, first: bool, laws: tuple[str, ...]) -> tuple[MadeTrial, Settings]:
+        """The next planned trial, created running with its parameters, generation,
+        this worker's name and its settings; and the settings."""
         template = self.sampler.plan_trial(study, first)
+        settings = settings_of(template.params, laws)
         template.user_attrs[WORKER_ATTR] = _worker_id()
         # The settings' user attribute with them (the trial's result records it again,
         # which :meth:`Objective.record` skips as already there).
-        template.user_attrs["settings"] = space.settings_to_dict(settings_of(template.params, laws))
+        template.user_attrs["settings"] = space.settings_to_dict(settings)
         trial_id = self.storage.create_new_trial(self.study_id, template)
-        trial = optuna.trial.Trial(study, trial_id)
-        self.sampler.created(trial.number)
-        return trial, trial_id
+        number = template.number
+        # The number planned is the trial's unless one was made meanwhile (outside the
+        # claim lock): checked by the storage's cache of numbers, which the new trial is
+        # in (no read), else found by a read.
+        if self.storage.get_trial_id_from_study_id_trial_number(self.study_id, number) != trial_id:
+            number = self.storage.get_trial(trial_id).number
+        self.sampler.created(number)
+        return MadeTrial(self.storage, trial_id, number, template.user_attrs), settings
 
     def tell(self, trial_id: int, values: float | list[float]) -> None:
         """Complete the trial with its values (what ``study.tell`` writes)."""
@@ -333,6 +339,28 @@ def one_write(sampler: Any, storage: Any, study_name: str) -> OneWrite | None:
     if not (hasattr(sampler, "plan_trial") and hasattr(sampler, "created")):
         return None
     return OneWrite(sampler, storage, storage.get_study_id_from_name(study_name))
+
+
+class MadeTrial:
+    """A trial :class:`OneWrite` made, with what a worker uses of an
+    :class:`optuna.trial.Trial` (its number, storage, user attributes), without reading the
+    trial back from the storage."""
+
+    def __init__(self, storage: Any, trial_id: int, number: int, user_attrs: dict) -> None:
+        self.storage = storage
+        self._trial_id = trial_id
+        self.number = number
+        self._user_attrs = dict(user_attrs)
+
+    @property
+    def user_attrs(self) -> dict[str, Any]:
+        """The user attributes (the trial's as made, and those set since)."""
+        return dict(self._user_attrs)
+
+    def set_user_attr(self, key: str, value: Any) -> None:
+        """Set a user attribute (one storage write)."""
+        self.storage.set_trial_user_attr(self._trial_id, key, value)
+        self._user_attrs[key] = value
 
 
 class Claimed(NamedTuple):
@@ -359,7 +387,7 @@ def run_batch(
         raise
     except Exception:
         for c in batch:
-            study.tell(c.trial, state=optuna.trial.TrialState.FAIL)
+            study.tell(c.trial.number, state=optuna.trial.TrialState.FAIL)
         raise
     for c, res in zip(batch, results, strict=True):
         objective.record(c.trial, res)
@@ -367,7 +395,7 @@ def run_batch(
         if maker is not None and c.trial_id is not None and all(map(math.isfinite, values)):
             maker.tell(c.trial_id, res.values)
         else:
-            study.tell(c.trial, res.values)
+            study.tell(c.trial.number, res.values)
 
 
 def give_back(study: Any, batch: list[Claimed]) -> None:
