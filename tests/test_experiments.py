@@ -40,11 +40,34 @@ def run(script: str, *args: str) -> str:
 def test_trials_to_reference_prints_a_row_per_sampler_with_an_even_number_of_seeds(refs):
     # Two seeds: the median of two trial counts may be a half (it once failed to print).
     out = run("trials_to_reference.py", "--refs", str(refs), "--problems", "paper-step",
-              "--samplers", "compass,random", "--seeds", "0,1", "--max-trials", "6",
+              "--samplers", "compass,random,cmaes", "--seeds", "0,1", "--max-trials", "6",
               "--storage", "journal")  # fmt: skip
-    for sampler in ("compass", "random"):
-        row = next(line for line in out.splitlines() if line.startswith(sampler))
+    for sampler in ("compass", "random", "cmaes"):
+        row = next(line for line in out.splitlines() if line.startswith(f"{sampler} "))
         assert re.search(r"\d+/2 ", row), row  # every run's best feasible, of 2
+        said = next(line for line in out.splitlines() if line.startswith(f"{sampler}:"))
+        assert "Relative" in said and "warm starts" in said, said
+    assert "sigma0" in next(line for line in out.splitlines() if line.startswith("cmaes:"))
+
+
+def test_held_out_problems_are_drawn_by_their_seed_apart_from_the_axes_own_moves():
+    sys.path.insert(0, str(ROOT / "experiments"))
+    try:
+        from trials_to_reference import HELD_OUT_AXES, HELD_OUT_MOVES, held_out
+    finally:
+        sys.path.pop(0)
+    a, b = held_out(2, 7), held_out(2, 8)
+    assert a == held_out(2, 7) and a != b
+    assert len(a) == 2 * len(HELD_OUT_AXES)
+    for problem in a:
+        axis, _, moves = problem.partition(":")
+        assert axis in HELD_OUT_AXES
+        seeds = [int(m.removeprefix("test-")) for m in moves.split(",")]
+        assert len(set(seeds)) == HELD_OUT_MOVES and min(seeds) >= 10_000  # not 0-31
+    out = run("trials_to_reference.py", "--problems", "", "--held-out", "1",
+              "--held-out-seed", "7", "--print-held-out")  # fmt: skip
+    assert "drawn by seed 7" in out
+    assert out.count("reference: vfgym grid --axis ") == len(HELD_OUT_AXES)
 
 
 def test_reference_basin_prints_a_row_per_box(refs):

@@ -7,7 +7,7 @@ from typing import NamedTuple
 import numpy as np
 import pytest
 
-from vfgym.tuning._compass import Observation, propose_local
+from vfgym.tuning._model import Observation, propose_local
 
 
 def _observe(points: np.ndarray) -> list[Observation]:
@@ -174,14 +174,14 @@ def test_patience_keeps_a_moving_compass_past_its_budget(moved, patience, mode):
     ],
 )
 def test_constraint_targets(cons, split, expected):
-    from vfgym.tuning._compass import _constraint_targets
+    from vfgym.tuning._model import _constraint_targets
 
     got = _constraint_targets(np.array(cons), split)
     assert [list(c) for c in got] == expected
 
 
 def test_one_feasibility_model_per_broken_constraint():
-    from vfgym.tuning._compass import _fit
+    from vfgym.tuning._model import _fit
 
     x = np.random.default_rng(3).uniform(0.0, 1.0, (30, 4))
     obs = []

@@ -9,14 +9,15 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from vfgym.tuning._compass import _Fit
 from vfgym.tuning._gp import (
+    Believer,
     GaussianProcess,
     expected_improvement,
     log_expected_improvement,
     log_norm_cdf,
     matern52,
 )
+from vfgym.tuning._model import _Fit
 
 sklearn_gp = pytest.importorskip("sklearn.gaussian_process")
 kernels = pytest.importorskip("sklearn.gaussian_process.kernels")
@@ -125,3 +126,27 @@ def test_a_model_batch_takes_the_best_candidate_when_every_product_underflows():
     assert want != 0
     (chosen,) = _Fit(gp, [], best).choose(1, lambda: cand)
     np.testing.assert_array_equal(chosen, cand[want])
+
+
+def test_believed_points_give_the_posterior_of_conditioning_on_their_predictions():
+    x, y = _data(40, seed=5)
+    cand = np.random.default_rng(6).random((200, 4))
+    gp = _ours(x, y)
+    b = Believer(gp, cand)
+    mu0, _ = gp.predict(cand)
+    np.testing.assert_allclose(b.mean, mu0, rtol=1e-12, atol=1e-12)
+    for j in (17, 3, 150, 90):
+        b.believe(j)
+        gp.condition(cand[j][None], float(gp.predict(cand[j][None])[0][0]))
+        mu, sd = gp.predict(cand)
+        np.testing.assert_allclose(mu, b.mean, rtol=1e-8, atol=1e-8)
+        np.testing.assert_allclose(b.sd(), sd, rtol=1e-6, atol=1e-8)
+    assert b.sd()[17] < 0.1 * sd.max()  # a believed point is nearly known
+
+
+def test_a_model_batch_chooses_distinct_candidates():
+    x, y = _data(30)
+    gp = _ours(x, y)
+    cand = np.random.default_rng(7).random((64, 4))
+    chosen = _Fit(gp, [], float(y.min())).choose(8, lambda: cand)
+    assert len({tuple(c) for c in chosen}) == 8

@@ -92,7 +92,9 @@ from vfgym.tuning._study import (
     check_sampler,
     create_or_load,
     make_sampler,
+    relative_space,
     trial_budget,
+    warm_starts,
 )
 from vfgym.tuning._workers import DeferredInterrupt, WorkerReport, run_worker, spawn_workers
 
@@ -138,6 +140,7 @@ __all__ = [
     "make_sampler",
     "mask_url",
     "open_storage",
+    "relative_space",
     "resolve_storage",
     "run_grid",
     "run_worker",
@@ -146,6 +149,7 @@ __all__ = [
     "spawn_workers",
     "trial_budget",
     "trial_settings",
+    "warm_starts",
     "write_grid_csv",
     "write_plots",
     "write_trials_csv",

@@ -45,40 +45,23 @@ Every choice is a deterministic function of the seed and the study's completed t
 and each sampled trial records its generation (system attribute ``vfgym:compass``), so a
 study resumed in a new process, or shared by several workers, continues the same search;
 a worker that asks while another's generation is still running gets model points that
-take the running trials into account.
+take the running trials into account. A model batch's tag keeps its models' fitted
+hyperparameters (``theta``), where the next batch's fits start (:func:`last_thetas`).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 import optuna
 
 from vfgym import space
-from vfgym.tuning._gp import GaussianProcess, log_expected_improvement, log_norm_cdf
+from vfgym.tuning._model import Observation, propose, propose_local, rank
 
 ATTR = "vfgym:compass"
 """System attribute of each trial the sampler draws: its generation's state and role."""
-
-
-class Observation(NamedTuple):
-    """A completed trial as the sampler sees it."""
-
-    number: int
-    x: np.ndarray  # log coordinates of :class:`vfgym.space.Relative`
-    law: str
-    cost: float
-    violation: float  # sum of the positive constraint values
-    feasible: bool
-    constraints: np.ndarray
-
-
-def rank(o: Observation) -> tuple:
-    """Feasible first, by cost; then infeasible ones by total violation, then cost."""
-    return (0, o.cost, 0.0) if o.feasible else (1, o.violation, o.cost)
 
 
 @dataclass(frozen=True)
@@ -97,7 +80,11 @@ class CompassOptions:
     ``diagonal``: the fifth poll direction (value and L/value together); ``patience``: a
     compass whose last generation moved goes on past ``compass_trials`` (50: five
     generations of ten polls, as 40 were of eight). All four on by default
-    (docs/tuning.md, "Samplers: trials to the grid optimum")."""
+    (docs/tuning.md, "Samplers: trials to the grid optimum"). ``refit_growth``: a model
+    batch fits its Gaussian processes' hyperparameters again (from the last fit's) once
+    the completed trials number this many times those of the last fit, else keeps them
+    (a long sweep's model batches, one per 8 trials, cost a factorisation, not a fit:
+    docs/speed.md)."""
 
     n_init: int = 6
     step0: float = 0.4
@@ -115,6 +102,7 @@ class CompassOptions:
     patience: bool = True
     split_constraints: bool = True
     explore_gap: float = 0.1
+    refit_growth: float = 1.25
 
 
 LOCAL = CompassOptions(search=2, composite=True, model_rounds=2, cap_model=True,
@@ -153,6 +141,10 @@ class CompassSampler(optuna.samplers.BaseSampler):
         self._lo, self._span = b[:, 0], b[:, 1] - b[:, 0]
         self._queue: list[dict[str, Any]] = []
         self._checked = -1  # the number of the next trial, when the queue was last checked
+        self._seen: dict[int, Observation | None] = {}  # completed trials, by number
+        self._seen_in: tuple[int, str] | None = None  # the study they are of
+        # The last model batch's hyperparameters, and the trials they were fitted on.
+        self._starts: tuple[dict[str, list[float]], int] = ({}, 0)
         # Poll directions: the four axes, and with ``diagonal`` value and L/value moved
         # together (L/value² held: the tail's deceleration at top speed, δ²f²·L/value²).
         self._dirs = np.eye(4)
@@ -168,11 +160,66 @@ class CompassSampler(optuna.samplers.BaseSampler):
             return {}  # an enqueued trial (a warm start, a retry) keeps its settings
         item = self._next(study, trial.number)
         study._storage.set_trial_system_attr(trial._trial_id, ATTR, item["tag"])
+        return self._params(item)
+
+    def _params(self, item: dict[str, Any]) -> dict[str, Any]:
         s = self.relative.settings(self._to_unit(np.asarray(item["x"])), item["law"])
         params = {d.name: getattr(s, d.name) for d in space.SPACE}
         if len(self.laws) > 1:
             params["accel_law"] = s.accel_law
         return params
+
+    # --- trials made in one write ---------------------------------------------------------
+    def plan_trial(self, study: Any, first: bool) -> optuna.trial.FrozenTrial:
+        """The next trial of the search as a running trial to create in one write
+        (``storage.create_new_trial(study_id, template)``: its parameters and generation
+        with it), where :meth:`sample_relative` costs a write per parameter after the
+        trial's own; the same trial as ``study.ask()`` would draw.
+
+        Call under the claim lock, and create each trial before asking for the next (the
+        plan counts the study's trials); then :meth:`created` with its number.
+
+        Parameters
+        ----------
+        study : optuna.Study
+            The study.
+        first : bool
+            The first of a batch: the study is read again (another worker may have
+            drawn since).
+
+        Returns
+        -------
+        optuna.trial.FrozenTrial
+            The trial (state ``RUNNING``), numbered as the study's next.
+        """
+        import datetime
+
+        if first or self._checked < 0:
+            self._queue_for(study)
+        number = self._checked
+        item = self._next(study, number)
+        params = self._params(item)
+        dists = space.distributions(self.laws)
+        return optuna.trial.FrozenTrial(
+            number=number,
+            state=optuna.trial.TrialState.RUNNING,
+            value=None,
+            datetime_start=datetime.datetime.now(),
+            datetime_complete=None,
+            params=params,
+            distributions={k: dists[k] for k in params},
+            user_attrs={},
+            system_attrs={ATTR: item["tag"]},
+            intermediate_values={},
+            trial_id=-1,
+        )
+
+    def created(self, number: int) -> None:
+        """The trial :meth:`plan_trial` planned was created with this number (another
+        than planned: a trial made meanwhile, outside the claim lock; the next plan reads
+        the study again)."""
+        if number + 1 != self._checked:
+            self._checked = -1
 
     def sample_independent(self, study: Any, trial: Any, name: str, dist: Any) -> Any:
         rng = np.random.default_rng([self.seed, trial.number, 7])
@@ -227,7 +274,8 @@ class CompassSampler(optuna.samplers.BaseSampler):
         if any(t.system_attrs[ATTR]["gen"] == last and not t.state.is_finished() for t in tagged):
             return []  # its retries wait, or another worker runs it
         done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
-        obs = [o for o in (self._observe(t) for t in done) if o is not None]
+        obs = self._observations(study, done)
+        self._starts = last_thetas(tagged)
         self._queue = self._generation(obs, tagged, last)
         return self._queue
 
@@ -238,9 +286,10 @@ class CompassSampler(optuna.samplers.BaseSampler):
         last = max((t.system_attrs[ATTR]["gen"] for t in trials if ATTR in t.system_attrs),
                    default=0)  # fmt: skip
         done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
-        obs = [o for o in (self._observe(t) for t in done) if o is not None]
+        obs = self._observations(study, done)
         running = optuna.trial.TrialState.RUNNING
         pending = [self._x_of(t) for t in trials if t.state == running and self._has_params(t)]
+        self._starts = last_thetas([t for t in trials if ATTR in t.system_attrs])
         return self._extra(obs, pending, last, len(trials))
 
     # --- the search ---------------------------------------------------------------------
@@ -395,10 +444,18 @@ class CompassSampler(optuna.samplers.BaseSampler):
                rounds: int = 1) -> list[dict[str, Any]]:  # fmt: skip
         o = self.options
         rng = self._rng(gen, 2 + len(pending))
-        pts = propose(self._inputs(obs), obs, [self._input(x, law) for x, law in pending],
-                      n or o.model_batch, o.xi, rng, len(self.laws), o.cap_model,
-                      o.split_constraints)  # fmt: skip
-        tag = self._tag(gen, "model", role, centre, steps, since, rounds)
+        starts, fitted_at = self._starts
+        # The hyperparameters are fitted again once the trials have grown by refit_growth
+        # since their last fit; in between they are kept, the models only factored.
+        refit = not starts or len(obs) >= o.refit_growth * fitted_at
+        pts, thetas = propose(self._inputs(obs), obs,
+                              [self._input(x, law) for x, law in pending],
+                              n or o.model_batch, o.xi, rng, len(self.laws), o.cap_model,
+                              o.split_constraints, starts, refit)  # fmt: skip
+        tag = self._tag(gen, "model", role, centre, steps, since, rounds) | {
+            "theta": thetas,
+            "theta_n": len(obs) if refit else fitted_at,
+        }
         return [{"x": self._from_unit(p[:4]), "law": self._law_of(p), "tag": tag} for p in pts]
 
     def _extra(self, obs: list[Observation], pending: list, last: int, k: int) -> list:
@@ -437,6 +494,19 @@ class CompassSampler(optuna.samplers.BaseSampler):
     def _has_params(self, trial: Any) -> bool:
         return all(d.name in trial.params for d in space.SPACE)
 
+    def _observations(self, study: Any, done: list[Any]) -> list[Observation]:
+        """The completed trials as observations; each read once (per study): a completed
+        trial never changes, and reading them all for each generation made a long
+        sweep's cost per trial grow with its size."""
+        key = (id(study), study.study_name)
+        if self._seen_in != key:
+            self._seen, self._seen_in = {}, key
+        seen = self._seen
+        for t in done:
+            if t.number not in seen:
+                seen[t.number] = self._observe(t)
+        return [o for o in (seen[t.number] for t in done) if o is not None]
+
     def _observe(self, trial: Any) -> Observation | None:
         if trial.value is None or not self._has_params(trial):
             return None
@@ -446,158 +516,21 @@ class CompassSampler(optuna.samplers.BaseSampler):
         return Observation(trial.number, x, law, float(trial.value), viol, viol <= 0.0, cons)
 
 
-MODEL_POINTS = 160
-"""At most this many observations inform the model (the best half and the latest half)."""
+def last_thetas(tagged: list[Any]) -> tuple[dict[str, list[float]], int]:
+    """The models' log hyperparameters of the latest model batch among the trials (its
+    tag's ``theta``; empty if none), and the completed trials they were fitted on: where
+    the next batch's fits start, so that they take :data:`vfgym.tuning._gp.WARM_STEPS`
+    steps, not ``COLD_STEPS`` (or none, :attr:`CompassOptions.refit_growth`); read from
+    the study, so a resumed or shared search starts them the same."""
+    best: tuple[int, dict[str, list[float]], int] = (-1, {}, 0)
+    for t in tagged:
+        tag = t.system_attrs[ATTR]
+        if "theta" in tag and tag["gen"] > best[0]:
+            best = (tag["gen"], tag["theta"], int(tag.get("theta_n", 0)))
+    return best[1], best[2]
 
 
 def latin_hypercube(n: int, dim: int, rng: np.random.Generator) -> np.ndarray:
     """``n`` points in [0, 1]^dim, one in each of n equal slices of every axis."""
     u = (np.argsort(rng.random((dim, n)), axis=1).T + rng.random((n, dim))) / max(n, 1)
     return u
-
-
-def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
-            xi: float, rng: np.random.Generator, n_laws: int = 1,
-            cap: bool = False, split: bool = True) -> list[np.ndarray]:  # fmt: skip
-    """``n`` points (unit coordinates) of highest expected improvement (by at least
-    ``xi`` over the best feasible cost) times probability of feasibility, each conditioned
-    on the previous ones and on ``pending`` at their predicted values. Gaussian
-    processes: log cost (on the feasible points once there are three) and the
-    constraints (signed log, :func:`_constraint_targets`); ``cap``: log costs above their
-    median taken as the median; ``split``: one model per broken constraint.
-    Linear algebra on one thread: OpenBLAS's threads spin on matrices this small, 30x
-    slower on a busy machine (measured, 150 points)."""
-    from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
-
-    with threadpool_limits(1, user_api="blas"):
-        return _propose(x, obs, pending, n, xi, rng, n_laws, cap, split)
-
-
-def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
-             xi: float, rng: np.random.Generator, n_laws: int,
-             cap: bool, split: bool) -> list[np.ndarray]:  # fmt: skip
-    if len(obs) > MODEL_POINTS:
-        order = sorted(range(len(obs)), key=lambda i: rank(obs[i]))
-        keep = sorted(set(order[: MODEL_POINTS // 2]) | set(range(len(obs))[-MODEL_POINTS // 2 :]))
-        x, obs = x[keep], [obs[i] for i in keep]
-    fit = _fit(x, obs, xi, pending, cap, split)
-    feas = np.array([o.feasible for o in obs])
-    y = np.log(np.maximum([o.cost for o in obs], 1e-12))
-    top = x[np.argsort(np.where(feas, y, np.inf), kind="stable")[:3]]
-    dim = x.shape[1]
-
-    def candidates() -> np.ndarray:
-        cand = [rng.random((1024, dim))]
-        for t in top:
-            for scale in (0.1, 0.03):
-                dz = np.zeros((200, dim))
-                dz[np.arange(200), rng.integers(0, 4, 200)] = rng.normal(0.0, scale, 200)
-                cand.append(np.clip(t + dz, 0.0, 1.0))
-        c = np.vstack(cand)
-        if n_laws > 1:
-            c[:, 4] = np.round(c[:, 4] * (n_laws - 1)) / (n_laws - 1)
-        return c
-
-    return fit.choose(n, candidates)
-
-
-LOCAL_POINTS = 60
-"""At most this many observations, the nearest to the centre, inform the local model."""
-
-
-def propose_local(x: np.ndarray, obs: list[Observation], centre: np.ndarray,
-                  radius: np.ndarray, pending: list[np.ndarray], n: int,
-                  rng: np.random.Generator) -> list[np.ndarray]:  # fmt: skip
-    """``n`` points (unit coordinates) within ``radius`` of ``centre`` along every axis
-    (a box; the law, if searched, kept at the centre's) of highest expected improvement
-    over the best feasible cost near the centre, times probability of feasibility, from
-    Gaussian processes on the :data:`LOCAL_POINTS` observations nearest the centre (in
-    units of the radius); each point conditioned on ``pending`` and the previous ones."""
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(1, user_api="blas"):
-        dim = len(radius)
-        r = np.ones(x.shape[1])
-        r[:dim] = radius
-        near = np.argsort((((x - centre) / r) ** 2).sum(1), kind="stable")[:LOCAL_POINTS]
-        fit = _fit(x[near], [obs[i] for i in near], 0.0, pending)
-
-        def candidates() -> np.ndarray:
-            c = np.repeat(centre[None], 1536, axis=0)
-            c[:1024, :dim] += radius * rng.uniform(-1.0, 1.0, (1024, dim))
-            c[1024:, :dim] += radius * rng.normal(0.0, 0.25, (512, dim))
-            return np.clip(c, 0.0, 1.0)
-
-        return fit.choose(n, candidates)
-
-
-class _Fit(NamedTuple):
-    """The models a proposal is chosen by: log cost, and the constraints (if any
-    observation violates one); ``best``: the log cost to improve on (None: none feasible)."""
-
-    gp: GaussianProcess
-    cgps: list[GaussianProcess]
-    best: float | None
-
-    def choose(self, n: int, candidates: Any) -> list[np.ndarray]:
-        """``n`` points, each the best of fresh ``candidates()`` by the logarithm of
-        expected improvement times probability of feasibility, then believed at its
-        predicted values."""
-        out = []
-        for _ in range(n):
-            c = candidates()
-            mu, sd = self.gp.predict(c)
-            log_pf = np.zeros(len(c))
-            for m in self.cgps:
-                cm, cs = m.predict(c)
-                log_pf += log_norm_cdf(-cm / np.maximum(cs, 1e-9))
-            # In logs: EI × P(feasible) underflows to 0 on every candidate far from the
-            # best, where argmax would silently take the first.
-            acq = log_pf
-            if self.best is not None:
-                acq = acq + log_expected_improvement(self.best, mu, sd)
-            j = int(np.argmax(acq))
-            out.append(c[j])
-            for m in (self.gp, *self.cgps):
-                m.condition(c[j][None], float(m.predict(c[j][None])[0][0]))
-        return out
-
-
-def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndarray],
-         cap: bool = False, split: bool = True) -> _Fit:  # fmt: skip
-    """Gaussian processes on log cost (on the feasible points once there are three) and
-    on the constraints (signed log, :func:`_constraint_targets`), conditioned on ``pending``
-    at their predicted values.
-    ``cap``: log costs above their median taken as the median, so that the model spends
-    itself on the good half of a space whose costs span decades."""
-    y = np.log(np.maximum([o.cost for o in obs], 1e-12))
-    feas = np.array([o.feasible for o in obs])
-    cons = np.array([o.constraints for o in obs])
-    fit = feas if feas.sum() >= 3 else np.ones(len(obs), dtype=bool)
-    yf = np.minimum(y[fit], np.median(y[fit])) if cap else y[fit]
-    gp = GaussianProcess(x[fit], yf)
-    cgps = [GaussianProcess(x, _signed_log(c)) for c in _constraint_targets(cons, split)]
-    best = y[feas].min() + math.log1p(-xi) if feas.any() else None
-    for p in pending:
-        for m in (gp, *cgps):
-            m.condition(p[None], float(m.predict(p[None])[0][0]))
-    return _Fit(gp, cgps, best)
-
-
-def _constraint_targets(cons: np.ndarray, split: bool) -> list[np.ndarray]:
-    """The constraint values the feasibility models are fitted to, one array per model:
-    each constraint some observation violates (``split``), else the worst of them (if
-    any is violated). Each constraint alone is smoother than their maximum, which jumps
-    from one constraint's surface to another's: on ``short-move`` the worst's model took
-    the region of the better basin (lower value and L/value, where the acceleration
-    constraint gives way) as infeasible."""
-    if not cons.size:
-        return []
-    if split:
-        return [c for c in cons.T if (c > 0).any()]
-    worst = cons.max(axis=1)
-    return [worst] if (worst > 0).any() else []
-
-
-def _signed_log(v: np.ndarray) -> np.ndarray:
-    return np.sign(v) * np.log1p(np.abs(v))

@@ -214,7 +214,8 @@ class Objective:
         return [r for r in out if r is not None]
 
     def record(self, trial: Trial, res: Result) -> None:
-        """Set a result's user attributes and constraints on the trial.
+        """Set a result's user attributes (those it does not hold already) and constraints
+        on the trial.
 
         Parameters
         ----------
@@ -223,8 +224,10 @@ class Objective:
         res : Result
             Its result.
         """
+        have = trial.user_attrs  # (the trial's own copy: no read)
         for k, v in res.attrs.items():
-            trial.set_user_attr(k, v)
+            if k not in have or have[k] != v:
+                trial.set_user_attr(k, v)
         set_constraints(trial, dict(zip(CONSTRAINTS, res.attrs["constraints"], strict=True)))
 
     def score(self, settings: Settings) -> Result:

@@ -143,11 +143,12 @@ def relative_space(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> spac
     return space.Relative(float(np.exp(np.mean(np.log(ks)))))
 
 
-BATCH = {"tpe": 1, "gp": 1, "cmaes": 8, "nsga2": 8, "grid": 16, "random": 16}
-"""Trials a worker claims and simulates at once, by sampler: one for the samplers that
-learn from every trial (TPE, GP: a batch would be asked blind), CMA-ES's population (4 +
-3 ln 4 = 8 in four dimensions), a share of NSGA-II's generation, and more for the grid
-and random sampling, which never look at results."""
+BATCH = {"tpe": 1, "gp": 8, "cmaes": 8, "nsga2": 8, "grid": 16, "random": 16}
+"""Trials a worker claims and simulates at once, by sampler: one for TPE, which learns from
+every trial (a batch would be asked blind); 8 for GP, whose sampler conditions each ask on
+the running trials (a batch is chosen point by point, as the compass's model batch is);
+CMA-ES's population (4 + 3 ln 4 = 8 in four dimensions), a share of NSGA-II's
+generation, and more for the grid and random sampling, which never look at results."""
 
 
 def batch_size(cfg: SweepConfig, sampler: object = None, study: Study | None = None) -> int:

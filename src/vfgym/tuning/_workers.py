@@ -207,6 +207,7 @@ def run_worker(
         evaluate(PAPER_SETTINGS, scenarios[:1], **on_axis)
         lock = _claim_lock(spec, study_name)
         beats = Heartbeats(storage)
+        maker = one_write(sampler, storage, study_name)
         objective.guard = interrupts.allowed
         claimed: list[Claimed] = []
         try:
@@ -225,14 +226,14 @@ def run_worker(
                     free = budget - n["complete"] - n["running"]
                     size = batch_size(cfg, sampler, study)
                     take = min(size, free) if free > 0 else min(1, n["waiting"])
-                    claimed = claim(study, objective, take, beats)
+                    claimed = claim(study, objective, take, beats, maker, n["waiting"])
                 finally:
                     lock.release()
                 if not claimed:
                     with interrupts.allowed():
                         time.sleep(poll_s)
                     continue
-                run_batch(study, objective, claimed)
+                run_batch(study, objective, claimed, maker)
                 beats.stop()
                 rep.trials += [c.trial.number for c in claimed]
                 claimed = []
@@ -253,30 +254,127 @@ def run_worker(
     return rep
 
 
-def claim(study: Any, objective: Objective, n: int, beats: Heartbeats) -> list[Claimed]:
+def claim(
+    study: Any,
+    objective: Objective,
+    n: int,
+    beats: Heartbeats,
+    maker: OneWrite | None = None,
+    waiting: int = 0,
+) -> list[Claimed]:
     """Ask the study for ``n`` trials (waiting ones first), each with its heartbeat
     started, this worker's name and its settings stored (call under the claim lock: a
-    retried trial inherits its dead worker's name, which must be gone when it goes)."""
+    retried trial inherits its dead worker's name, which must be gone when it goes).
+
+    With ``maker`` (a sampler that plans its trials, :meth:`OneWrite.make`), the trials
+    after the ``waiting`` ones are each created in one write instead of ``study.ask()``
+    and a write per parameter and attribute."""
     out = []
-    for _ in range(n):
-        with warnings.catch_warnings():  # heartbeats are ours (:class:`Heartbeats`)
-            warnings.filterwarnings("ignore", message="Heartbeat of storage is supposed")
-            trial = study.ask()
-        beats.add(trial)
-        trial.set_user_attr(WORKER_ATTR, _worker_id())
+    for i in range(n):
+        if maker is not None and i >= waiting:
+            trial, settings = maker.make(study, i == waiting, objective.laws)
+            beats.add(trial)
+            trial_id: int | None = trial._trial_id
+        else:
+            with warnings.catch_warnings():  # heartbeats are ours (:class:`Heartbeats`)
+                warnings.filterwarnings("ignore", message="Heartbeat of storage is supposed")
+                trial = study.ask()
+            trial_id = None
+            beats.add(trial)
+            trial.set_user_attr(WORKER_ATTR, _worker_id())
+            settings = space.suggest(trial, objective.laws)
         objective.current = trial.number
-        out.append(Claimed(trial, space.suggest(trial, objective.laws)))
+        out.append(Claimed(trial, settings, trial_id))
     return out
 
 
+class OneWrite(NamedTuple):
+    """Trials of a sampler that plans them (the compass: ``plan_trial`` and ``created``)
+    made in one storage write each, and told through the storage: such a sampler learns
+    nothing in ``after_trial``, and ``study.tell`` reads the trial twice before its one
+    write (the same state and values)."""
+
+    sampler: Any
+    storage: Any
+    study_id: int
+
+    def make(self, study: Any, first: bool, laws: tuple[str, ...]) -> tuple[MadeTrial, Settings]:
+        """The next planned trial, created running with its parameters, generation,
+        this worker's name and its settings; and the settings."""
+        template = self.sampler.plan_trial(study, first)
+        settings = settings_of(template.params, laws)
+        template.user_attrs[WORKER_ATTR] = _worker_id()
+        # The settings' user attribute with them (the trial's result records it again,
+        # which :meth:`Objective.record` skips as already there).
+        template.user_attrs["settings"] = space.settings_to_dict(settings)
+        trial_id = self.storage.create_new_trial(self.study_id, template)
+        number = template.number
+        # The number planned is the trial's unless one was made meanwhile (outside the
+        # claim lock): checked by the storage's cache of numbers, which the new trial is
+        # in (no read), else found by a read.
+        if self.storage.get_trial_id_from_study_id_trial_number(self.study_id, number) != trial_id:
+            number = self.storage.get_trial(trial_id).number
+        self.sampler.created(number)
+        return MadeTrial(self.storage, trial_id, number, template.user_attrs), settings
+
+    def tell(self, trial_id: int, values: float | list[float]) -> None:
+        """Complete the trial with its values (what ``study.tell`` writes)."""
+        import optuna
+
+        vals = [float(values)] if isinstance(values, (int, float)) else [float(v) for v in values]
+        self.storage.set_trial_state_values(trial_id, optuna.trial.TrialState.COMPLETE, vals)
+
+
+def settings_of(params: dict[str, Any], laws: tuple[str, ...]) -> Settings:
+    """The settings of a trial's parameters (the law, if not among them, the one searched),
+    as :func:`vfgym.space.suggest` gives them."""
+    return Settings(
+        **{d.name: params[d.name] for d in space.SPACE},
+        accel_law=params.get("accel_law", laws[0]),
+    )
+
+
+def one_write(sampler: Any, storage: Any, study_name: str) -> OneWrite | None:
+    """:class:`OneWrite` for a sampler that plans its trials, else None."""
+    if not (hasattr(sampler, "plan_trial") and hasattr(sampler, "created")):
+        return None
+    return OneWrite(sampler, storage, storage.get_study_id_from_name(study_name))
+
+
+class MadeTrial:
+    """A trial :class:`OneWrite` made, with what a worker uses of an
+    :class:`optuna.trial.Trial` (its number, storage, user attributes), without reading the
+    trial back from the storage."""
+
+    def __init__(self, storage: Any, trial_id: int, number: int, user_attrs: dict) -> None:
+        self.storage = storage
+        self._trial_id = trial_id
+        self.number = number
+        self._user_attrs = dict(user_attrs)
+
+    @property
+    def user_attrs(self) -> dict[str, Any]:
+        """The user attributes (the trial's as made, and those set since)."""
+        return dict(self._user_attrs)
+
+    def set_user_attr(self, key: str, value: Any) -> None:
+        """Set a user attribute (one storage write)."""
+        self.storage.set_trial_user_attr(self._trial_id, key, value)
+        self._user_attrs[key] = value
+
+
 class Claimed(NamedTuple):
-    """A trial a worker claimed, and the settings drawn for it."""
+    """A trial a worker claimed, the settings drawn for it, and its id when it was made
+    by :class:`OneWrite` (then told through the storage)."""
 
     trial: Any
     settings: Settings
+    trial_id: int | None = None
 
 
-def run_batch(study: Any, objective: Objective, batch: list[Claimed]) -> None:
+def run_batch(
+    study: Any, objective: Objective, batch: list[Claimed], maker: OneWrite | None = None
+) -> None:
     """Score the batch's settings together (one batched simulation) and tell the study;
     a failing evaluation fails the batch's trials and raises."""
     import optuna
@@ -289,11 +387,15 @@ def run_batch(study: Any, objective: Objective, batch: list[Claimed]) -> None:
         raise
     except Exception:
         for c in batch:
-            study.tell(c.trial, state=optuna.trial.TrialState.FAIL)
+            study.tell(c.trial.number, state=optuna.trial.TrialState.FAIL)
         raise
     for c, res in zip(batch, results, strict=True):
         objective.record(c.trial, res)
-        study.tell(c.trial, res.values)
+        values = res.values if isinstance(res.values, list) else [res.values]
+        if maker is not None and c.trial_id is not None and all(map(math.isfinite, values)):
+            maker.tell(c.trial_id, res.values)
+        else:
+            study.tell(c.trial.number, res.values)
 
 
 def give_back(study: Any, batch: list[Claimed]) -> None:

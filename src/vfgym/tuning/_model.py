@@ -1,0 +1,226 @@
+"""The compass sampler's model step: Gaussian processes on the completed trials (log cost,
+and each constraint some trial broke), and batches of points chosen by the logarithm of
+expected improvement times probability of feasibility (:func:`propose`, over the whole
+space; :func:`propose_local`, in a box around the compass's centre).
+
+A batch's points are chosen one at a time among one set of candidates, each believed at
+its predicted values before the next is chosen (:class:`vfgym.tuning._gp.Believer`: the
+posterior mean stays, the variance takes a rank-one update), so a batch costs one
+prediction of the candidates per model rather than one per point.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from vfgym.tuning._gp import Believer, GaussianProcess, log_expected_improvement, log_norm_cdf
+
+
+class Observation(NamedTuple):
+    """A completed trial as the sampler sees it."""
+
+    number: int
+    x: np.ndarray  # log coordinates of :class:`vfgym.space.Relative`
+    law: str
+    cost: float
+    violation: float  # sum of the positive constraint values
+    feasible: bool
+    constraints: np.ndarray
+
+
+def rank(o: Observation) -> tuple:
+    """Feasible first, by cost; then infeasible ones by total violation, then cost."""
+    return (0, o.cost, 0.0) if o.feasible else (1, o.violation, o.cost)
+
+
+MODEL_POINTS = 160
+"""At most this many observations inform the model (the best half and the latest half)."""
+
+
+def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
+            xi: float, rng: np.random.Generator, n_laws: int = 1,
+            cap: bool = False, split: bool = True,
+            starts: dict[str, list[float]] | None = None,
+            refit: bool = True) -> Proposal:  # fmt: skip
+    """``n`` points (unit coordinates) of highest expected improvement (by at least
+    ``xi`` over the best feasible cost) times probability of feasibility, each conditioned
+    on the previous ones and on ``pending`` at their predicted values. Gaussian
+    processes: log cost (on the feasible points once there are three) and the
+    constraints (signed log, :func:`_constraint_targets`); ``cap``: log costs above their
+    median taken as the median; ``split``: one model per broken constraint; ``starts``:
+    each model's fit starts from these log hyperparameters (a previous batch's
+    :attr:`Proposal.thetas`, by model) and takes fewer steps; not ``refit``: a model
+    with a start keeps it, unfitted (only factored on the points).
+    Linear algebra on one thread: OpenBLAS's threads spin on matrices this small, 30x
+    slower on a busy machine (measured, 150 points)."""
+    from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
+
+    with threadpool_limits(1, user_api="blas"):
+        return _propose(x, obs, pending, n, xi, rng, n_laws, cap, split, starts, refit)
+
+
+class Proposal(NamedTuple):
+    """A model batch's points (unit coordinates) and each model's fitted log
+    hyperparameters (``cost``, and ``c0``, ``c1``, … per constraint or ``worst``)."""
+
+    points: list[np.ndarray]
+    thetas: dict[str, list[float]]
+
+
+def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
+             xi: float, rng: np.random.Generator, n_laws: int,
+             cap: bool, split: bool,
+             starts: dict[str, list[float]] | None, refit: bool) -> Proposal:  # fmt: skip
+    if len(obs) > MODEL_POINTS:
+        order = sorted(range(len(obs)), key=lambda i: rank(obs[i]))
+        keep = sorted(set(order[: MODEL_POINTS // 2]) | set(range(len(obs))[-MODEL_POINTS // 2 :]))
+        x, obs = x[keep], [obs[i] for i in keep]
+    fit = _fit(x, obs, xi, pending, cap, split, starts, refit)
+    feas = np.array([o.feasible for o in obs])
+    y = np.log(np.maximum([o.cost for o in obs], 1e-12))
+    top = x[np.argsort(np.where(feas, y, np.inf), kind="stable")[:3]]
+    dim = x.shape[1]
+
+    def candidates() -> np.ndarray:
+        cand = [rng.random((1024, dim))]
+        for t in top:
+            for scale in (0.1, 0.03):
+                dz = np.zeros((200, dim))
+                dz[np.arange(200), rng.integers(0, 4, 200)] = rng.normal(0.0, scale, 200)
+                cand.append(np.clip(t + dz, 0.0, 1.0))
+        c = np.vstack(cand)
+        if n_laws > 1:
+            c[:, 4] = np.round(c[:, 4] * (n_laws - 1)) / (n_laws - 1)
+        return c
+
+    return Proposal(fit.choose(n, candidates), fit.thetas())
+
+
+LOCAL_POINTS = 60
+"""At most this many observations, the nearest to the centre, inform the local model."""
+
+
+def propose_local(x: np.ndarray, obs: list[Observation], centre: np.ndarray,
+                  radius: np.ndarray, pending: list[np.ndarray], n: int,
+                  rng: np.random.Generator) -> list[np.ndarray]:  # fmt: skip
+    """``n`` points (unit coordinates) within ``radius`` of ``centre`` along every axis
+    (a box; the law, if searched, kept at the centre's) of highest expected improvement
+    over the best feasible cost near the centre, times probability of feasibility, from
+    Gaussian processes on the :data:`LOCAL_POINTS` observations nearest the centre (in
+    units of the radius); each point conditioned on ``pending`` and the previous ones."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1, user_api="blas"):
+        dim = len(radius)
+        r = np.ones(x.shape[1])
+        r[:dim] = radius
+        near = np.argsort((((x - centre) / r) ** 2).sum(1), kind="stable")[:LOCAL_POINTS]
+        fit = _fit(x[near], [obs[i] for i in near], 0.0, pending)
+
+        def candidates() -> np.ndarray:
+            c = np.repeat(centre[None], 1536, axis=0)
+            c[:1024, :dim] += radius * rng.uniform(-1.0, 1.0, (1024, dim))
+            c[1024:, :dim] += radius * rng.normal(0.0, 0.25, (512, dim))
+            return np.clip(c, 0.0, 1.0)
+
+        return fit.choose(n, candidates)
+
+
+class _Fit(NamedTuple):
+    """The models a proposal is chosen by: log cost, and the constraints (if any
+    observation violates one); ``best``: the log cost to improve on (None: none feasible)."""
+
+    gp: GaussianProcess
+    cgps: list[GaussianProcess]
+    best: float | None
+    keys: tuple[str, ...] = ()
+
+    def thetas(self) -> dict[str, list[float]]:
+        """Each model's log hyperparameters, by name (``cost``, then :attr:`keys`)."""
+        models = zip(("cost", *self.keys), (self.gp, *self.cgps), strict=False)
+        return {k: [float(t) for t in m.theta] for k, m in models}
+
+    def choose(self, n: int, candidates: Any) -> list[np.ndarray]:
+        """``n`` points of one set of ``candidates()``, each the best by the logarithm of
+        expected improvement times probability of feasibility, then believed at its
+        predicted values (:class:`vfgym.tuning._gp.Believer`) before the next is chosen;
+        a candidate is chosen once."""
+        c = candidates()
+        cost = Believer(self.gp, c)
+        cons = [Believer(m, c) for m in self.cgps]
+        taken = np.zeros(len(c), dtype=bool)
+        out = []
+        for _ in range(min(n, len(c))):
+            sd = cost.sd()
+            log_pf = np.zeros(len(c))
+            for m in cons:
+                log_pf += log_norm_cdf(-m.mean / np.maximum(m.sd(), 1e-9))
+            # In logs: EI × P(feasible) underflows to 0 on every candidate far from the
+            # best, where argmax would silently take the first.
+            acq = log_pf
+            if self.best is not None:
+                acq = acq + log_expected_improvement(self.best, cost.mean, sd)
+            acq[taken] = -np.inf
+            j = int(np.argmax(acq))
+            taken[j] = True
+            out.append(c[j])
+            for m in (cost, *cons):
+                m.believe(j)
+        return out
+
+
+def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndarray],
+         cap: bool = False, split: bool = True,
+         starts: dict[str, list[float]] | None = None, refit: bool = True) -> _Fit:  # fmt: skip
+    """Gaussian processes on log cost (on the feasible points once there are three) and
+    on the constraints (signed log, :func:`_constraint_targets`), conditioned on ``pending``
+    at their predicted values; each fit from ``starts``' hyperparameters of its name, if
+    given (:meth:`_Fit.thetas`); not ``refit``: kept as they are where given.
+    ``cap``: log costs above their median taken as the median, so that the model spends
+    itself on the good half of a space whose costs span decades."""
+    y = np.log(np.maximum([o.cost for o in obs], 1e-12))
+    feas = np.array([o.feasible for o in obs])
+    cons = np.array([o.constraints for o in obs])
+    fit = feas if feas.sum() >= 3 else np.ones(len(obs), dtype=bool)
+    yf = np.minimum(y[fit], np.median(y[fit])) if cap else y[fit]
+    starts = starts or {}
+
+    def model(xs: np.ndarray, ys: np.ndarray, key: str) -> GaussianProcess:
+        start = starts.get(key)
+        return GaussianProcess(xs, ys, start=start, fit=refit or start is None)
+
+    gp = model(x[fit], yf, "cost")
+    keyed = _constraint_models(cons, split)
+    cgps = [model(x, _signed_log(c), k) for k, c in keyed]
+    best = y[feas].min() + math.log1p(-xi) if feas.any() else None
+    for p in pending:
+        for m in (gp, *cgps):
+            m.condition(p[None], float(m.predict(p[None])[0][0]))
+    return _Fit(gp, cgps, best, tuple(k for k, _ in keyed))
+
+
+def _constraint_targets(cons: np.ndarray, split: bool) -> list[np.ndarray]:
+    """The constraint values the feasibility models are fitted to, one array per model:
+    each constraint some observation violates (``split``), else the worst of them (if
+    any is violated). Each constraint alone is smoother than their maximum, which jumps
+    from one constraint's surface to another's: on ``short-move`` the worst's model took
+    the region of the better basin (lower value and L/value, where the acceleration
+    constraint gives way) as infeasible."""
+    return [c for _, c in _constraint_models(cons, split)]
+
+
+def _constraint_models(cons: np.ndarray, split: bool) -> list[tuple[str, np.ndarray]]:
+    """:func:`_constraint_targets`, each named: ``c<i>`` for constraint i, ``worst``."""
+    if not cons.size:
+        return []
+    if split:
+        return [(f"c{i}", c) for i, c in enumerate(cons.T) if (c > 0).any()]
+    worst = cons.max(axis=1)
+    return [("worst", worst)] if (worst > 0).any() else []
+
+
+def _signed_log(v: np.ndarray) -> np.ndarray:
+    return np.sign(v) * np.log1p(np.abs(v))
