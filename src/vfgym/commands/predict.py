@@ -1,11 +1,12 @@
-"""``vfgym predict``: the settings an amortised tuner picks for a move, as YAML. The tuner
-is the settings model vfgym ships (a neighbour look-up: the optima of training moves
-ranked by their mean cost on the training moves nearest the move in feature space, the 8
-best simulated on the move and the best of them kept; no training needed), a settings model of ``vfgym fit`` (JSON) for an axis, or a trained VFTune-v0 agent
-(``.zip``); one used on another axis than its own, or on a move unlike its training moves,
-says so on stderr. ``--refine N`` then runs a short sweep on the move from those settings.
-A VFServo-v0 agent (``.zip``) prints the schedule it runs on the move instead: each change
-of settings with the time it takes effect, and the move's cost."""
+"""``vfgym predict``: the settings an amortised tuner picks for a move, as YAML. The tuner is
+the settings model vfgym ships (a neighbour look-up: the optima of training moves ranked by
+their mean cost on the training moves nearest the move in feature space, the 8 best
+simulated on the move and the best of them kept; no training needed), a settings model of
+``vfgym fit`` (JSON) for an axis, or a trained VFTune-v0 agent (``.zip``); one used on
+another axis than its own, or on a move unlike its training moves, says so on stderr.
+``--refine N`` then runs a short sweep on the move from those settings. A VFServo-v0 agent
+(``.zip``) prints the schedule it runs on the move instead: each change of settings with the
+time it takes effect, and the move's cost."""
 
 from __future__ import annotations
 
