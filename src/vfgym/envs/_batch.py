@@ -64,6 +64,7 @@ def space_table(ratio: bool = False) -> np.ndarray:
         rows.append((float(names.index(d.name)), lo, hi, 1.0 if d.log else 0.0))
     return np.array(rows, dtype=np.float64).reshape(-1)
 
+
 ACTION_TOL = 1e-6
 """Actions may exceed [-1, 1] by this much (float rounding), as :func:`vfgym.space.from_action`."""
 

@@ -32,7 +32,6 @@ from ._common import (
     scored_info,
 )
 
-
 RESIDUAL_FEATURES = tuple(f"base_{d.name}" for d in SPACE)
 """The entries VFTune-v0's observation ends with under residual actions: the base setting
 as an action in [-1, 1] (:func:`vfgym.space.to_action`)."""
@@ -91,9 +90,7 @@ class ActionMap:
         c = self.config
         a = as_action(action)
         base_row = np.array([getattr(base, f) for f in B.SETTING_FIELDS])
-        x = B.map_action(
-            a, self._dims, True, self._scales, c.residual_ratio, base_row, self._unit
-        )
+        x = B.map_action(a, self._dims, True, self._scales, c.residual_ratio, base_row, self._unit)
         return Settings(*x, accel_law=law)
 
 
