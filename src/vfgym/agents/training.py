@@ -389,7 +389,25 @@ def train(
     result = heldout_result(run / "best_model.zip", params)
     log(result.text())
     write_yaml(run / "heldout.yaml", result.as_dict())
+    if env_kwargs.get("axis"):
+        _axis_verdict(run, env_kwargs["axis"], log)
     return model
+
+
+def _axis_verdict(run: Path, axis_file: str, log: Callable[[str], None]) -> None:
+    """On an axis, the verdict ``vfgym fit`` gives a settings model, for the run's best
+    model: printed, and written to ``verdict.txt`` and ``summary.yaml`` as fit writes them."""
+    from vfgym.agents.heldout import axis_verdict
+    from vfgym.report import format_verdict
+    from vfgym.space import settings_to_dict
+
+    v, fixed = axis_verdict(run / "best_model.zip", axis_file)
+    text = format_verdict(v, per_move=True)
+    write_text(run / "verdict.txt", text + "\n")
+    write_yaml(
+        run / "summary.yaml", {"best_fixed": settings_to_dict(fixed), "verdict": v.to_dict()}
+    )
+    log(text)
 
 
 def start_at_base(model: Any) -> None:
