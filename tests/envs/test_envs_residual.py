@@ -169,3 +169,27 @@ def test_vftune_residual_zero_action_is_the_base_and_matches_vfservo():
     _, r1, *_ = env.step(a)
     _, r2, *_ = venv.step(np.stack([a, ZERO]))
     assert r2[0] == r1 and -r2[1] == evaluate(TUNED, "short-move").cost[0, 0]
+
+
+def test_vftune_violation_penalty_lowers_only_an_infeasible_moves_reward():
+    from vfgym.envs.tune import TuneConfig, VFTuneEnv
+    from vfgym.envs.vector import VFTuneVectorEnv
+
+    hot = Settings(value_rad=1.0, error_limit_rad=1.0, k=1.0, ts_over_tf=0.25)  # k 1: too fast
+    plain = VFTuneEnv("paper-step", residual=True, residual_base=hot)
+    env = VFTuneEnv("paper-step", residual=True, residual_base=hot, violation_penalty=2.0)
+    venv = VFTuneVectorEnv(1, "paper-step", residual=True, residual_base=hot, violation_penalty=2.0)
+    for e in (plain, env):
+        e.reset()
+    venv.reset(seed=0)
+    _, r0, *_, info0 = plain.step(ZERO)
+    _, r1, *_, info1 = env.step(ZERO)
+    _, rv, *_ = venv.step(ZERO[None])
+    assert not info1["feasible"] and info1["cost"] == info0["cost"] == -r0
+    assert r1 == r0 - 2.0 and rv[0] == r1
+    ok = VFTuneEnv("paper-step", violation_penalty=2.0)
+    ok.reset()
+    _, r, *_, info = ok.step(to_action(PAPER_SETTINGS))
+    assert info["feasible"] and r == -info["cost"]  # the paper's settings: feasible there
+    with pytest.raises(ValueError, match="violation_penalty"):
+        TuneConfig(violation_penalty=-1.0)

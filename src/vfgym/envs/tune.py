@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from vfgym._validate import check_choice
+from vfgym._validate import check_choice, check_real
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Measures, Settings
 from vfgym.plant import simulate
@@ -31,6 +32,43 @@ from ._common import (
     as_action,
     scored_info,
 )
+
+
+@dataclass(frozen=True)
+class TuneConfig(EnvConfig):
+    """VFTune-v0's arguments, every default here: :class:`EnvConfig`'s and its own;
+    validated on construction.
+
+    Parameters
+    ----------
+    scenario, split, seed_range, accel_law, axis, plant, measures, weights, bounds
+        As :class:`vfgym.envs._common.EnvConfig`.
+    residual, residual_scale, residual_base, residual_ratio
+        As :class:`vfgym.envs._common.EnvConfig` (``residual_base`` None: the paper's).
+    violation_penalty : float
+        Subtracted from the reward of a move that breaks a constraint (0: the reward is
+        minus the cost alone), ≥ 0. The cost already grows with the acceleration over the
+        limit, so an agent may find a move a little over it cheaper; a penalty makes
+        feasibility worth more than that.
+
+    Raises
+    ------
+    ValueError
+        If an argument is of the wrong type or out of its range.
+    """
+
+    violation_penalty: float = 0.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        penalty = check_real("violation_penalty", self.violation_penalty, 0.0)
+        object.__setattr__(self, "violation_penalty", penalty)
+
+    def reward(self, cost: float, feasible: bool) -> float:
+        """The reward of a scored move: minus its cost, minus ``violation_penalty`` if it
+        broke a constraint."""
+        return -cost - (0.0 if feasible else self.violation_penalty)
+
 
 RESIDUAL_FEATURES = tuple(f"base_{d.name}" for d in SPACE)
 """The entries VFTune-v0's observation ends with under residual actions: the base setting
@@ -59,11 +97,11 @@ class ActionMap:
 
     Parameters
     ----------
-    config : EnvConfig
+    config : TuneConfig
         The env's arguments (``accel_law``, ``residual*``).
     """
 
-    def __init__(self, config: EnvConfig) -> None:
+    def __init__(self, config: TuneConfig) -> None:
         self.config = config
         self.residual = config.residual
         self._dims = B.space_table(config.residual and config.residual_ratio)
@@ -151,7 +189,9 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     :mod:`vfgym.plant.measures`, ``ideal_time_s``, ``time_ratio``, ``window_rad``,
     ``arrived``, ``cost``, the constraint values ``constraint_accel``,
     ``constraint_torque``, ``constraint_overshoot``, ``constraint_arrival`` (feasible when
-    ≤ 0), ``feasible``, ``scenario`` and the settings used.
+    ≤ 0), ``feasible``, ``scenario`` and the settings used. With ``violation_penalty`` > 0
+    a move that breaks a constraint is rewarded ``-cost - violation_penalty``; ``info``'s
+    cost is the cost alone.
 
     ## Starting State
 
@@ -189,20 +229,21 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         ``"rgb_array"`` draws the last move (position, speed, acceleration, command
         against motor) as an (480, 640, 3) uint8 array.
     **options
-        The other fields of :class:`vfgym.envs._common.EnvConfig`, where their defaults
-        live and are checked: ``split`` (``"train"`` or ``"test"``), ``seed_range``
+        The other fields of :class:`TuneConfig`, where their defaults live and are
+        checked: ``split`` (``"train"`` or ``"test"``), ``seed_range``
         ((low, high) of the scenario seeds), ``accel_law`` (``"rise"`` or ``"slew"``),
         ``axis`` (an axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant,
         measures and move sets), the scoring path's inputs ``plant``, ``measures``,
         ``weights``, ``bounds`` (:func:`vfgym.evaluate`), and ``residual``,
-        ``residual_scale``, ``residual_base``, ``residual_ratio`` (residual actions).
+        ``residual_scale``, ``residual_base``, ``residual_ratio`` (residual actions),
+        ``violation_penalty``.
 
     Raises
     ------
     ValueError
         If an argument is out of its range or of the wrong type.
     TypeError
-        If an option is not a field of :class:`vfgym.envs._common.EnvConfig`.
+        If an option is not a field of :class:`TuneConfig`.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}
@@ -214,7 +255,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         render_mode: str | None = None,
         **options: Any,
     ) -> None:
-        self.config = EnvConfig(scenario, **options)
+        self.config = TuneConfig(scenario, **options)
         self.accel_law = self.config.accel_law
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
@@ -325,7 +366,8 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         info.update(settings_to_dict(settings))
         self._settings = settings
         self._done = True
-        return self.action_map.features(ep, self._base), -cost, True, False, info
+        reward = c.reward(cost, info["feasible"])
+        return self.action_map.features(ep, self._base), reward, True, False, info
 
     def render(self) -> np.ndarray | None:
         """The last move (or, before a step, the command) as an RGB array.

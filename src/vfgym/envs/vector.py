@@ -26,9 +26,9 @@ from vfgym.plant import _layout as L
 from vfgym.space import settings_to_dict
 
 from . import _batch as B
-from ._common import EnvConfig, Episode, scored_info
+from ._common import Episode, scored_info
 from .servo import ServoConfig, ServoCore, raise_bad_action, servo_spaces
-from .tune import ActionMap, evaluate_pairs, tune_spaces
+from .tune import ActionMap, TuneConfig, evaluate_pairs, tune_spaces
 
 Infos = dict[str, Any]
 
@@ -307,7 +307,7 @@ class VFTuneVectorEnv(_BatchVectorEnv):
         **options: Any,
     ) -> None:
         super().__init__(num_envs, autoreset_mode, render_mode)
-        self.config = EnvConfig(scenario, **options)
+        self.config = TuneConfig(scenario, **options)
         self.accel_law = self.config.accel_law
         self.source = self.config.scenario_source()
         spaces = tune_spaces(self.config.residual)
@@ -376,9 +376,9 @@ class VFTuneVectorEnv(_BatchVectorEnv):
                 while_running=while_running,
             )
             for i, s, ep, res in zip(idx, settings, eps, results, strict=True):
-                rew[i] = -res.cost
                 term[i] = True
                 info = scored_info(ep, res.metrics, res.cost, res.constraints)
+                rew[i] = self.config.reward(res.cost, info["feasible"])
                 info.update(settings_to_dict(s))
                 ends[int(i)] = info
         return rew, term, np.zeros(self.num_envs, dtype=np.bool_), ends
