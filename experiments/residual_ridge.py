@@ -47,7 +47,7 @@ def main() -> None:
     print("| action | " + " | ".join(VARIANTS) + " |")
     print("|---|" + "---|" * len(VARIANTS))
     rows: dict[str, list[float]] = {}
-    for label, kw in VARIANTS.items():
+    for kw in VARIANTS.values():
         env = make_env("vfgym/VFServo-v0", kw)
         cases = {"zero": lambda t: np.zeros(4)}
         for j, name in enumerate(("value", "L", "k", "Ts/Tf")):
@@ -55,8 +55,9 @@ def main() -> None:
             a[j] = args.offset
             cases[f"{name} {args.offset:+g}"] = lambda t, a=a: a
         rng = np.random.default_rng(0)
-        noise = args.noise
-        cases[f"noise {noise:g}"] = lambda t: np.clip(rng.normal(0.0, noise, 4), -1.0, 1.0)
+        cases[f"noise {args.noise:g}"] = lambda t, rng=rng: np.clip(
+            rng.normal(0.0, args.noise, 4), -1.0, 1.0
+        )
         for case, act in cases.items():
             cost = np.mean([episode_cost(env, sc, act) for sc in moves])
             rows.setdefault(case, []).append(float(cost))
