@@ -21,6 +21,11 @@ With residual actions (the run's ``env_kwargs``) the row names its base (``model
 shipped per-move settings model; ``paper``; a settings file) and the base's own ratio to
 the per-move optima on the same moves, the mark an agent that starts as its base must beat.
 
+"worst validation" is the largest validation mean cost a run logged (``evaluations.csv``)
+over its first one, the agent as it started, the worst seed's: above 1 the policy got
+worse while training; the best model is still chosen on validation, so a held-out cost
+at its base's shows a run that never improved on it.
+
 Writes ``benchmark.md`` (the table and the commands), ``benchmark.json`` and
 ``learning_curves.png`` (each run's held-out validation cost from its
 ``evaluations.csv`` against steps, mean over seeds) into ``--out``.
@@ -59,6 +64,7 @@ class Row:
     vs_best_fixed: float
     feasible: float
     seeds: int
+    worst_validation: float
 
 
 def train_command(algo: str, env: str, seed: int, steps: int, out: Path, extra: list[str]):
@@ -131,6 +137,16 @@ def base_cost(base: str, scenarios) -> float:
     return float(compare([cand], [], scenarios, resamples=1).column("base").cost.mean())
 
 
+def worst_validation(folders: list[Path]) -> float:
+    """The largest validation mean cost over the first one, the worst of the runs."""
+    out = []
+    for f in folders:
+        data = np.genfromtxt(f / "evaluations.csv", delimiter=",", names=True, ndmin=1)
+        cost = np.atleast_1d(data["mean_cost"])
+        out.append(float(cost.max() / cost[0]))
+    return max(out)
+
+
 def curves(runs: dict[tuple[str, str], list[Path]], path: Path) -> None:
     """Held-out validation cost against steps, mean over seeds, one line per row."""
     import matplotlib
@@ -161,14 +177,15 @@ def curves(runs: dict[tuple[str, str], list[Path]], path: Path) -> None:
 def table(rows: list[Row], commands: list[str]) -> str:
     """The benchmark.md text."""
     head = ("| algo | env | base (vs optima) | steps | wall time [s] | held-out mean cost "
-            "| vs per-move optima | vs best fixed | feasible | seeds |")  # fmt: skip
-    lines = [head, "|" + "---|" * 10]
+            "| vs per-move optima | vs best fixed | feasible | seeds "
+            "| worst validation |")  # fmt: skip
+    lines = [head, "|" + "---|" * 11]
     for r in rows:
         base = f"{r.base} ({r.base_vs_optima:.3f}x)" if r.base else ""
         lines.append(
             f"| {r.algo} | {r.env} | {base} | {r.steps} | {r.wall_s:.0f} | {r.mean_cost:.4g} ± "
             f"{r.std_cost:.2g} | {r.vs_optima:.3f}x | {r.vs_best_fixed:.3f}x | "
-            f"{100 * r.feasible:.0f} % | {r.seeds} |"
+            f"{100 * r.feasible:.0f} % | {r.seeds} | {r.worst_validation:.3f}x |"
         )
     return "\n".join([*lines, "", "Commands:", "", *(f"    {c}" for c in commands), ""])
 
@@ -207,8 +224,9 @@ def main() -> None:
             spread = (float(np.mean(walls)), mean, float(np.std(costs)))
             base = residual_base(folder)
             base_ratio = base_cost(base, scenarios) / float(optimum.mean())
+            worst = worst_validation(runs[(algo, env)])
             rows.append(Row(algo, env, base, base_ratio, args.steps, *spread, *ratios,
-                            float(np.mean(feas)), len(seeds)))  # fmt: skip
+                            float(np.mean(feas)), len(seeds), worst))  # fmt: skip
     text = table(rows, commands)
     head = (f"Held-out: test-0 … test-{args.moves - 1}; per-move optima mean cost "
             f"{optimum.mean():.4g}, best fixed setting {best.mean():.4g}.\n\n")  # fmt: skip
