@@ -96,9 +96,9 @@ C_VIOL = _c + 7  # 1: end the episode on a constraint violation
 C_DIMS = _c + 8  # 4 × (action index, low, high, log) for value, error limit, k, Ts/Tf;
 # for a log dimension low and high are stored as log(low), log(high)
 C_RES = C_DIMS + 16  # 1: residual actions, 0: absolute
-C_SCALE = C_RES + 1  # residual actions: each offset's scale in unit coordinates (4 slots,
+C_RSCALE = C_RES + 1  # residual actions: each offset's scale in unit coordinates (4 slots,
 # in SETTING_FIELDS order)
-C_BASE = C_SCALE + 4  # residual actions: the base settings (4 slots, SETTING_FIELDS order)
+C_BASE = C_RSCALE + 4  # residual actions: the base settings (4 slots, SETTING_FIELDS order)
 C_RATIO = C_BASE + 4  # residual actions: 1 when L's offset is of L/value (residual_ratio)
 _x = C_RATIO + 1
 # per-step results and running values
@@ -240,7 +240,7 @@ def apply_action(act, w) -> bool:
         act,
         w[C_DIMS : C_DIMS + 16],
         w[C_RES] != 0.0,
-        w[C_SCALE : C_SCALE + 4],
+        w[C_RSCALE : C_RSCALE + 4],
         w[C_RATIO] != 0.0,
         w[C_BASE : C_BASE + 4],
         w[X_SET : X_SET + 4],

@@ -178,7 +178,7 @@ class ServoCore:
             w[k] = v
         w[B.C_DIMS : B.C_DIMS + 16] = self._dims
         w[B.C_RES] = 1.0 if c.residual else 0.0
-        w[B.C_SCALE : B.C_SCALE + 4] = c.residual_scales()
+        w[B.C_RSCALE : B.C_RSCALE + 4] = c.residual_scales()
         w[B.C_BASE : B.C_BASE + 4] = [getattr(set0, f) for f in SETTING_FIELDS]
         w[B.C_RATIO] = 1.0 if c.residual and c.residual_ratio else 0.0
         w[B.X_SET : B.X_SET + 4] = to_action(set0).astype(np.float64)
