@@ -182,9 +182,10 @@ def table(rows: list[Row], commands: list[str]) -> str:
     lines = [head, "|" + "---|" * 11]
     for r in rows:
         base = f"{r.base} ({r.base_vs_optima:.3f}x)" if r.base else ""
+        std = r.std_cost if r.std_cost > 1e-12 * abs(r.mean_cost) else 0.0  # rounding only
         lines.append(
             f"| {r.algo} | {r.env} | {base} | {r.steps} | {r.wall_s:.0f} | {r.mean_cost:.4g} ± "
-            f"{r.std_cost:.2g} | {r.vs_optima:.3f}x | {r.vs_best_fixed:.3f}x | "
+            f"{std:.2g} | {r.vs_optima:.3f}x | {r.vs_best_fixed:.3f}x | "
             f"{100 * r.feasible:.0f} % | {r.seeds} | {r.worst_validation:.3f}x |"
         )
     return "\n".join([*lines, "", "Commands:", "", *(f"    {c}" for c in commands), ""])
