@@ -40,29 +40,8 @@ from ._common import clip_feature
 
 _jit = J.jit
 
-SETTING_FIELDS = ("value_rad", "error_limit_rad", "k", "ts_over_tf")
-"""The order in which the compiled step reads the search space's dimensions."""
-
-
-def space_table(ratio: bool = False) -> np.ndarray:
-    """(action index, low, high, log) of each setting in :data:`SETTING_FIELDS` order, read
-    from :data:`vfgym.space.SPACE`; a log dimension's low and high as their logarithms (the
-    very numbers ``from_unit`` computes, so the compiled mapping stays bit for bit the
-    search space's). ``ratio``: residual actions with L's offset of L/value
-    (:func:`map_action`), which needs value and L on the same (log) scale."""
-    from vfgym.space import SPACE
-
-    names = [d.name for d in SPACE]
-    if sorted(names) != sorted(SETTING_FIELDS):
-        raise RuntimeError(f"the search space {names} is not the four settings {SETTING_FIELDS}")
-    dims = [SPACE[names.index(f)] for f in SETTING_FIELDS]
-    if ratio and not (dims[0].log and dims[1].log):
-        raise RuntimeError("residual_ratio needs value and L on log scales in vfgym.space.SPACE")
-    rows = []
-    for d in dims:
-        lo, hi = (math.log(d.low), math.log(d.high)) if d.log else (d.low, d.high)
-        rows.append((float(names.index(d.name)), lo, hi, 1.0 if d.log else 0.0))
-    return np.array(rows, dtype=np.float64).reshape(-1)
+SETTING_FIELDS = _common.SETTING_FIELDS
+space_table = _common.space_table
 
 
 ACTION_TOL = 1e-6

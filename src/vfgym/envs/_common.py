@@ -54,6 +54,32 @@ unit coordinates, [-1, 1]) from its base: an eighth of each setting's (log) rang
 way (both envs)."""
 RESET_OPTIONS = ("scenario", "scenario_seed")
 
+SETTING_FIELDS = ("value_rad", "error_limit_rad", "k", "ts_over_tf")
+"""The order in which the compiled step reads the search space's dimensions."""
+
+
+def space_table(ratio: bool = False) -> np.ndarray:
+    """(action index, low, high, log) of each setting in :data:`SETTING_FIELDS` order, read
+    from :data:`vfgym.space.SPACE`; a log dimension's low and high as their logarithms (the
+    very numbers ``from_unit`` computes, so the compiled mapping stays bit for bit the
+    search space's). ``ratio``: residual actions with L's offset of L/value
+    (:func:`vfgym.envs._batch.map_action`), which needs value and L on the same (log)
+    scale."""
+    from vfgym.space import SPACE
+
+    names = [d.name for d in SPACE]
+    if sorted(names) != sorted(SETTING_FIELDS):
+        raise RuntimeError(f"the search space {names} is not the four settings {SETTING_FIELDS}")
+    dims = [SPACE[names.index(f)] for f in SETTING_FIELDS]
+    if ratio and not (dims[0].log and dims[1].log):
+        raise RuntimeError("residual_ratio needs value and L on log scales in vfgym.space.SPACE")
+    rows = []
+    for d in dims:
+        lo, hi = (math.log(d.low), math.log(d.high)) if d.log else (d.low, d.high)
+        rows.append((float(names.index(d.name)), lo, hi, 1.0 if d.log else 0.0))
+    return np.array(rows, dtype=np.float64).reshape(-1)
+
+
 # scales of the scenario features: the random distribution's ranges (vfgym.moves.scenarios)
 INERTIA_RATIO_SCALE = 5.0
 COULOMB_SCALE_NM = 0.004
@@ -416,8 +442,6 @@ class EnvConfig:
         """Each setting's ``residual_scale``, in the compiled mapping's order (value, L, k,
         Ts/Tf: :data:`vfgym.envs._batch.SETTING_FIELDS`)."""
         from vfgym.space import SPACE
-
-        from ._batch import SETTING_FIELDS
 
         scale = self.residual_scale
         per = scale if isinstance(scale, tuple) else (scale,) * len(SPACE)
