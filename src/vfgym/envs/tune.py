@@ -128,8 +128,9 @@ class ActionMap:
         c = self.config
         a = as_action(action)
         base_row = np.array([getattr(base, f) for f in B.SETTING_FIELDS])
-        x = B.map_action(a, self._dims, True, self._scales, c.residual_ratio, base_row, self._unit)
-        return Settings(*x, accel_law=law)
+        row = (a, self._dims, True, self._scales, c.residual_ratio, base_row, self._unit)
+        value, limit, k, ts = B.map_action(*row)
+        return Settings(value_rad=value, error_limit_rad=limit, k=k, ts_over_tf=ts, accel_law=law)
 
 
 class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
