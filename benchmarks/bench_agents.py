@@ -17,6 +17,15 @@ the held-out mean cost ± its standard deviation over seeds, and the mean cost's
 * the best fixed setting: the one setting, among the per-move optima's and the paper's,
   with the lowest mean cost on these moves (chosen on them, so a baseline in hindsight).
 
+With residual actions (the run's ``env_kwargs``) the row names its base (``model``: the
+shipped per-move settings model; ``paper``; a settings file) and the base's own ratio to
+the per-move optima on the same moves, the mark an agent that starts as its base must beat.
+
+"worst validation" is the largest validation mean cost a run logged (``evaluations.csv``)
+over its first one, the agent as it started, the worst seed's: above 1 the policy got
+worse while training; the best model is still chosen on validation, so a held-out cost
+at its base's shows a run that never improved on it.
+
 Writes ``benchmark.md`` (the table and the commands), ``benchmark.json`` and
 ``learning_curves.png`` (each run's held-out validation cost from its
 ``evaluations.csv`` against steps, mean over seeds) into ``--out``.
@@ -45,6 +54,8 @@ class Row:
 
     algo: str
     env: str
+    base: str
+    base_vs_optima: float
     steps: int
     wall_s: float
     mean_cost: float
@@ -53,6 +64,7 @@ class Row:
     vs_best_fixed: float
     feasible: float
     seeds: int
+    worst_validation: float
 
 
 def train_command(algo: str, env: str, seed: int, steps: int, out: Path, extra: list[str]):
@@ -103,6 +115,38 @@ def judge(model: Path, scenarios) -> tuple[float, float]:
     return float(col.cost.mean()), float(np.mean(np.all(col.constraints <= 0.0, axis=1)))
 
 
+def residual_base(folder: Path) -> str:
+    """The run's residual base as written in its hyperparameters ('' without residual)."""
+    from vfgym.io.runs import read_yaml
+
+    kw = (read_yaml(folder / "config.yaml").get("hyperparams") or {}).get("env_kwargs") or {}
+    return str(kw.get("residual_base") or "paper") if kw.get("residual") else ""
+
+
+def base_cost(base: str, scenarios) -> float:
+    """Mean cost of a residual base on the held-out moves (NaN without a base)."""
+    if not base:
+        return float("nan")
+    from vfgym.agents.training import env_options
+    from vfgym.params import PAPER_PLANT
+    from vfgym.report import Candidate, compare
+
+    b = env_options({"residual_base": base})["residual_base"]
+    policy = b if not callable(b) else (lambda sc: b(sc, PAPER_PLANT))
+    cand = Candidate("base", b) if not callable(b) else Candidate("base", policy=policy)
+    return float(compare([cand], [], scenarios, resamples=1).column("base").cost.mean())
+
+
+def worst_validation(folders: list[Path]) -> float:
+    """The largest validation mean cost over the first one, the worst of the runs."""
+    out = []
+    for f in folders:
+        data = np.genfromtxt(f / "evaluations.csv", delimiter=",", names=True, ndmin=1)
+        cost = np.atleast_1d(data["mean_cost"])
+        out.append(float(cost.max() / cost[0]))
+    return max(out)
+
+
 def curves(runs: dict[tuple[str, str], list[Path]], path: Path) -> None:
     """Held-out validation cost against steps, mean over seeds, one line per row."""
     import matplotlib
@@ -132,14 +176,17 @@ def curves(runs: dict[tuple[str, str], list[Path]], path: Path) -> None:
 
 def table(rows: list[Row], commands: list[str]) -> str:
     """The benchmark.md text."""
-    head = ("| algo | env | steps | wall time [s] | held-out mean cost | vs per-move optima "
-            "| vs best fixed | feasible | seeds |")  # fmt: skip
-    lines = [head, "|" + "---|" * 9]
+    head = ("| algo | env | base (vs optima) | steps | wall time [s] | held-out mean cost "
+            "| vs per-move optima | vs best fixed | feasible | seeds "
+            "| worst validation |")  # fmt: skip
+    lines = [head, "|" + "---|" * 11]
     for r in rows:
+        base = f"{r.base} ({r.base_vs_optima:.3f}x)" if r.base else ""
+        std = r.std_cost if r.std_cost > 1e-12 * abs(r.mean_cost) else 0.0  # rounding only
         lines.append(
-            f"| {r.algo} | {r.env} | {r.steps} | {r.wall_s:.0f} | {r.mean_cost:.4g} ± "
-            f"{r.std_cost:.2g} | {r.vs_optima:.3f}x | {r.vs_best_fixed:.3f}x | "
-            f"{100 * r.feasible:.0f} % | {r.seeds} |"
+            f"| {r.algo} | {r.env} | {base} | {r.steps} | {r.wall_s:.0f} | {r.mean_cost:.4g} ± "
+            f"{std:.2g} | {r.vs_optima:.3f}x | {r.vs_best_fixed:.3f}x | "
+            f"{100 * r.feasible:.0f} % | {r.seeds} | {r.worst_validation:.3f}x |"
         )
     return "\n".join([*lines, "", "Commands:", "", *(f"    {c}" for c in commands), ""])
 
@@ -176,8 +223,11 @@ def main() -> None:
             mean = float(np.mean(costs))
             ratios = (mean / float(optimum.mean()), mean / float(best.mean()))
             spread = (float(np.mean(walls)), mean, float(np.std(costs)))
-            rows.append(Row(algo, env, args.steps, *spread, *ratios, float(np.mean(feas)),
-                            len(seeds)))  # fmt: skip
+            base = residual_base(folder)
+            base_ratio = base_cost(base, scenarios) / float(optimum.mean())
+            worst = worst_validation(runs[(algo, env)])
+            rows.append(Row(algo, env, base, base_ratio, args.steps, *spread, *ratios,
+                            float(np.mean(feas)), len(seeds), worst))  # fmt: skip
     text = table(rows, commands)
     head = (f"Held-out: test-0 … test-{args.moves - 1}; per-move optima mean cost "
             f"{optimum.mean():.4g}, best fixed setting {best.mean():.4g}.\n\n")  # fmt: skip

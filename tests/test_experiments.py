@@ -92,3 +92,17 @@ def test_accel_feasibility_runs_and_counts_no_feasible_run_above_the_limit():
     assert out.returncode == 0, out.stderr[-2000:]
     lines = [ln for ln in out.stdout.splitlines() if "runs feasible" in ln]
     assert len(lines) == 2 and all(ln.endswith("above 1.01x: 0") for ln in lines)
+
+
+def test_residual_ridge_runs_and_the_zero_action_costs_the_same_either_way():
+    out = subprocess.run(
+        [sys.executable, "experiments/residual_ridge.py", "--moves", "2"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    zero = next(ln for ln in out.stdout.splitlines() if ln.startswith("| zero |"))
+    a, b = zero.strip("| ").split(" | ")[1:]
+    assert a == b  # the zero action is the base exactly, whatever L's offset means

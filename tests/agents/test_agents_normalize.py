@@ -121,3 +121,50 @@ def test_a_residual_agent_starts_as_its_base(algo):
     assert not np.any(agent.act(obs.astype(np.float32)))
     info = rollout_info(agent, env, "short-move")
     assert info["cost"] == evaluate(PAPER_SETTINGS, "short-move").cost[0, 0]
+
+
+@pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
+def test_a_residual_vftune_agent_starts_as_the_shipped_model(algo):
+    """VFTune-v0 with residual actions on the shipped per-move model: the untrained agent's
+    settings are the model's on every move, and ``policy_settings`` reads them so."""
+    from vfgym import PAPER_PLANT
+    from vfgym.agents.hyperparams import algo_class
+    from vfgym.agents.loaded import settings_policy
+    from vfgym.agents.supervised import load_settings_model
+    from vfgym.agents.training import start_at_base
+
+    kw = {"residual": True, "residual_base": "model", "residual_ratio": True}
+    env = make_env("vfgym/VFTune-v0", kw)
+    model = algo_class(algo)("MlpPolicy", env, seed=0, device="cpu")
+    start_at_base(model)
+    agent = Agent(model, {"hyperparams": {"env_kwargs": kw}}, None, "vfgym/VFTune-v0")
+    shipped = load_settings_model()
+    pick = settings_policy(agent)
+    for name in ("test-0", "test-1", "short-move"):
+        from vfgym.moves.distribution import get_scenario
+
+        assert pick(name) == shipped.settings(get_scenario(name), PAPER_PLANT)
+
+
+def test_a_vftune_agent_is_a_residual_base_for_vfservo(tmp_path):
+    """``residual_base: RUN/best_model.zip``: each move's base is the settings the VFTune-v0
+    agent picks for it, so VFServo-v0's zero action costs what those settings cost."""
+    from vfgym import evaluate
+    from vfgym.agents import policy_settings
+    from vfgym.agents.training import env_options
+
+    params = hp.load("ppo", "vfgym/VFTune-v0", hp.HYPERPARAMS_DIR / "ppo.yml", TINY)
+    train("ppo", "vfgym/VFTune-v0", params, tmp_path, seed=0, progress=False, log=lambda m: None)
+    zip_path = str(tmp_path / "best_model.zip")
+    kw = {"residual": True, "residual_base": zip_path, "interval_s": 0.005}
+    env = make_env("vfgym/VFServo-v0", kw)
+    pick = policy_settings(zip_path)
+    for name in ("test-2", "short-move"):
+        env.reset(options={"scenario": name})
+        while True:
+            _, _, term, trunc, info = env.step(np.zeros(4, dtype=np.float32))
+            if term or trunc:
+                break
+        assert info["cost"] == evaluate(pick(name), name).cost[0, 0]
+    with pytest.raises(ValueError, match="VFTune-v0 agent"):
+        env_options({"residual_base": "nowhere.zip"})

@@ -75,3 +75,22 @@ def test_cli_train_on_an_axis_then_predict_on_it(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert f"{bad}: measures.in_position_counts=-1 is out of range" in err
     assert not (tmp_path / "x").exists()
+
+
+def test_train_on_an_axis_ends_with_fits_verdict(tmp_path, capsys):
+    """The run's best model judged as ``vfgym fit`` judges its model: against the best
+    fixed setting of a sweep on the axis's train moves, the paper's and the S-curve."""
+    path = tmp_path / "small.yaml"
+    path.write_text(yaml.safe_dump(SMALL))
+    args = ["train", "--algo", "ppo", "--axis", str(path), "--runs-dir", str(tmp_path),
+            "--name", "v", "--no-progress", "--hyperparams", "n_timesteps=32", "n_envs=4",
+            "n_steps=8", "batch_size=16", "eval_freq=16", "n_eval_scenarios=2"]  # fmt: skip
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    run = tmp_path / "train" / "v"
+    text = (run / "verdict.txt").read_text()
+    assert "axis small" in text and text.strip() in out
+    summary = yaml.safe_load((run / "summary.yaml").read_text())
+    labels = [r["controller"] for r in summary["verdict"]["controllers"]]
+    assert labels[0] == "agent" and {"best-fixed", "paper", "scurve"} <= set(labels)
+    assert set(summary["best_fixed"]) >= {"value_rad", "error_limit_rad", "k", "ts_over_tf"}

@@ -16,7 +16,7 @@ from vfgym import PAPER_PLANT, PAPER_SETTINGS, Settings
 from vfgym.envs import _batch as B
 from vfgym.envs._common import OBS_BOUND, EnvConfig, clip_feature
 from vfgym.envs.servo import ServoConfig, ServoCore, VFServoEnv
-from vfgym.envs.tune import VFTuneEnv
+from vfgym.envs.tune import TuneConfig, VFTuneEnv
 from vfgym.envs.vector import VFServoVectorEnv, VFTuneVectorEnv
 
 
@@ -79,7 +79,8 @@ def test_servo_config_holds_the_defaults_and_derives_the_ticks():
     assert env.core.interval_ticks == 280 and env.accel_law == "slew"
     venv = VFServoVectorEnv(2, "short-move", interval_s=2e-3, accel_law="slew")
     assert venv.core.config == env.core.config
-    assert VFTuneEnv(accel_law="slew").config == EnvConfig(accel_law="slew")
+    assert VFTuneEnv(accel_law="slew").config == TuneConfig(accel_law="slew")
+    assert isinstance(TuneConfig(), EnvConfig)
 
 
 @pytest.mark.parametrize(
@@ -104,3 +105,21 @@ def test_unknown_arguments_and_a_bare_core_are_refused():
         VFTuneEnv(interval_s=1e-3)  # a VFServo-v0 argument
     with pytest.raises(ValueError, match="config="):
         ServoCore(Settings())  # type: ignore[arg-type]
+
+
+def test_workspace_slots_do_not_overlap():
+    """Every named slot of the compiled step's workspace row is its own (a name bound twice
+    would write one slot for two things)."""
+    import re
+    from pathlib import Path
+
+    text = Path(B.__file__).read_text()
+    names = re.findall(r"^([CX]_[A-Z0-9_]+) = ", text, flags=re.M)
+    assert len(names) == len(set(names))  # no name bound twice
+    width = {"C_DIMS": 16, "C_RSCALE": 4, "C_BASE": 4, "X_SET": 4}
+    taken: dict[int, str] = {}
+    for name in names:
+        for k in range(width.get(name, 1)):
+            slot = getattr(B, name) + k
+            assert slot not in taken, f"{name} and {taken.get(slot)} share slot {slot}"
+            taken[slot] = name

@@ -95,3 +95,101 @@ def test_residual_offset_moves_the_unit_coordinates_by_the_scale():
 def test_bad_residual_arguments_name_themselves(kwargs, name):
     with pytest.raises(ValueError, match=name):
         ServoConfig(**kwargs)
+
+
+RIDGE = Settings(value_rad=0.6, error_limit_rad=0.6, k=40.0, ts_over_tf=0.5)
+
+
+def test_residual_ratio_keeps_l_equal_to_the_value_bit_for_bit():
+    env = VFServoEnv("paper-step", residual=True, residual_base=RIDGE, residual_ratio=True)
+    env.reset()
+    from vfgym.envs import _batch as B
+    from vfgym.plant import _layout as L
+
+    env.step(np.array([0.37, 0.0, -0.2, 0.1]))
+    w = env._w
+    assert w[B.W_PRM + L.P_VALUE] != RIDGE.value_rad
+    assert w[B.W_PRM + L.P_LIMIT] == w[B.W_PRM + L.P_VALUE]
+    # without the ratio, L stays at its base while the value moves
+    env = VFServoEnv("paper-step", residual=True, residual_base=RIDGE)
+    env.reset()
+    env.step(np.array([0.37, 0.0, -0.2, 0.1]))
+    assert env._w[B.W_PRM + L.P_LIMIT] == RIDGE.error_limit_rad
+
+
+def test_a_zero_scale_holds_its_setting_at_the_base():
+    env = VFServoEnv(
+        "paper-step", residual=True, residual_base=TUNED, residual_scale=(0.5, 0.0, 0.5, 0.0)
+    )
+    env.reset()
+    from vfgym.envs import _batch as B
+    from vfgym.plant import _layout as L
+
+    env.step(np.array([0.4, -0.9, 1.0, 0.8]))
+    w = env._w
+    assert w[B.W_PRM + L.P_LIMIT] == TUNED.error_limit_rad
+    assert w[B.W_PRM + L.P_A] == TUNED.ts_over_tf
+    assert w[B.W_PRM + L.P_VALUE] != TUNED.value_rad
+
+
+@pytest.mark.parametrize("scale", [(0.1, 0.2, 0.3), (0.1, 0.2, 0.3, 2.5), (0.1, -0.1, 0.2, 0.2)])
+def test_bad_per_setting_scales_name_themselves(scale):
+    with pytest.raises(ValueError, match="residual_scale"):
+        ServoConfig(residual_scale=scale)
+
+
+def test_vftune_residual_zero_action_is_the_base_and_matches_vfservo():
+    from vfgym.envs.tune import VFTuneEnv
+    from vfgym.envs.vector import VFTuneVectorEnv
+
+    kw = {"residual": True, "residual_base": TUNED, "residual_ratio": True}
+    env = VFTuneEnv("short-move", **kw)
+    obs, _ = env.reset()
+    assert obs.shape == (23,) and env.observation_space.shape == (23,)
+    np.testing.assert_array_equal(obs[-4:], to_action(TUNED))
+    _, r, *_ = env.step(ZERO)
+    assert -r == evaluate(TUNED, "short-move").cost[0, 0]
+    # a nonzero action: the settings VFServo-v0's compiled mapping holds for a whole move
+    a = np.array([0.3, -0.4, 0.5, -0.6])
+    s = env.settings_of(a)
+    servo = VFServoEnv("short-move", **kw)
+    servo.reset()
+    from vfgym.envs import _batch as B
+    from vfgym.plant import _layout as L
+
+    servo.step(a)
+    w = servo._w
+    assert (s.value_rad, s.error_limit_rad) == (w[B.W_PRM + L.P_VALUE], w[B.W_PRM + L.P_LIMIT])
+    assert s.ts_over_tf == w[B.W_PRM + L.P_A]
+    # the vector env: the same observations and rewards
+    venv = VFTuneVectorEnv(2, "short-move", **kw)
+    vobs, _ = venv.reset(seed=0)
+    np.testing.assert_array_equal(vobs[0], obs)
+    env.reset()
+    _, r1, *_ = env.step(a)
+    _, r2, *_ = venv.step(np.stack([a, ZERO]))
+    assert r2[0] == r1 and -r2[1] == evaluate(TUNED, "short-move").cost[0, 0]
+
+
+def test_vftune_violation_penalty_lowers_only_an_infeasible_moves_reward():
+    from vfgym.envs.tune import TuneConfig, VFTuneEnv
+    from vfgym.envs.vector import VFTuneVectorEnv
+
+    hot = Settings(value_rad=1.0, error_limit_rad=1.0, k=1.0, ts_over_tf=0.25)  # k 1: too fast
+    plain = VFTuneEnv("paper-step", residual=True, residual_base=hot)
+    env = VFTuneEnv("paper-step", residual=True, residual_base=hot, violation_penalty=2.0)
+    venv = VFTuneVectorEnv(1, "paper-step", residual=True, residual_base=hot, violation_penalty=2.0)
+    for e in (plain, env):
+        e.reset()
+    venv.reset(seed=0)
+    _, r0, *_, info0 = plain.step(ZERO)
+    _, r1, *_, info1 = env.step(ZERO)
+    _, rv, *_ = venv.step(ZERO[None])
+    assert not info1["feasible"] and info1["cost"] == info0["cost"] == -r0
+    assert r1 == r0 - 2.0 and rv[0] == r1
+    ok = VFTuneEnv("paper-step", violation_penalty=2.0)
+    ok.reset()
+    _, r, *_, info = ok.step(to_action(PAPER_SETTINGS))
+    assert info["feasible"] and r == -info["cost"]  # the paper's settings: feasible there
+    with pytest.raises(ValueError, match="violation_penalty"):
+        TuneConfig(violation_penalty=-1.0)

@@ -1,6 +1,7 @@
 """The result a training run ends with: its agent on held-out moves (the test split, never
 drawn in training nor in the choice of ``best_model.zip``) against the paper's settings
-and the shipped per-move settings model, through the one scoring path."""
+and the shipped per-move settings model, through the one scoring path; on an axis also
+the verdict ``vfgym fit`` gives its settings model (:func:`axis_verdict`)."""
 
 from __future__ import annotations
 
@@ -100,3 +101,51 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
         beats_paper=int(np.sum(agent < paper)),
         beats_model=int(np.sum(agent < model)),
     )
+
+
+def axis_verdict(model_path: str | Path, axis_file: str | Path, sweep_trials: int | None = None):
+    """A trained agent's verdict on its axis's test moves, as ``vfgym fit`` judges its
+    settings model (:func:`vfgym.agents.fit.fit_axis`): against the best fixed setting a
+    short sweep finds on the axis's train moves (:func:`vfgym.agents.fit.best_fixed`), the
+    paper's settings and the S-curve source, through :func:`vfgym.report.compare` and
+    :func:`vfgym.report.verdict`.
+
+    Parameters
+    ----------
+    model_path : str or Path
+        The agent (``RUN/best_model.zip``), trained on the axis.
+    axis_file : str or Path
+        The axis file.
+    sweep_trials : int or None
+        Trials of the fixed-setting sweep (default :attr:`vfgym.agents.fit.FitConfig.sweep_trials`).
+
+    Returns
+    -------
+    tuple of (vfgym.report.Verdict, Settings)
+        The verdict, and the best fixed setting it was judged against.
+    """
+    from vfgym.agents import agent_policy
+    from vfgym.agents.fit import FitConfig, best_fixed
+    from vfgym.moves.axis import load_axis
+    from vfgym.report import Candidate, baseline_candidates, compare, verdict
+
+    axis = load_axis(axis_file)
+    trials = FitConfig().sweep_trials if sweep_trials is None else sweep_trials
+    train = axis.scenarios("train")
+    fixed = best_fixed(train, axis, trials)
+    test = axis.scenarios("test")
+    report = compare(
+        [
+            Candidate(
+                "agent", policy=agent_policy(model_path, str(axis_file)), source=str(model_path)
+            )
+        ],
+        [
+            Candidate("best-fixed", fixed, source="sweep", role="baseline"),
+            *baseline_candidates(("paper", "scurve")),
+        ],
+        test,
+        plant=axis.plant,
+        measures=axis.measures,
+    )
+    return verdict(report, "agent", train, f"the {len(test)} test moves of axis {axis.name}"), fixed

@@ -341,13 +341,12 @@ def _env_kwargs(where: str, kwargs: dict[str, Any], env_id: str | None) -> None:
     """Keys of the env's constructor that YAML can give (numbers, strings, booleans)."""
     import dataclasses
 
-    from vfgym.envs._common import EnvConfig
     from vfgym.envs.servo import ServoConfig, VFServoEnv
-    from vfgym.envs.tune import VFTuneEnv
+    from vfgym.envs.tune import TuneConfig, VFTuneEnv
 
     # the env's own arguments, then its options: the fields of its frozen config
     classes = {
-        "vfgym/VFTune-v0": (VFTuneEnv, EnvConfig),
+        "vfgym/VFTune-v0": (VFTuneEnv, TuneConfig),
         "vfgym/VFServo-v0": (VFServoEnv, ServoConfig),
     }
     plain = (str, int, float, bool, tuple)

@@ -163,16 +163,15 @@ def rollout_info(agent: Agent, env: Any, scenario: Scenario | str) -> dict[str, 
 
 
 def settings_policy(agent: Agent, axis: str | Axis | None = None) -> Callable[[Any], Settings]:
-    """A VFTune-v0 agent as a function: scenario → the settings it picks."""
+    """A VFTune-v0 agent as a function: scenario → the settings it picks (with residual
+    actions, its offset from the move's base)."""
     from vfgym.agents.training import make_env
-    from vfgym.envs.tune import action_settings
 
     env = make_env(agent.env_id, agent.env_kwargs(axis))
-    law = env.unwrapped.accel_law
 
     def settings_for(scenario: Scenario | str) -> Settings:
         obs, _ = env.reset(options={"scenario": scenario})
-        return action_settings(agent.act(obs), law)
+        return env.unwrapped.settings_of(agent.act(obs))
 
     return settings_for
 

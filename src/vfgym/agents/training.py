@@ -56,10 +56,11 @@ def _activation(name: str) -> Any:
 
 
 def env_options(env_kwargs: dict[str, Any] | None) -> dict[str, Any]:
-    """The env arguments of a hyperparameter file made objects: VFServo-v0's
-    ``residual_base`` written as ``paper`` (the paper's settings), ``model`` (the shipped
-    per-move settings model's, move by move) or a settings file (a mapping of the
-    settings, or one under ``settings:`` as ``best.yaml``)."""
+    """The env arguments of a hyperparameter file made objects: ``residual_base`` written
+    as ``paper`` (the paper's settings), ``model`` (the shipped per-move settings model's,
+    move by move), a settings file (a mapping of the settings, or one under ``settings:``
+    as ``best.yaml``) or a trained VFTune-v0 agent (its ``.zip``: the settings it picks
+    for each move)."""
     kw = dict(env_kwargs or {})
     base = kw.get("residual_base")
     if isinstance(base, str):
@@ -77,8 +78,16 @@ def _residual_base(spec: str) -> Any:
         from vfgym.agents.supervised import load_settings_model
 
         return load_settings_model().settings
+    if spec.endswith(".zip") and Path(spec).is_file():
+        from vfgym.agents import policy_settings
+
+        pick = policy_settings(spec)
+        return lambda scenario, plant: pick(scenario)
     if not Path(spec).is_file():
-        raise ValueError(f"residual_base={spec!r} is not allowed: paper, model or a settings file")
+        raise ValueError(
+            f"residual_base={spec!r} is not allowed: paper, model, a settings file or a "
+            "VFTune-v0 agent's .zip"
+        )
     data = read_yaml(spec)
     data = data["settings"] if isinstance(data, dict) and "settings" in data else data
     return settings_from_dict(data, source=spec)
@@ -389,7 +398,25 @@ def train(
     result = heldout_result(run / "best_model.zip", params)
     log(result.text())
     write_yaml(run / "heldout.yaml", result.as_dict())
+    if env_kwargs.get("axis"):
+        _axis_verdict(run, env_kwargs["axis"], log)
     return model
+
+
+def _axis_verdict(run: Path, axis_file: str, log: Callable[[str], None]) -> None:
+    """On an axis, the verdict ``vfgym fit`` gives a settings model, for the run's best
+    model: printed, and written to ``verdict.txt`` and ``summary.yaml`` as fit writes them."""
+    from vfgym.agents.heldout import axis_verdict
+    from vfgym.report import format_verdict
+    from vfgym.space import settings_to_dict
+
+    v, fixed = axis_verdict(run / "best_model.zip", axis_file)
+    text = format_verdict(v, per_move=True)
+    write_text(run / "verdict.txt", text + "\n")
+    write_yaml(
+        run / "summary.yaml", {"best_fixed": settings_to_dict(fixed), "verdict": v.to_dict()}
+    )
+    log(text)
 
 
 def start_at_base(model: Any) -> None:

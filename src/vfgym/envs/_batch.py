@@ -40,6 +40,10 @@ from ._common import clip_feature
 
 _jit = J.jit
 
+SETTING_FIELDS = _common.SETTING_FIELDS
+space_table = _common.space_table
+
+
 ACTION_TOL = 1e-6
 """Actions may exceed [-1, 1] by this much (float rounding), as :func:`vfgym.space.from_action`."""
 
@@ -70,9 +74,12 @@ C_SHAPE = _c + 6  # tracking-error shaping weight
 C_VIOL = _c + 7  # 1: end the episode on a constraint violation
 C_DIMS = _c + 8  # 4 × (action index, low, high, log) for value, error limit, k, Ts/Tf;
 # for a log dimension low and high are stored as log(low), log(high)
-C_RES = C_DIMS + 16  # residual actions: the offset's scale in unit coordinates (0: absolute)
-C_BASE = C_RES + 1  # residual actions: the base settings (4 slots, in SETTING_FIELDS order)
-_x = C_BASE + 4
+C_RES = C_DIMS + 16  # 1: residual actions, 0: absolute
+C_RSCALE = C_RES + 1  # residual actions: each offset's scale in unit coordinates (4 slots,
+# in SETTING_FIELDS order)
+C_BASE = C_RSCALE + 4  # residual actions: the base settings (4 slots, SETTING_FIELDS order)
+C_RATIO = C_BASE + 4  # residual actions: 1 when L's offset is of L/value (residual_ratio)
+_x = C_RATIO + 1
 # per-step results and running values
 X_COST = _x + 0  # running cost after the last interval
 X_COST_PREV = _x + 1  # running cost before the last interval
@@ -141,30 +148,66 @@ def action_ok(act) -> bool:
 
 
 @_jit
-def setting_at(u: float, f: int, w) -> tuple[float, float]:
-    """Setting ``f`` (value, L, k, Ts/Tf) for action entry ``u``, and its unit coordinate.
+def map_action(act, dims, residual: bool, scales, ratio: bool, base, unit) -> tuple:
+    """The four settings (value, L, k, Ts/Tf) an action in [-1, 1]⁴ stands for, and (into
+    ``unit``, in action order) their unit coordinates: the one mapping of both envs.
 
-    Absolute actions (``C_RES`` 0): ``u`` is the unit coordinate, as the search space maps
-    it. Residual actions: ``u`` × ``C_RES`` is an offset in unit coordinates from the base
-    setting ``C_BASE + f``; a zero offset gives the base exactly (no round trip through the
-    unit coordinate), any other is clipped to the space."""
-    b = C_DIMS + 4 * f
-    lo = w[b + 1]
-    hi = w[b + 2]
-    log = w[b + 3] != 0.0
-    c = min(max(u, -1.0), 1.0)
-    scale = w[C_RES]
-    if scale == 0.0:
-        return from_unit(c, lo, hi, log), c
-    base = w[C_BASE + f]
-    x0 = math.log(base) if log else base
-    t0 = (x0 - lo) / (hi - lo)
-    d = scale * c
-    x = base
-    if d != 0.0:
-        x = x0 + d * (hi - lo) / 2.0
-        x = math.exp(min(max(x, lo), hi)) if log else min(max(x, lo), hi)
-    return x, min(max(2.0 * t0 - 1.0 + d, -1.0), 1.0)
+    ``dims`` holds 4 × (action index, low, high, log) in that order (a log dimension's low
+    and high as their logarithms). Absolute actions: each entry is the unit coordinate, as
+    the search space maps it. Residual actions: entry × its ``scales`` (in the order of
+    ``dims``) is an offset in unit coordinates from ``base`` (the four settings, in that
+    order); a zero offset gives the
+    base exactly (no round trip through the unit coordinate), any other is clipped to the
+    space. With ``ratio`` L's offset is of the ratio L/value: once the value has moved, L
+    is the new value times the base's L/value, then offset; a base with L = value keeps
+    L = value bit for bit under any value offset (the V-F controller's cost has a ridge
+    there: docs/model.md §1). Both dimensions are logarithmic then (checked by the
+    config)."""
+    v0 = 0.0
+    v1 = 0.0
+    v2 = 0.0
+    v3 = 0.0
+    moved = False  # the value is off its base (residual actions)
+    zv = 0.0  # the value's new coordinate (its logarithm for a log dimension)
+    for f in range(4):
+        b = 4 * f
+        j = int(dims[b])
+        lo = dims[b + 1]
+        hi = dims[b + 2]
+        log = dims[b + 3] != 0.0
+        c = min(max(float(act[j]), -1.0), 1.0)
+        if not residual:
+            x = from_unit(c, lo, hi, log)
+            u = c
+        else:
+            d = scales[f] * c
+            xb = base[f]
+            x0 = math.log(xb) if log else xb
+            if f == 1 and ratio and moved:
+                vb = math.log(base[0]) if log else base[0]
+                y = min(max(zv + (x0 - vb) + d * (hi - lo) / 2.0, lo), hi)
+                x = math.exp(y) if log else y
+                u = min(max(2.0 * (y - lo) / (hi - lo) - 1.0, -1.0), 1.0)
+            else:
+                t0 = (x0 - lo) / (hi - lo)
+                x = xb
+                if d != 0.0:
+                    y = min(max(x0 + d * (hi - lo) / 2.0, lo), hi)
+                    x = math.exp(y) if log else y
+                    if f == 0:
+                        zv = y
+                        moved = True
+                u = min(max(2.0 * t0 - 1.0 + d, -1.0), 1.0)
+        unit[j] = u
+        if f == 0:
+            v0 = x
+        elif f == 1:
+            v1 = x
+        elif f == 2:
+            v2 = x
+        else:
+            v3 = x
+    return v0, v1, v2, v3
 
 
 @_jit
@@ -172,22 +215,15 @@ def apply_action(act, w) -> bool:
     """Set the settings in force from an action in [-1, 1]⁴; False (nothing set) if bad."""
     if act.shape[0] != 4 or not action_ok(act):
         return False
-    x0 = 0.0
-    x1 = 0.0
-    x2 = 0.0
-    x3 = 0.0
-    for f in range(4):
-        j = int(w[C_DIMS + 4 * f])
-        x, unit = setting_at(float(act[j]), f, w)
-        w[X_SET + j] = unit
-        if f == 0:
-            x0 = x
-        elif f == 1:
-            x1 = x
-        elif f == 2:
-            x2 = x
-        else:
-            x3 = x
+    x0, x1, x2, x3 = map_action(
+        act,
+        w[C_DIMS : C_DIMS + 16],
+        w[C_RES] != 0.0,
+        w[C_RSCALE : C_RSCALE + 4],
+        w[C_RATIO] != 0.0,
+        w[C_BASE : C_BASE + 4],
+        w[X_SET : X_SET + 4],
+    )
     w[W_PRM + L.P_VALUE] = x0
     w[W_PRM + L.P_LIMIT] = x1
     w[W_PRM + L.P_STEP] = x0 / x2

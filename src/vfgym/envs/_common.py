@@ -4,13 +4,14 @@ describe a move and its plant, reset options, and the info of a scored move."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from os import PathLike, fspath
 from typing import Any
 
 import numpy as np
 
-from vfgym._validate import check_choice, check_int
+from vfgym._validate import check_choice, check_int, check_real
 from vfgym.moves import profiles
 from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.distribution import get_scenario, random_scenario
@@ -19,8 +20,10 @@ from vfgym.params import (
     ACCEL_LAWS,
     DEFAULT_MEASURES,
     PAPER_PLANT,
+    PAPER_SETTINGS,
     Measures,
     Plant,
+    Settings,
 )
 from vfgym.scoring import (
     CONSTRAINTS,
@@ -45,11 +48,37 @@ SERVO_TRACKING_WEIGHT = 0.0
 """Weight of the per-interval tracking-error shaping term (0: the return is −cost)."""
 SERVO_VIOLATION_PENALTY = 5.0
 """Subtracted at a constraint violation when ``terminate_on_violation`` is on."""
-SERVO_RESIDUAL_SCALE = 0.25
+RESIDUAL_SCALE = 0.25
 """With residual actions, an action of ±1 moves a setting this far (in the search space's
 unit coordinates, [-1, 1]) from its base: an eighth of each setting's (log) range either
-way."""
+way (both envs)."""
 RESET_OPTIONS = ("scenario", "scenario_seed")
+
+SETTING_FIELDS = ("value_rad", "error_limit_rad", "k", "ts_over_tf")
+"""The order in which the compiled step reads the search space's dimensions."""
+
+
+def space_table(ratio: bool = False) -> np.ndarray:
+    """(action index, low, high, log) of each setting in :data:`SETTING_FIELDS` order, read
+    from :data:`vfgym.space.SPACE`; a log dimension's low and high as their logarithms (the
+    very numbers ``from_unit`` computes, so the compiled mapping stays bit for bit the
+    search space's). ``ratio``: residual actions with L's offset of L/value
+    (:func:`vfgym.envs._batch.map_action`), which needs value and L on the same (log)
+    scale."""
+    from vfgym.space import SPACE
+
+    names = [d.name for d in SPACE]
+    if sorted(names) != sorted(SETTING_FIELDS):
+        raise RuntimeError(f"the search space {names} is not the four settings {SETTING_FIELDS}")
+    dims = [SPACE[names.index(f)] for f in SETTING_FIELDS]
+    if ratio and not (dims[0].log and dims[1].log):
+        raise RuntimeError("residual_ratio needs value and L on log scales in vfgym.space.SPACE")
+    rows = []
+    for d in dims:
+        lo, hi = (math.log(d.low), math.log(d.high)) if d.log else (d.low, d.high)
+        rows.append((float(names.index(d.name)), lo, hi, 1.0 if d.log else 0.0))
+    return np.array(rows, dtype=np.float64).reshape(-1)
+
 
 # scales of the scenario features: the random distribution's ranges (vfgym.moves.scenarios)
 INERTIA_RATIO_SCALE = 5.0
@@ -339,6 +368,25 @@ class EnvConfig:
         Weights of the cost.
     bounds : Bounds
         Bounds of the constraints.
+    residual : bool
+        Residual actions: the action times ``residual_scale`` is an offset, in the search
+        space's unit coordinates, from the base setting, so the zero action gives the base
+        setting exactly (VFServo-v0: the base is also in force before the first action;
+        VFTune-v0: the observation ends with the base as an action, 4 more entries).
+    residual_scale : float or tuple of 4 floats
+        The largest offset of a residual action, in unit coordinates: one for every
+        setting, in (0, 2], or one per setting in the action's order (value, L, k, Ts/Tf),
+        each in [0, 2] (0 holds that setting at its base; with ``residual_ratio``, L at
+        the base's L/value).
+    residual_base : Settings, callable or None
+        The base of residual actions: fixed settings, a callable ``(scenario, plant) ->
+        Settings`` giving each move's (a per-move settings model; asked with ``plant``,
+        before the move's load), or None for the env's default (:meth:`default_base`).
+        Its law is replaced by ``accel_law``.
+    residual_ratio : bool
+        With residual actions, L's offset is of the ratio L/value (L moves with the
+        value), not of L alone: a base with L = value keeps L = value under any offset of
+        the value (the cost's ridge, docs/model.md §1).
 
     Raises
     ------
@@ -356,6 +404,10 @@ class EnvConfig:
     measures: Measures = DEFAULT_MEASURES
     weights: CostWeights = DEFAULT_WEIGHTS
     bounds: Bounds = DEFAULT_BOUNDS
+    residual: bool = False
+    residual_scale: float | tuple[float, ...] = RESIDUAL_SCALE
+    residual_base: Settings | Callable[[Scenario, Plant], Settings] | None = None
+    residual_ratio: bool = False
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -365,6 +417,78 @@ class EnvConfig:
         s(self, "measures", measures)
         check_scoring(self.weights, self.bounds, self.measures, self.plant)
         s(self, "accel_law", check_choice("accel_law", self.accel_law, ACCEL_LAWS))
+        for name in ("residual", "residual_ratio"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name}={getattr(self, name)!r} must be a bool")
+        scale = self.residual_scale
+        if isinstance(scale, (list, tuple)):
+            if len(scale) != 4:
+                raise ValueError(
+                    f"residual_scale={scale!r} is not allowed: one number, or 4 (value, L, "
+                    "k, Ts/Tf)"
+                )
+            scale = tuple(
+                check_real(f"residual_scale[{i}]", x, 0.0, 2.0) for i, x in enumerate(scale)
+            )
+        else:
+            scale = check_real("residual_scale", scale, 0.0, 2.0, lo_open=True)
+        s(self, "residual_scale", scale)
+        base = self.residual_base
+        if isinstance(base, Settings):
+            s(self, "residual_base", base.replace(accel_law=self.accel_law))
+        elif base is not None and not callable(base):
+            raise ValueError(
+                f"residual_base={base!r} must be a vfgym.Settings, a callable "
+                "(scenario, plant) -> Settings, or None"
+            )
+
+    def residual_scales(self) -> np.ndarray:
+        """Each setting's ``residual_scale``, in the compiled mapping's order (value, L, k,
+        Ts/Tf: :data:`vfgym.envs._batch.SETTING_FIELDS`)."""
+        from vfgym.space import SPACE
+
+        scale = self.residual_scale
+        per = scale if isinstance(scale, tuple) else (scale,) * len(SPACE)
+        by_name = {d.name: float(x) for d, x in zip(SPACE, per, strict=True)}
+        return np.array([by_name[f] for f in SETTING_FIELDS])
+
+    def default_base(self) -> Settings:
+        """The base of residual actions when ``residual_base`` is None: the paper's
+        settings (under ``accel_law``)."""
+        return PAPER_SETTINGS.replace(accel_law=self.accel_law)
+
+    def base_settings(self, scenario: Scenario) -> Settings:
+        """The base of residual actions on a move of ``scenario`` (without residual
+        actions, :meth:`default_base`); a per-move base is asked with the env's plant
+        (before the scenario's load, as a settings model takes it).
+
+        Parameters
+        ----------
+        scenario : Scenario
+            The move.
+
+        Returns
+        -------
+        Settings
+            The base, under ``accel_law``.
+
+        Raises
+        ------
+        ValueError
+            If a per-move base returns something other than a :class:`vfgym.Settings`.
+        """
+        base = self.residual_base
+        if not self.residual or base is None:
+            return self.default_base()
+        if isinstance(base, Settings):
+            return base
+        out = base(scenario, self.plant)
+        if not isinstance(out, Settings):
+            raise ValueError(
+                f"residual_base returned {out!r} for scenario {scenario.name!r}: "
+                "expected vfgym.Settings"
+            )
+        return out.replace(accel_law=self.accel_law)
 
     def scenario_source(self) -> ScenarioSource:
         """Where the episodes' scenarios come from.

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -13,11 +11,7 @@ from gymnasium import spaces
 
 from vfgym._validate import check_choice, check_real
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import (
-    PAPER_SETTINGS,
-    Plant,
-    Settings,
-)
+from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import pack
@@ -32,7 +26,6 @@ from ._common import (
     OBS_BOUND,
     SCENARIO_FEATURES,
     SERVO_INTERVAL_S,
-    SERVO_RESIDUAL_SCALE,
     SERVO_SETTLE_TIME_S,
     SERVO_TRACKING_WEIGHT,
     SERVO_VIOLATION_PENALTY,
@@ -48,8 +41,7 @@ _ENDED = B.ENDED
 
 SERVO_FEATURES = B.OBS_DYNAMIC + SCENARIO_FEATURES
 """Names of VFServo-v0's observation entries, in order."""
-SETTING_FIELDS = ("value_rad", "error_limit_rad", "k", "ts_over_tf")
-"""The order in which the compiled step reads the search space's dimensions."""
+SETTING_FIELDS = B.SETTING_FIELDS
 
 
 def servo_spaces() -> tuple[spaces.Box, spaces.Box]:
@@ -57,22 +49,6 @@ def servo_spaces() -> tuple[spaces.Box, spaces.Box]:
     obs = spaces.Box(-OBS_BOUND, OBS_BOUND, shape=(len(SERVO_FEATURES),), dtype=np.float32)
     act = spaces.Box(-1.0, 1.0, shape=(len(SPACE),), dtype=np.float32)
     return obs, act
-
-
-def _space_table() -> np.ndarray:
-    """(action index, low, high, log) of each setting, read from :data:`vfgym.space.SPACE`;
-    a log dimension's low and high as their logarithms (the very numbers ``from_unit``
-    computes, so the compiled mapping stays bit for bit the search space's)."""
-    names = [d.name for d in SPACE]
-    if sorted(names) != sorted(SETTING_FIELDS):
-        raise RuntimeError(f"the search space {names} is not the four settings {SETTING_FIELDS}")
-    rows = []
-    for field in SETTING_FIELDS:
-        j = names.index(field)
-        d = SPACE[j]
-        lo, hi = (math.log(d.low), math.log(d.high)) if d.log else (d.low, d.high)
-        rows.append((float(j), lo, hi, 1.0 if d.log else 0.0))
-    return np.array(rows, dtype=np.float64).reshape(-1)
 
 
 def raise_bad_action(action: np.ndarray, accel_law: str, index: int | None = None) -> None:
@@ -95,6 +71,10 @@ class ServoConfig(EnvConfig):
     ----------
     scenario, split, seed_range, accel_law, axis, plant, measures, weights, bounds
         As :class:`vfgym.envs._common.EnvConfig` (an axis resolved there).
+    residual, residual_scale, residual_base, residual_ratio
+        As :class:`vfgym.envs._common.EnvConfig`: with residual actions the base is also
+        in force before the first action; ``residual_base`` None is
+        ``initial_settings``.
     interval_s : float
         The control interval (s), a whole number of ticks (:meth:`vfgym.Plant.whole_ticks`).
     settle_time_s : float
@@ -108,18 +88,6 @@ class ServoConfig(EnvConfig):
         End the episode on a constraint violation.
     violation_penalty : float
         The extra negative reward of such an end, ≥ 0.
-    residual : bool
-        Residual actions: the action times ``residual_scale`` is an offset, in the search
-        space's unit coordinates, from the base setting, so the zero action holds the base
-        setting exactly; the base is also in force before the first action.
-    residual_scale : float
-        The largest offset of a residual action, in unit coordinates, in (0, 2].
-    residual_base : Settings, callable or None
-        The base of residual actions: fixed settings, a callable ``(scenario, plant) ->
-        Settings`` giving each move's (a per-move settings model; asked with ``plant``,
-        before the move's load), or None for
-        ``initial_settings``. Its law is replaced by ``accel_law``.
-
     Raises
     ------
     ValueError
@@ -132,9 +100,6 @@ class ServoConfig(EnvConfig):
     tracking_weight: float = SERVO_TRACKING_WEIGHT
     terminate_on_violation: bool = False
     violation_penalty: float = SERVO_VIOLATION_PENALTY
-    residual: bool = False
-    residual_scale: float = SERVO_RESIDUAL_SCALE
-    residual_base: Settings | Callable[[Scenario, Plant], Settings] | None = None
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -150,38 +115,11 @@ class ServoConfig(EnvConfig):
                 f"terminate_on_violation={self.terminate_on_violation!r} must be a bool"
             )
         s(self, "violation_penalty", check_real("violation_penalty", self.violation_penalty, 0.0))
-        if not isinstance(self.residual, bool):
-            raise ValueError(f"residual={self.residual!r} must be a bool")
-        s(
-            self,
-            "residual_scale",
-            check_real("residual_scale", self.residual_scale, 0.0, 2.0, lo_open=True),
-        )
-        base = self.residual_base
-        if isinstance(base, Settings):
-            s(self, "residual_base", base.replace(accel_law=self.accel_law))
-        elif base is not None and not callable(base):
-            raise ValueError(
-                f"residual_base={base!r} must be a vfgym.Settings, a callable "
-                "(scenario, plant) -> Settings, or None"
-            )
 
-    def base_settings(self, scenario: Scenario) -> Settings:
-        """The settings in force before the first action (with residual actions, their
-        base) on a move of ``scenario``; a per-move base is asked with the env's plant
-        (before the scenario's load, as a settings model takes it)."""
-        base = self.residual_base
-        if not self.residual or base is None:
-            return self.initial_settings
-        if isinstance(base, Settings):
-            return base
-        out = base(scenario, self.plant)
-        if not isinstance(out, Settings):
-            raise ValueError(
-                f"residual_base returned {out!r} for scenario {scenario.name!r}: "
-                "expected vfgym.Settings"
-            )
-        return out.replace(accel_law=self.accel_law)
+    def default_base(self) -> Settings:
+        """The base of residual actions when ``residual_base`` is None, and the settings
+        in force before the first action without residual actions: ``initial_settings``."""
+        return self.initial_settings
 
     @property
     def interval_ticks(self) -> int:
@@ -211,7 +149,7 @@ class ServoCore:
         prm = pack(PAPER_SETTINGS, config.plant, config.measures, 1.0, 1)
         self.ring_len = B.ring_size(prm)
         self.acc_window = int(prm[L.P_ACC_W])
-        self._dims = _space_table()
+        self._dims = B.space_table(config.residual and config.residual_ratio)
 
     @property
     def accel_law(self) -> str:
@@ -239,8 +177,10 @@ class ServoCore:
         for k, v in cfg.items():
             w[k] = v
         w[B.C_DIMS : B.C_DIMS + 16] = self._dims
-        w[B.C_RES] = c.residual_scale if c.residual else 0.0
+        w[B.C_RES] = 1.0 if c.residual else 0.0
+        w[B.C_RSCALE : B.C_RSCALE + 4] = c.residual_scales()
         w[B.C_BASE : B.C_BASE + 4] = [getattr(set0, f) for f in SETTING_FIELDS]
+        w[B.C_RATIO] = 1.0 if c.residual and c.residual_ratio else 0.0
         w[B.X_SET : B.X_SET + 4] = to_action(set0).astype(np.float64)
         w[B.W_OBS + B.N_DYN : B.W_OBS + self.n_obs] = ep.features
         B.reset_row(w, ring, cmd)

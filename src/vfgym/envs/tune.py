@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from vfgym._validate import check_choice
+from vfgym._validate import check_choice, check_real
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Measures, Settings
 from vfgym.plant import simulate
@@ -20,8 +21,9 @@ from vfgym.scoring import (
     evaluate,
     score_pairs,
 )
-from vfgym.space import SPACE, from_action, settings_to_dict
+from vfgym.space import SPACE, from_action, settings_to_dict, to_action
 
+from . import _batch as B
 from ._common import (
     OBS_BOUND,
     SCENARIO_FEATURES,
@@ -32,9 +34,51 @@ from ._common import (
 )
 
 
-def tune_spaces() -> tuple[spaces.Box, spaces.Box]:
-    """(observation space, action space) of VFTune-v0."""
-    n = len(SCENARIO_FEATURES)
+@dataclass(frozen=True)
+class TuneConfig(EnvConfig):
+    """VFTune-v0's arguments, every default here: :class:`EnvConfig`'s and its own;
+    validated on construction.
+
+    Parameters
+    ----------
+    scenario, split, seed_range, accel_law, axis, plant, measures, weights, bounds
+        As :class:`vfgym.envs._common.EnvConfig`.
+    residual, residual_scale, residual_base, residual_ratio
+        As :class:`vfgym.envs._common.EnvConfig` (``residual_base`` None: the paper's).
+    violation_penalty : float
+        Subtracted from the reward of a move that breaks a constraint (0: the reward is
+        minus the cost alone), ≥ 0. The cost already grows with the acceleration over the
+        limit, so an agent may find a move a little over it cheaper; a penalty makes
+        feasibility worth more than that.
+
+    Raises
+    ------
+    ValueError
+        If an argument is of the wrong type or out of its range.
+    """
+
+    violation_penalty: float = 0.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        penalty = check_real("violation_penalty", self.violation_penalty, 0.0)
+        object.__setattr__(self, "violation_penalty", penalty)
+
+    def reward(self, cost: float, feasible: bool) -> float:
+        """The reward of a scored move: minus its cost, minus ``violation_penalty`` if it
+        broke a constraint."""
+        return -cost - (0.0 if feasible else self.violation_penalty)
+
+
+RESIDUAL_FEATURES = tuple(f"base_{d.name}" for d in SPACE)
+"""The entries VFTune-v0's observation ends with under residual actions: the base setting
+as an action in [-1, 1] (:func:`vfgym.space.to_action`)."""
+
+
+def tune_spaces(residual: bool = False) -> tuple[spaces.Box, spaces.Box]:
+    """(observation space, action space) of VFTune-v0 (``residual``: with residual
+    actions, the observation ends with :data:`RESIDUAL_FEATURES`)."""
+    n = len(SCENARIO_FEATURES) + (len(RESIDUAL_FEATURES) if residual else 0)
     obs = spaces.Box(-OBS_BOUND, OBS_BOUND, shape=(n,), dtype=np.float32)
     act = spaces.Box(-1.0, 1.0, shape=(len(SPACE),), dtype=np.float32)
     return obs, act
@@ -44,6 +88,49 @@ def action_settings(action: Any, accel_law: str) -> Settings:
     """The settings an action in [-1, 1]⁴ stands for (:func:`vfgym.space.from_action`);
     NaN, out-of-box or misshapen actions raise ``ValueError``."""
     return from_action(as_action(action), accel_law)
+
+
+class ActionMap:
+    """VFTune-v0's action → settings on one env's config: the search space's mapping, or
+    with residual actions the offset from each move's base through the compiled mapping
+    VFServo-v0 steps with (:func:`vfgym.envs._batch.map_action`, one core for both envs).
+
+    Parameters
+    ----------
+    config : TuneConfig
+        The env's arguments (``accel_law``, ``residual*``).
+    """
+
+    def __init__(self, config: TuneConfig) -> None:
+        self.config = config
+        self.residual = config.residual
+        self._dims = B.space_table(config.residual and config.residual_ratio)
+        self._scales = config.residual_scales()
+        self._unit = np.zeros(len(SPACE))
+
+    def base(self, ep: Episode) -> Settings | None:
+        """The move's base setting under residual actions (None without)."""
+        return self.config.base_settings(ep.scenario) if self.residual else None
+
+    def features(self, ep: Episode, base: Settings | None) -> np.ndarray:
+        """The observation of a move: its features, then (residual) the base as an action."""
+        if base is None:
+            return ep.features.astype(np.float32)
+        return np.concatenate([ep.features, to_action(base)]).astype(np.float32)
+
+    def settings(self, action: Any, base: Settings | None) -> Settings:
+        """The settings an action stands for (on the move whose base is ``base``); NaN,
+        out-of-box or misshapen actions raise ``ValueError``."""
+        law = self.config.accel_law
+        s = action_settings(action, law)  # checks the action
+        if base is None:
+            return s
+        c = self.config
+        a = as_action(action)
+        base_row = np.array([getattr(base, f) for f in B.SETTING_FIELDS])
+        row = (a, self._dims, True, self._scales, c.residual_ratio, base_row, self._unit)
+        value, limit, k, ts = B.map_action(*row)
+        return Settings(value_rad=value, error_limit_rad=limit, k=k, ts_over_tf=ts, accel_law=law)
 
 
 class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
@@ -63,11 +150,17 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     range by the search space (:data:`vfgym.space.SPACE`, log scales for ranges spanning
     decades): value and L in [0.05, 10] rad, k in [1, 10⁴], Ts/Tf in [0.02, 1]. The
     acceleration law is the ``accel_law`` argument. NaN or out-of-box actions raise
-    ``ValueError``.
+    ``ValueError``. With ``residual=True`` the action is instead an offset from a base
+    setting (``residual_base``: the paper's by default, fixed settings, or a per-move
+    model's), as VFServo-v0's residual actions and through the same compiled mapping: each
+    setting's unit coordinate is the base's plus ``residual_scale`` × the action, so the
+    zero action gives the base exactly (``residual_ratio``: L's offset is of L/value).
 
     ## Observation Space
 
-    ``Box(-10, 10, (19,), float32)``, the move and its plant, normalised (each clipped):
+    ``Box(-10, 10, (19,), float32)``, the move and its plant, normalised (each clipped);
+    with residual actions ``(23,)``, entries 19-22 the base setting as an action
+    (:data:`RESIDUAL_FEATURES`):
 
     | index | name | definition |
     |---|---|---|
@@ -97,7 +190,9 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     :mod:`vfgym.plant.measures`, ``ideal_time_s``, ``time_ratio``, ``window_rad``,
     ``arrived``, ``cost``, the constraint values ``constraint_accel``,
     ``constraint_torque``, ``constraint_overshoot``, ``constraint_arrival`` (feasible when
-    ≤ 0), ``feasible``, ``scenario`` and the settings used.
+    ≤ 0), ``feasible``, ``scenario`` and the settings used. With ``violation_penalty`` > 0
+    a move that breaks a constraint is rewarded ``-cost - violation_penalty``; ``info``'s
+    cost is the cost alone.
 
     ## Starting State
 
@@ -135,19 +230,21 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         ``"rgb_array"`` draws the last move (position, speed, acceleration, command
         against motor) as an (480, 640, 3) uint8 array.
     **options
-        The other fields of :class:`vfgym.envs._common.EnvConfig`, where their defaults
-        live and are checked: ``split`` (``"train"`` or ``"test"``), ``seed_range``
+        The other fields of :class:`TuneConfig`, where their defaults live and are
+        checked: ``split`` (``"train"`` or ``"test"``), ``seed_range``
         ((low, high) of the scenario seeds), ``accel_law`` (``"rise"`` or ``"slew"``),
         ``axis`` (an axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant,
-        measures and move sets), and the scoring path's inputs ``plant``, ``measures``,
-        ``weights``, ``bounds`` (:func:`vfgym.evaluate`).
+        measures and move sets), the scoring path's inputs ``plant``, ``measures``,
+        ``weights``, ``bounds`` (:func:`vfgym.evaluate`), and ``residual``,
+        ``residual_scale``, ``residual_base``, ``residual_ratio`` (residual actions),
+        ``violation_penalty``.
 
     Raises
     ------
     ValueError
         If an argument is out of its range or of the wrong type.
     TypeError
-        If an option is not a field of :class:`vfgym.envs._common.EnvConfig`.
+        If an option is not a field of :class:`TuneConfig`.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}
@@ -159,13 +256,15 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         render_mode: str | None = None,
         **options: Any,
     ) -> None:
-        self.config = EnvConfig(scenario, **options)
+        self.config = TuneConfig(scenario, **options)
         self.accel_law = self.config.accel_law
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
         self.render_mode = render_mode
         self.source = self.config.scenario_source()
-        self.observation_space, self.action_space = tune_spaces()
+        self.observation_space, self.action_space = tune_spaces(self.config.residual)
+        self.action_map = ActionMap(self.config)
+        self._base: Settings | None = None
         self._ep: Episode | None = None
         self._settings: Settings | None = None
         self._done = False
@@ -196,9 +295,36 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         """
         super().reset(seed=seed)
         self._ep = self.source.draw(self.np_random, options)
+        self._base = self.action_map.base(self._ep)
         self._settings = None
         self._done = False
-        return self._ep.features.astype(np.float32), {"scenario": self._ep.scenario.name}
+        obs = self.action_map.features(self._ep, self._base)
+        return obs, {"scenario": self._ep.scenario.name}
+
+    def settings_of(self, action: Any) -> Settings:
+        """The settings an action stands for on the current move (with residual actions,
+        the offset from its base).
+
+        Parameters
+        ----------
+        action : array-like
+            A point of ``[-1, 1]⁴``.
+
+        Returns
+        -------
+        Settings
+            The settings ``step`` would simulate.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            Before ``reset()``.
+        ValueError
+            If the action is not finite or outside the box.
+        """
+        if self._ep is None:
+            raise gym.error.ResetNeeded("call reset() before settings_of()")
+        return self.action_map.settings(action, self._base)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Simulate the whole move with the settings the action maps to, and score it.
@@ -226,7 +352,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
                 "VFTune-v0 episodes are one step long: call reset() before step()"
             )
         ep = self._ep
-        settings = action_settings(action, self.accel_law)
+        settings = self.action_map.settings(action, self._base)
         c = self.config
         ev = evaluate(
             settings,
@@ -241,7 +367,8 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         info.update(settings_to_dict(settings))
         self._settings = settings
         self._done = True
-        return ep.features.astype(np.float32), -cost, True, False, info
+        reward = c.reward(cost, info["feasible"])
+        return self.action_map.features(ep, self._base), reward, True, False, info
 
     def render(self) -> np.ndarray | None:
         """The last move (or, before a step, the command) as an RGB array.

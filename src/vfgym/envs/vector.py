@@ -26,9 +26,9 @@ from vfgym.plant import _layout as L
 from vfgym.space import settings_to_dict
 
 from . import _batch as B
-from ._common import EnvConfig, Episode, scored_info
+from ._common import Episode, scored_info
 from .servo import ServoConfig, ServoCore, raise_bad_action, servo_spaces
-from .tune import action_settings, evaluate_pairs, tune_spaces
+from .tune import ActionMap, TuneConfig, evaluate_pairs, tune_spaces
 
 Infos = dict[str, Any]
 
@@ -294,7 +294,7 @@ class VFTuneVectorEnv(_BatchVectorEnv):
     **options
         As :class:`vfgym.envs.tune.VFTuneEnv` (:class:`vfgym.envs._common.EnvConfig`'s
         fields: ``split``, ``seed_range``, ``accel_law``, ``axis``, ``plant``,
-        ``measures``, ``weights``, ``bounds``).
+        ``measures``, ``weights``, ``bounds``, ``residual*``).
     """
 
     def __init__(
@@ -307,19 +307,23 @@ class VFTuneVectorEnv(_BatchVectorEnv):
         **options: Any,
     ) -> None:
         super().__init__(num_envs, autoreset_mode, render_mode)
-        self.config = EnvConfig(scenario, **options)
+        self.config = TuneConfig(scenario, **options)
         self.accel_law = self.config.accel_law
         self.source = self.config.scenario_source()
-        self.single_observation_space, self.single_action_space = tune_spaces()
+        spaces = tune_spaces(self.config.residual)
+        self.single_observation_space, self.single_action_space = spaces
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.action_map = ActionMap(self.config)
         self._eps: list[Episode | None] = [None] * self.num_envs
+        self._bases: list[Any] = [None] * self.num_envs
         self._obs = np.zeros(self.observation_space.shape, dtype=np.float32)
 
     def _reset_one(self, i: int, options: dict[str, Any] | None) -> Infos:
         ep = self.source.draw(self._rngs[i], options)
         self._eps[i] = ep
-        self._obs[i] = ep.features
+        self._bases[i] = self.action_map.base(ep)
+        self._obs[i] = self.action_map.features(ep, self._bases[i])
         return {"scenario": ep.scenario.name}
 
     def _observations(self) -> np.ndarray:
@@ -355,7 +359,7 @@ class VFTuneVectorEnv(_BatchVectorEnv):
         settings = []
         for i in idx:
             try:
-                settings.append(action_settings(actions[i], self.accel_law))
+                settings.append(self.action_map.settings(actions[i], self._bases[i]))
             except ValueError as e:
                 raise ValueError(f"actions[{i}]: {e}") from None
         eps = [self._eps[i] for i in idx]
@@ -372,9 +376,9 @@ class VFTuneVectorEnv(_BatchVectorEnv):
                 while_running=while_running,
             )
             for i, s, ep, res in zip(idx, settings, eps, results, strict=True):
-                rew[i] = -res.cost
                 term[i] = True
                 info = scored_info(ep, res.metrics, res.cost, res.constraints)
+                rew[i] = self.config.reward(res.cost, info["feasible"])
                 info.update(settings_to_dict(s))
                 ends[int(i)] = info
         return rew, term, np.zeros(self.num_envs, dtype=np.bool_), ends
