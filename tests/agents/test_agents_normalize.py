@@ -126,7 +126,10 @@ def test_a_residual_agent_starts_as_its_base(algo):
 @pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
 def test_a_residual_vftune_agent_starts_as_the_shipped_model(algo):
     """VFTune-v0 with residual actions on the shipped per-move model: the untrained agent's
-    settings are the model's on every move, and ``policy_settings`` reads them so."""
+    settings are the model's look-up (its best-ranked candidate, unchecked) on every move,
+    and ``policy_settings`` reads them so."""
+    from dataclasses import replace
+
     from vfgym import PAPER_PLANT
     from vfgym.agents.hyperparams import algo_class
     from vfgym.agents.loaded import settings_policy
@@ -138,7 +141,7 @@ def test_a_residual_vftune_agent_starts_as_the_shipped_model(algo):
     model = algo_class(algo)("MlpPolicy", env, seed=0, device="cpu")
     start_at_base(model)
     agent = Agent(model, {"hyperparams": {"env_kwargs": kw}}, None, "vfgym/VFTune-v0")
-    shipped = load_settings_model()
+    shipped = replace(load_settings_model(), check=0)
     pick = settings_policy(agent)
     for name in ("test-0", "test-1", "short-move"):
         from vfgym.moves.distribution import get_scenario

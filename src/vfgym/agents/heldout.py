@@ -76,7 +76,7 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
     from vfgym.agents.supervised import load_settings_model
     from vfgym.moves.axis import axis_kwargs, load_axis
     from vfgym.moves.distribution import scenario_set
-    from vfgym.params import PAPER_PLANT
+    from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT
     from vfgym.report import Candidate, compare
 
     n = int(params.get("n_eval_scenarios", HELDOUT_COUNT))
@@ -84,10 +84,11 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
     axis = load_axis(axis_file) if axis_file else None
     scenarios = scenario_set("test", n, 0) if axis is None else axis.scenario_set("test")[:n]
     plant = PAPER_PLANT if axis is None else axis.plant
+    measures = DEFAULT_MEASURES if axis is None else axis.measures
     shipped = load_settings_model()
     cands = [
         Candidate("agent", policy=agent_policy(model_path, axis_file)),
-        Candidate("model", policy=lambda sc: shipped.settings(sc, plant)),
+        Candidate("model", policy=lambda sc: shipped.settings(sc, plant, measures)),
     ]
     rep = compare(cands, "paper", scenarios, resamples=1, **axis_kwargs(axis))
     agent, model, paper = (rep.column(c).cost for c in ("agent", "model", "paper"))

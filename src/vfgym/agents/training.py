@@ -57,8 +57,9 @@ def _activation(name: str) -> Any:
 
 def env_options(env_kwargs: dict[str, Any] | None) -> dict[str, Any]:
     """The env arguments of a hyperparameter file made objects: ``residual_base`` written
-    as ``paper`` (the paper's settings), ``model`` (the shipped per-move settings model's,
-    move by move), a settings file (a mapping of the settings, or one under ``settings:``
+    as ``paper`` (the paper's settings), ``model`` (the shipped per-move settings model's
+    look-up, move by move, without its check on the move: the best-ranked candidate), a
+    settings file (a mapping of the settings, or one under ``settings:``
     as ``best.yaml``) or a trained VFTune-v0 agent (its ``.zip``: the settings it picks
     for each move)."""
     kw = dict(env_kwargs or {})
@@ -75,9 +76,13 @@ def _residual_base(spec: str) -> Any:
     if spec == "paper":
         return PAPER_SETTINGS
     if spec == "model":
-        from vfgym.agents.supervised import load_settings_model
+        from dataclasses import replace
 
-        return load_settings_model().settings
+        from vfgym.agents.supervised import PickModel, load_settings_model
+
+        # the look-up alone: the model's check would simulate its candidates at every reset
+        model = load_settings_model()
+        return (replace(model, check=0) if isinstance(model, PickModel) else model).settings
     if spec.endswith(".zip") and Path(spec).is_file():
         from vfgym.agents import policy_settings
 
