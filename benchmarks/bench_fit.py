@@ -46,7 +46,7 @@ def best_known(test, ref, candidates, axis) -> tuple[np.ndarray, int]:
     best = np.array([o.cost for o in ref])
     own = best.copy()
     for (i, _), r in zip(pairs, scores, strict=True):
-        if r is not None and np.all(r.constraints <= 0.0):
+        if r is not None and r.feasible:
             best[i] = min(best[i], r.cost)
     return best, int(np.sum(best < own))
 

@@ -206,7 +206,7 @@ def candidate_costs(
         for (i, j), r in zip(chunk, res, strict=True):
             assert r is not None  # V-F settings run every move
             cost[i, j] = r.cost
-            feas[i, j] = bool(np.all(r.constraints <= 0.0))
+            feas[i, j] = r.feasible
         if progress:
             progress(a + len(chunk), len(pairs))
     return cost, feas

@@ -151,7 +151,7 @@ def move_optima(
             )
             for (i, u), r in zip(chunk, res, strict=True):
                 assert r is not None  # V-F settings run every move
-                feas = bool(np.all(r.constraints <= 0.0))
+                feas = r.feasible
                 seen[i][tuple(np.round(u, 12))] = (_rank(r.cost, feas), u, feas, float(r.cost))
 
     coarse = np.linspace(-1.0, 1.0, search.points)

@@ -198,7 +198,7 @@ class PickModel(TargetModel):
         def key(i: int) -> tuple[bool, float, int]:
             r = scores[i]
             assert r is not None  # V-F settings run every move
-            return (not bool(np.all(r.constraints <= 0.0)), float(r.cost), i)
+            return (not r.feasible, float(r.cost), i)
 
         return cands[min(range(len(cands)), key=key)]
 

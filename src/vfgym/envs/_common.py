@@ -315,21 +315,18 @@ class ScenarioSource:
             return self.episode(self._named(opts["scenario"]))
         if "scenario_seed" in opts:
             seed = check_int("scenario_seed", opts["scenario_seed"], 0, SEED_LIMIT - 1)
-            return self.episode(self._seeded(seed))
+            return self.episode(self.seeded(seed))
         if self.fixed is not None:
             return self.episode(self.fixed)
         seed = int(rng.integers(self.seed_range[0], self.seed_range[1]))
-        return self.episode(self._seeded(seed))
-
-    def seeded(self, seed: int) -> Scenario:
-        """The scenario a draw of ``seed`` gives (on the source's split and axis)."""
-        return self._seeded(seed)
+        return self.episode(self.seeded(seed))
 
     def _named(self, scenario: Any) -> Scenario:
         sc = _check_scenario(scenario)
         return get_scenario(sc) if self.axis is None else self.axis.scenario(sc)
 
-    def _seeded(self, seed: int) -> Scenario:
+    def seeded(self, seed: int) -> Scenario:
+        """The scenario a draw of ``seed`` gives (on the source's split and axis)."""
         if self.axis is None:
             return random_scenario(seed, self.split)
         return self.axis.moves.of(self.split).pick(seed, self.split, self.base)

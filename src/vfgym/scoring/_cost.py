@@ -281,6 +281,11 @@ class Score(NamedTuple):
     metrics: dict[str, Any]
     terms: CostTerms
 
+    @property
+    def feasible(self) -> bool:
+        """Every constraint ≤ 0."""
+        return bool(np.all(self.constraints <= 0.0))
+
 
 def arrival_constraint(m: dict[str, Any], y: Yardsticks) -> float:
     """How far a run is from arriving (> 0: it did not; see the module docstring).
