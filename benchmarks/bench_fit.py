@@ -22,21 +22,28 @@ import argparse
 import os
 import shutil
 import time
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from vfgym.agents.fit import FitConfig, checkpointed_optima, fit_axis
-from vfgym.agents.optima import OptimumSearch
-from vfgym.moves.axis import load_axis
+from vfgym.agents.optima import MoveOptimum, OptimumSearch
+from vfgym.moves.axis import Axis, load_axis
+from vfgym.moves.scenarios import Scenario
 from vfgym.scoring import Move, score_pairs
 
 ROOT = Path(__file__).resolve().parents[1]
 AXES = [str(p.relative_to(ROOT)) for p in sorted((ROOT / "experiments/axes").glob("*.yaml"))]
 
 
-def best_known(test, ref, candidates, axis) -> tuple[np.ndarray, int]:
+def best_known(
+    test: Sequence[Scenario],
+    ref: Sequence[MoveOptimum],
+    candidates: Sequence[MoveOptimum],
+    axis: Axis,
+) -> tuple[np.ndarray, int]:
     """Each test move's best known cost: its own search's optimum, or a better feasible
     one among ``candidates`` (other moves' optima, scored on it); and how many bettered."""
     moves = [Move.of(sc, axis.plant) for sc in test]
