@@ -40,10 +40,12 @@ def test_bench_sweep_runs_to_the_end_on_a_small_budget():
     assert "12 / 10 trials, time:" in stdout
 
 
-def test_bench_fit_runs_to_the_end_on_a_small_budget():
+def test_bench_fit_runs_to_the_end_on_a_small_budget(tmp_path):
     args = ["--axes", "experiments/axes/belt.yaml", "--moves", "8", "--reference-points", "2"]
-    stdout = _run("bench_fit.py", *args, "--reference-rounds", "0")
+    stdout = _run("bench_fit.py", *args, "--reference-rounds", "0", "--out", str(tmp_path))
     assert "| belt | 32 |" in stdout
+    assert (tmp_path / "belt" / "fit" / "settings_model.json").is_file()
+    assert (tmp_path / "belt" / "test-optima.csv").is_file()
 
 
 def test_bench_agents_runs_to_the_end_on_a_few_hundred_steps(tmp_path):
