@@ -199,7 +199,8 @@ def test_predict_uses_the_shipped_model_without_training(tmp_path, capsys):
     assert doc["source"] == "pretrained settings model"
     want = load_settings_model().settings(get_scenario("test-3"))
     assert doc["settings"]["k"] == pytest.approx(want.k)
-    assert main(["evaluate", "--settings", str(out), "--scenarios", "test-3"]) == 0
+    args = ["evaluate", "--settings", str(out), "--scenarios", "test-3"]
+    assert main([*args, "--runs-dir", str(tmp_path)]) == 0
     capsys.readouterr()
     assert main(["predict", "--scenario", "test-3", "--refine", "4"]) == 0
     doc = yaml.safe_load(capsys.readouterr().out)
