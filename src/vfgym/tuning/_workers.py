@@ -275,6 +275,11 @@ def claim(
             trial, settings = maker.make(study, i == waiting, objective.laws)
             beats.add(trial)
             trial_id: int | None = trial._trial_id
+            # The worker's name only once its heartbeat is recorded, as below: recovery
+            # takes a running trial without one for an orphan (its worker died before
+            # the heartbeat began), and one with a name for the heartbeat to judge, so a
+            # name written with the trial would leave a death in between never retried.
+            trial.set_user_attr(WORKER_ATTR, _worker_id())
         else:
             with warnings.catch_warnings():  # heartbeats are ours (:class:`Heartbeats`)
                 warnings.filterwarnings("ignore", message="Heartbeat of storage is supposed")
@@ -299,11 +304,11 @@ class OneWrite(NamedTuple):
     study_id: int
 
     def make(self, study: Any, first: bool, laws: tuple[str, ...]) -> tuple[MadeTrial, Settings]:
-        """The next planned trial, created running with its parameters, generation,
-        this worker's name and its settings; and the settings."""
+        """The next planned trial, created running with its parameters, generation and
+        settings (the worker's name is written after its heartbeat, :func:`claim`); and
+        the settings."""
         template = self.sampler.plan_trial(study, first)
         settings = settings_of(template.params, laws)
-        template.user_attrs[WORKER_ATTR] = _worker_id()
         # The settings' user attribute with them (the trial's result records it again,
         # which :meth:`Objective.record` skips as already there).
         template.user_attrs["settings"] = space.settings_to_dict(settings)
