@@ -38,6 +38,7 @@ def test_bench_sweep_runs_to_the_end_on_a_small_budget():
     stdout = _run("bench_sweep.py", "--trials", "10", "--long", "12")
     assert "sweep / kernel:" in stdout
     assert "12 / 10 trials, time:" in stdout
+    assert "wall ms a trial of the long sweep, by completion: 0-3:" in stdout
 
 
 def test_bench_fit_runs_to_the_end_on_a_small_budget(tmp_path):

@@ -58,9 +58,10 @@ def _study(options, seed: int, trials: int = 45):
     return [(t.params, t.value) for t in study.trials], roles
 
 
-def _run(options, seed: int, trials: int):
+def _run(options, seed: int, trials: int, with_storage: bool = True):
     """A compass study on a synthetic cost falling along u0 + u1 behind the edge
-    u1 − u0 ≤ 0.05 (unit coordinates of :class:`vfgym.space.Relative`)."""
+    u1 − u0 ≤ 0.05 (unit coordinates of :class:`vfgym.space.Relative`); the sampler
+    given the study's storage, or not (it keeps its generations itself)."""
     import optuna
 
     from vfgym import space
@@ -69,8 +70,9 @@ def _run(options, seed: int, trials: int):
     from vfgym.tuning._objective import set_constraints
 
     rel = space.Relative(430.0)
-    sampler = CompassSampler(rel, seed=seed, options=options)
-    study = optuna.create_study(sampler=sampler)
+    storage = optuna.storages.InMemoryStorage() if with_storage else None
+    sampler = CompassSampler(rel, seed=seed, options=options, storage=storage)
+    study = optuna.create_study(sampler=sampler, storage=storage)
     study.enqueue_trial({"value_rad": 1.0, "error_limit_rad": 1.0, "k": 430.0, "ts_over_tf": 0.25})
 
     def objective(trial: optuna.Trial) -> float:
@@ -93,6 +95,21 @@ def test_local_options_add_search_points_and_keep_the_trials_a_function_of_the_s
     assert "search" in roles
     _, plain = _study(CompassOptions(), seed=1)
     assert "search" not in plain and "composite" not in plain  # off by default
+
+
+def test_a_compass_without_the_storage_draws_the_same_trials():
+    # Given no storage, the sampler keeps the generations of the trials it draws itself
+    # (none is written to the trials), and draws what it draws with the storage.
+    from vfgym.tuning._compass import ATTR, CompassOptions
+
+    kept = _run(CompassOptions(), seed=2, trials=40, with_storage=False)
+    written = _run(CompassOptions(), seed=2, trials=40)
+    assert [(t.params, t.value) for t in kept.trials] == [
+        (t.params, t.value) for t in written.trials
+    ]
+    assert not any(ATTR in t.system_attrs for t in kept.trials)
+    modes = {t.system_attrs[ATTR]["mode"] for t in written.trials if ATTR in t.system_attrs}
+    assert {"init", "compass"} <= modes
 
 
 def test_diagonal_polls_move_value_and_the_limit_ratio_together():

@@ -51,6 +51,7 @@ hyperparameters (``theta``), where the next batch's fits start (:func:`last_thet
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from typing import Any
 
@@ -124,6 +125,10 @@ class CompassSampler(optuna.samplers.BaseSampler):
     laws : acceleration laws searched (several: the law is one more coordinate).
     seed : seed of the Sobol points and the model's candidates.
     options : :class:`CompassOptions`.
+    storage : the storage of the studies it samples (an Optuna storage), where a trial
+        drawn by ``study.ask()`` gets its generation; without one (a study whose storage
+        the caller does not hold), the generations are kept in this sampler, so a study
+        resumed by another sampler starts its search again.
     """
 
     def __init__(
@@ -132,8 +137,12 @@ class CompassSampler(optuna.samplers.BaseSampler):
         laws: tuple[str, ...] = ("rise",),
         seed: int | None = None,
         options: CompassOptions | None = None,
+        storage: Any = None,
     ) -> None:
         self.relative = relative
+        self.storage = storage
+        self._study_ids: dict[str, int] = {}
+        self._tags: dict[tuple[str, int], dict[str, Any]] = {}  # kept here without storage
         self.laws = tuple(laws)
         self.seed = 0 if seed is None else int(seed)
         self.options = options or CompassOptions()
@@ -159,8 +168,34 @@ class CompassSampler(optuna.samplers.BaseSampler):
         if not search_space or "fixed_params" in trial.system_attrs:
             return {}  # an enqueued trial (a warm start, a retry) keeps its settings
         item = self._next(study, trial.number)
-        study._storage.set_trial_system_attr(trial._trial_id, ATTR, item["tag"])
+        self._record(study, trial.number, item["tag"])
         return self._params(item)
+
+    def _record(self, study: Any, number: int, tag: dict[str, Any]) -> None:
+        """Record a drawn trial's generation: through :attr:`storage`, else here."""
+        if self.storage is None:
+            self._tags[(study.study_name, number)] = tag
+            return
+        name = study.study_name
+        if name not in self._study_ids:
+            self._study_ids[name] = self.storage.get_study_id_from_name(name)
+        study_id = self._study_ids[name]
+        trial_id = self.storage.get_trial_id_from_study_id_trial_number(study_id, number)
+        self.storage.set_trial_system_attr(trial_id, ATTR, tag)
+
+    def _trials(self, study: Any) -> list[Any]:
+        """The study's trials, those drawn without :attr:`storage` with their generation."""
+        trials = study.get_trials(deepcopy=False)
+        if not self._tags:
+            return trials
+        out = []
+        for t in trials:
+            tag = self._tags.get((study.study_name, t.number))
+            if tag is not None and ATTR not in t.system_attrs:
+                t = copy.copy(t)  # (the study's own trial is left as it is)
+                t.system_attrs = {**t.system_attrs, ATTR: tag}
+            out.append(t)
+        return out
 
     def _params(self, item: dict[str, Any]) -> dict[str, Any]:
         s = self.relative.settings(self._to_unit(np.asarray(item["x"])), item["law"])
@@ -265,7 +300,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         (empty while another worker's generation is still running)."""
         import optuna
 
-        trials = study.get_trials(deepcopy=False)
+        trials = self._trials(study)
         self._checked = len(trials)
         tagged = [t for t in trials if ATTR in t.system_attrs]
         last = max((t.system_attrs[ATTR]["gen"] for t in tagged), default=-1)
@@ -282,7 +317,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
     def _extra_plan(self, study: Any) -> list[dict[str, Any]]:
         import optuna
 
-        trials = study.get_trials(deepcopy=False)
+        trials = self._trials(study)
         last = max((t.system_attrs[ATTR]["gen"] for t in trials if ATTR in t.system_attrs),
                    default=0)  # fmt: skip
         done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]

@@ -169,7 +169,7 @@ class Objective:
         return res.values
 
     def results(
-        self, study: Study, numbers: Sequence[int], settings: list[Settings]
+        self, study: Study | None, numbers: Sequence[int], settings: list[Settings]
     ) -> list[Result]:
         """The result of each setting, simulating only those never scored.
 
@@ -179,8 +179,9 @@ class Objective:
 
         Parameters
         ----------
-        study : optuna.Study
-            The study whose completed trials may already hold a setting's result.
+        study : optuna.Study or None
+            The study whose completed trials may already hold a setting's result (None:
+            those :meth:`learn` read last, without reading the study again).
         numbers : sequence of int
             The trials' numbers (recorded as ``cached_from`` of the results they create).
         settings : list of Settings
@@ -193,7 +194,7 @@ class Objective:
         """
         out: list[Result | None] = [self.cache.get(settings_key(s)) for s in settings]
         if any(r is None for r in out):
-            found = self._completed(study)
+            found = self._completed(study) if study is not None else self._found
             for i, s in enumerate(settings):
                 if out[i] is None:
                     out[i] = found.get(settings_key(s))
@@ -213,7 +214,7 @@ class Objective:
                     out[i] = self.cache[settings_key(s)]
         return [r for r in out if r is not None]
 
-    def record(self, trial: Trial, res: Result) -> None:
+    def record(self, trial: Trial, res: Result, trial_id: int | None = None) -> None:
         """Set a result's user attributes (those it does not hold already) and constraints
         on the trial.
 
@@ -223,12 +224,15 @@ class Objective:
             The trial.
         res : Result
             Its result.
+        trial_id : int or None
+            The trial's id in ``trial.storage`` (default: looked up, :func:`trial_id_of`).
         """
         have = trial.user_attrs  # (the trial's own copy: no read)
         for k, v in res.attrs.items():
             if k not in have or have[k] != v:
                 trial.set_user_attr(k, v)
-        set_constraints(trial, dict(zip(CONSTRAINTS, res.attrs["constraints"], strict=True)))
+        values = dict(zip(CONSTRAINTS, res.attrs["constraints"], strict=True))
+        set_constraints(trial, values, trial_id)
 
     def score(self, settings: Settings) -> Result:
         """Values and user attributes of one setting (one batched evaluation).
@@ -278,6 +282,18 @@ class Objective:
             out.append(Result(cost if self.form == "cost" else objectives, attrs))
         return out
 
+    def learn(self, study: Study) -> None:
+        """Read the study's trials completed since the last read (a worker does, before it
+        claims a batch, so that the batch's results need not read the study again: that
+        read would rebuild the batch's own running trials).
+
+        Parameters
+        ----------
+        study : optuna.Study
+            The study.
+        """
+        self._completed(study)
+
     def _completed(self, study: Study) -> dict[tuple, Result]:
         """Results of the study's completed trials, by settings (the lowest-numbered of each).
 
@@ -310,14 +326,52 @@ class Objective:
 _RESULT_ATTRS = ("settings", "cost", "constraints", "feasible", "objectives")
 
 
-def set_constraints(trial: Any, values: dict[str, float]) -> None:
+def trial_id_of(trial: Any, study_id: int | None = None) -> int:
+    """A trial's id in its storage, by Optuna's public API (``trial.storage``, the
+    number): where the study's storage caches its trials (RDB, in memory), no read.
+
+    Parameters
+    ----------
+    trial : optuna.Trial
+        The trial.
+    study_id : int or None
+        Its study's id in ``trial.storage`` (default: looked up by the study's name).
+
+    Returns
+    -------
+    int
+        The id the storage's trial methods take.
+    """
+    storage = trial.storage
+    if study_id is None:
+        study_id = storage.get_study_id_from_name(trial.study.study_name)
+    return int(storage.get_trial_id_from_study_id_trial_number(study_id, trial.number))
+
+
+def set_constraints(trial: Any, values: dict[str, float], trial_id: int | None = None) -> None:
     """Set the trial's constraints, as ``trial.set_constraint`` does (Optuna 5 reads them
     from the trial; its ``constraints_func`` is deprecated), without reading the trial
     first: on an RDB storage each read rebuilds the whole trial. A retried trial carries
     its first run's constraints, which are written again with the same values (the same
-    settings, so the same result)."""
+    settings, so the same result).
+
+    Parameters
+    ----------
+    trial : optuna.Trial
+        The trial (or what a worker made in its place: ``storage`` and ``number``).
+    values : dict of str to float
+        The constraints by name (≤ 0: met).
+    trial_id : int or None
+        The trial's id in ``trial.storage`` (default: :func:`trial_id_of`).
+
+    Raises
+    ------
+    ValueError
+        If a value is NaN.
+    """
+    tid = trial_id_of(trial) if trial_id is None else trial_id
     for name, v in values.items():
         v = float(v)
         if math.isnan(v):
             raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
-        trial.storage.set_trial_system_attr(trial._trial_id, f"{_CONSTRAINTS_KEY}:{name}", v)
+        trial.storage.set_trial_system_attr(tid, f"{_CONSTRAINTS_KEY}:{name}", v)

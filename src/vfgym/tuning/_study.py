@@ -55,7 +55,10 @@ def check_sampler(cfg: SweepConfig) -> None:
 
 
 def make_sampler(
-    cfg: SweepConfig, seed: int | None, scenarios: list[Scenario] | None = None
+    cfg: SweepConfig,
+    seed: int | None,
+    scenarios: list[Scenario] | None = None,
+    storage: BaseStorage | None = None,
 ) -> BaseSampler:
     """The Optuna sampler named by ``cfg.sampler``, seeded; constrained where it can be.
 
@@ -71,6 +74,9 @@ def make_sampler(
     scenarios : list of Scenario or None
         The sweep's scenarios (the compass sampler's coordinates depend on their plants;
         default: ``cfg``'s).
+    storage : optuna.storages.BaseStorage or None
+        The storage of the study it samples: the compass records there the generation of
+        a trial it draws through ``study.ask()`` (without it, in the sampler only).
 
     Returns
     -------
@@ -87,7 +93,7 @@ def make_sampler(
 
             base = _base_plant(cfg)
             rel = relative_space(scenarios or cfg.scenario_list(), base)
-            return CompassSampler(rel, cfg.laws, seed)
+            return CompassSampler(rel, cfg.laws, seed, storage=storage)
         if cfg.sampler == "tpe":
             return s.TPESampler(seed=seed, multivariate=True)
         if cfg.sampler == "cmaes":

@@ -30,7 +30,7 @@ from vfgym.moves.axis import axis_kwargs
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
-from vfgym.tuning._objective import Objective
+from vfgym.tuning._objective import Objective, trial_id_of
 from vfgym.tuning._recovery import (
     WORKER_ATTR,
     RetryStale,
@@ -192,7 +192,7 @@ def run_worker(
     deadline = math.inf if cfg.timeout is None else time.monotonic() + cfg.timeout
     with DeferredInterrupt() as interrupts:
         storage = open_storage(spec, cfg.heartbeat, cfg.grace)
-        sampler = make_sampler(cfg, seed, scenarios)
+        sampler = make_sampler(cfg, seed, scenarios, storage)
         study = optuna.load_study(study_name=study_name, storage=storage, sampler=sampler)
         on_axis = axis_kwargs(cfg.load_axis())
         objective = Objective(
@@ -207,7 +207,8 @@ def run_worker(
         evaluate(PAPER_SETTINGS, scenarios[:1], **on_axis)
         lock = _claim_lock(spec, study_name)
         beats = Heartbeats(storage)
-        maker = one_write(sampler, storage, study_name)
+        study_id = storage.get_study_id_from_name(study_name)
+        maker = one_write(sampler, storage, study_id)
         objective.guard = interrupts.allowed
         claimed: list[Claimed] = []
         try:
@@ -223,10 +224,11 @@ def run_worker(
                     if time.monotonic() >= deadline:
                         rep.stopped = "timeout"
                         break
+                    objective.learn(study)  # (the batch's results read nothing more)
                     free = budget - n["complete"] - n["running"]
                     size = batch_size(cfg, sampler, study)
                     take = min(size, free) if free > 0 else min(1, n["waiting"])
-                    claimed = claim(study, objective, take, beats, maker, n["waiting"])
+                    claimed = claim(study, objective, take, beats, maker, n["waiting"], study_id)
                 finally:
                     lock.release()
                 if not claimed:
@@ -261,6 +263,7 @@ def claim(
     beats: Heartbeats,
     maker: OneWrite | None = None,
     waiting: int = 0,
+    study_id: int | None = None,
 ) -> list[Claimed]:
     """Ask the study for ``n`` trials (waiting ones first), each with its heartbeat
     started, this worker's name and its settings stored (call under the claim lock: a
@@ -268,13 +271,16 @@ def claim(
 
     With ``maker`` (a sampler that plans its trials, :meth:`OneWrite.make`), the trials
     after the ``waiting`` ones are each created in one write instead of ``study.ask()``
-    and a write per parameter and attribute."""
+    and a write per parameter and attribute. ``study_id``: the study's id in the trials'
+    storage (default: the maker's, else read)."""
+    sid = study_id if study_id is not None else maker.study_id if maker else None
     out = []
     for i in range(n):
         if maker is not None and i >= waiting:
-            trial, settings = maker.make(study, i == waiting, objective.laws)
-            beats.add(trial)
-            trial_id: int | None = trial._trial_id
+            made, settings = maker.make(study, i == waiting, objective.laws)
+            trial: Any = made
+            trial_id = made.trial_id
+            beats.add(trial_id)
             # The worker's name only once its heartbeat is recorded, as below: recovery
             # takes a running trial without one for an orphan (its worker died before
             # the heartbeat began), and one with a name for the heartbeat to judge, so a
@@ -284,12 +290,15 @@ def claim(
             with warnings.catch_warnings():  # heartbeats are ours (:class:`Heartbeats`)
                 warnings.filterwarnings("ignore", message="Heartbeat of storage is supposed")
                 trial = study.ask()
-            trial_id = None
-            beats.add(trial)
+            trial_id = trial_id_of(trial, sid)
+            beats.add(trial_id)
             trial.set_user_attr(WORKER_ATTR, _worker_id())
             settings = space.suggest(trial, objective.laws)
         objective.current = trial.number
-        out.append(Claimed(trial, settings, trial_id))
+        out.append(Claimed(trial, settings, trial_id, maker is not None and i >= waiting))
+    if maker is not None and len(out) > waiting:
+        maker.check([c.trial for c in out[waiting:]])
+        objective.current = out[-1].trial.number
     return out
 
 
@@ -306,21 +315,33 @@ class OneWrite(NamedTuple):
     def make(self, study: Any, first: bool, laws: tuple[str, ...]) -> tuple[MadeTrial, Settings]:
         """The next planned trial, created running with its parameters, generation and
         settings (the worker's name is written after its heartbeat, :func:`claim`); and
-        the settings."""
+        the settings. Its number is the one planned, which :meth:`check` confirms for a
+        batch."""
         template = self.sampler.plan_trial(study, first)
         settings = settings_of(template.params, laws)
         # The settings' user attribute with them (the trial's result records it again,
         # which :meth:`Objective.record` skips as already there).
         template.user_attrs["settings"] = space.settings_to_dict(settings)
         trial_id = self.storage.create_new_trial(self.study_id, template)
-        number = template.number
-        # The number planned is the trial's unless one was made meanwhile (outside the
-        # claim lock): checked by the storage's cache of numbers, which the new trial is
-        # in (no read), else found by a read.
-        if self.storage.get_trial_id_from_study_id_trial_number(self.study_id, number) != trial_id:
-            number = self.storage.get_trial(trial_id).number
-        self.sampler.created(number)
-        return MadeTrial(self.storage, trial_id, number, template.user_attrs), settings
+        self.sampler.created(template.number)
+        return MadeTrial(self.storage, trial_id, template.number, template.user_attrs), settings
+
+    def check(self, made: list[MadeTrial]) -> None:
+        """Confirm the numbers planned for trials made one after the other (by
+        :meth:`make`, the first with ``first``): a trial's number counts the study's
+        trials before it, so they are the planned ones unless a trial was made meanwhile
+        (outside the claim lock), and then one numbered past the last planned exists.
+        One read a batch; on a mismatch each trial's number is read and the sampler plans
+        from the study again."""
+        if not made:
+            return
+        try:
+            self.storage.get_trial_id_from_study_id_trial_number(self.study_id, made[-1].number + 1)
+        except KeyError:
+            return
+        for m in made:
+            m.number = self.storage.get_trial(m.trial_id).number
+        self.sampler.created(-2)  # (not the next planned: the next plan reads the study)
 
     def tell(self, trial_id: int, values: float | list[float]) -> None:
         """Complete the trial with its values (what ``study.tell`` writes)."""
@@ -339,21 +360,21 @@ def settings_of(params: dict[str, Any], laws: tuple[str, ...]) -> Settings:
     )
 
 
-def one_write(sampler: Any, storage: Any, study_name: str) -> OneWrite | None:
+def one_write(sampler: Any, storage: Any, study_id: int) -> OneWrite | None:
     """:class:`OneWrite` for a sampler that plans its trials, else None."""
     if not (hasattr(sampler, "plan_trial") and hasattr(sampler, "created")):
         return None
-    return OneWrite(sampler, storage, storage.get_study_id_from_name(study_name))
+    return OneWrite(sampler, storage, study_id)
 
 
 class MadeTrial:
     """A trial :class:`OneWrite` made, with what a worker uses of an
-    :class:`optuna.trial.Trial` (its number, storage, user attributes), without reading the
-    trial back from the storage."""
+    :class:`optuna.trial.Trial` (its number, storage, user attributes) and its id in the
+    storage, without reading the trial back from the storage."""
 
     def __init__(self, storage: Any, trial_id: int, number: int, user_attrs: dict) -> None:
         self.storage = storage
-        self._trial_id = trial_id
+        self.trial_id = trial_id
         self.number = number
         self._user_attrs = dict(user_attrs)
 
@@ -364,29 +385,31 @@ class MadeTrial:
 
     def set_user_attr(self, key: str, value: Any) -> None:
         """Set a user attribute (one storage write)."""
-        self.storage.set_trial_user_attr(self._trial_id, key, value)
+        self.storage.set_trial_user_attr(self.trial_id, key, value)
         self._user_attrs[key] = value
 
 
 class Claimed(NamedTuple):
-    """A trial a worker claimed, the settings drawn for it, and its id when it was made
-    by :class:`OneWrite` (then told through the storage)."""
+    """A trial a worker claimed, the settings drawn for it, its id in the storage, and
+    whether :class:`OneWrite` made it (then it is told through the storage)."""
 
     trial: Any
     settings: Settings
-    trial_id: int | None = None
+    trial_id: int
+    made: bool = False
 
 
 def run_batch(
     study: Any, objective: Objective, batch: list[Claimed], maker: OneWrite | None = None
 ) -> None:
-    """Score the batch's settings together (one batched simulation) and tell the study;
-    a failing evaluation fails the batch's trials and raises."""
+    """Score the batch's settings together (one batched simulation; a setting a completed
+    trial holds is copied from those ``objective`` read last, :meth:`Objective.learn`)
+    and tell the study; a failing evaluation fails the batch's trials and raises."""
     import optuna
 
     try:
         results = objective.results(
-            study, [c.trial.number for c in batch], [c.settings for c in batch]
+            None, [c.trial.number for c in batch], [c.settings for c in batch]
         )
     except KeyboardInterrupt:
         raise
@@ -395,9 +418,9 @@ def run_batch(
             study.tell(c.trial.number, state=optuna.trial.TrialState.FAIL)
         raise
     for c, res in zip(batch, results, strict=True):
-        objective.record(c.trial, res)
+        objective.record(c.trial, res, c.trial_id)
         values = res.values if isinstance(res.values, list) else [res.values]
-        if maker is not None and c.trial_id is not None and all(map(math.isfinite, values)):
+        if maker is not None and c.made and all(map(math.isfinite, values)):
             maker.tell(c.trial_id, res.values)
         else:
             study.tell(c.trial.number, res.values)
@@ -428,11 +451,13 @@ class Heartbeats:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
-    def add(self, trial: Any) -> None:
+    def add(self, trial_id: int) -> None:
+        """Record a heartbeat of the trial (by its id in the storage) now, and from now
+        on every interval."""
         if self._storage is None:
             return
-        self._storage.record_heartbeat(trial._trial_id)
-        self._ids.append(trial._trial_id)
+        self._storage.record_heartbeat(trial_id)
+        self._ids.append(trial_id)
         if self._thread is None:
             self._stop.clear()
             self._thread = threading.Thread(target=self._beat, daemon=True)
