@@ -12,7 +12,12 @@ first, second and last hundred took (cost per trial growing with the study's siz
 in the last against the second: the first hundred are mostly the compass's polls, the
 rest mostly model batches).
 
-    python benchmarks/bench_sweep.py [--trials 100] [--long 1000] [--config FILE] [--dump FILE]
+``--repeat N`` times the short sweep and the kernel N times each, alternately, and takes
+the fastest of each (on a shared machine one run may be twice another); ``--sql`` counts
+the short sweep's SQL statements (what a trial costs the storage, whatever the load).
+
+    python benchmarks/bench_sweep.py [--trials 100] [--long 1000] [--repeat 1] [--sql]
+        [--config FILE] [--dump FILE]
 """
 
 from __future__ import annotations
@@ -47,18 +52,23 @@ class Seconds(NamedTuple):
 
 
 class Sweep(NamedTuple):
-    """A timed sweep: its seconds, the settings of its completed trials, and the wall
-    seconds each trial took, by number (from the previous completion, or the sweep's
-    start, to the trial's completion: a batch's time falls on its first trial)."""
+    """A timed sweep: its seconds, the settings of its completed trials, the wall
+    seconds each trial took, by completion (from the previous completion, or the sweep's
+    start: a batch's time falls on its first trial), and the SQL statements it ran."""
 
     seconds: Seconds
     settings: list
     per_trial: list[float]
+    statements: int
 
 
-def sweep_seconds(config: Path, trials: int, folder: Path, dump: str = "") -> Sweep:
-    """``trials`` trials of the config's sweep in ``folder``, timed."""
+def sweep_seconds(
+    config: Path, trials: int, folder: Path, dump: str = "", sql: bool = False
+) -> Sweep:
+    """``trials`` trials of the config's sweep in ``folder``, timed (and with ``sql``,
+    the SQL statements of every engine counted: a little slower)."""
     import optuna
+    import sqlalchemy
 
     cfg = tuning.SweepConfig.resolve(
         read_yaml(config), {"trials": trials, "runs_dir": str(folder)}, source=str(config)
@@ -69,10 +79,19 @@ def sweep_seconds(config: Path, trials: int, folder: Path, dump: str = "") -> Sw
     study, _ = tuning.create_or_load(storage, "bench", cfg, cfg.scenario_list())
     scenarios = cfg.scenario_list()
     evaluate(space.Settings(), scenarios[:1], **axis_kwargs(cfg.load_axis()))  # compiled
+    statements = [0]
+
+    def count(*_: object) -> None:
+        statements[0] += 1
+
     start = datetime.datetime.now()
+    if sql:
+        sqlalchemy.event.listen(sqlalchemy.engine.Engine, "before_cursor_execute", count)
     t, c = time.perf_counter(), time.process_time()
     tuning.run_worker(cfg, spec, "bench")
     seconds = Seconds(time.perf_counter() - t, time.process_time() - c)
+    if sql:
+        sqlalchemy.event.remove(sqlalchemy.engine.Engine, "before_cursor_execute", count)
     if dump:
         params = [tr.params for tr in study.get_trials(deepcopy=False)]
         Path(dump).write_text(json.dumps(params, indent=0))
@@ -80,7 +99,7 @@ def sweep_seconds(config: Path, trials: int, folder: Path, dump: str = "") -> Sw
     ends = sorted(tr.datetime_complete for tr in done if tr.datetime_complete is not None)
     per_trial = [(b - a).total_seconds() for a, b in zip([start, *ends[:-1]], ends, strict=True)]
     settings = [space.settings_from_dict(tr.user_attrs["settings"]) for tr in done]
-    return Sweep(seconds, settings, per_trial)
+    return Sweep(seconds, settings, per_trial, statements[0])
 
 
 def block_ms(per_trial: list[float], first: int, last: int) -> float:
@@ -101,21 +120,40 @@ def kernel_seconds(config: Path, settings: list) -> Seconds:
     return Seconds(time.perf_counter() - t, time.process_time() - c)
 
 
+def fastest(times: list[Seconds]) -> Seconds:
+    """The least wall and the least CPU time among repeats (the run least disturbed by
+    other jobs: on a shared machine the spread is large)."""
+    return Seconds(min(t.wall for t in times), min(t.cpu for t in times))
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--config", type=Path, default=ROOT / "experiments" / "quick.yaml")
     p.add_argument("--trials", type=int, default=100)
     p.add_argument("--long", type=int, default=0, help="also an N-trial sweep (0: not)")
     p.add_argument("--dump", default="", help="write the trials' parameters to this JSON file")
+    p.add_argument(
+        "--repeat", type=int, default=1, help="time the short sweep and the kernel N times "
+        "each, alternately, and take the fastest of each (the long sweep runs once)",
+    )  # fmt: skip
+    p.add_argument("--sql", action="store_true", help="count the short sweep's SQL statements")
     a = p.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        sweep_s, settings, _ = sweep_seconds(a.config, a.trials, Path(tmp) / "short", a.dump)
-        kernel_s = kernel_seconds(a.config, settings)
-        print(f"sweep, {len(settings)} trials ({a.config.name}, sqlite): {sweep_s}")
-        print(f"kernel, the same {len(settings)} settings one a call: {kernel_s}")
+        sweeps, kernels = [], []
+        for i in range(max(a.repeat, 1)):
+            dump = a.dump if i == 0 else ""
+            sweeps.append(sweep_seconds(a.config, a.trials, Path(tmp) / f"short{i}", dump, a.sql))
+            kernels.append(kernel_seconds(a.config, sweeps[-1].settings))
+        settings = sweeps[0].settings
+        sweep_s, kernel_s = fastest([s.seconds for s in sweeps]), fastest(kernels)
+        of = f" (fastest of {len(sweeps)})" if len(sweeps) > 1 else ""
+        print(f"sweep, {len(settings)} trials ({a.config.name}, sqlite): {sweep_s}{of}")
+        print(f"kernel, the same {len(settings)} settings one a call: {kernel_s}{of}")
         print(f"sweep / kernel: {sweep_s.over(kernel_s)} (target <= 4x)")
+        if a.sql:
+            print(f"SQL statements a trial: {sweeps[0].statements / len(settings):.1f}")
         if a.long:
-            long_s, done, per_trial = sweep_seconds(a.config, a.long, Path(tmp) / "long")
+            long_s, done, per_trial, _ = sweep_seconds(a.config, a.long, Path(tmp) / "long")
             print(f"sweep, {len(done)} trials: {long_s}")
             print(
                 f"{len(done)} / {len(settings)} trials, time: {long_s.over(sweep_s)} "
