@@ -35,8 +35,9 @@ def test_bench_envs_runs_to_the_end_on_a_small_budget():
 
 
 def test_bench_sweep_runs_to_the_end_on_a_small_budget():
-    stdout = _run("bench_sweep.py", "--trials", "10", "--long", "12")
+    stdout = _run("bench_sweep.py", "--trials", "10", "--long", "12", "--repeat", "2", "--sql")
     assert "sweep / kernel:" in stdout
+    assert "(fastest of 2)" in stdout and "SQL statements a trial:" in stdout
     assert "12 / 10 trials, time:" in stdout
     assert "wall ms a trial of the long sweep, by completion: 0-3:" in stdout
 
