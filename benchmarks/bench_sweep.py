@@ -7,10 +7,11 @@ timing the trials (:func:`vfgym.tuning.run_worker`, the study already created, t
 kernel already compiled: what a sweep adds to the simulation), then simulates the
 settings those trials drew again, one setting a call (:func:`vfgym.evaluate` on the same
 moves), and prints both and their ratio. ``--long N`` also runs an ``N``-trial sweep and
-prints the ratio of its trials' time to the first's, and the wall time a trial of its
-first, second and last hundred took (cost per trial growing with the study's size shows
-in the last against the second: the first hundred are mostly the compass's polls, the
-rest mostly model batches).
+prints the ratio of its trials' time to the first's, and to its own first ``--trials``
+(the same trials, timed in the same run: the ratio least disturbed by a load that
+changes between runs), and the wall time a trial of its first, second and last hundred
+took (cost per trial growing with the study's size shows in the last against the second:
+the first hundred are mostly the compass's polls, the rest mostly model batches).
 
 ``--repeat N`` times the short sweep and the kernel N times each, alternately, and takes
 the fastest of each (on a shared machine one run may be twice another); ``--sql`` counts
@@ -160,6 +161,11 @@ def main() -> None:
             print(
                 f"{len(done)} / {len(settings)} trials, time: {long_s.over(sweep_s)} "
                 f"(target <= {1.2 * len(done) / len(settings):.1f}x: 12x for 1,000 / 100)"
+            )
+            first = sum(per_trial[: len(settings)])
+            print(
+                f"{len(done)} trials / their first {len(settings)} (the short sweep's trials, "
+                f"timed in the same run): {sum(per_trial) / first:.1f}x wall"
             )
             n, k = len(per_trial), min(100, len(per_trial) // 3)
             if k:
