@@ -2,6 +2,7 @@
 costs against ``model-lookup`` (its look-up alone): prints figures, asserts nothing.
 
     python benchmarks/bench_residual_base.py [--moves 200] [--steps 20000] [--repeat 2]
+        [--envs VFServo-v0,VFTune-v0]
 
 1. The base alone: ms per new move (train-split moves never seen before, so nothing is
    remembered), each spelling through :func:`vfgym.agents.training.env_options`.
@@ -66,10 +67,11 @@ def main() -> None:
     ap.add_argument("--moves", type=int, default=200)
     ap.add_argument("--steps", type=int, default=20_000)
     ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--envs", default="VFServo-v0,VFTune-v0")
     args = ap.parse_args()
     for spec in SPELLINGS:
         print(f"base {spec}: {per_move_ms(spec, args.moves):.2f} ms per new move", flush=True)
-    for env_id in ("vfgym/VFServo-v0", "vfgym/VFTune-v0"):
+    for env_id in (f"vfgym/{e}" for e in args.envs.split(",")):
         rates: dict[str, list[float]] = {s: [] for s in SPELLINGS}
         for r in range(args.repeat):
             for spec in SPELLINGS:

@@ -179,8 +179,10 @@ def main() -> None:
                          residual_ratio=True)  # fmt: skip
         tune.reset()
         print(f"  the optimum: {fmt(sched.base)}")
-        for t, a in zip([0, *switches], acts, strict=True):
-            print(f"  from interval {t}: {fmt(tune.settings_of(a))}")
+        ends = [*switches, None]
+        for t, t1, a in zip([0, *switches], ends, acts, strict=True):
+            if t != t1:  # an empty piece (two equal switch times) is not shown
+                print(f"  from interval {t}: {fmt(tune.settings_of(a))}")
     print(f"{time.perf_counter() - t0:.0f} s")
 
 
