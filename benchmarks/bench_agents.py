@@ -18,8 +18,9 @@ the held-out mean cost ± its standard deviation over seeds, and the mean cost's
   with the lowest mean cost on these moves (chosen on them, so a baseline in hindsight).
 
 With residual actions (the run's ``env_kwargs``) the row names its base (``model``: the
-shipped per-move settings model; ``paper``; a settings file) and the base's own ratio to
-the per-move optima on the same moves, the mark an agent that starts as its base must beat.
+shipped per-move settings model, its candidates checked on the move; ``model-lookup``: its
+look-up alone; ``paper``; a settings file) and the base's own ratio to the per-move optima
+on the same moves, the mark an agent that starts as its base must beat.
 
 "worst validation" is the largest validation mean cost a run logged (``evaluations.csv``)
 over its first one, the agent as it started, the worst seed's: above 1 the policy got
