@@ -18,13 +18,19 @@ the held-out mean cost ± its standard deviation over seeds, and the mean cost's
   with the lowest mean cost on these moves (chosen on them, so a baseline in hindsight).
 
 With residual actions (the run's ``env_kwargs``) the row names its base (``model``: the
-shipped per-move settings model; ``paper``; a settings file) and the base's own ratio to
-the per-move optima on the same moves, the mark an agent that starts as its base must beat.
+shipped per-move settings model, its candidates checked on the move; ``model-lookup``: its
+look-up alone; ``paper``; a settings file) and the base's own ratio to the per-move optima
+on the same moves, the mark an agent that starts as its base must beat.
 
 "worst validation" is the largest validation mean cost a run logged (``evaluations.csv``)
 over its first one, the agent as it started, the worst seed's: above 1 the policy got
 worse while training; the best model is still chosen on validation, so a held-out cost
 at its base's shows a run that never improved on it.
+
+``--combine RUN [RUN ...]`` trains nothing: it prints the row of run folders already
+trained (one algorithm × env, one folder per seed, e.g. seeds trained by separate
+``--seeds N --out DIR`` processes), judged as above; their wall time is not known there
+(nan).
 
 Writes ``benchmark.md`` (the table and the commands), ``benchmark.json`` and
 ``learning_curves.png`` (each run's held-out validation cost from its
@@ -191,6 +197,27 @@ def table(rows: list[Row], commands: list[str]) -> str:
     return "\n".join([*lines, "", "Commands:", "", *(f"    {c}" for c in commands), ""])
 
 
+def combine(folders: list[Path], moves: int) -> None:
+    """Print the row of trained run folders (one algorithm × env, one per seed)."""
+    from vfgym.io.runs import read_yaml
+
+    scenarios, optimum, best = baselines(moves)
+    cfg = read_yaml(folders[0] / "config.yaml")
+    judged = [judge(f / "best_model.zip", scenarios) for f in folders]
+    costs = [c for c, _ in judged]
+    mean = float(np.mean(costs))
+    base = residual_base(folders[0])
+    row = Row(cfg["algo"], str(cfg["env"]).removeprefix("vfgym/"), base,
+              base_cost(base, scenarios) / float(optimum.mean()),
+              int(cfg["hyperparams"]["n_timesteps"]), float("nan"), mean, float(np.std(costs)),
+              mean / float(optimum.mean()), mean / float(best.mean()),
+              float(np.mean([f for _, f in judged])), len(folders),
+              worst_validation(folders))  # fmt: skip
+    for f, c in zip(folders, costs, strict=True):
+        print(f"{f}: held-out mean cost {c:.4g}")
+    print(table([row], [f"(run folders: {', '.join(map(str, folders))})"]))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--algos", default="ppo,sac,td3")
@@ -201,7 +228,11 @@ def main() -> None:
     ap.add_argument("--out", default="runs/bench-agents")
     ap.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE",
                     help="extra overrides for every training")  # fmt: skip
+    ap.add_argument("--combine", nargs="+", metavar="RUN", help="judge these run folders")
     args = ap.parse_args()
+    if args.combine:
+        combine([Path(f) for f in args.combine], args.moves)
+        return
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     scenarios, optimum, best = baselines(args.moves)

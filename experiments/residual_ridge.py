@@ -1,8 +1,8 @@
 """How VFServo-v0's cost answers small residual actions: the mean cost of the first
 ``--moves`` validation moves (train split, never drawn in training) under constant
 offsets on one setting at a time and under per-interval Gaussian noise, with the shipped
-model as base, for L's offset of L alone and of L/value (``residual_ratio``, L held at
-the base's ratio).
+model's look-up (``model-lookup``) as base, for L's offset of L alone and of L/value
+(``residual_ratio``, L held at the base's ratio).
 
     python experiments/residual_ridge.py [--moves 8] [--offset 0.02] [--noise 0.05]
 
@@ -18,7 +18,7 @@ import numpy as np
 
 from vfgym.agents.training import make_env, validation_scenarios
 
-BASE = {"residual": True, "residual_base": "model", "interval_s": 0.005}
+BASE = {"residual": True, "residual_base": "model-lookup", "interval_s": 0.005}
 VARIANTS = {
     "L alone": BASE,
     "L/value, L held": {**BASE, "residual_ratio": True, "residual_scale": [0.25, 0, 0.25, 0.25]},

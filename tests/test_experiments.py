@@ -106,3 +106,21 @@ def test_residual_ridge_runs_and_the_zero_action_costs_the_same_either_way():
     zero = next(ln for ln in out.stdout.splitlines() if ln.startswith("| zero |"))
     a, b = zero.strip("| ").split(" | ")[1:]
     assert a == b  # the zero action is the base exactly, whatever L's offset means
+
+
+def test_schedule_headroom_runs_and_no_schedule_is_worse_than_the_optimum():
+    """Its own check (the zero schedule costs the optimum's ``evaluate`` cost bit for bit)
+    passes, and each search keeps the best found, the optimum included."""
+    out = subprocess.run(
+        [sys.executable, "experiments/schedule_headroom.py", "--moves", "1", "--evals", "12",
+         "--interval-ms", "5", "--show", "1"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr[-2000:]
+    row = next(ln for ln in out.stdout.splitlines() if ln.startswith("| test-0 |"))
+    optimum, *found = (float(c.split()[0]) for c in row.strip("| ").split(" | ")[2:])
+    assert len(found) == 3 and all(c <= optimum for c in found)
+    assert "from interval 0:" in out.stdout

@@ -127,7 +127,7 @@ def test_a_residual_agent_starts_as_its_base(algo):
 def test_a_residual_vftune_agent_starts_as_the_shipped_model(algo):
     """VFTune-v0 with residual actions on the shipped per-move model: the untrained agent's
     settings are the model's look-up (its best-ranked candidate, unchecked) on every move,
-    and ``policy_settings`` reads them so."""
+    and ``policy_settings`` reads them so (``model-lookup``)."""
     from dataclasses import replace
 
     from vfgym import PAPER_PLANT
@@ -136,7 +136,7 @@ def test_a_residual_vftune_agent_starts_as_the_shipped_model(algo):
     from vfgym.agents.supervised import load_settings_model
     from vfgym.agents.training import start_at_base
 
-    kw = {"residual": True, "residual_base": "model", "residual_ratio": True}
+    kw = {"residual": True, "residual_base": "model-lookup", "residual_ratio": True}
     env = make_env("vfgym/VFTune-v0", kw)
     model = algo_class(algo)("MlpPolicy", env, seed=0, device="cpu")
     start_at_base(model)
@@ -147,6 +147,44 @@ def test_a_residual_vftune_agent_starts_as_the_shipped_model(algo):
         from vfgym.moves.distribution import get_scenario
 
         assert pick(name) == shipped.settings(get_scenario(name), PAPER_PLANT)
+
+
+@pytest.mark.parametrize("env_id", ["vfgym/VFServo-v0", "vfgym/VFTune-v0"])
+def test_the_model_base_is_the_shipped_model_checked_on_the_move(env_id):
+    """``residual_base: model`` is the shipped model as ``vfgym predict`` uses it (its
+    candidates checked on the move): the zero action costs what ``evaluate`` gives for
+    those settings, bit for bit; ``model-lookup`` is its best-ranked candidate, and on a
+    move where the two differ the check's is no worse."""
+    from dataclasses import replace
+
+    from vfgym import PAPER_PLANT, evaluate
+    from vfgym.agents.supervised import load_settings_model
+    from vfgym.agents.training import env_options
+    from vfgym.moves.distribution import get_scenario
+
+    shipped = load_settings_model()
+    assert shipped.check > 1
+    lookup = replace(shipped, check=0)
+    kw = {"residual": True, "residual_base": "model", "residual_ratio": True}
+    env = make_env(env_id, {**kw, **({"interval_s": 0.005} if "Servo" in env_id else {})})
+    differ = 0
+    for name in ("test-0", "test-5", "test-10", "short-move"):
+        sc = get_scenario(name)
+        checked = shipped.settings(sc, PAPER_PLANT)
+        assert env_options(kw)["residual_base"](sc, PAPER_PLANT) == checked
+        env.reset(options={"scenario": name})
+        while True:
+            _, _, term, trunc, info = env.step(np.zeros(4, dtype=np.float32))
+            if term or trunc:
+                break
+        assert info["cost"] == evaluate(checked, name).cost[0, 0]
+        plain = evaluate(lookup.settings(sc, PAPER_PLANT), name)
+        if lookup.settings(sc, PAPER_PLANT) != checked:
+            differ += 1
+            assert (not plain.feasible[0, 0]) or info["cost"] <= plain.cost[0, 0]
+    assert differ >= 2  # the check changed the pick on test-5 and test-10 at least
+    with pytest.raises(ValueError, match="model-lookup"):
+        env_options({"residual_base": "modle"})
 
 
 def test_a_vftune_agent_is_a_residual_base_for_vfservo(tmp_path):

@@ -57,32 +57,80 @@ def _activation(name: str) -> Any:
 
 def env_options(env_kwargs: dict[str, Any] | None) -> dict[str, Any]:
     """The env arguments of a hyperparameter file made objects: ``residual_base`` written
-    as ``paper`` (the paper's settings), ``model`` (the shipped per-move settings model's
-    look-up, move by move, without its check on the move: the best-ranked candidate), a
-    settings file (a mapping of the settings, or one under ``settings:``
-    as ``best.yaml``) or a trained VFTune-v0 agent (its ``.zip``: the settings it picks
-    for each move)."""
+    as ``paper`` (the paper's settings), ``model`` (the shipped per-move settings model as
+    ``vfgym predict`` uses it: its best-ranked candidates simulated on the move, the best
+    kept; :class:`CheckedBase`), ``model-lookup`` (its look-up alone, unsimulated: the
+    best-ranked candidate), a settings file (a mapping of the settings, or one under
+    ``settings:`` as ``best.yaml``) or a trained VFTune-v0 agent (its ``.zip``: the
+    settings it picks for each move)."""
     kw = dict(env_kwargs or {})
     base = kw.get("residual_base")
     if isinstance(base, str):
-        kw["residual_base"] = _residual_base(base)
+        kw["residual_base"] = _residual_base(base, _measures_of(kw))
     return kw
 
 
-def _residual_base(spec: str) -> Any:
-    from vfgym.params import PAPER_SETTINGS
+BASE_SPECS = ("paper", "model", "model-lookup")
+"""The named bases a hyperparameter file's ``residual_base`` may be (or a file's path)."""
+
+
+class CheckedBase:
+    """A settings model's settings for each move, remembered per (move, plant): with its
+    check on (:attr:`vfgym.agents.pick.PickModel.check`) each new move simulates its
+    candidates once (a few ms), and the validation moves, scored again at every
+    evaluation, only the first time.
+
+    Parameters
+    ----------
+    model : PickModel or SettingsModel
+        The model.
+    measures : Measures
+        What the check scores with (an axis's).
+    size : int
+        Moves remembered; the oldest are forgotten beyond it.
+    """
+
+    def __init__(self, model: Any, measures: Any, size: int = 1024) -> None:
+        self.model, self.measures, self.size = model, measures, size
+        self._seen: dict[tuple[Scenario, Any], Any] = {}
+
+    def __call__(self, scenario: Scenario, plant: Any) -> Any:
+        """The model's settings for ``scenario`` on the base plant ``plant``."""
+        key = (scenario, plant)
+        out = self._seen.get(key)
+        if out is None:
+            if len(self._seen) >= self.size:
+                del self._seen[next(iter(self._seen))]
+            out = self._seen[key] = self.model.settings(scenario, plant, self.measures)
+        return out
+
+
+def _measures_of(kw: dict[str, Any]) -> Any:
+    from vfgym.params import DEFAULT_MEASURES
+
+    axis = kw.get("axis")
+    if axis is None:
+        return kw.get("measures", DEFAULT_MEASURES)
+    from vfgym.moves.axis import load_axis
+
+    return (load_axis(axis) if isinstance(axis, (str, Path)) else axis).measures
+
+
+def _residual_base(spec: str, measures: Any = None) -> Any:
+    from vfgym.params import DEFAULT_MEASURES, PAPER_SETTINGS
     from vfgym.space import settings_from_dict
 
     if spec == "paper":
         return PAPER_SETTINGS
-    if spec == "model":
+    if spec in ("model", "model-lookup"):
         from dataclasses import replace
 
         from vfgym.agents.supervised import PickModel, load_settings_model
 
-        # the look-up alone: the model's check would simulate its candidates at every reset
         model = load_settings_model()
-        return (replace(model, check=0) if isinstance(model, PickModel) else model).settings
+        if spec == "model-lookup" and isinstance(model, PickModel):
+            model = replace(model, check=0)
+        return CheckedBase(model, DEFAULT_MEASURES if measures is None else measures)
     if spec.endswith(".zip") and Path(spec).is_file():
         from vfgym.agents import policy_settings
 
@@ -90,8 +138,9 @@ def _residual_base(spec: str) -> Any:
         return lambda scenario, plant: pick(scenario)
     if not Path(spec).is_file():
         raise ValueError(
-            f"residual_base={spec!r} is not allowed: paper, model, a settings file or a "
-            "VFTune-v0 agent's .zip"
+            f"residual_base={spec!r} is not allowed: {', '.join(BASE_SPECS)} (the shipped "
+            "settings model, checked on the move, or its look-up alone), a settings file "
+            "or a VFTune-v0 agent's .zip"
         )
     data = read_yaml(spec)
     data = data["settings"] if isinstance(data, dict) and "settings" in data else data
