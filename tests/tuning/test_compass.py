@@ -221,9 +221,9 @@ def test_a_model_point_of_another_basin_gets_a_compass(cost, far, gap, mode):
         Observation(1, away, "rise", cost, 0.0, True, np.array([-1.0])),
         Observation(2, mid + 0.1, "rise", 5.0, 0.0, True, np.array([-1.0])),
     ]
-    # The compass before the model converged (steps below min_step): with steps left it
-    # would go on from the centre whatever the model found (``resume``).
-    tag = {"gen": 4, "mode": "model", "role": "model", "centre": 0, "steps": [0.05] * 4,
+    # The compass before the model converged (steps below resume_floor): with steps left
+    # it would go on from the centre whatever the model found (``resume``).
+    tag = {"gen": 4, "mode": "model", "role": "model", "centre": 0, "steps": [0.02] * 4,
            "since": 0, "rounds": 1}  # fmt: skip
     tagged = [_Trial(n, {ATTR: tag}) for n in (1, 2)]
     plan = sampler._generation(obs, tagged, 4)
@@ -237,7 +237,8 @@ def test_a_model_point_of_another_basin_gets_a_compass(cost, far, gap, mode):
     [
         (0.2, True, "compass"),  # cut short by its budget: the compass goes on, same steps
         (0.2, False, "model"),  # off: model batches until one beats the centre
-        (0.05, True, "model"),  # converged (steps below min_step): the model again
+        (0.05, True, "compass"),  # below min_step, above resume_floor: goes on too
+        (0.02, True, "model"),  # below resume_floor: converged, the model again
     ],
 )
 def test_a_compass_cut_short_goes_on_after_a_model_batch(steps, resume, mode):
