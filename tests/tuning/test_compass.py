@@ -238,10 +238,41 @@ def test_a_model_point_of_another_basin_gets_a_compass(cost, far, gap, mode):
         Observation(1, away, "rise", cost, 0.0, True, np.array([-1.0])),
         Observation(2, mid + 0.1, "rise", 5.0, 0.0, True, np.array([-1.0])),
     ]
-    tag = {"gen": 4, "mode": "model", "role": "model", "centre": 0, "steps": [0.1] * 4,
+    # The compass before the model converged (steps below resume_floor): with steps left
+    # it would go on from the centre whatever the model found (``resume``).
+    tag = {"gen": 4, "mode": "model", "role": "model", "centre": 0, "steps": [0.02] * 4,
            "since": 0, "rounds": 1}  # fmt: skip
     tagged = [_Trial(n, {ATTR: tag}) for n in (1, 2)]
     plan = sampler._generation(obs, tagged, 4)
     assert plan[0]["tag"]["mode"] == mode
     if mode == "compass":
         assert plan[0]["tag"]["centre"] == 1
+
+
+@pytest.mark.parametrize(
+    ("steps", "resume", "mode"),
+    [
+        (0.2, True, "compass"),  # cut short by its budget: the compass goes on, same steps
+        (0.2, False, "model"),  # off: model batches until one beats the centre
+        (0.05, True, "compass"),  # below min_step, above resume_floor: goes on too
+        (0.02, True, "model"),  # below resume_floor: converged, the model again
+    ],
+)
+def test_a_compass_cut_short_goes_on_after_a_model_batch(steps, resume, mode):
+    from vfgym import space
+    from vfgym.tuning._compass import ATTR, CompassOptions, CompassSampler
+
+    opts = CompassOptions(resume=resume, diagonal=False)
+    sampler = CompassSampler(space.Relative(430.0), seed=0, options=opts)
+    mid = sampler._lo + 0.5 * sampler._span
+    ok = np.array([-1.0])
+    obs = [Observation(0, mid, "rise", 1.0, 0.0, True, ok)]
+    obs += [Observation(n, mid + 0.3 * n, "rise", 2.0, 0.0, True, ok) for n in (1, 2)]
+    tag = {"gen": 6, "mode": "model", "role": "model", "centre": 0, "steps": [steps] * 4,
+           "since": 0, "rounds": 1}  # fmt: skip
+    plan = sampler._generation(obs, [_Trial(n, {ATTR: tag}) for n in (1, 2)], 6)
+    assert {p["tag"]["mode"] for p in plan} == {mode}
+    if mode == "compass":
+        assert plan[0]["tag"]["centre"] == 0 and plan[0]["tag"]["steps"] == [steps] * 4
+        moved = [np.abs(p["x"] - mid).max() for p in plan]
+        assert np.allclose(moved, steps)

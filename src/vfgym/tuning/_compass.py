@@ -26,11 +26,16 @@ acceleration limit), and a compass stays in the first it finds. So the search al
    (Gaussian processes on log cost and on each constraint some trial broke,
    :mod:`vfgym.tuning._gp`); a batch is chosen one point at a time, each conditioned on
    the previous ones at their predicted values. Repeated until a feasible point beats the
-   centre; the compass then starts again there with fresh steps. A batch's best point that
-   does not beat the centre but comes within ``explore_gap`` of its cost, more than two
-   first steps from it along some axis (another basin, unexplored), gets a compass too
-   (multi-level single-linkage's idea: a local search from each good point not already in
-   a searched basin); the model after it aims at the best of all again.
+   centre; the compass then starts again there with fresh steps. Between batches
+   (``resume``), a compass with a step still at or above ``resume_floor`` (finer than
+   ``min_step``) goes on from the centre with its steps, a generation at a time: on a
+   loaded axis the compass still descends along the acceleration edge at its budget, or
+   stops on it a few percent of value from the optimum, and the model's batches, over
+   the whole space, rarely beat it there. A batch's best point that does not beat the
+   centre but comes within ``explore_gap`` of its cost, more than two first steps from
+   it along some axis (another basin, unexplored), gets a compass too (multi-level
+   single-linkage's idea: a local search from each good point not already in a searched
+   basin); the model after it aims at the best of all again.
 
 :data:`LOCAL` adds to each compass generation the composite move (the sum of the last
 generation's axis polls that beat the centre) and ``search`` model points chosen within
@@ -85,7 +90,13 @@ class CompassOptions:
     batch fits its Gaussian processes' hyperparameters again (from the last fit's) once
     the completed trials number this many times those of the last fit, else keeps them
     (a long sweep's model batches, one per 8 trials, cost a factorisation, not a fit:
-    docs/speed.md)."""
+    docs/speed.md). ``resume``: after a model batch that did not beat the centre, a
+    compass with a step still at or above ``resume_floor`` (0: ``min_step``) goes on
+    from the centre with its steps, a generation between model batches, where without
+    it model batches follow until one beats the centre (``resume`` chosen on the two
+    loaded held-out problems of seed 20261202 it missed and ``multi-move``,
+    ``resume_floor`` on two of seed 20261204's; each judged on held-out problems drawn
+    after: docs/tuning.md, "Held-out problems")."""
 
     n_init: int = 6
     step0: float = 0.4
@@ -104,16 +115,19 @@ class CompassOptions:
     split_constraints: bool = True
     explore_gap: float = 0.1
     refit_growth: float = 1.25
+    resume: bool = True
+    resume_floor: float = 0.025
 
 
 LOCAL = CompassOptions(search=2, composite=True, model_rounds=2, cap_model=True,
                        compass_trials=40, diagonal=False, patience=False,
-                       split_constraints=False, explore_gap=0.0)  # fmt: skip
+                       split_constraints=False, explore_gap=0.0,
+                       resume=False, resume_floor=0.0)  # fmt: skip
 """The compass with its local model step: faster on ``heavy-load`` (within 1.5 % after 200
 trials, against 4.6 %), slower on ``paper-step``, ``multi-move`` and ``short-move``
 (docs/tuning.md); chosen on ``short-move`` and ``heavy-load`` among a few variants over 5 seeds,
-before ``split_constraints``, ``explore_gap``, ``diagonal`` and ``patience`` (off here:
-the search as measured)."""
+before ``split_constraints``, ``explore_gap``, ``diagonal``, ``patience`` and ``resume``
+(off here: the search as measured)."""
 
 
 class CompassSampler(optuna.samplers.BaseSampler):
@@ -400,6 +414,16 @@ class CompassSampler(optuna.samplers.BaseSampler):
             and np.abs(best.x - centre.x).max() > 2.0 * o.step0
         ):
             centre = best  # another basin's point nearly as good: a compass searches it
+        elif o.resume and steps.max() >= (o.resume_floor or o.min_step):
+            # resume: the compass before this batch was cut short by its budget or
+            # counted as converged with steps above resume_floor; it goes on from the
+            # centre with its steps (its budget still spent, its steps below min_step:
+            # a generation that does not move hands over to the model again, one batch
+            # between generations). No poll left (all clipped onto the centre): the
+            # model, as converged.
+            return self._compass(last + 1, obs, centre, None, steps, st["since"]) or (
+                self._model(last + 1, obs, centre, np.zeros_like(steps), st["since"], [])
+            )
         elif not o.model_rounds or st.get("rounds", 1) < o.model_rounds:
             return self._model(last + 1, obs, centre, steps, st["since"], [],
                                rounds=st.get("rounds", 1) + 1)  # fmt: skip
