@@ -100,7 +100,7 @@ def sweep_seconds(
     done = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
     ends = sorted(tr.datetime_complete for tr in done if tr.datetime_complete is not None)
     per_trial = [(b - a).total_seconds() for a, b in zip([start, *ends[:-1]], ends, strict=True)]
-    settings = [space.settings_from_dict(tr.user_attrs["settings"]) for tr in done]
+    settings = [tuning.trial_settings(tr) for tr in done]
     return Sweep(seconds, settings, per_trial, statements[0])
 
 

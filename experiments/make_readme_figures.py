@@ -50,6 +50,7 @@ def tuned_candidate(sweep: str | None):
             f"tuned = best settings of the sweep `{d}` (`{best.name}`)",
         )
     from vfgym.commands.plot import load_study
+    from vfgym.tuning import stored_result
 
     study = load_study(str(d))
     if len(study.directions) > 1:
@@ -58,7 +59,8 @@ def tuned_candidate(sweep: str | None):
             "single best trial): give a sweep folder with best.yaml"
         )
     trial = study.best_trial
-    data = trial.user_attrs.get("settings") or trial.params
+    res = stored_result(trial)
+    data = res.settings if res is not None and res.settings else trial.params
     return (
         Candidate("tuned", settings_from_dict(data, source=f"{d} trial {trial.number}")),
         f"tuned = best trial {trial.number} of the sweep `{d}`",

@@ -163,12 +163,14 @@ def run_one(
         done.sort(key=lambda t: (t.datetime_complete, t.number))
         best, gaps, secs = math.inf, [], []
         for t in done:
-            if t.user_attrs["feasible"]:
-                best = min(best, t.user_attrs["cost"])
+            res = tuning.stored_result(t)
+            if res is not None and res.feasible:
+                best = min(best, res.cost)
             gaps.append(tuning.gap_pct(best, ref_cost) if best < math.inf else math.inf)
             secs.append((t.datetime_complete - start).total_seconds())
         top = tuning.best_trial(study)
-        return Run(gaps, secs, bool(top is not None and top.user_attrs["feasible"]))
+        top_res = None if top is None else tuning.stored_result(top)
+        return Run(gaps, secs, bool(top_res is not None and top_res.feasible))
 
 
 BATCHES = {"tpe": 1, "gp": 8, "cmaes": 8, "nsga2": 8, "random": 16}

@@ -121,6 +121,7 @@ def short_sweep(
         baseline_params,
         best_trial,
         make_sampler,
+        stored_result,
         trial_settings,
     )
 
@@ -137,12 +138,16 @@ def short_sweep(
     done = study.trials
     best = best_trial(study)
     assert best is not None  # trials ≥ 1 completed
+    results = [stored_result(t) for t in done]
+    costs = tuple(r.cost for r in results if r is not None)
+    top = stored_result(best)
+    assert top is not None and results[0] is not None  # (scored by the objective)
     return Refinement(
         settings=trial_settings(best),
-        cost=float(best.user_attrs["cost"]),
-        feasible=bool(best.user_attrs["feasible"]),
-        start_cost=float(done[0].user_attrs["cost"]),
-        costs=tuple(float(t.user_attrs["cost"]) for t in done),
+        cost=top.cost,
+        feasible=top.feasible,
+        start_cost=results[0].cost,
+        costs=costs,
     )
 
 

@@ -254,13 +254,14 @@ class _Bar:
         self._n = min(initial, total)
 
     def update(self, study) -> None:
-        from vfgym.tuning import best_trial, counts
+        from vfgym.tuning import best_trial, counts, stored_result
 
         n = min(counts(study)["complete"], self._bar.total)
         best = best_trial(study)
-        if best is not None:
-            feas = "" if best.user_attrs.get("feasible") else " (infeasible)"
-            self._bar.set_postfix_str(f"best {best.user_attrs['cost']:.4f}{feas}", refresh=False)
+        res = None if best is None else stored_result(best)
+        if res is not None:
+            feas = "" if res.feasible else " (infeasible)"
+            self._bar.set_postfix_str(f"best {res.cost:.4f}{feas}", refresh=False)
         self._bar.update(n - self._n)
         self._n = n
 

@@ -41,7 +41,9 @@ def _complete(study: Study) -> list[FrozenTrial]:
 def _attr_objectives(trial: FrozenTrial, names: Sequence[str]) -> list[float] | None:
     """A trial's objectives from its user attributes: one attribute per name, or
     ``objectives`` as a list in that order or a mapping by name (as vfgym sweeps store)."""
-    ua = trial.user_attrs
+    ua = dict(trial.user_attrs)
+    if isinstance(ua.get("result"), Mapping):  # a vfgym sweep's result, one attribute
+        ua |= ua["result"]
     if all(n in ua for n in names):
         return [float(ua[n]) for n in names]
     obj = ua.get("objectives")

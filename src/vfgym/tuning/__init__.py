@@ -85,6 +85,7 @@ from vfgym.tuning._storage import (
     open_storage,
     resolve_storage,
 )
+from vfgym.tuning._stored import StoredResult, stored_result
 from vfgym.tuning._study import (
     SAMPLER_NEEDS,
     StudyMeta,
@@ -117,6 +118,7 @@ __all__ = [
     "Objective",
     "ReferenceGap",
     "StorageSpec",
+    "StoredResult",
     "StudyMeta",
     "SweepConfig",
     "WorkerReport",
@@ -147,6 +149,7 @@ __all__ = [
     "set_cost",
     "settings_key",
     "spawn_workers",
+    "stored_result",
     "trial_budget",
     "trial_settings",
     "warm_starts",

@@ -65,6 +65,7 @@ import optuna
 
 from vfgym import space
 from vfgym.tuning._model import Observation, propose, propose_local, rank
+from vfgym.tuning._stored import named_constraints
 
 ATTR = "vfgym:compass"
 """System attribute of each trial the sampler draws: its generation's state and role."""
@@ -570,7 +571,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         if trial.value is None or not self._has_params(trial):
             return None
         x, law = self._x_of(trial)
-        cons = np.array([float(v) for _, v in sorted(trial.constraints.items())])
+        cons = np.array([v for _, v in sorted(named_constraints(trial).items())])
         viol = float(np.maximum(cons, 0.0).sum()) if cons.size else 0.0
         return Observation(trial.number, x, law, float(trial.value), viol, viol <= 0.0, cons)
 

@@ -21,12 +21,17 @@ from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Setting
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, aggregate_costs
 from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
+from vfgym.tuning._stored import (
+    CONSTRAINTS_KEY,
+    FORMAT,
+    RESULT_ATTR,
+    constraint_writes,
+    result_attr,
+    stored_result,
+)
 
 if TYPE_CHECKING:
     from optuna import Study, Trial
-
-_CONSTRAINTS_KEY = "constraints"
-"""Optuna's system-attribute prefix of a trial's constraints (``constraints:NAME``)."""
 
 
 class Aggregate(NamedTuple):
@@ -128,6 +133,12 @@ class Objective:
         Windows and bands of the measures (an axis's).
     aggregate, cvar_alpha : str, float
         The cost's aggregate over the scenarios (:func:`aggregate`).
+
+    Attributes
+    ----------
+    trial_format : int
+        How :meth:`record` stores a result (:mod:`vfgym.tuning._stored`): the study's
+        format, which a worker sets from the study it runs (new studies: the latest).
     """
 
     def __init__(
@@ -147,6 +158,7 @@ class Objective:
         self.measures = measures
         self.laws = laws
         self.form = form
+        self.trial_format = FORMAT
         self.cache: dict[tuple, Result] = {}
         self.simulated = 0
         self.on_enter: Callable[[], None] | None = None
@@ -215,8 +227,9 @@ class Objective:
         return [r for r in out if r is not None]
 
     def record(self, trial: Trial, res: Result, trial_id: int | None = None) -> None:
-        """Set a result's user attributes (those it does not hold already) and constraints
-        on the trial.
+        """Store a result on the trial: its user attribute(s), unless the trial holds
+        them already (a retried trial), and its constraints (:mod:`vfgym.tuning._stored`:
+        one write each in the latest format, a write a part in format 1).
 
         Parameters
         ----------
@@ -228,11 +241,15 @@ class Objective:
             The trial's id in ``trial.storage`` (default: looked up, :func:`trial_id_of`).
         """
         have = trial.user_attrs  # (the trial's own copy: no read)
-        for k, v in res.attrs.items():
+        if self.trial_format >= 2:
+            writes = {RESULT_ATTR: result_attr(res.attrs)}
+        else:
+            writes = dict(res.attrs)
+        for k, v in writes.items():
             if k not in have or have[k] != v:
                 trial.set_user_attr(k, v)
         values = dict(zip(CONSTRAINTS, res.attrs["constraints"], strict=True))
-        set_constraints(trial, values, trial_id)
+        set_constraints(trial, values, trial_id, self.trial_format)
 
     def score(self, settings: Settings) -> Result:
         """Values and user attributes of one setting (one batched evaluation).
@@ -308,22 +325,20 @@ class Objective:
             if t.number in seen:
                 continue
             seen.add(t.number)
-            cons = t.user_attrs.get("constraints")
-            if "cost" not in t.user_attrs or "settings" not in t.user_attrs:
+            stored = stored_result(t)
+            if stored is None or stored.settings is None:
                 continue
-            if len(cons or ()) != len(CONSTRAINTS):  # scored with other constraints
+            if len(stored.constraints) != len(CONSTRAINTS):  # scored with other constraints
                 continue
-            key = settings_key(space.settings_from_dict(t.user_attrs["settings"]))
+            key = settings_key(space.settings_from_dict(stored.settings))
             if key in found and found[key].attrs["cached_from"] <= t.number:
                 continue  # (a lower-numbered one may complete later, on another worker)
-            attrs = {k: t.user_attrs[k] for k in _RESULT_ATTRS if k in t.user_attrs}
-            attrs["cached_from"] = t.user_attrs.get("cached_from", t.number)
+            parts = stored._asdict()
+            attrs = {k: list(v) if isinstance(v, tuple) else v for k, v in parts.items()}
+            attrs["cached_from"] = t.number if stored.cached_from is None else stored.cached_from
             values = float(t.value) if self.form == "cost" else [float(v) for v in t.values]
             found[key] = Result(values, attrs)
         return found
-
-
-_RESULT_ATTRS = ("settings", "cost", "constraints", "feasible", "objectives")
 
 
 def trial_id_of(trial: Any, study_id: int | None = None) -> int:
@@ -348,7 +363,9 @@ def trial_id_of(trial: Any, study_id: int | None = None) -> int:
     return int(storage.get_trial_id_from_study_id_trial_number(study_id, trial.number))
 
 
-def set_constraints(trial: Any, values: dict[str, float], trial_id: int | None = None) -> None:
+def set_constraints(
+    trial: Any, values: dict[str, float], trial_id: int | None = None, fmt: int = 1
+) -> None:
     """Set the trial's constraints, as ``trial.set_constraint`` does (Optuna 5 reads them
     from the trial; its ``constraints_func`` is deprecated), without reading the trial
     first: on an RDB storage each read rebuilds the whole trial. A retried trial carries
@@ -363,6 +380,10 @@ def set_constraints(trial: Any, values: dict[str, float], trial_id: int | None =
         The constraints by name (≤ 0: met).
     trial_id : int or None
         The trial's id in ``trial.storage`` (default: :func:`trial_id_of`).
+    fmt : int
+        The study's trial format (:mod:`vfgym.tuning._stored`): from 2, constraints named
+        as :data:`vfgym.scoring.CONSTRAINTS`, in its order, are stored as one list (one
+        write); otherwise each as ``constraints:NAME``.
 
     Raises
     ------
@@ -371,7 +392,11 @@ def set_constraints(trial: Any, values: dict[str, float], trial_id: int | None =
     """
     tid = trial_id_of(trial) if trial_id is None else trial_id
     for name, v in values.items():
-        v = float(v)
-        if math.isnan(v):
+        if math.isnan(float(v)):
             raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
-        trial.storage.set_trial_system_attr(tid, f"{_CONSTRAINTS_KEY}:{name}", v)
+    if tuple(values) == CONSTRAINTS:
+        writes = constraint_writes(list(values.values()), fmt)
+    else:
+        writes = [(f"{CONSTRAINTS_KEY}:{n}", float(v)) for n, v in values.items()]
+    for key, value in writes:
+        trial.storage.set_trial_system_attr(tid, key, value)

@@ -24,18 +24,12 @@ from vfgym.report import Candidate, Report
 from vfgym.scoring import CONSTRAINTS, OBJECTIVES
 from vfgym.tuning._config import SweepConfig
 from vfgym.tuning._storage import StorageSpec
+from vfgym.tuning._stored import RESULT_ATTR, stored_result
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
     from optuna import Study
     from optuna.trial import FrozenTrial
-
-
-def _arrives(trial: FrozenTrial) -> bool:
-    """Whether a trial's settings arrived on every scenario (worst arrival constraint ≤ 0)."""
-    cons = trial.user_attrs.get("constraints") or ()
-    i = CONSTRAINTS.index("arrival")
-    return len(cons) == len(CONSTRAINTS) and cons[i] <= 0.0
 
 
 def best_trial(study: Study) -> FrozenTrial | None:
@@ -57,15 +51,15 @@ def best_trial(study: Study) -> FrozenTrial | None:
     import optuna
 
     done = [
-        t
+        (t, r)
         for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
-        if "cost" in t.user_attrs
+        if (r := stored_result(t)) is not None
     ]
     if not done:
         return None
-    feas = [t for t in done if t.user_attrs.get("feasible")]
-    arrive = [t for t in done if _arrives(t)]
-    return min(feas or arrive or done, key=lambda t: (t.user_attrs["cost"], t.number))
+    feas = [d for d in done if d[1].feasible]
+    arrive = [d for d in done if d[1].arrives]
+    return min(feas or arrive or done, key=lambda d: (d[1].cost, d[0].number))[0]
 
 
 def trial_settings(trial: FrozenTrial) -> Settings:
@@ -74,14 +68,17 @@ def trial_settings(trial: FrozenTrial) -> Settings:
     Parameters
     ----------
     trial : optuna.trial.FrozenTrial
-        A trial with the ``settings`` user attribute :class:`Objective` sets.
+        A trial scored by a sweep (its settings as stored with its result, or, for a
+        study made before that, as its ``settings`` user attribute).
 
     Returns
     -------
     Settings
         Its settings.
     """
-    return space.settings_from_dict(trial.user_attrs["settings"], source=f"trial {trial.number}")
+    res = stored_result(trial)
+    data = trial.user_attrs["settings"] if res is None or res.settings is None else res.settings
+    return space.settings_from_dict(data, source=f"trial {trial.number}")
 
 
 def write_trials_csv(study: Study, path: Path) -> Path:
@@ -106,13 +103,14 @@ def write_trials_csv(study: Study, path: Path) -> Path:
     )
     value_cols = ["value"] if len(names) == 1 else [f"values_{n}" for n in names]
     params = sorted({k for t in trials for k in t.params})
-    attrs = sorted({k for t in trials for k in t.user_attrs})
+    flat = [_flat_attrs(t) for t in trials]
+    attrs = sorted({k for ua in flat for k in ua})
     cols = ["number", *value_cols, "datetime_start", "datetime_complete", "duration"]
     cols += [f"params_{p}" for p in params] + [f"user_attrs_{a}" for a in attrs] + ["state"]
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(cols)
-    for t in trials:
+    for t, ua in zip(trials, flat, strict=True):
         vals = list(t.values) if t.values is not None else [""] * len(value_cols)
         dur = (
             (t.datetime_complete - t.datetime_start).total_seconds()
@@ -121,10 +119,18 @@ def write_trials_csv(study: Study, path: Path) -> Path:
         )
         row = [t.number, *vals, t.datetime_start or "", t.datetime_complete or "", dur]
         row += [t.params.get(p, "") for p in params]
-        row += [_cell(t.user_attrs.get(a, "")) for a in attrs]
+        row += [_cell(ua.get(a, "")) for a in attrs]
         row.append(t.state.name)
         w.writerow(row)
     return write_text(path, buf.getvalue())
+
+
+def _flat_attrs(trial: FrozenTrial) -> dict[str, Any]:
+    """A trial's user attributes with its stored result's parts as attributes of their
+    own (the trials CSV's columns whatever the study's trial format)."""
+    ua = dict(trial.user_attrs)
+    res = ua.pop(RESULT_ATTR, None)
+    return ua | res if isinstance(res, dict) else ua
 
 
 def _cell(v: object) -> object:
@@ -158,7 +164,8 @@ def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
     complete = (optuna.trial.TrialState.COMPLETE,)
 
     def cost(t: FrozenTrial) -> float:
-        return float(t.user_attrs.get("cost", math.nan))
+        r = stored_result(t)
+        return math.nan if r is None else r.cost
 
     target = None if form == "cost" else cost
     jobs: dict[str, Callable[[], Figure]] = {
@@ -498,13 +505,15 @@ def best_record(
         The settings, cost, feasibility, constraints, objectives, and the study, storage,
         trial, sampler, objective, scenarios, laws and axis they come from.
     """
-    ua = trial.user_attrs
+    r = stored_result(trial)
+    if r is None:
+        raise ValueError(f"trial {trial.number} holds no result")
     return BestRecord(
-        settings=ua["settings"],
-        cost=ua["cost"],
-        feasible=bool(ua.get("feasible")),
-        constraints=dict(zip(CONSTRAINTS, ua["constraints"], strict=True)),
-        objectives=dict(zip(OBJECTIVES, ua["objectives"], strict=True)),
+        settings=r.settings if r.settings is not None else trial.user_attrs["settings"],
+        cost=r.cost,
+        feasible=r.feasible,
+        constraints=dict(zip(CONSTRAINTS, r.constraints, strict=True)),
+        objectives=dict(zip(OBJECTIVES, r.objectives, strict=True)),
         study=study.study_name,
         storage=spec.display,
         trial=trial.number,

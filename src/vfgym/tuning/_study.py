@@ -19,6 +19,7 @@ from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings, usable_k
 from vfgym.scoring import OBJECTIVES
 from vfgym.tuning._aggregate import describe
 from vfgym.tuning._config import SweepConfig
+from vfgym.tuning._stored import FORMAT, FORMAT_KEY
 
 if TYPE_CHECKING:
     from optuna import Study
@@ -364,6 +365,7 @@ def create_or_load(
         created = False
     if created:
         study.set_user_attr(META_KEY, asdict(meta))
+        study.set_user_attr(FORMAT_KEY, FORMAT)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             study.set_metric_names(["cost"] if cfg.objective == "cost" else list(OBJECTIVES))

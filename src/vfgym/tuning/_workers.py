@@ -41,6 +41,7 @@ from vfgym.tuning._recovery import (
     recover,
 )
 from vfgym.tuning._storage import StorageSpec, _claim_lock, open_storage
+from vfgym.tuning._stored import study_format
 from vfgym.tuning._study import batch_size, make_sampler, trial_budget
 
 if TYPE_CHECKING:
@@ -203,12 +204,13 @@ def run_worker(
             aggregate=cfg.aggregate,
             cvar_alpha=cfg.cvar_alpha,
         )
+        objective.trial_format = study_format(study)
         # First call compiles/loads the kernel before any trial is claimed.
         evaluate(PAPER_SETTINGS, scenarios[:1], **on_axis)
         lock = _claim_lock(spec, study_name)
         beats = Heartbeats(storage)
         study_id = storage.get_study_id_from_name(study_name)
-        maker = one_write(sampler, storage, study_id)
+        maker = one_write(sampler, storage, study_id, objective.trial_format)
         objective.guard = interrupts.allowed
         claimed: list[Claimed] = []
         try:
@@ -311,17 +313,20 @@ class OneWrite(NamedTuple):
     sampler: Any
     storage: Any
     study_id: int
+    trial_format: int = 1
 
     def make(self, study: Any, first: bool, laws: tuple[str, ...]) -> tuple[MadeTrial, Settings]:
-        """The next planned trial, created running with its parameters, generation and
-        settings (the worker's name is written after its heartbeat, :func:`claim`); and
+        """The next planned trial, created running with its parameters and generation
+        (and, in a study of trial format 1, its settings; from 2 they are stored with its
+        result) (the worker's name is written after its heartbeat, :func:`claim`); and
         the settings. Its number is the one planned, which :meth:`check` confirms for a
         batch."""
         template = self.sampler.plan_trial(study, first)
         settings = settings_of(template.params, laws)
-        # The settings' user attribute with them (the trial's result records it again,
-        # which :meth:`Objective.record` skips as already there).
-        template.user_attrs["settings"] = space.settings_to_dict(settings)
+        if self.trial_format < 2:
+            # The settings' user attribute with them (the trial's result records it
+            # again, which :meth:`Objective.record` skips as already there).
+            template.user_attrs["settings"] = space.settings_to_dict(settings)
         trial_id = self.storage.create_new_trial(self.study_id, template)
         self.sampler.created(template.number)
         return MadeTrial(self.storage, trial_id, template.number, template.user_attrs), settings
@@ -360,11 +365,12 @@ def settings_of(params: dict[str, Any], laws: tuple[str, ...]) -> Settings:
     )
 
 
-def one_write(sampler: Any, storage: Any, study_id: int) -> OneWrite | None:
-    """:class:`OneWrite` for a sampler that plans its trials, else None."""
+def one_write(sampler: Any, storage: Any, study_id: int, fmt: int = 1) -> OneWrite | None:
+    """:class:`OneWrite` for a sampler that plans its trials (``fmt``: the study's trial
+    format), else None."""
     if not (hasattr(sampler, "plan_trial") and hasattr(sampler, "created")):
         return None
-    return OneWrite(sampler, storage, study_id)
+    return OneWrite(sampler, storage, study_id, fmt)
 
 
 class MadeTrial:
