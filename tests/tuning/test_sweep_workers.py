@@ -88,7 +88,7 @@ def name(kind: str) -> str:
 
 
 @pytest.mark.parametrize(
-    ("kind", "n"), [("journal", 60), pytest.param("postgresql", 15, marks=needs_pg)]
+    ("kind", "n"), [("journal", 60), pytest.param("postgresql", 60, marks=needs_pg)]
 )
 def test_three_workers_share_one_study_and_end_with_exactly_the_trials_asked(tmp_path, kind, n):
     study_name = name(kind)
