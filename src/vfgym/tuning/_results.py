@@ -504,6 +504,11 @@ def best_record(
     BestRecord
         The settings, cost, feasibility, constraints, objectives, and the study, storage,
         trial, sampler, objective, scenarios, laws and axis they come from.
+
+    Raises
+    ------
+    ValueError
+        If the trial holds no result (it did not complete in a sweep).
     """
     r = stored_result(trial)
     if r is None:
