@@ -156,25 +156,28 @@ def worst_validation(folders: list[Path]) -> float:
 
 
 def curves(runs: dict[tuple[str, str], list[Path]], path: Path) -> None:
-    """Held-out validation cost against steps, mean over seeds, one line per row."""
+    """Held-out validation cost against steps, mean over seeds, one line per row (a log
+    scale when the costs span more than a factor 3)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 4))
+    low, high = np.inf, 0.0
     for (algo, env), folders in runs.items():
         series = []
         for f in folders:
             data = np.genfromtxt(f / "evaluations.csv", delimiter=",", names=True, ndmin=1)
             series.append((np.atleast_1d(data["timesteps"]), np.atleast_1d(data["mean_cost"])))
         n = min(len(s[0]) for s in series)
-        steps = series[0][0][:n]
-        ax.plot(steps, np.mean([s[1][:n] for s in series], axis=0), marker=".",
-                label=f"{algo} {env}")  # fmt: skip
+        steps, mean = series[0][0][:n], np.mean([s[1][:n] for s in series], axis=0)
+        low, high = min(low, float(mean.min())), max(high, float(mean.max()))
+        ax.plot(steps, mean, marker=".", label=f"{algo} {env}")
     ax.set_xlabel("steps")
     ax.set_ylabel("validation mean cost")
-    ax.set_yscale("log")
+    if high > 3 * low:  # a log scale for divergence; within a factor 3 its ticks would be few
+        ax.set_yscale("log")
     ax.legend()
     ax.grid(alpha=0.3)
     fig.tight_layout()
