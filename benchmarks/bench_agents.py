@@ -27,10 +27,12 @@ over its first one, the agent as it started, the worst seed's: above 1 the polic
 worse while training; the best model is still chosen on validation, so a held-out cost
 at its base's shows a run that never improved on it.
 
-``--combine RUN [RUN ...]`` trains nothing: it prints the row of run folders already
-trained (one algorithm × env, one folder per seed, e.g. seeds trained by separate
-``--seeds N --out DIR`` processes), judged as above; their wall time is not known there
-(nan).
+``--combine RUN [RUN ...]`` trains nothing: it prints the rows of run folders already
+trained (one folder per seed, e.g. seeds trained by separate ``--seeds N --out DIR``
+processes), one row per algorithm × env × hyperparameters (as each folder's
+``config.yaml`` has them, the seed aside), judged as above; their wall time is not known
+there (nan). With ``--out`` it also writes that folder's ``benchmark.md`` and
+``learning_curves.png`` (one line per row).
 
 Writes ``benchmark.md`` (the table and the commands), ``benchmark.json`` and
 ``learning_curves.png`` (each run's held-out validation cost from its
@@ -154,25 +156,28 @@ def worst_validation(folders: list[Path]) -> float:
 
 
 def curves(runs: dict[tuple[str, str], list[Path]], path: Path) -> None:
-    """Held-out validation cost against steps, mean over seeds, one line per row."""
+    """Held-out validation cost against steps, mean over seeds, one line per row (a log
+    scale when the costs span more than a factor 3)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 4))
+    low, high = np.inf, 0.0
     for (algo, env), folders in runs.items():
         series = []
         for f in folders:
             data = np.genfromtxt(f / "evaluations.csv", delimiter=",", names=True, ndmin=1)
             series.append((np.atleast_1d(data["timesteps"]), np.atleast_1d(data["mean_cost"])))
         n = min(len(s[0]) for s in series)
-        steps = series[0][0][:n]
-        ax.plot(steps, np.mean([s[1][:n] for s in series], axis=0), marker=".",
-                label=f"{algo} {env}")  # fmt: skip
+        steps, mean = series[0][0][:n], np.mean([s[1][:n] for s in series], axis=0)
+        low, high = min(low, float(mean.min())), max(high, float(mean.max()))
+        ax.plot(steps, mean, marker=".", label=f"{algo} {env}")
     ax.set_xlabel("steps")
     ax.set_ylabel("validation mean cost")
-    ax.set_yscale("log")
+    if high > 3 * low:  # a log scale for divergence; within a factor 3 its ticks would be few
+        ax.set_yscale("log")
     ax.legend()
     ax.grid(alpha=0.3)
     fig.tight_layout()
@@ -197,25 +202,52 @@ def table(rows: list[Row], commands: list[str]) -> str:
     return "\n".join([*lines, "", "Commands:", "", *(f"    {c}" for c in commands), ""])
 
 
-def combine(folders: list[Path], moves: int) -> None:
-    """Print the row of trained run folders (one algorithm × env, one per seed)."""
+def groups(folders: list[Path]) -> dict[tuple[str, str], list[Path]]:
+    """Run folders by (algo, env label), one group per algorithm × env × hyperparameters
+    (the seed aside), in the order first met; a label is ``algo`` and the env without
+    its ``vfgym/``, numbered (``#2`` ...) when hyperparameters differ within one pair."""
+    from vfgym.io.runs import read_yaml
+
+    keyed: dict[tuple[str, str, str], list[Path]] = {}
+    for f in folders:
+        cfg = read_yaml(f / "config.yaml")
+        hp = json.dumps(cfg.get("hyperparams") or {}, sort_keys=True, default=str)
+        keyed.setdefault((cfg["algo"], str(cfg["env"]).removeprefix("vfgym/"), hp), []).append(f)
+    out: dict[tuple[str, str], list[Path]] = {}
+    for (algo, env, _), fs in keyed.items():
+        n = sum(1 for a, e in out if a == algo and e.split(" #")[0] == env)
+        out[(algo, env if n == 0 else f"{env} #{n + 1}")] = fs
+    return out
+
+
+def combine(folders: list[Path], moves: int, out: Path | None = None) -> None:
+    """Print the rows of trained run folders (one row per algorithm × env ×
+    hyperparameters, one folder per seed); with ``out``, write its ``benchmark.md`` and
+    ``learning_curves.png`` there."""
     from vfgym.io.runs import read_yaml
 
     scenarios, optimum, best = baselines(moves)
-    cfg = read_yaml(folders[0] / "config.yaml")
-    judged = [judge(f / "best_model.zip", scenarios) for f in folders]
-    costs = [c for c, _ in judged]
-    mean = float(np.mean(costs))
-    base = residual_base(folders[0])
-    row = Row(cfg["algo"], str(cfg["env"]).removeprefix("vfgym/"), base,
-              base_cost(base, scenarios) / float(optimum.mean()),
-              int(cfg["hyperparams"]["n_timesteps"]), float("nan"), mean, float(np.std(costs)),
-              mean / float(optimum.mean()), mean / float(best.mean()),
-              float(np.mean([f for _, f in judged])), len(folders),
-              worst_validation(folders))  # fmt: skip
-    for f, c in zip(folders, costs, strict=True):
-        print(f"{f}: held-out mean cost {c:.4g}")
-    print(table([row], [f"(run folders: {', '.join(map(str, folders))})"]))
+    rows, runs = [], groups(folders)
+    for (algo, env), fs in runs.items():
+        steps = int(read_yaml(fs[0] / "config.yaml")["hyperparams"]["n_timesteps"])
+        judged = [judge(f / "best_model.zip", scenarios) for f in fs]
+        costs = [c for c, _ in judged]
+        mean = float(np.mean(costs))
+        base = residual_base(fs[0])
+        rows.append(Row(algo, env, base, base_cost(base, scenarios) / float(optimum.mean()),
+                        steps, float("nan"), mean, float(np.std(costs)),
+                        mean / float(optimum.mean()), mean / float(best.mean()),
+                        float(np.mean([f for _, f in judged])), len(fs),
+                        worst_validation(fs)))  # fmt: skip
+        for f, c in zip(fs, costs, strict=True):
+            print(f"{f}: held-out mean cost {c:.4g}")
+    text = table(rows, [f"(run folders: {', '.join(map(str, folders))})"])
+    print(text)
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "benchmark.md").write_text(text)
+        curves(runs, out / "learning_curves.png")
+        print(f"wrote {out}/benchmark.md, learning_curves.png")
 
 
 def main() -> None:
@@ -225,15 +257,15 @@ def main() -> None:
     ap.add_argument("--seeds", default="0,1,2")
     ap.add_argument("--steps", type=int, default=200_000)
     ap.add_argument("--moves", type=int, default=16, help="held-out test moves (≤ 64)")
-    ap.add_argument("--out", default="runs/bench-agents")
+    ap.add_argument("--out", help="output folder (default runs/bench-agents; with --combine none)")
     ap.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE",
                     help="extra overrides for every training")  # fmt: skip
     ap.add_argument("--combine", nargs="+", metavar="RUN", help="judge these run folders")
     args = ap.parse_args()
     if args.combine:
-        combine([Path(f) for f in args.combine], args.moves)
+        combine([Path(f) for f in args.combine], args.moves, args.out and Path(args.out))
         return
-    out = Path(args.out)
+    out = Path(args.out or "runs/bench-agents")
     out.mkdir(parents=True, exist_ok=True)
     scenarios, optimum, best = baselines(args.moves)
     seeds = [int(s) for s in args.seeds.split(",")]

@@ -6,6 +6,7 @@ tested is that each still runs against today's package; their figures are not ch
 
 from __future__ import annotations
 
+import importlib.util
 import re
 import subprocess
 import sys
@@ -63,3 +64,33 @@ def test_bench_agents_runs_to_the_end_on_a_few_hundred_steps(tmp_path):
         assert re.search(rf"\| ppo \| {env} \| {base} \(\d\.\d{{3}}x\) \| 128 \|", md)
     assert md.count("vfgym train --algo ppo") == 2
     assert (tmp_path / "learning_curves.png").stat().st_size > 1000
+    # the two run folders again, combined: one row each (two envs), and their curves
+    runs = [str(tmp_path / "train" / f"ppo-{env}-seed0") for env in ("VFTune-v0", "VFServo-v0")]
+    out = tmp_path / "combined"
+    stdout = _run("bench_agents.py", "--moves", "2", "--combine", *runs, "--out", str(out))
+    for env, base in (("VFTune-v0", "model-lookup"), ("VFServo-v0", "model")):
+        row = re.search(rf"\| ppo \| {env} \| {base} \(\d\.\d{{3}}x\) \| 128 \| nan \|", stdout)
+        assert row and row.group(0) in (out / "benchmark.md").read_text()
+    assert (out / "learning_curves.png").stat().st_size > 1000
+
+
+def test_bench_agents_groups_run_folders_by_algo_env_and_hyperparameters(tmp_path, monkeypatch):
+    path = ROOT / "benchmarks" / "bench_agents.py"
+    spec = importlib.util.spec_from_file_location("bench_agents", path)
+    bench = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, "bench_agents", bench)  # its dataclass looks itself up
+    spec.loader.exec_module(bench)
+    runs = {"a0": ("sac", 0, 1e-4), "b0": ("sac", 0, 3e-4), "a1": ("sac", 1, 1e-4),
+            "c0": ("td3", 0, 1e-4)}  # fmt: skip
+    for name, (algo, seed, lr) in runs.items():
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "config.yaml").write_text(
+            f"algo: {algo}\nenv: vfgym/VFServo-v0\nseed: {seed}\n"
+            f"hyperparams:\n  learning_rate: {lr}\n"
+        )
+    got = bench.groups([tmp_path / n for n in runs])
+    assert {k: [f.name for f in v] for k, v in got.items()} == {
+        ("sac", "VFServo-v0"): ["a0", "a1"],
+        ("sac", "VFServo-v0 #2"): ["b0"],
+        ("td3", "VFServo-v0"): ["c0"],
+    }
