@@ -117,3 +117,31 @@ def test_a_study_made_before_the_format_goes_on_in_its_own(tmp_path):
         assert keys == sorted(f"constraints:{n}" for n in CONSTRAINTS)
         assert tuning.stored_result(t).cost == t.value
     assert tuning.best_trial(study) is not None
+
+
+@pytest.mark.filterwarnings("ignore:Heartbeat of storage")
+def test_trials_made_meanwhile_are_read_back_and_the_compass_plans_again(tmp_path):
+    """The compass's trials are made with the numbers it planned; when another trial was
+    made meanwhile (outside the claim lock), the batch's numbers are read back from the
+    storage and the next plan reads the study again."""
+    from vfgym.tuning._workers import one_write
+
+    cfg = _config(tmp_path, 4)
+    spec = tuning.resolve_storage(cfg.storage, tmp_path)
+    storage = tuning.open_storage(spec)
+    study, _ = tuning.create_or_load(storage, "s", cfg, cfg.scenario_list())
+    study.ask()  # the first warm start, taken
+    study.ask()  # the second
+    sampler = tuning.make_sampler(cfg, 0, cfg.scenario_list(), storage)
+    study = optuna.load_study(study_name="s", storage=storage, sampler=sampler)
+    maker = one_write(sampler, storage, storage.get_study_id_from_name("s"), FORMAT)
+    assert maker is not None
+    first, _ = maker.make(study, True, cfg.laws)
+    study.ask()  # another worker's trial, made between the two
+    second, _ = maker.make(study, False, cfg.laws)
+    planned = [first.number, second.number]
+    maker.check([first, second])
+    stored = [storage.get_trial(m.trial_id).number for m in (first, second)]
+    assert [first.number, second.number] == stored and stored != planned
+    third, _ = maker.make(study, False, cfg.laws)  # planned from the study again
+    assert storage.get_trial(third.trial_id).number == third.number

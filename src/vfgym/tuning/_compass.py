@@ -269,7 +269,12 @@ class CompassSampler(optuna.samplers.BaseSampler):
         than planned: a trial made meanwhile, outside the claim lock; the next plan reads
         the study again)."""
         if number + 1 != self._checked:
-            self._checked = -1
+            self.replan()
+
+    def replan(self) -> None:
+        """Plan the next trial from the study again (trials were made meanwhile, outside
+        the claim lock, so the planned numbers no longer hold)."""
+        self._checked = -1
 
     def sample_independent(self, study: Any, trial: Any, name: str, dist: Any) -> Any:
         rng = np.random.default_rng([self.seed, trial.number, 7])

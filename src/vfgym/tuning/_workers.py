@@ -305,10 +305,10 @@ def claim(
 
 
 class OneWrite(NamedTuple):
-    """Trials of a sampler that plans them (the compass: ``plan_trial`` and ``created``)
-    made in one storage write each, and told through the storage: such a sampler learns
-    nothing in ``after_trial``, and ``study.tell`` reads the trial twice before its one
-    write (the same state and values)."""
+    """Trials of a sampler that plans them (the compass: ``plan_trial``, ``created`` and
+    ``replan``) made in one storage write each, and told through the storage: such a
+    sampler learns nothing in ``after_trial``, and ``study.tell`` reads the trial twice
+    before its one write (the same state and values)."""
 
     sampler: Any
     storage: Any
@@ -346,7 +346,7 @@ class OneWrite(NamedTuple):
             return
         for m in made:
             m.number = self.storage.get_trial(m.trial_id).number
-        self.sampler.created(-2)  # (not the next planned: the next plan reads the study)
+        self.sampler.replan()
 
     def tell(self, trial_id: int, values: float | list[float]) -> None:
         """Complete the trial with its values (what ``study.tell`` writes)."""
@@ -368,7 +368,7 @@ def settings_of(params: dict[str, Any], laws: tuple[str, ...]) -> Settings:
 def one_write(sampler: Any, storage: Any, study_id: int, fmt: int = 1) -> OneWrite | None:
     """:class:`OneWrite` for a sampler that plans its trials (``fmt``: the study's trial
     format), else None."""
-    if not (hasattr(sampler, "plan_trial") and hasattr(sampler, "created")):
+    if not all(hasattr(sampler, m) for m in ("plan_trial", "created", "replan")):
         return None
     return OneWrite(sampler, storage, study_id, fmt)
 
