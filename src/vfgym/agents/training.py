@@ -4,7 +4,8 @@ A run folder (``runs/train/<name>/``) holds ``config.yaml`` (the resolved
 hyperparameters, algorithm, env, seed), ``command.txt``, TensorBoard logs (``tb/``),
 checkpoints (``checkpoints/model_<steps>_steps.zip`` and, for off-policy algorithms, the
 replay buffer), ``best_model.zip`` chosen on held-out scenarios by
-:class:`HeldOutEval` (``evaluations.csv`` logs every evaluation) and ``final_model.zip``.
+:class:`HeldOutEval` (``evaluations.csv`` logs every evaluation; ``best_model_costs.json``
+holds the best's cost on each validation scenario) and ``final_model.zip``.
 Starting the same run again continues from its last checkpoint; an interrupt (Ctrl-C)
 saves a checkpoint first, so nothing trained is lost.
 
@@ -16,6 +17,8 @@ report.
 from __future__ import annotations
 
 import csv
+import json
+import math
 import re
 from collections.abc import Callable
 from pathlib import Path
@@ -31,6 +34,43 @@ from vfgym.moves.scenarios import Scenario
 
 VALIDATION_SEED0 = 2**40
 """First train-split seed of the held-out validation scenarios."""
+
+SIGNIFICANCE = 2.0
+"""A later model replaces the best one only if its mean validation cost is lower by more
+than this many standard errors of the per-scenario differences (:func:`beats`)."""
+
+
+def beats(costs: np.ndarray, best: np.ndarray | None, z: float = SIGNIFICANCE) -> bool:
+    """Whether a model with validation ``costs`` replaces the best so far, whose costs on
+    the same scenarios are ``best``: its mean cost is lower by more than ``z`` standard
+    errors of the paired differences (the scenarios' spread), so that a model a hair
+    better on these scenarios, and as likely worse on others, does not replace one that
+    is known (a residual agent's start is its base setting; a noise-level pick of a later
+    model was worse on held-out moves more often than not).
+
+    Parameters
+    ----------
+    costs : numpy.ndarray
+        The candidate's cost on each validation scenario.
+    best : numpy.ndarray or None
+        The best model's, on the same scenarios (None: no best yet, the candidate wins).
+    z : float
+        Standard errors required.
+
+    Returns
+    -------
+    bool
+        True if the candidate becomes the best.
+    """
+    costs = np.asarray(costs, dtype=np.float64)
+    if best is None:
+        return True
+    diff = np.asarray(best, dtype=np.float64) - costs
+    gain = float(diff.mean())
+    if len(diff) < 2:
+        return gain > 0.0
+    se = float(diff.std(ddof=1)) / math.sqrt(len(diff))
+    return gain > 0.0 and gain > z * se
 
 
 def validation_scenarios(n: int, axis: Any = None) -> list[Scenario]:
@@ -195,7 +235,7 @@ def _callbacks(
             super().__init__()
             self.freq, self.scenarios = freq, scenarios
             self.env = make_env(env_id, env_kwargs)
-            self.best = _best_so_far(run)
+            self.best, self.best_costs = _best_so_far(run)
             self.next_at = 0
 
         def _on_step(self) -> bool:
@@ -204,10 +244,14 @@ def _callbacks(
                 costs = evaluate_policy_costs(self.model, self.env, self.scenarios, normalizer)
                 mean = float(np.mean(costs))
                 self.logger.record("eval/mean_cost", mean)
-                new = not np.isfinite(self.best) or mean < self.best
+                if self.best_costs is None and np.isfinite(self.best):
+                    new = mean < self.best  # (a run continued from before the costs were kept)
+                else:
+                    new = beats(costs, self.best_costs)
                 if new:
-                    self.best = mean
+                    self.best, self.best_costs = mean, costs
                     self.model.save(run / "best_model.zip")
+                    write_text(run / BEST_COSTS, json.dumps([float(c) for c in costs]))
                     if normalizer is not None:
                         normalizer.save(str(vecnormalize_path(run / "best_model.zip")))
                 _append_eval(run, self.num_timesteps, mean, float(np.median(costs)), new)
@@ -257,13 +301,23 @@ def _callbacks(
     return cbs
 
 
-def _best_so_far(run: Path) -> float:
-    path = run / "evaluations.csv"
+BEST_COSTS = "best_model_costs.json"
+"""The best model's cost on each validation scenario, beside ``best_model.zip``."""
+
+
+def _best_so_far(run: Path) -> tuple[float, np.ndarray | None]:
+    """The best model's mean validation cost and its costs by scenario, of a run being
+    continued (``inf`` and None: none yet; the costs None for a run from before they were
+    kept, whose best is then judged by its mean)."""
+    path, costs_path = run / "evaluations.csv", run / BEST_COSTS
     if not path.is_file():
-        return float("inf")
+        return float("inf"), None
     with path.open() as fh:
-        costs = [float(r["mean_cost"]) for r in csv.DictReader(fh)]
-    return min(costs) if costs else float("inf")
+        rows = [r for r in csv.DictReader(fh) if r.get("best") == "1"]
+    if not rows:
+        return float("inf"), None
+    costs = json.loads(costs_path.read_text()) if costs_path.is_file() else None
+    return float(rows[-1]["mean_cost"]), None if costs is None else np.array(costs, float)
 
 
 def _append_eval(run: Path, steps: int, mean: float, median: float, best: bool) -> None:

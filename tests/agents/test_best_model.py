@@ -1,0 +1,49 @@
+"""Which evaluation's model becomes a run's best (vfgym.agents.training.beats): a later
+model must beat the best by more than the validation scenarios' spread."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vfgym.agents.training import SIGNIFICANCE, _best_so_far, beats
+
+BEST = np.array([2.0, 3.0, 4.0, 5.0, 2.5, 3.5, 4.5, 1.5])
+
+
+@pytest.mark.parametrize(
+    ("costs", "wins"),
+    [
+        (BEST * 0.99, True),  # 1 % lower on every scenario: no spread, a real gain
+        (BEST, False),  # the same model again
+        (BEST * 1.01, False),  # worse
+        # lower on average by 0.05, but by +-1 scenario by scenario: noise
+        (BEST + np.array([1, -1, 1, -1, 1, -1, 1, -1.4]), False),
+        # lower by 0.3 on average, with a spread of 0.2: clear
+        (BEST - 0.3 + np.array([0.2, -0.2, 0.2, -0.2, 0.2, -0.2, 0.2, -0.2]), True),
+    ],
+    ids=["uniform", "same", "worse", "noise", "clear"],
+)
+def test_a_later_model_replaces_the_best_only_beyond_the_spread(costs, wins):
+    assert beats(costs, BEST) is wins
+
+
+def test_the_first_evaluation_is_the_best_and_the_margin_is_in_standard_errors():
+    assert beats(BEST, None)
+    diff = np.array([0.1, -0.05, 0.1, -0.05, 0.1, -0.05, 0.1, -0.05])  # mean 0.025
+    se = diff.std(ddof=1) / np.sqrt(len(diff))
+    z_at = diff.mean() / se
+    assert beats(BEST - diff, BEST, z=0.9 * z_at) and not beats(BEST - diff, BEST, z=1.1 * z_at)
+    assert SIGNIFICANCE > 0
+
+
+def test_a_continued_run_keeps_its_best_and_its_costs(tmp_path):
+    assert _best_so_far(tmp_path) == (float("inf"), None)
+    (tmp_path / "evaluations.csv").write_text(
+        "timesteps,mean_cost,median_cost,best\n0,3.0,3.0,1\n100,2.9,2.9,0\n200,2.95,2.9,1\n"
+    )
+    mean, costs = _best_so_far(tmp_path)
+    assert mean == 2.95 and costs is None  # a run from before the costs were kept
+    (tmp_path / "best_model_costs.json").write_text("[2.9, 3.0]")
+    mean, costs = _best_so_far(tmp_path)
+    assert mean == 2.95 and costs.tolist() == [2.9, 3.0]
