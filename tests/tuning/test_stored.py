@@ -145,3 +145,22 @@ def test_trials_made_meanwhile_are_read_back_and_the_compass_plans_again(tmp_pat
     assert [first.number, second.number] == stored and stored != planned
     third, _ = maker.make(study, False, cfg.laws)  # planned from the study again
     assert storage.get_trial(third.trial_id).number == third.number
+
+
+@pytest.mark.parametrize(
+    ("names", "fmt", "keys"),
+    [
+        (CONSTRAINTS, 2, ["constraints"]),  # one list, in CONSTRAINTS' order
+        (CONSTRAINTS, 1, [f"constraints:{n}" for n in CONSTRAINTS]),  # a study made before
+        (("edge",), 2, ["constraints:edge"]),  # other names: each by name
+    ],
+    ids=["list", "format-1", "other-names"],
+)
+def test_constraint_writes_by_format_and_names(names, fmt, keys):
+    from vfgym.tuning._stored import constraint_writes
+
+    values = {n: -0.5 * i for i, n in enumerate(names)}
+    writes = constraint_writes(values, fmt)
+    assert [k for k, _ in writes] == keys
+    flat = [x for _, v in writes for x in (v if isinstance(v, list) else [v])]
+    assert flat == list(values.values())

@@ -22,7 +22,6 @@ from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, aggregate_costs
 from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
 from vfgym.tuning._stored import (
-    CONSTRAINTS_KEY,
     FORMAT,
     RESULT_ATTR,
     constraint_writes,
@@ -394,9 +393,5 @@ def set_constraints(
     for name, v in values.items():
         if math.isnan(float(v)):
             raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
-    if tuple(values) == CONSTRAINTS:
-        writes = constraint_writes(list(values.values()), fmt)
-    else:
-        writes = [(f"{CONSTRAINTS_KEY}:{n}", float(v)) for n, v in values.items()]
-    for key, value in writes:
+    for key, value in constraint_writes(values, fmt):
         trial.storage.set_trial_system_attr(tid, key, value)

@@ -511,10 +511,10 @@ def best_record(
         If the trial holds no result (it did not complete in a sweep).
     """
     r = stored_result(trial)
-    if r is None:
+    if r is None or r.settings is None:  # (either format: the settings with the result)
         raise ValueError(f"trial {trial.number} holds no result")
     return BestRecord(
-        settings=r.settings if r.settings is not None else trial.user_attrs["settings"],
+        settings=r.settings,
         cost=r.cost,
         feasible=r.feasible,
         constraints=dict(zip(CONSTRAINTS, r.constraints, strict=True)),

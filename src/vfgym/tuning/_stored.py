@@ -21,7 +21,7 @@ on every trial.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 from vfgym.scoring import CONSTRAINTS
@@ -164,22 +164,22 @@ def named_constraints(trial: Any) -> dict[str, float]:
     return out
 
 
-def constraint_writes(values: Sequence[float], fmt: int) -> list[tuple[str, Any]]:
+def constraint_writes(values: Mapping[str, float], fmt: int) -> list[tuple[str, Any]]:
     """The system attributes that store a trial's constraints in a format.
 
     Parameters
     ----------
-    values : sequence of float
-        The constraints, in ``CONSTRAINTS``' order (none NaN).
+    values : mapping of str to float
+        The constraints by name (none NaN).
     fmt : int
         The study's trial format.
 
     Returns
     -------
     list of (str, object)
-        The (key, value) pairs to write: one list (format 2), one a constraint (1).
+        The (key, value) pairs to write: one list when the format is 2 or later and the
+        names are ``CONSTRAINTS``, in its order; else one a constraint, ``constraints:NAME``.
     """
-    vals = [float(v) for v in values]
-    if fmt >= 2:
-        return [(CONSTRAINTS_KEY, vals)]
-    return [(f"{CONSTRAINTS_KEY}:{n}", v) for n, v in zip(CONSTRAINTS, vals, strict=True)]
+    if fmt >= 2 and tuple(values) == CONSTRAINTS:
+        return [(CONSTRAINTS_KEY, [float(v) for v in values.values()])]
+    return [(f"{CONSTRAINTS_KEY}:{n}", float(v)) for n, v in values.items()]

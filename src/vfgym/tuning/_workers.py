@@ -41,7 +41,7 @@ from vfgym.tuning._recovery import (
     recover,
 )
 from vfgym.tuning._storage import StorageSpec, _claim_lock, open_storage
-from vfgym.tuning._stored import study_format
+from vfgym.tuning._stored import FORMAT, study_format
 from vfgym.tuning._study import batch_size, make_sampler, trial_budget
 
 if TYPE_CHECKING:
@@ -313,7 +313,7 @@ class OneWrite(NamedTuple):
     sampler: Any
     storage: Any
     study_id: int
-    trial_format: int = 1
+    trial_format: int = FORMAT
 
     def make(self, study: Any, first: bool, laws: tuple[str, ...]) -> tuple[MadeTrial, Settings]:
         """The next planned trial, created running with its parameters and generation
@@ -365,7 +365,7 @@ def settings_of(params: dict[str, Any], laws: tuple[str, ...]) -> Settings:
     )
 
 
-def one_write(sampler: Any, storage: Any, study_id: int, fmt: int = 1) -> OneWrite | None:
+def one_write(sampler: Any, storage: Any, study_id: int, fmt: int = FORMAT) -> OneWrite | None:
     """:class:`OneWrite` for a sampler that plans its trials (``fmt``: the study's trial
     format), else None."""
     if not all(hasattr(sampler, m) for m in ("plan_trial", "created", "replan")):
