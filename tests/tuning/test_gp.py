@@ -150,3 +150,27 @@ def test_a_model_batch_chooses_distinct_candidates():
     cand = np.random.default_rng(7).random((64, 4))
     chosen = _Fit(gp, [], float(y.min())).choose(8, lambda: cand)
     assert len({tuple(c) for c in chosen}) == 8
+
+
+def test_a_batch_on_threads_gives_the_bits_of_a_batch_in_turn(monkeypatch):
+    """The models of a batch fitted and predicted side by side (:func:`_model.each`) give
+    the same points, bit for bit, as one after the other."""
+    from vfgym.tuning import _model
+    from vfgym.tuning._model import Observation, propose
+
+    rng = np.random.default_rng(3)
+    x = rng.random((40, 4))
+    obs = [
+        Observation(i, x[i], "ramp", float(1.0 + (x[i] ** 2).sum()), max(0.0, x[i, 0] - 0.6),
+                    bool(x[i, 0] <= 0.6), np.array([x[i, 0] - 0.6, x[i, 1] - 0.8]))
+        for i in range(40)
+    ]  # fmt: skip
+
+    def batch() -> list[np.ndarray]:
+        return propose(x, obs, [x[0] * 0.5], 4, 0.0, np.random.default_rng(7)).points
+
+    threaded = batch()
+    monkeypatch.setattr(_model, "each", lambda fn, items: [fn(i) for i in items])
+    in_turn = batch()
+    assert len(threaded) == 4
+    assert all(np.array_equal(a, b) for a, b in zip(threaded, in_turn, strict=True))

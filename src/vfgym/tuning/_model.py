@@ -12,7 +12,10 @@ prediction of the candidates per model rather than one per point.
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 
@@ -149,8 +152,7 @@ class _Fit(NamedTuple):
         predicted values (:class:`vfgym.tuning._gp.Believer`) before the next is chosen;
         a candidate is chosen once."""
         c = candidates()
-        cost = Believer(self.gp, c)
-        cons = [Believer(m, c) for m in self.cgps]
+        cost, *cons = each(lambda m: Believer(m, c), [self.gp, *self.cgps])
         taken = np.zeros(len(c), dtype=bool)
         out = []
         for _ in range(min(n, len(c))):
@@ -188,18 +190,37 @@ def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndar
     yf = np.minimum(y[fit], np.median(y[fit])) if cap else y[fit]
     starts = starts or {}
 
-    def model(xs: np.ndarray, ys: np.ndarray, key: str) -> GaussianProcess:
+    def model(data: tuple[np.ndarray, np.ndarray, str]) -> GaussianProcess:
+        xs, ys, key = data
         start = starts.get(key)
-        return GaussianProcess(xs, ys, start=start, fit=refit or start is None)
-
-    gp = model(x[fit], yf, "cost")
-    keyed = _constraint_models(cons, split)
-    cgps = [model(x, _signed_log(c), k) for k, c in keyed]
-    best = y[feas].min() + math.log1p(-xi) if feas.any() else None
-    for p in pending:
-        for m in (gp, *cgps):
+        m = GaussianProcess(xs, ys, start=start, fit=refit or start is None)
+        for p in pending:
             m.condition(p[None], float(m.predict(p[None])[0][0]))
+        return m
+
+    keyed = _constraint_models(cons, split)
+    gp, *cgps = each(model, [(x[fit], yf, "cost"), *((x, _signed_log(c), k) for k, c in keyed)])
+    best = y[feas].min() + math.log1p(-xi) if feas.any() else None
     return _Fit(gp, cgps, best, tuple(k for k, _ in keyed))
+
+
+T = TypeVar("T")
+R = TypeVar("R")
+_POOL: tuple[int, ThreadPoolExecutor] | None = None  # (the process that made it, the pool)
+
+
+def each(fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
+    """``[fn(i) for i in items]``, the items on up to as many threads as the machine has
+    cores. The models of a batch are independent and their numpy work releases the GIL,
+    so they run side by side; each one's operations are the same, in the same order, on
+    whichever thread, so the results are the same bits (the linear algebra is on one BLAS
+    thread, :func:`propose`)."""
+    global _POOL
+    if len(items) < 2 or (os.cpu_count() or 1) < 2:
+        return [fn(i) for i in items]
+    if _POOL is None or _POOL[0] != os.getpid():  # (a forked worker has no threads)
+        _POOL = (os.getpid(), ThreadPoolExecutor(os.cpu_count(), "vfgym-model"))
+    return list(_POOL[1].map(fn, items))
 
 
 def _constraint_targets(cons: np.ndarray, split: bool) -> list[np.ndarray]:
