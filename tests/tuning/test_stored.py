@@ -124,7 +124,7 @@ def test_trials_made_meanwhile_are_read_back_and_the_compass_plans_again(tmp_pat
     """The compass's trials are made with the numbers it planned; when another trial was
     made meanwhile (outside the claim lock), the batch's numbers are read back from the
     storage and the next plan reads the study again."""
-    from vfgym.tuning._workers import one_write
+    from vfgym.tuning._batch import one_write
 
     cfg = _config(tmp_path, 4)
     spec = tuning.resolve_storage(cfg.storage, tmp_path)

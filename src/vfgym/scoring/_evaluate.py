@@ -305,9 +305,22 @@ def _run_beside(run: Callable[..., None], beside: Callable[[], None] | None, *ar
     try:
         beside()
     finally:
-        worker.join()
+        _join(worker)
     if failed:
         raise failed[0]
+
+
+def _join(worker: threading.Thread) -> None:
+    """Wait for the thread even through Ctrl-C, then raise the interrupt: a compiled call
+    cannot be stopped, and the caller may run the next one (or read its arrays) at once."""
+    interrupted: KeyboardInterrupt | None = None
+    while worker.is_alive():
+        try:
+            worker.join()
+        except KeyboardInterrupt as e:
+            interrupted = e
+    if interrupted is not None:
+        raise interrupted
 
 
 def evaluate(
@@ -320,6 +333,7 @@ def evaluate(
     bounds: Bounds = DEFAULT_BOUNDS,
     keep_traces: bool = False,
     decimation: int = 1,
+    while_running: Callable[[], None] | None = None,
 ) -> Evaluation:
     """Score every controller on every scenario through one batched kernel call.
 
@@ -347,6 +361,9 @@ def evaluate(
         and equal the traces' own).
     decimation : int
         Keep every ``decimation``-th tick in the traces.
+    while_running : callable or None
+        Work of the caller's to do while the compiled call runs (a sweep writes the
+        trials being simulated): as :func:`score_pairs` runs it.
 
     Returns
     -------
@@ -368,6 +385,7 @@ def evaluate(
         measures=measures,
         weights=weights,
         bounds=bounds,
+        while_running=while_running,
     )
     nan_m = dict.fromkeys(METRIC_NAMES, math.nan)
     metrics = [[dict(nan_m) for _ in range(ns)] for _ in range(nc)]

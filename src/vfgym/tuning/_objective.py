@@ -180,7 +180,11 @@ class Objective:
         return res.values
 
     def results(
-        self, study: Study | None, numbers: Sequence[int], settings: list[Settings]
+        self,
+        study: Study | None,
+        numbers: Sequence[int] | Callable[[], Sequence[int]],
+        settings: list[Settings],
+        while_running: Callable[[], None] | None = None,
     ) -> list[Result]:
         """The result of each setting, simulating only those never scored.
 
@@ -193,10 +197,14 @@ class Objective:
         study : optuna.Study or None
             The study whose completed trials may already hold a setting's result (None:
             those :meth:`learn` read last, without reading the study again).
-        numbers : sequence of int
-            The trials' numbers (recorded as ``cached_from`` of the results they create).
+        numbers : sequence of int, or a callable giving them
+            The trials' numbers (recorded as ``cached_from`` of the results they create);
+            a callable is called after ``while_running`` (which may number the trials).
         settings : list of Settings
             The settings, one per trial.
+        while_running : callable or None
+            Work to do while the batch is simulated (:func:`vfgym.evaluate`'s), else
+            before the results are copied; it holds interrupts back itself, if it must.
 
         Returns
         -------
@@ -215,14 +223,17 @@ class Objective:
                 todo.setdefault(settings_key(s), i)
         if todo:
             with self.guard():
-                scored = self.score_many([settings[i] for i in todo.values()])
+                scored = self.score_many([settings[i] for i in todo.values()], while_running)
             self.simulated += len(todo)
+            nums = numbers() if callable(numbers) else numbers
             for (key, i), res in zip(todo.items(), scored, strict=True):
-                self.cache[key] = Result(res.values, res.attrs | {"cached_from": numbers[i]})
+                self.cache[key] = Result(res.values, res.attrs | {"cached_from": nums[i]})
                 out[i] = res
             for i, s in enumerate(settings):
                 if out[i] is None:
                     out[i] = self.cache[settings_key(s)]
+        elif while_running is not None:
+            while_running()
         return [r for r in out if r is not None]
 
     def record(self, trial: Trial, res: Result, trial_id: int | None = None) -> None:
@@ -267,13 +278,17 @@ class Objective:
         """
         return self.score_many([settings])[0]
 
-    def score_many(self, settings: list[Settings]) -> list[Result]:
+    def score_many(
+        self, settings: list[Settings], while_running: Callable[[], None] | None = None
+    ) -> list[Result]:
         """Values and user attributes of each setting, all in one batched evaluation.
 
         Parameters
         ----------
         settings : list of Settings
             The settings.
+        while_running : callable or None
+            Work to do while the batch is simulated (:func:`vfgym.evaluate`'s).
 
         Returns
         -------
@@ -281,7 +296,13 @@ class Objective:
             One per setting, as :meth:`score` gives it.
         """
         agg = aggregate(
-            evaluate(settings, self.scenarios, plant=self.plant, measures=self.measures),
+            evaluate(
+                settings,
+                self.scenarios,
+                plant=self.plant,
+                measures=self.measures,
+                while_running=while_running,
+            ),
             *self.how,
         )
         out = []
