@@ -30,9 +30,9 @@ from vfgym.scoring import evaluate
 from vfgym.tuning._batch import (
     Claimed,
     Heartbeats,
-    once,
     claim,
     give_back,
+    once,
     one_write,
     run_batch,
     run_planned,
