@@ -174,3 +174,20 @@ def test_a_batch_on_threads_gives_the_bits_of_a_batch_in_turn(monkeypatch):
     in_turn = batch()
     assert len(threaded) == 4
     assert all(np.array_equal(a, b) for a, b in zip(threaded, in_turn, strict=True))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_compiled_correlation_is_the_numpy_one_bit_for_bit(seed):
+    """:func:`_gp_compiled.matern52` against the numpy formula :func:`_gp.matern52`, on
+    random points and length scales across their bounds (one point pair coinciding)."""
+    from vfgym.tuning import _gp_compiled
+    from vfgym.tuning._gp import LENGTH_BOUNDS, matern52
+
+    rng = np.random.default_rng(seed)
+    a, b = rng.random((rng.integers(1, 300), 4)), rng.random((rng.integers(1, 200), 4))
+    b[0] = a[0]
+    lengths = np.exp(rng.uniform(*np.log(LENGTH_BOUNDS), 4))
+    expected = matern52(a, b, lengths)
+    got = _gp_compiled.matern52(a, b, lengths)
+    assert got.shape == expected.shape and np.array_equal(got, expected)
+    assert got[0, 0] == 1.0

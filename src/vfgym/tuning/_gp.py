@@ -3,8 +3,9 @@ length scale per axis, constant mean, hyperparameters fitted by maximum marginal
 likelihood (Adam on their logarithms, within bounds), and the normal distribution's
 functions the expected improvement needs.
 
-Plain numpy (scipy is not a dependency of vfgym), sized for a sweep's few hundred points
-in four dimensions.
+numpy (scipy is not a dependency of vfgym), the correlation of many candidates with the
+points compiled (:mod:`vfgym.tuning._gp_compiled`, the same bits), sized for a sweep's
+few hundred points in four dimensions.
 """
 
 from __future__ import annotations
@@ -13,6 +14,8 @@ import math
 from typing import Any
 
 import numpy as np
+
+from vfgym.tuning import _gp_compiled as _compiled
 
 SQRT5 = math.sqrt(5.0)
 COLD_STEPS, WARM_STEPS = 60, 20
@@ -32,7 +35,8 @@ def matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     One axis at a time, in place: the same operations, in the same order, as
     ``r = sqrt(sum(((a - b) / lengths)²))``, ``(1 + √5 r + 5/3 r²) exp(-√5 r)`` on the
     (rows of a, rows of b, axes) array, so the same bits, without that array (a model
-    batch predicts thousands of candidates against hundreds of points).
+    batch predicts thousands of candidates against hundreds of points). The models call
+    its compiled copy, :func:`vfgym.tuning._gp_compiled.matern52` (the same bits).
     """
     r = np.zeros((len(a), len(b)))
     for i in range(a.shape[1]):
@@ -141,7 +145,8 @@ class GaussianProcess:
     def _factor(self) -> None:
         lengths, var, noise = self._unpack(self.theta)
         self.lengths, self.var, self.noise = lengths, var, noise
-        k = var * matern52(self.x, self.x, lengths) + (noise + 1e-10) * np.eye(len(self.x))
+        k = var * _compiled.matern52(self.x, self.x, lengths)
+        k += (noise + 1e-10) * np.eye(len(self.x))
         self.chol = np.linalg.cholesky(k)
         self.linv = np.linalg.inv(self.chol)  # L⁻¹: predictions multiply, not solve
         self.alpha = self.linv.T @ (self.linv @ self.y)
@@ -154,7 +159,7 @@ class GaussianProcess:
 
     def predict(self, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Posterior mean and standard deviation at the rows of ``xs``, in ``y``'s units."""
-        ks = self.var * matern52(xs, self.x, self.lengths)
+        ks = self.var * _compiled.matern52(xs, self.x, self.lengths)
         mu = ks @ self.alpha
         v = self.linv @ ks.T
         sd = np.sqrt(np.maximum(self.var - (v * v).sum(0), 1e-18))
@@ -179,7 +184,7 @@ class Believer:
     def __init__(self, gp: GaussianProcess, xs: np.ndarray) -> None:
         self.gp = gp
         self.xs = np.asarray(xs, dtype=np.float64)
-        ks = gp.var * matern52(self.xs, gp.x, gp.lengths)
+        ks = gp.var * _compiled.matern52(self.xs, gp.x, gp.lengths)
         self.mean = (ks @ gp.alpha) * gp.scale + gp.mean
         self._v = gp.linv @ ks.T  # (n, m): L⁻¹ k(x, candidate)
         self._var = gp.var - (self._v * self._v).sum(0)  # standardised, unclipped
@@ -192,7 +197,7 @@ class Believer:
     def believe(self, j: int) -> None:
         """Add candidate ``j`` to the observations at its predicted mean."""
         gp = self.gp
-        k = gp.var * matern52(self.xs, self.xs[j : j + 1], gp.lengths)[:, 0]
+        k = gp.var * _compiled.matern52(self.xs, self.xs[j : j + 1], gp.lengths)[:, 0]
         cov = k - self._v.T @ self._v[:, j]
         for u in self._u:
             cov -= u * u[j]
