@@ -191,3 +191,16 @@ def test_the_compiled_correlation_is_the_numpy_one_bit_for_bit(seed):
     got = _gp_compiled.matern52(a, b, lengths)
     assert got.shape == expected.shape and np.array_equal(got, expected)
     assert got[0, 0] == 1.0
+
+
+def test_the_compiled_erfc_is_pythons_bit_for_bit():
+    """:func:`_gp_compiled.erfc` against ``math.erfc``, element by element, over the normal
+    range, the tails where it underflows or saturates, and signed zeros and infinities."""
+    from vfgym.tuning import _gp_compiled
+
+    rng = np.random.default_rng(0)
+    x = np.concatenate([rng.normal(0.0, 4.0, 20_000), rng.uniform(-40.0, 40.0, 20_000),
+                        [0.0, -0.0, np.inf, -np.inf, 26.5, -6.0]]).reshape(-1, 2)  # fmt: skip
+    got = _gp_compiled.erfc(x)
+    assert got.shape == x.shape
+    assert np.array_equal(got.ravel(), [math.erfc(v) for v in x.ravel()])

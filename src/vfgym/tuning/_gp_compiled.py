@@ -1,12 +1,15 @@
-"""The compiled copy of :func:`vfgym.tuning._gp.matern52`, which a model batch calls for
-every candidate against every point (thousands by hundreds, five models a batch).
+"""The compiled copies of :func:`vfgym.tuning._gp.matern52`, which a model batch calls for
+every candidate against every point (thousands by hundreds, five models a batch), and of
+``math.erfc`` element-wise, which it calls for every candidate, model and chosen point
+(the normal distribution function of the expected improvement and of feasibility).
 
 Two loops over plain arrays, each doing the numpy version's operations in its order (the
 scaled differences squared and summed axis by axis, the square root; then the
 polynomial), with numpy's own ``exp`` between them: numpy's vectorised ``exp`` and libm's
 differ in the last bit, so the exponential stays numpy's and the result is the same bits
 (``tests/tuning/test_gp.py`` checks it on random inputs). One pass over the
-(candidates × points) array each, where numpy makes about twenty.
+(candidates × points) array each, where numpy makes about twenty. ``erfc`` is libm's, as
+Python's ``math.erfc`` is (the same bits, tested), without a Python call an element.
 """
 
 from __future__ import annotations
@@ -58,3 +61,17 @@ def matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     np.exp(e, out=e)
     _polynomial(r, e)
     return r
+
+
+@jit(simd=True)
+def _erfc_into(x: np.ndarray, out: np.ndarray) -> None:
+    for i in range(x.size):
+        out[i] = math.erfc(x[i])
+
+
+def erfc(x: np.ndarray) -> np.ndarray:
+    """``math.erfc`` of each element (a float64 array of ``x``'s shape)."""
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    out = np.empty_like(x)
+    _erfc_into(x.reshape(-1), out.reshape(-1))
+    return out
