@@ -185,19 +185,31 @@ def run_batch(
     """Score the batch's settings together (one batched simulation; a setting a completed
     trial holds is copied from those ``objective`` read last, :meth:`Objective.learn`)
     and tell the study; a failing evaluation fails the batch's trials and raises."""
+    numbers, settings = [c.trial.number for c in batch], [c.settings for c in batch]
+    results = _results_or_fail(study, objective, batch, numbers, settings)
+    tell_results(study, objective, batch, results, maker)
+
+
+def _results_or_fail(
+    study: Any,
+    objective: Objective,
+    batch: list[Claimed],
+    numbers: Any,
+    settings: list[Settings],
+    while_running: Callable[[], None] | None = None,
+) -> list[Result]:
+    """:meth:`Objective.results`; a failing evaluation fails the ``batch``'s trials (those
+    made by then) and raises."""
     import optuna
 
     try:
-        results = objective.results(
-            None, [c.trial.number for c in batch], [c.settings for c in batch]
-        )
+        return objective.results(None, numbers, settings, while_running)
     except KeyboardInterrupt:
         raise
     except Exception:
         for c in batch:
             study.tell(c.trial.number, state=optuna.trial.TrialState.FAIL)
         raise
-    tell_results(study, objective, batch, results, maker)
 
 
 def once(fn: Callable[[], None]) -> Callable[[], None]:
@@ -250,8 +262,6 @@ def run_planned(
     released. The writes a batch needs before its results take the simulation's
     time instead of adding to it. ``claimed`` receives the trials as they are made (what
     an interrupt gives back); a failing simulation fails them and raises."""
-    import optuna
-
     created = False
 
     def create() -> None:
@@ -268,16 +278,12 @@ def run_planned(
             finally:
                 release()
 
+    def numbers() -> list[int]:  # read after create: checked
+        return [c.trial.number for c in claimed]
+
     try:
-        results = objective.results(
-            None, lambda: [c.trial.number for c in claimed], [s for _, s in planned], create
-        )
-    except KeyboardInterrupt:
-        raise
-    except Exception:
-        for c in claimed:
-            study.tell(c.trial.number, state=optuna.trial.TrialState.FAIL)
-        raise
+        settings = [s for _, s in planned]
+        results = _results_or_fail(study, objective, claimed, numbers, settings, create)
     finally:
         if not created:  # failed before any trial was made: none exists, plan again
             release()
