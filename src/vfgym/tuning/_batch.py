@@ -44,19 +44,13 @@ def claim(
             made, settings = maker.make(study, i == waiting, objective.laws)
             trial: Any = made
             trial_id = made.trial_id
-            beats.add(trial_id)
-            # The worker's name only once its heartbeat is recorded, as below: recovery
-            # takes a running trial without one for an orphan (its worker died before
-            # the heartbeat began), and one with a name for the heartbeat to judge, so a
-            # name written with the trial would leave a death in between never retried.
-            trial.set_user_attr(WORKER_ATTR, _worker_id())
+            start(trial, trial_id, beats)
         else:
             with warnings.catch_warnings():  # heartbeats are ours (:class:`Heartbeats`)
                 warnings.filterwarnings("ignore", message="Heartbeat of storage is supposed")
                 trial = study.ask()
             trial_id = trial_id_of(trial, sid)
-            beats.add(trial_id)
-            trial.set_user_attr(WORKER_ATTR, _worker_id())
+            start(trial, trial_id, beats)
             settings = space.suggest(trial, objective.laws)
         objective.current = trial.number
         out.append(Claimed(trial, settings, trial_id, maker is not None and i >= waiting))
@@ -64,6 +58,17 @@ def claim(
         maker.check([c.trial for c in out[waiting:]])
         objective.current = out[-1].trial.number
     return out
+
+
+def start(trial: Any, trial_id: int, beats: Heartbeats) -> None:
+    """Start a claimed trial's heartbeat, then write this worker's name on it.
+
+    The name only once the heartbeat is recorded: recovery takes a running trial without
+    a name for an orphan (its worker died before the heartbeat began), and one with a name
+    for the heartbeat to judge, so a name written first would leave a death in between
+    never retried."""
+    beats.add(trial_id)
+    trial.set_user_attr(WORKER_ATTR, _worker_id())
 
 
 class OneWrite(NamedTuple):
@@ -256,9 +261,9 @@ def run_planned(
     """Simulate a planned batch (:meth:`OneWrite.plan`, under the claim lock) and create
     its trials meanwhile, then tell each its result.
 
-    The trials are created as :func:`claim` creates them (heartbeat, then this worker's
-    name) on this thread while the kernel simulates their settings on the others, with
-    interrupts ``held`` back (a write is not cut short), and then the claim lock is
+    The trials are created and started as :func:`claim` does (:func:`start`) on this
+    thread while the kernel simulates their settings on the others, with interrupts
+    ``held`` back (a write is not cut short), and then the claim lock is
     released. The writes a batch needs before its results take the simulation's
     time instead of adding to it. ``claimed`` receives the trials as they are made (what
     an interrupt gives back); a failing simulation fails them and raises."""
@@ -271,8 +276,7 @@ def run_planned(
             try:
                 for template, settings in planned:
                     made = maker.create(template)
-                    beats.add(made.trial_id)
-                    made.set_user_attr(WORKER_ATTR, _worker_id())
+                    start(made, made.trial_id, beats)
                     claimed.append(Claimed(made, settings, made.trial_id, True))
                 maker.check([c.trial for c in claimed])
             finally:
