@@ -52,11 +52,9 @@ def claim(
             trial_id = trial_id_of(trial, sid)
             start(trial, trial_id, beats)
             settings = space.suggest(trial, objective.laws)
-        objective.current = trial.number
         out.append(Claimed(trial, settings, trial_id, maker is not None and i >= waiting))
     if maker is not None and len(out) > waiting:
         maker.check([c.trial for c in out[waiting:]])
-        objective.current = out[-1].trial.number
     return out
 
 
@@ -292,7 +290,6 @@ def run_planned(
         if not created:  # failed before any trial was made: none exists, plan again
             release()
             maker.sampler.replan()
-    objective.current = claimed[-1].trial.number
     tell_results(study, objective, claimed, results, maker)
 
 

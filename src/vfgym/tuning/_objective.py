@@ -162,13 +162,11 @@ class Objective:
         self.simulated = 0
         self.on_enter: Callable[[], None] | None = None
         self.guard: Callable[[], Any] = nullcontext
-        self.current: int | None = None
         self._found: dict[tuple, Result] = {}
         self._seen: set[int] = set()
         self._found_in: tuple | None = None
 
     def __call__(self, trial: Trial) -> float | list[float]:
-        self.current = trial.number
         # Before the claim lock goes: a retried trial inherits its dead worker's attribute,
         # and another worker's recovery must not see this one running under that name.
         trial.set_user_attr(WORKER_ATTR, _worker_id())
