@@ -46,6 +46,7 @@ from vfgym.params import (
     Plant,
     Servo,
 )
+from vfgym.plant.uncertainty import EXACT, Uncertainty
 
 AXIS_FILE = "axis.yaml"
 """The axis's copy in a run folder."""
@@ -90,6 +91,10 @@ class Axis:
         The measures' windows and bands on this machine.
     moves : MoveSets
         The train and test move sets; a move's load is added to the plant's.
+    uncertainty : Uncertainty
+        What the plant's figures do not state exactly (:mod:`vfgym.plant.uncertainty`):
+        tuners stay feasible on every plant of its design, verdicts are judged across
+        plants drawn within it. Default: exactly known.
 
     Raises
     ------
@@ -102,11 +107,18 @@ class Axis:
     plant: Plant = PAPER_PLANT
     measures: Measures = DEFAULT_MEASURES
     moves: MoveSets = field(default_factory=MoveSets)
+    uncertainty: Uncertainty = EXACT
 
     def __post_init__(self) -> None:
-        for key, kind in (("plant", Plant), ("measures", Measures), ("moves", MoveSets)):
+        for key, kind in (
+            ("plant", Plant),
+            ("measures", Measures),
+            ("moves", MoveSets),
+            ("uncertainty", Uncertainty),
+        ):
             if not isinstance(getattr(self, key), kind):
                 raise ValueError(f"{key}={getattr(self, key)!r} must be a vfgym {kind.__name__}")
+        self.uncertainty.check_motor(self.plant.motor)
         listed = {
             f"moves.{split}[{i}]": sc
             for split in SPLITS
@@ -326,7 +338,7 @@ def axis_from_dict(data: Any, name: str = "axis") -> Axis:
     if not isinstance(data, dict):
         raise ValueError(
             f"the file holds {type(data).__name__} {data!r}: allowed a mapping with keys "
-            "name, description, plant, measures, moves"
+            "name, description, plant, measures, moves, uncertainty"
         )
     data = dict(data)
     plant = _plant(data.pop("plant", None))
@@ -339,8 +351,12 @@ def axis_from_dict(data: Any, name: str = "axis") -> Axis:
         k = unknown[0]
         raise ValueError(f"moves.{k}={moves_data[k]!r} is not a key: allowed train, test")
     sets = {s: _move_set(moves_data[s], f"moves.{s}") for s in SPLITS if s in moves_data}
+    unc_data = data.pop("uncertainty", None)
+    unc = EXACT if unc_data is None else _make(Uncertainty, unc_data, "uncertainty")
     data.setdefault("name", name)
-    return _make(Axis, data, "", plant=plant, measures=measures, moves=MoveSets(**sets))
+    return _make(
+        Axis, data, "", plant=plant, measures=measures, moves=MoveSets(**sets), uncertainty=unc
+    )
 
 
 def axis_to_dict(axis: Axis) -> dict[str, Any]:
@@ -377,6 +393,8 @@ def axis_to_dict(axis: Axis) -> dict[str, Any]:
         },
         "measures": asdict(axis.measures),
         "moves": {s: move_set(axis.moves.of(s)) for s in SPLITS},
+        # written only when stated, so an exactly known axis keeps its digest
+        **({} if axis.uncertainty.exact else {"uncertainty": axis.uncertainty.to_dict()}),
     }
 
 
