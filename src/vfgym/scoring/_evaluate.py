@@ -35,6 +35,7 @@ from vfgym.plant._notice import announce_compile
 from vfgym.plant._threads import keeps_torch_threads
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.plant.measures import from_acc
+from vfgym.plant.uncertainty import NOMINAL, PlantVariant
 from vfgym.scoring._cost import (
     CONSTRAINTS,
     DEFAULT_BOUNDS,
@@ -45,6 +46,7 @@ from vfgym.scoring._cost import (
     Score,
     score,
 )
+from vfgym.scoring._plants import AcrossPlants
 
 
 @dataclass
@@ -73,6 +75,9 @@ class Evaluation:
         (controllers, scenarios, 3), in the order of :data:`OBJECTIVES`.
     traces : list of list of Trace or None
         Per-tick traces when asked for (``keep_traces``), else ``None``.
+    across : AcrossPlants or None
+        The same pairs on true plants within an axis's uncertainty, when asked for
+        (``plants``); the arrays above are the modelled plant's.
     """
 
     controllers: list[Controller]
@@ -82,6 +87,7 @@ class Evaluation:
     constraints: np.ndarray
     objectives: np.ndarray
     traces: list[list[Trace | None]] | None = field(default=None, repr=False)
+    across: AcrossPlants | None = field(default=None, repr=False)
 
     @property
     def mean_cost(self) -> np.ndarray:
@@ -149,16 +155,23 @@ class Move:
         The position command per tick (rad).
     command_end_s : float
         Time at which the command reached its final value (s).
+    model : Plant or None
+        The modelled plant the controllers are set for (baselines resolved, pulse sources
+        planned, commands shaped on it), where ``plant`` is a true plant that differs
+        from it (:class:`~vfgym.plant.uncertainty.PlantVariant`); ``None``: ``plant``.
     """
 
     scenario: Scenario
     plant: Plant
     command: np.ndarray
     command_end_s: float
+    model: Plant | None = None
 
     @classmethod
-    def of(cls, scenario: Scenario, base: Plant = PAPER_PLANT) -> Move:
-        """The move of a scenario on a base plant.
+    def of(
+        cls, scenario: Scenario, base: Plant = PAPER_PLANT, variant: PlantVariant = NOMINAL
+    ) -> Move:
+        """The move of a scenario on a base plant, optionally on a true plant.
 
         Parameters
         ----------
@@ -166,24 +179,31 @@ class Move:
             The scenario.
         base : Plant
             The plant before the scenario's load.
+        variant : PlantVariant
+            The true plant relative to the modelled one (default: the modelled plant).
 
         Returns
         -------
         Move
-            Its plant, command and command end.
+            Its (true) plant, command and command end, with the modelled plant.
         """
         plant = scenario.plant(base)
         cmd = scenario.command(plant)
-        return cls(scenario, plant, cmd, command_end_s(cmd, plant.tick_hz))
+        end = command_end_s(cmd, plant.tick_hz)
+        if variant.nominal:
+            return cls(scenario, plant, cmd, end)
+        return cls(scenario, variant.apply(plant), cmd, end, model=plant)
 
 
 def _as_run(c: Controller, move: Any) -> tuple[Settings, np.ndarray | None] | None:
     """The settings and external pulse train a controller runs with on a move (``None``
-    pulses: the V-F controller makes them), or ``None`` if it cannot run it."""
-    c = resolve(c, move.plant)
+    pulses: the V-F controller makes them), or ``None`` if it cannot run it. Baselines and
+    pulse sources are set for the modelled plant (a move's ``model``, if it has one)."""
+    model = getattr(move, "model", None) or move.plant
+    c = resolve(c, model)
     if isinstance(c, Settings):
         return c, None
-    train = c.pulses(move.scenario, move.plant)
+    train = c.pulses(move.scenario, model)
     return None if train is None else (Settings(ts_over_tf=c.ts_over_tf), train)
 
 
@@ -334,6 +354,8 @@ def evaluate(
     keep_traces: bool = False,
     decimation: int = 1,
     while_running: Callable[[], None] | None = None,
+    plants: Sequence[PlantVariant] = (),
+    plant_seed: int | None = None,
 ) -> Evaluation:
     """Score every controller on every scenario through one batched kernel call.
 
@@ -364,6 +386,13 @@ def evaluate(
     while_running : callable or None
         Work of the caller's to do while the compiled call runs (a sweep writes the
         trials being simulated): as :func:`score_pairs` runs it.
+    plants : sequence of PlantVariant
+        True plants within an axis's uncertainty
+        (:func:`vfgym.plant.uncertainty.draw_plants`): every pair is also scored on each,
+        in the same batched call, into :attr:`Evaluation.across`. Empty: the modelled
+        plant only.
+    plant_seed : int or None
+        The seed ``plants`` were drawn from, recorded with them.
 
     Returns
     -------
@@ -379,14 +408,23 @@ def evaluate(
     scens = scenario_set(scenarios)
     moves = [Move.of(sc, plant) for sc in scens]
     nc, ns = len(ctrls), len(scens)
-    results = score_pairs(
-        [c for c in ctrls for _ in moves],
-        [mv for _ in ctrls for mv in moves],
+    variants = tuple(plants)
+    true_moves = [Move.of(sc, plant, v) for v in variants for sc in scens]
+    all_moves = moves + true_moves
+    scored = score_pairs(
+        [c for c in ctrls for _ in all_moves],
+        [mv for _ in ctrls for mv in all_moves],
         measures=measures,
         weights=weights,
         bounds=bounds,
         while_running=while_running,
     )
+    per = len(all_moves)
+    results = [r for ci in range(nc) for r in scored[ci * per : ci * per + ns]]
+    across = None
+    if variants:
+        rest = [scored[ci * per + ns : (ci + 1) * per] for ci in range(nc)]
+        across = _across(rest, variants, plant_seed, ns)
     nan_m = dict.fromkeys(METRIC_NAMES, math.nan)
     metrics = [[dict(nan_m) for _ in range(ns)] for _ in range(nc)]
     cost = np.full((nc, ns), np.nan)
@@ -411,4 +449,19 @@ def evaluate(
                 measures=measures,
                 decimation=decimation,
             )
-    return Evaluation(ctrls, scens, metrics, cost, cons, objs, traces)
+    return Evaluation(ctrls, scens, metrics, cost, cons, objs, traces, across)
+
+
+def _across(
+    rows: list[list[Score | None]], plants: tuple[PlantVariant, ...], seed: int | None, ns: int
+) -> AcrossPlants:
+    """Each controller's scores on the true plants (plant-major), as arrays."""
+    nc, npl = len(rows), len(plants)
+    cost = np.full((nc, npl, ns), np.nan)
+    cons = np.full((nc, npl, ns, len(CONSTRAINTS)), np.nan)
+    for ci, row in enumerate(rows):
+        for k, res in enumerate(row):
+            if res is not None:
+                pi, si = divmod(k, ns)
+                cost[ci, pi, si], cons[ci, pi, si] = res.cost, res.constraints
+    return AcrossPlants(plants, seed, cost, cons)
