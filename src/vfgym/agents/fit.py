@@ -290,8 +290,9 @@ def checkpointed_optima(
 
 
 def best_fixed(scenarios: Sequence[Scenario], axis: Axis, trials: int) -> Settings:
-    """The best fixed setting a short sweep (the default sampler, the paper's settings
-    first) finds on moves, as ``vfgym sweep`` picks it.
+    """The best fixed setting a short sweep (the default sampler on the axis's plant, the
+    paper's settings first, feasible on the axis's plant design) finds on moves, as
+    ``vfgym sweep`` picks it.
 
     Parameters
     ----------
@@ -312,7 +313,12 @@ def best_fixed(scenarios: Sequence[Scenario], axis: Axis, trials: int) -> Settin
     from .refine import short_sweep
 
     return short_sweep(
-        scenarios, PAPER_SETTINGS, trials, plant=axis.plant, measures=axis.measures
+        scenarios,
+        PAPER_SETTINGS,
+        trials,
+        plant=axis.plant,
+        measures=axis.measures,
+        plants=axis.design_plants(),
     ).settings
 
 
@@ -347,7 +353,7 @@ def fit_axis(
     from tqdm.auto import tqdm
 
     from vfgym.agents.tuners import Tuner, trained_on
-    from vfgym.report import Candidate, baseline_candidates, compare, verdict
+    from vfgym.report import Candidate, across_plants, baseline_candidates, compare, verdict
 
     run = Path(run_dir)
     seconds: dict[str, float] = {}
@@ -388,6 +394,7 @@ def fit_axis(
             **kw,
         )  # fmt: skip
         v = verdict(report, "fitted", train, f"the {len(test)} test moves of axis {axis.name}")
+        v = across_plants(v, axis.plant, axis.measures, axis.uncertainty)
         bar.update(1)
         seconds["verdict"] = time.perf_counter() - t0 - sum(seconds.values())
     return FitResult(model, tuple(optima), fixed, v, seconds)

@@ -128,7 +128,7 @@ def axis_verdict(model_path: str | Path, axis_file: str | Path, sweep_trials: in
     from vfgym.agents import agent_policy
     from vfgym.agents.fit import FitConfig, best_fixed
     from vfgym.moves.axis import load_axis
-    from vfgym.report import Candidate, baseline_candidates, compare, verdict
+    from vfgym.report import Candidate, across_plants, baseline_candidates, compare, verdict
 
     axis = load_axis(axis_file)
     trials = FitConfig().sweep_trials if sweep_trials is None else sweep_trials
@@ -149,4 +149,5 @@ def axis_verdict(model_path: str | Path, axis_file: str | Path, sweep_trials: in
         plant=axis.plant,
         measures=axis.measures,
     )
-    return verdict(report, "agent", train, f"the {len(test)} test moves of axis {axis.name}"), fixed
+    v = verdict(report, "agent", train, f"the {len(test)} test moves of axis {axis.name}")
+    return across_plants(v, axis.plant, axis.measures, axis.uncertainty), fixed

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from vfgym._validate import check_int
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.plant.uncertainty import PlantVariant
 
 
 @dataclass(frozen=True)
@@ -92,6 +93,7 @@ def short_sweep(
     plant: Plant = PAPER_PLANT,
     measures: Measures = DEFAULT_MEASURES,
     seed: int | None = 0,
+    plants: Sequence[PlantVariant] = (),
 ) -> Refinement:
     """``trials`` trials of the default sampler on moves (the mean cost), ``start`` first.
 
@@ -107,6 +109,9 @@ def short_sweep(
         The axis's plant and measures.
     seed : int or None
         The sampler's seed.
+    plants : sequence of PlantVariant
+        True plants every trial must also be feasible on (an axis's
+        :meth:`~vfgym.moves.axis.Axis.design_plants`).
 
     Returns
     -------
@@ -130,10 +135,13 @@ def short_sweep(
     cfg = SweepConfig(laws=laws, seed=seed, plots=False)  # its sampler: the default
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        sampler = make_sampler(cfg, cfg.seed, list(scenarios))  # coordinates from the moves
+        # coordinates from the moves on the axis's plant
+        sampler = make_sampler(cfg, cfg.seed, list(scenarios), plant=plant)
         study = optuna.create_study(direction="minimize", sampler=sampler)
     study.enqueue_trial(baseline_params(laws, start))
-    objective = Objective(list(scenarios), laws, "cost", plant=plant, measures=measures)
+    objective = Objective(
+        list(scenarios), laws, "cost", plant=plant, measures=measures, plants=plants
+    )
     study.optimize(objective, n_trials=trials)
     done = study.trials
     best = best_trial(study)

@@ -17,6 +17,7 @@ AGENTS_HINT = 'pip install -c constraints.txt -e ".[agents]"'
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     from vfgym.commands._common import SEED, add_axis_option, positive_int, whole
+    from vfgym.plant.uncertainty import VERDICT_PLANT_SEED, VERDICT_PLANTS
 
     p = sub.add_parser(
         "evaluate",
@@ -73,6 +74,21 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="bootstrap resamples for the 95%% interval of means (default: 2000)",
     )
     p.add_argument("--seed", type=SEED, default=0, help="bootstrap seed (default: 0)")
+    p.add_argument(
+        "--plants",
+        type=positive_int,
+        metavar="N",
+        help="true plants drawn within the axis's uncertainty on which every controller is "
+        f"also judged (default: {VERDICT_PLANTS}; an axis without uncertainty: the ±5 %% "
+        "inertia sensitivity line instead)",
+    )
+    p.add_argument(
+        "--plant-seed",
+        type=SEED,
+        default=VERDICT_PLANT_SEED,
+        metavar="S",
+        help=f"seed of the drawn plants (default: {VERDICT_PLANT_SEED})",
+    )
     p.add_argument("--name", help="run folder name (default: a timestamp)")
     p.add_argument("--runs-dir", default="runs", help="root of run folders (default: runs)")
     add_axis_option(p)
@@ -121,11 +137,19 @@ def run(args: argparse.Namespace) -> int:
     from vfgym._validate import check_name, check_output_path
     from vfgym.commands._common import axis_from_args, load_settings
     from vfgym.io.runs import new_run_dir, record_command, write_yaml
-    from vfgym.moves.axis import AXIS_FILE, axis_kwargs, write_axis
+    from vfgym.moves.axis import AXIS_FILE, PAPER_AXIS, axis_kwargs, write_axis
     from vfgym.moves.baselines import BASELINE_NAMES
     from vfgym.moves.distribution import scenario_set
-    from vfgym.report import Candidate, baseline_candidates, compare, format_table, write_report
-    from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS
+    from vfgym.plant.uncertainty import VERDICT_PLANTS, draw_plants
+    from vfgym.report import (
+        Candidate,
+        baseline_candidates,
+        compare,
+        format_across,
+        format_table,
+        write_report,
+    )
+    from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, score_across
     from vfgym.space import settings_to_dict
 
     if not args.settings and not args.model:
@@ -160,6 +184,13 @@ def run(args: argparse.Namespace) -> int:
         for m, lab in zip(args.model, _labels(args.model, taken), strict=True)
     ]
     policies = [load_policy(m, args.axis) for m in args.model]
+    on = PAPER_AXIS if axis is None else axis
+    if on.uncertainty.exact and args.plants is not None:
+        raise ValueError(
+            f"--plants={args.plants} is ignored: axis {on.name} states no uncertainty (give "
+            "an axis file with an uncertainty: block, or leave --plants out for the ±5 % "
+            "inertia sensitivity line)"
+        )
     if axis is None:
         scenarios = scenario_set(args.scenarios, count, first_seed)
     else:
@@ -199,6 +230,7 @@ def run(args: argparse.Namespace) -> int:
             "first_seed": first_seed if axis is None else None,
             "scenario_names": [s.name for s in scenarios],
             "bootstrap": {"resamples": args.bootstrap, "seed": args.seed, "level": 0.95},
+            "plants": {"count": args.plants or VERDICT_PLANTS, "seed": args.plant_seed},
             "plant": "PAPER_PLANT (each scenario applies its load)"
             if axis is None
             else f"the axis's ({AXIS_FILE}; each scenario adds its load)",
@@ -212,6 +244,17 @@ def run(args: argparse.Namespace) -> int:
         write_axis(axis, run_dir / AXIS_FILE)
     paths = write_report(report, run_dir)
     print(format_table(report), end="")
+    plants = VERDICT_PLANTS if args.plants is None else args.plants
+    variants = draw_plants(on.uncertainty, on.plant.motor, plants, args.plant_seed)
+    across = score_across(
+        [c.controllers for c in report.columns],
+        report.scenarios,
+        variants,
+        plant=on.plant,
+        measures=on.measures,
+        seed=None if on.uncertainty.exact else args.plant_seed,
+    )
+    print("\n" + "\n".join(format_across([c.label for c in report.columns], across)))
     extra = f", {AXIS_FILE}" if axis is not None else ""
     print(f"\nwrote {run_dir}/ ({', '.join(paths)}, config.yaml{extra}, command.txt)")
     return 0

@@ -46,7 +46,7 @@ from vfgym.params import (
     Plant,
     Servo,
 )
-from vfgym.plant.uncertainty import EXACT, Uncertainty
+from vfgym.plant.uncertainty import EXACT, PlantVariant, Uncertainty, plant_design
 
 AXIS_FILE = "axis.yaml"
 """The axis's copy in a run folder."""
@@ -132,6 +132,18 @@ class Axis:
             if (ms := self.moves.of(split)).random is not None
         }
         check_measures(self.measures, self.plant, listed, drawn)
+
+    def design_plants(self) -> tuple[PlantVariant, ...]:
+        """The true plants a tuner must stay feasible on: the corners of the axis's
+        uncertainty and points drawn inside (:func:`vfgym.plant.uncertainty.plant_design`);
+        none where it is exactly known.
+
+        Returns
+        -------
+        tuple of PlantVariant
+            The design's plants, relative to the modelled one.
+        """
+        return plant_design(self.uncertainty, self.plant.motor)
 
     def scenarios(self, split: str) -> list[Scenario]:
         """The train or test moves.

@@ -22,9 +22,17 @@ import numpy as np
 from vfgym.moves.axis import PAPER_AXIS, Axis, axis_kwargs
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.plant.uncertainty import (
+    EXACT,
+    VERDICT_PLANT_SEED,
+    VERDICT_PLANTS,
+    Uncertainty,
+    draw_plants,
+)
 from vfgym.report._comparison import Candidate, Report, baseline_candidates, compare
 from vfgym.report._stats import Spread, WinLoss
 from vfgym.report._tables import _grid
+from vfgym.scoring import AcrossPlants, score_across
 
 VERDICT_BASELINES = ("paper", "rule-of-thumb", "scurve")
 """What a tuned setting is judged against: the paper's settings, the rule of thumb (the
@@ -75,6 +83,10 @@ class Verdict:
     title : str
         Which moves these are, for the printed verdict (e.g. ``the 32 test moves of axis
         paper``).
+    across : AcrossPlants or None
+        Every row's controllers on true plants: drawn within the axis's uncertainty (from
+        a recorded seed), or, where it states none, at ±5 % inertia (the sensitivity
+        line); in the order of :attr:`rows`.
     """
 
     report: Report
@@ -82,6 +94,7 @@ class Verdict:
     rows: tuple[VerdictRow, ...]
     seen: tuple[str, ...] = ()
     title: str = ""
+    across: AcrossPlants | None = None
 
     def row(self, label: str) -> VerdictRow:
         """A controller's row by label.
@@ -149,13 +162,29 @@ class Verdict:
                 d |= {"wins": w.wins, "losses": w.losses, "ties": w.ties}
                 d |= {"not_applicable": w.not_applicable, "cost_diff": spread(w.cost_diff)}
             rows.append(d)
-        return {
+        out = {
             "tuned": self.tuned,
             "title": self.title,
             "moves": [s.name for s in self.report.scenarios],
             "seen_in_tuning": list(self.seen),
             "controllers": rows,
         }
+        if self.across is not None:
+            a = self.across
+            out["plants"] = {
+                "seed": a.seed,
+                "plants": [p.label() for p in a.plants],
+                "controllers": [
+                    {"controller": r.label}
+                    | {
+                        k: (None if isinstance(v, float) and math.isnan(v) else v)
+                        for k, v in a.summary(i).__dict__.items()
+                    }
+                    | {"feasible_per_plant": [int(x) for x in a.feasible[i].sum(axis=1)]}
+                    for i, r in enumerate(self.rows)
+                ],
+            }
+        return out
 
 
 def verdict(
@@ -213,6 +242,51 @@ def _content(sc: Scenario) -> Scenario:
     return replace(sc, name="move", description="")
 
 
+def across_plants(
+    v: Verdict,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+    uncertainty: Uncertainty = EXACT,
+    plants: int = VERDICT_PLANTS,
+    plant_seed: int = VERDICT_PLANT_SEED,
+) -> Verdict:
+    """The verdict with every row judged on true plants too.
+
+    Each row's controller, as it ran on each move (per-move choices included), is run
+    on ``plants`` true plants drawn within the uncertainty from ``plant_seed``; where the
+    axis states none, on the ±5 % inertia plants of the sensitivity line.
+
+    Parameters
+    ----------
+    v : Verdict
+        The verdict on the modelled plant.
+    plant, measures : Plant, Measures
+        The axis's modelled plant and measures.
+    uncertainty : Uncertainty
+        The axis's uncertainty.
+    plants : int
+        How many held-out plants to draw (ignored when exact).
+    plant_seed : int
+        Their seed (printed with the verdict).
+
+    Returns
+    -------
+    Verdict
+        ``v`` with :attr:`Verdict.across` set.
+    """
+    variants = draw_plants(uncertainty, plant.motor, plants, plant_seed)
+    cols = [v.report.column(r.label) for r in v.rows]
+    across = score_across(
+        [c.controllers for c in cols],
+        v.report.scenarios,
+        variants,
+        plant=plant,
+        measures=measures,
+        seed=None if uncertainty.exact else plant_seed,
+    )
+    return replace(v, across=across)
+
+
 def held_out_verdict(
     settings: Settings,
     scenarios: Sequence[Scenario],
@@ -223,6 +297,9 @@ def held_out_verdict(
     label: str = "tuned",
     tuned_on: Sequence[Scenario] = (),
     title: str = "",
+    uncertainty: Uncertainty | None = None,
+    plants: int = VERDICT_PLANTS,
+    plant_seed: int = VERDICT_PLANT_SEED,
 ) -> Verdict:
     """A tuned setting against the baselines on test moves (:func:`vfgym.report.compare`).
 
@@ -242,6 +319,11 @@ def held_out_verdict(
         The moves tuned on (to note any test move among them).
     title : str
         Which moves these are, for the printed verdict.
+    uncertainty : Uncertainty or None
+        The axis's uncertainty: the verdict is then also judged across plants
+        (:func:`across_plants`); ``None``: on the modelled plant only.
+    plants, plant_seed : int, int
+        How many held-out plants, drawn from which seed (:func:`across_plants`).
 
     Returns
     -------
@@ -255,7 +337,10 @@ def held_out_verdict(
         plant=plant,
         measures=measures,
     )
-    return verdict(report, label, tuned_on, title)
+    v = verdict(report, label, tuned_on, title)
+    if uncertainty is None:
+        return v
+    return across_plants(v, plant, measures, uncertainty, plants, plant_seed)
 
 
 def axis_verdict(
@@ -289,7 +374,15 @@ def axis_verdict(
     test = ax.scenarios("test")
     title = f"the {len(test)} test moves of axis {ax.name}"
     kw = axis_kwargs(ax)
-    return held_out_verdict(settings, test, **kw, label=label, tuned_on=tuned_on, title=title)
+    return held_out_verdict(
+        settings,
+        test,
+        **kw,
+        label=label,
+        tuned_on=tuned_on,
+        title=title,
+        uncertainty=ax.uncertainty,
+    )
 
 
 def _num(x: float) -> str:
@@ -361,10 +454,61 @@ def format_verdict(v: Verdict, axis_file: str | None = None, per_move: bool = Fa
         "n/a: the baseline cannot run it); CI: bootstrap of the mean paired difference "
         f"({v.report.resamples} resamples)"
     )
+    if v.across is not None:
+        lines += format_across([r.label for r in v.rows], v.across)
     losing = v.losing_to()
     if losing:
         lines.append(_losing_line(v, losing, axis_file, per_move))
     return "\n".join(lines)
+
+
+def format_across(labels: Sequence[str], a: AcrossPlants) -> list[str]:
+    """Lines across true plants (:attr:`Verdict.across`, ``vfgym evaluate --plants``).
+
+    Parameters
+    ----------
+    labels : sequence of str
+        The controllers' labels, in the order of ``a``'s first axis.
+    a : AcrossPlants
+        Their results on the true plants.
+
+    Returns
+    -------
+    list of str
+        Where the axis states uncertainty: a title naming the plants' count and seed,
+        then per row the feasible (move, plant) pairs, the moves feasible on every plant
+        and the mean cost over the pairs. Where it states none: the sensitivity line, each
+        row's feasible moves at each inertia factor.
+    """
+    if a.seed is None:
+        per = [f"×{p.inertia:g}" for p in a.plants]
+        rows = [["controller", *(f"feasible at inertia {x}" for x in per)]]
+        for i, label in enumerate(labels):
+            n = int(np.isfinite(a.cost[i, 0]).sum())
+            rows.append([label, *(f"{int(a.feasible[i, p].sum())}/{n}" for p in range(len(per)))])
+        head = (
+            "sensitivity (the axis states no uncertainty): the same moves with "
+            + " and ".join(per)
+            + " the modelled inertia, the drive's gain as set for the modelled plant:"
+        )
+        return [head, *_grid(rows, right=set(range(1, len(per) + 1)))]
+    rows = [["controller", "feasible (move, plant)", "moves feasible on all", "mean cost"]]
+    for i, label in enumerate(labels):
+        s = a.summary(i)
+        pct = 100 * s.feasible / max(s.pairs, 1)
+        rows.append(
+            [
+                label,
+                f"{s.feasible}/{s.pairs} ({pct:.1f} %)",
+                f"{s.moves_feasible}/{s.moves}",
+                _num(s.mean_cost),
+            ]
+        )
+    head = (
+        f"across {len(a.plants)} plants drawn within the axis's uncertainty "
+        f"(plant seed {a.seed}), the drive's gain as set for the modelled plant:"
+    )
+    return [head, *_grid(rows, right={1, 2, 3})]
 
 
 def _losing_line(

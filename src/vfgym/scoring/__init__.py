@@ -24,24 +24,28 @@ from vfgym.scoring._cost import (
     score,
     yardsticks,
 )
-from vfgym.scoring._evaluate import Evaluation, Move, evaluate, score_pairs
+from vfgym.scoring._evaluate import Evaluation, Move, evaluate, score_across, score_pairs
+from vfgym.scoring._plants import AcrossPlants, PlantSummary
 
 __all__ = [
     "CONSTRAINTS",
     "DEFAULT_BOUNDS",
     "DEFAULT_WEIGHTS",
     "OBJECTIVES",
+    "AcrossPlants",
     "Bounds",
     "CostTerms",
     "CostWeights",
     "Evaluation",
     "Move",
+    "PlantSummary",
     "Score",
     "Yardsticks",
     "arrival_constraint",
     "arrival_term",
     "evaluate",
     "score",
+    "score_across",
     "score_pairs",
     "yardsticks",
 ]

@@ -452,6 +452,61 @@ def evaluate(
     return Evaluation(ctrls, scens, metrics, cost, cons, objs, traces, across)
 
 
+def score_across(
+    controllers: Sequence[Sequence[Controller | None]],
+    scenarios: Sequence[Scenario],
+    plants: Sequence[PlantVariant],
+    *,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+    weights: CostWeights = DEFAULT_WEIGHTS,
+    bounds: Bounds = DEFAULT_BOUNDS,
+    seed: int | None = None,
+) -> AcrossPlants:
+    """Per-move controllers scored on true plants, in one batched call.
+
+    What a verdict judges every tuner with (fixed settings, a baseline, per-move settings
+    a model chose): the controller each ran on each move, on each true plant.
+
+    Parameters
+    ----------
+    controllers : sequence of sequence
+        ``controllers[c][s]``: controller ``c``'s choice on move ``s`` (``None``, or
+        anything that is not a controller, e.g. a scheduler's own run: not scored, NaN).
+    scenarios : sequence of Scenario
+        The moves.
+    plants : sequence of PlantVariant
+        The true plants, relative to the modelled one.
+    plant, measures, weights, bounds : Plant, Measures, CostWeights, Bounds
+        The axis's modelled plant, measures and scoring.
+    seed : int or None
+        The seed ``plants`` were drawn from, recorded with them.
+
+    Returns
+    -------
+    AcrossPlants
+        Cost and constraints of every (controller, plant, move).
+    """
+    kinds = (Settings, FixedFrequency, SCurveSource, Baseline)
+    variants, scens = tuple(plants), list(scenarios)
+    moves = [Move.of(sc, plant, v) for v in variants for sc in scens]
+    ctrls: list[Controller] = []
+    on: list[Move] = []
+    at: list[tuple[int, int]] = []
+    for ci, row in enumerate(controllers):
+        for k, mv in enumerate(moves):
+            c = row[k % len(scens)]
+            if isinstance(c, kinds):
+                ctrls.append(c)
+                on.append(mv)
+                at.append((ci, k))
+    scored = score_pairs(ctrls, on, measures=measures, weights=weights, bounds=bounds)
+    rows: list[list[Score | None]] = [[None] * len(moves) for _ in controllers]
+    for (ci, k), res in zip(at, scored, strict=True):
+        rows[ci][k] = res
+    return _across(rows, variants, seed, len(scens))
+
+
 def _across(
     rows: list[list[Score | None]], plants: tuple[PlantVariant, ...], seed: int | None, ns: int
 ) -> AcrossPlants:

@@ -18,6 +18,7 @@ import numpy as np
 from vfgym import space
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.plant.uncertainty import PlantVariant
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, aggregate_costs
 from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
@@ -74,11 +75,14 @@ def aggregate(
     Returns
     -------
     Aggregate
-        Per controller: ``cost`` (the aggregate over the scenarios), ``constraints``
-        (worst, max, over the scenarios), ``feasible`` (every constraint ≤ 0 on every scenario) and
-        ``objectives`` (means).
+        Per controller: ``cost`` (the aggregate over the scenarios, on the modelled plant),
+        ``constraints`` (worst, max, over the scenarios and any true plants the evaluation
+        holds, :attr:`vfgym.Evaluation.across`), ``feasible`` (every constraint ≤ 0 on
+        every scenario and plant) and ``objectives`` (means).
     """
     cons = np.nanmax(ev.constraints, axis=1)
+    if ev.across is not None:  # robust: the worst over the true plants of the design too
+        cons = np.fmax(cons, np.nanmax(ev.across.constraints, axis=(1, 2)))
     return Aggregate(
         cost=aggregate_costs(ev.cost, how, cvar_alpha),
         constraints=cons,
@@ -132,6 +136,9 @@ class Objective:
         Windows and bands of the measures (an axis's).
     aggregate, cvar_alpha : str, float
         The cost's aggregate over the scenarios (:func:`aggregate`).
+    plants : sequence of PlantVariant
+        True plants a setting must also be feasible on (an axis's
+        :meth:`~vfgym.moves.axis.Axis.design_plants`); its cost is the modelled plant's.
 
     Attributes
     ----------
@@ -150,8 +157,10 @@ class Objective:
         measures: Measures = DEFAULT_MEASURES,
         aggregate: str = DEFAULT_AGGREGATE,
         cvar_alpha: float = DEFAULT_CVAR_ALPHA,
+        plants: Sequence[PlantVariant] = (),
     ) -> None:
         self.scenarios = scenarios
+        self.plants = tuple(plants)
         self.how = (aggregate, cvar_alpha)
         self.plant = plant
         self.measures = measures
@@ -300,6 +309,7 @@ class Objective:
                 plant=self.plant,
                 measures=self.measures,
                 while_running=while_running,
+                plants=self.plants,
             ),
             *self.how,
         )

@@ -60,6 +60,7 @@ def make_sampler(
     seed: int | None,
     scenarios: list[Scenario] | None = None,
     storage: BaseStorage | None = None,
+    plant: Plant | None = None,
 ) -> BaseSampler:
     """The Optuna sampler named by ``cfg.sampler``, seeded; constrained where it can be.
 
@@ -78,6 +79,9 @@ def make_sampler(
     storage : optuna.storages.BaseStorage or None
         The storage of the study it samples: the compass records there the generation of
         a trial it draws through ``study.ask()`` (without it, in the sampler only).
+    plant : Plant or None
+        The base plant the scenarios run on (default: ``cfg``'s axis's, else the paper's):
+        a sweep run outside a config (``vfgym fit``'s best fixed setting) gives its axis's.
 
     Returns
     -------
@@ -92,7 +96,7 @@ def make_sampler(
         if cfg.sampler == "compass":
             from vfgym.tuning._compass import CompassSampler
 
-            base = _base_plant(cfg)
+            base = _base_plant(cfg) if plant is None else plant
             rel = relative_space(scenarios or cfg.scenario_list(), base)
             return CompassSampler(rel, cfg.laws, seed, storage=storage)
         if cfg.sampler == "tpe":

@@ -218,7 +218,8 @@ def run_worker(
         storage = open_storage(spec, cfg.heartbeat, cfg.grace)
         sampler = make_sampler(cfg, seed, scenarios, storage)
         study = optuna.load_study(study_name=study_name, storage=storage, sampler=sampler)
-        on_axis = axis_kwargs(cfg.load_axis())
+        axis = cfg.load_axis()
+        on_axis = axis_kwargs(axis)
         objective = Objective(
             scenarios,
             cfg.laws,
@@ -226,6 +227,7 @@ def run_worker(
             **on_axis,  # type: ignore[arg-type]
             aggregate=cfg.aggregate,
             cvar_alpha=cfg.cvar_alpha,
+            plants=() if axis is None else axis.design_plants(),
         )
         objective.trial_format = study_format(study)
         # First call compiles/loads the kernel before any trial is claimed.
