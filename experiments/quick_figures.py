@@ -86,7 +86,32 @@ def render(run_dir: Path) -> str:
         else:
             cells += ["", ""]
         lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+    return "\n".join([*lines, "", plants_line(verdict)])
+
+
+def plants_line(verdict: dict) -> str:
+    """The verdict across true plants as one sentence: the ±5 % inertia sensitivity line
+    where the axis states no uncertainty, else the feasible (move, plant) pairs."""
+    p = verdict["plants"]
+    rows = p["controllers"]
+    if p["seed"] is None:
+        per = " / ".join(x.replace("J", "") for x in p["plants"])
+        each = "; ".join(
+            f"{NAMES.get(r['controller'], r['controller'])} "
+            + " / ".join(f"{n}/{r['moves']}" for n in r["feasible_per_plant"])
+            for r in rows
+        )
+        return (
+            f"Sensitivity (the axis states no uncertainty), feasible moves with {per} the "
+            f"modelled inertia, the drive's gain as set: {each}."
+        )
+    each = "; ".join(
+        f"{NAMES.get(r['controller'], r['controller'])} {r['feasible']}/{r['pairs']}" for r in rows
+    )
+    return (
+        f"Across {len(p['plants'])} plants drawn within the axis's uncertainty (plant seed "
+        f"{p['seed']}), feasible (move, plant) pairs: {each}."
+    )
 
 
 def replace_block(text: str, block: str, page: str) -> str:

@@ -306,7 +306,7 @@ def plant_design(
     if d == 0:
         return ()
     corners = [np.array(c, float) for c in itertools.product((0.0, 1.0), repeat=d)]
-    inner = _stratified(drawn, d, np.random.default_rng([seed, 1])) if drawn else []
+    inner = list(_stratified(drawn, d, np.random.default_rng([seed, 1]))) if drawn else []
     out = [_variant(unc, motor, u) for u in [*corners, *inner]]
     return tuple(dict.fromkeys(v for v in out if not v.nominal))
 

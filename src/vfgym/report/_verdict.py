@@ -162,7 +162,7 @@ class Verdict:
                 d |= {"wins": w.wins, "losses": w.losses, "ties": w.ties}
                 d |= {"not_applicable": w.not_applicable, "cost_diff": spread(w.cost_diff)}
             rows.append(d)
-        out = {
+        out: dict[str, Any] = {
             "tuned": self.tuned,
             "title": self.title,
             "moves": [s.name for s in self.report.scenarios],
