@@ -74,6 +74,21 @@ def _cli_values(args: argparse.Namespace) -> dict:
     return {k: getattr(args, k) for k in keys}
 
 
+def _check_ignored(file_data: object, cli: dict) -> None:
+    """A command-line option the axis overrides is refused rather than ignored without a
+    word (a config file's move-set keys stay its default for runs without an axis)."""
+    axis = cli.get("axis") or (file_data.get("axis") if isinstance(file_data, dict) else None)
+    if axis is None:
+        return
+    for key in ("scenario_count", "first_seed"):
+        if cli.get(key) is not None:
+            flag = "--" + key.replace("_", "-")
+            raise ValueError(
+                f"{flag}={cli[key]!r} is ignored with --axis {axis}: the axis file sets its "
+                "move sets (moves.train, moves.test); leave it out"
+            )
+
+
 def run(args: argparse.Namespace) -> int:
     import signal
     import time
@@ -86,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.moves.axis import axis_digest
 
     file_data = read_yaml(args.config) if args.config else None
+    _check_ignored(file_data, _cli_values(args))
     cfg = tuning.SweepConfig.resolve(file_data, _cli_values(args), source=str(args.config))
     scenarios = cfg.scenario_list()
     tuning.check_sampler(cfg)

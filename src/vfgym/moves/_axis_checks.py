@@ -127,3 +127,110 @@ def check_measures(
                 f"allowed (0, {shortest:g}) s, shorter than the shortest move ({key}: "
                 f"duration_s={shortest:g})"
             )
+
+
+UNITS_SLIP = 100.0
+"""A stated acceleration limit this many times below what the motor's torque gives is taken
+for a units slip (rad/s² given in krad/s²), not a choice."""
+
+
+def check_limit(plant: Plant) -> None:
+    """The stated acceleration limit must be within two orders of magnitude of what the
+    loaded motor can do: far below, it is a units slip (``20`` meant as 20 krad/s²).
+
+    Parameters
+    ----------
+    plant : Plant
+        The axis's plant.
+
+    Raises
+    ------
+    ValueError
+        Naming ``plant.motor.accel_limit_rad_s2``, its value and the allowed range.
+    """
+    m = plant.motor
+    reach = m.torque_accel_rad_s2
+    if m.accel_limit_rad_s2 * UNITS_SLIP < reach:
+        raise ValueError(
+            f"plant.motor.accel_limit_rad_s2={m.accel_limit_rad_s2!r} is out of range: the "
+            f"motor's peak torque gives {reach:.4g} rad/s², {reach / m.accel_limit_rad_s2:.3g} "
+            f"times more (a units slip? the limit is in rad/s², not krad/s²); allowed at "
+            f"least {reach / UNITS_SLIP:.4g}"
+        )
+
+
+def holding_counts(plant: Plant) -> tuple[float, float]:
+    """The band of position errors (encoder counts) at which the servo holds the motor
+    still against its friction and load torque: ``(|τ_load| − τc)/K3`` to
+    ``(|τ_load| + τc)/K3`` (the lower edge at least 0).
+
+    At rest the filtered speed decays to zero, so the torque command is K3 times the
+    position counter; the motor sticks wherever that torque less the load torque stays
+    within the Coulomb friction.
+
+    Parameters
+    ----------
+    plant : Plant
+        A plant with its load (an axis's, or a move's).
+
+    Returns
+    -------
+    tuple of float
+        The band's lower and upper edge, in counts.
+    """
+    m, k3 = plant.motor, plant.torque_per_count_nm
+    load = abs(m.load_torque_nm)
+    return max(0.0, load - m.coulomb_nm) / k3, (load + m.coulomb_nm) / k3
+
+
+def check_holding(measures: Measures, plant: Plant, listed: Mapping[str, Scenario]) -> str | None:
+    """Friction and load torque must let the servo stop inside the in-position window.
+
+    Parameters
+    ----------
+    measures : Measures
+        The axis's measures (a window in counts; a window in % of the move is not checked).
+    plant : Plant
+        The axis's plant.
+    listed : Mapping of str to Scenario
+        The listed moves by key path (their own load is added).
+
+    Returns
+    -------
+    str or None
+        A note when the motor may stick outside the window (the band's upper edge beyond
+        it): moves may not arrive, whatever the controller.
+
+    Raises
+    ------
+    ValueError
+        When the whole band lies outside the window: no controller can arrive.
+    """
+    if measures.in_position_pct is not None:
+        return None
+    window = measures.in_position_counts
+    plants = {"plant.motor": plant} | {
+        k: sc.plant(plant) for k, sc in listed.items() if not sc.tracking
+    }
+    note = None
+    for key, p in plants.items():
+        lo, hi = holding_counts(p)
+        what = (
+            f"{key}: coulomb_nm={p.motor.coulomb_nm:g} with load_torque_nm="
+            f"{p.motor.load_torque_nm:g} and K3={p.torque_per_count_nm:.4g} N·m/count"
+        )
+        if lo > window:
+            raise ValueError(
+                f"{what} hold the motor {lo:.3g} to {hi:.3g} counts from its target, outside "
+                f"the in-position window of {window:g} counts: no controller can arrive; "
+                f"allowed |load_torque_nm| − coulomb_nm below "
+                f"{window * p.torque_per_count_nm:.4g} N·m (or a wider "
+                "measures.in_position_counts)"
+            )
+        if hi > window and note is None:
+            note = (
+                f"{what} may stop the motor up to {hi:.3g} counts from its target, beyond the "
+                f"in-position window of {window:g} counts: moves may not arrive, whatever the "
+                "controller"
+            )
+    return note

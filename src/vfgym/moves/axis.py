@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from vfgym.io.runs import read_yaml, write_yaml
-from vfgym.moves._axis_checks import check_arrives, check_measures
+from vfgym.moves._axis_checks import check_arrives, check_holding, check_limit, check_measures
 from vfgym.moves._move_sets import MoveSet, MoveSets
 from vfgym.moves.distribution import MoveDistribution
 from vfgym.moves.scenarios import SCENARIOS, SPLITS, Scenario
@@ -132,6 +132,8 @@ class Axis:
             if (ms := self.moves.of(split)).random is not None
         }
         check_measures(self.measures, self.plant, listed, drawn)
+        check_limit(self.plant)
+        check_holding(self.measures, self.plant, listed)
 
     def design_plants(self) -> tuple[PlantVariant, ...]:
         """The true plants a tuner must stay feasible on: the corners of the axis's
@@ -478,14 +480,42 @@ def load_axis(path: str | Path) -> Axis:
 @functools.lru_cache(maxsize=16)
 def _load(path: str, stamp: tuple[int, int] | None) -> Axis:
     data = read_yaml(path)  # a missing or malformed file: "PATH: ..."
+    if not data:
+        raise ValueError(
+            f"{path}: the file is empty: give at least one of plant, measures, moves "
+            "(without --axis, vfgym uses the paper's axis)"
+        )
     try:
         axis = axis_from_dict(data, Path(path).stem)
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
-    note = axis.plant.motor.accel_note
-    if note is not None:  # once a file: the load is cached
-        warnings.warn(f"{path}: plant.motor: {note}", AxisNote, stacklevel=3)
+    for note in axis_notes(axis):  # once a file: the load is cached
+        warnings.warn(f"{path}: {note}", AxisNote, stacklevel=3)
     return axis
+
+
+def axis_notes(axis: Axis) -> list[str]:
+    """What a user should know of a valid axis, one line each: a motor that cannot reach
+    its stated limit, friction that may stop the motor outside the in-position window.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis.
+
+    Returns
+    -------
+    list of str
+        The notes, each naming its key.
+    """
+    listed = {
+        f"moves.{split}[{i}]": sc
+        for split in SPLITS
+        for i, sc in enumerate(axis.moves.of(split).moves)
+    }
+    notes = [f"plant.motor: {n}" for n in (axis.plant.motor.accel_note,) if n is not None]
+    held = check_holding(axis.measures, axis.plant, listed)
+    return notes + ([] if held is None else [held])
 
 
 def write_axis(axis: Axis, path: str | Path) -> Path:
@@ -516,6 +546,7 @@ __all__ = [
     "axis_digest",
     "axis_from_dict",
     "axis_kwargs",
+    "axis_notes",
     "axis_to_dict",
     "load_axis",
     "write_axis",
