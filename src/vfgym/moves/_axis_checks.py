@@ -152,7 +152,7 @@ def check_limit(plant: Plant) -> None:
     reach = m.torque_accel_rad_s2
     if m.accel_limit_rad_s2 * UNITS_SLIP < reach:
         raise ValueError(
-            f"plant.motor.accel_limit_rad_s2={m.accel_limit_rad_s2!r} is out of range: the "
+            f"plant.motor.accel_limit_rad_s2={m.accel_limit_rad_s2:g} is out of range: the "
             f"motor's peak torque gives {reach:.4g} rad/s², {reach / m.accel_limit_rad_s2:.3g} "
             f"times more (a units slip? the limit is in rad/s², not krad/s²); allowed at "
             f"least {reach / UNITS_SLIP:.4g}"

@@ -454,6 +454,12 @@ def format_verdict(v: Verdict, axis_file: str | None = None, per_move: bool = Fa
         "n/a: the baseline cannot run it); CI: bootstrap of the mean paired difference "
         f"({v.report.resamples} resamples)"
     )
+    if 2 * me.feasible < me.applicable:
+        lines.append(
+            f"{v.tuned} is infeasible on {me.applicable - me.feasible}/{me.applicable} of these "
+            "moves: its wins are wins among runs that break a limit or do not arrive (see "
+            "the axis file's notes)"
+        )
     if v.across is not None:
         lines += format_across([r.label for r in v.rows], v.across)
     losing = v.losing_to()

@@ -471,8 +471,9 @@ def score_across(
     Parameters
     ----------
     controllers : sequence of sequence
-        ``controllers[c][s]``: controller ``c``'s choice on move ``s`` (``None``, or
-        anything that is not a controller, e.g. a scheduler's own run: not scored, NaN).
+        ``controllers[c][s]``: controller ``c``'s choice on move ``s`` (settings, a pulse
+        source, a baseline or its name; ``None``, or anything else, e.g. a scheduler's
+        own run: not scored, NaN).
     scenarios : sequence of Scenario
         The moves.
     plants : sequence of PlantVariant
@@ -496,6 +497,7 @@ def score_across(
     for ci, row in enumerate(controllers):
         for k, mv in enumerate(moves):
             c = row[k % len(scens)]
+            c = Baseline(c) if isinstance(c, str) else c
             if isinstance(c, kinds):
                 ctrls.append(c)
                 on.append(mv)
