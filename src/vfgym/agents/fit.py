@@ -28,7 +28,8 @@ from vfgym.moves.axis import Axis
 from vfgym.moves.distribution import MoveDistribution
 from vfgym.moves.scenarios import DRAWN_PROFILES, Scenario, ideal_move_time_s
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
-from vfgym.scoring import Move, score_pairs
+from vfgym.plant.uncertainty import PlantVariant
+from vfgym.scoring import Move, score_robust
 
 from .optima import MoveOptimum, OptimumSearch, move_optima, read_optima, write_optima
 from .pick import PickModel, fit_pick_model
@@ -170,6 +171,7 @@ def candidate_costs(
     measures: Measures = DEFAULT_MEASURES,
     batch: int = 20_000,
     progress: Callable[[int, int], None] | None = None,
+    plants: Sequence[PlantVariant] = (),
 ) -> tuple[np.ndarray, np.ndarray]:
     """The cost on move i of move j's optimum in the model's coordinates, made settings
     on move i's plant (:func:`vfgym.agents.targets.target_settings`), for every pair.
@@ -186,6 +188,8 @@ def candidate_costs(
         Pairs per compiled call.
     progress : callable or None
         Called with (pairs done, pairs) after each batch.
+    plants : sequence of PlantVariant
+        True plants a candidate must also be feasible on (the axis's design).
 
     Returns
     -------
@@ -202,7 +206,7 @@ def candidate_costs(
     for a in range(0, len(pairs), batch):
         chunk = pairs[a : a + batch]
         ctrls = [target_settings(cand[j], moves[i].plant, law) for i, j in chunk]
-        res = score_pairs(ctrls, [moves[i] for i, _ in chunk], measures=measures)
+        res = score_robust(ctrls, [moves[i] for i, _ in chunk], plants, measures=measures)
         for (i, j), r in zip(chunk, res, strict=True):
             assert r is not None  # V-F settings run every move
             cost[i, j] = r.cost
@@ -213,10 +217,15 @@ def candidate_costs(
 
 
 def optima_key(
-    scenarios: Sequence[Scenario], search: OptimumSearch, plant: Plant, measures: Measures
+    scenarios: Sequence[Scenario],
+    search: OptimumSearch,
+    plant: Plant,
+    measures: Measures,
+    plants: Sequence[PlantVariant] = (),
 ) -> str:
     """The first line of a checkpointed optima file: a digest of what they were searched
-    for (the moves, the search, the plant and the measures).
+    for (the moves, the search, the plant, the measures and the true plants they must be
+    feasible on).
 
     Parameters
     ----------
@@ -226,13 +235,16 @@ def optima_key(
         The per-move search.
     plant, measures : Plant, Measures
         The axis's plant and measures.
+    plants : sequence of PlantVariant
+        The axis's design plants (none: the key of an exactly known axis, as before).
 
     Returns
     -------
     str
         ``moves-key: `` and 16 hex digits.
     """
-    text = repr((search, plant, measures, [asdict(sc) for sc in scenarios]))
+    what: tuple = (search, plant, measures, [asdict(sc) for sc in scenarios])
+    text = repr(what + ((tuple(plants),) if plants else ()))
     return f"moves-key: {hashlib.sha256(text.encode()).hexdigest()[:16]}"
 
 
@@ -245,6 +257,7 @@ def checkpointed_optima(
     measures: Measures = DEFAULT_MEASURES,
     chunk: int = 16,
     progress: Callable[[int], object] | None = None,
+    plants: Sequence[PlantVariant] = (),
 ) -> list[MoveOptimum]:
     """Per-move optima, ``chunk`` moves at a time, each chunk appended to ``path``; the
     optima already there (of the same moves, in order) are kept, not searched again.
@@ -263,6 +276,8 @@ def checkpointed_optima(
         Moves per checkpoint.
     progress : callable or None
         Called with the number of moves done (the kept ones first).
+    plants : sequence of PlantVariant
+        True plants the optima must be feasible on (:func:`move_optima`).
 
     Returns
     -------
@@ -271,7 +286,7 @@ def checkpointed_optima(
     """
 
     def key(n: int) -> str:  # what the first n optima were searched for
-        return optima_key(scenarios[:n], search, plant, measures)
+        return optima_key(scenarios[:n], search, plant, measures, plants)
 
     done: list[MoveOptimum] = read_optima(path) if path.is_file() else []
     first = path.read_text().partition("\n")[0] if done else ""
@@ -282,7 +297,7 @@ def checkpointed_optima(
         progress(len(done))
     for a in range(len(done), len(scenarios), chunk):
         part = list(scenarios[a : a + chunk])
-        done += move_optima(part, search, plant=plant, measures=measures)
+        done += move_optima(part, search, plant=plant, measures=measures, plants=plants)
         write_optima(path, done, header=f"{key(len(done))}\n{header}")
         if progress:
             progress(len(part))
@@ -359,7 +374,8 @@ def fit_axis(
     seconds: dict[str, float] = {}
     t0 = time.perf_counter()
     train = fit_moves(axis, cfg.moves)
-    kw: dict[str, Any] = {"plant": axis.plant, "measures": axis.measures}
+    design = axis.design_plants()
+    kw: dict[str, Any] = {"plant": axis.plant, "measures": axis.measures, "plants": design}
     steps = len(train) + 3
     with tqdm(total=steps, desc=f"fit {axis.name}", unit="move", disable=not progress) as bar:
         optima = checkpointed_optima(
@@ -383,7 +399,7 @@ def fit_axis(
         seconds["sweep"] = time.perf_counter() - t0 - sum(seconds.values())
         bar.set_postfix_str("verdict")
         tuner = Tuner("fitted", axis, axis.name,
-                      lambda sc: model.settings(sc, axis.plant, axis.measures),
+                      lambda sc: model.settings(sc, axis.plant, axis.measures, design),
                       lambda sc: None, lambda msg: None)  # fmt: skip
         test = axis.scenarios("test")
         report = compare(

@@ -29,7 +29,8 @@ from vfgym._validate import check_int
 from vfgym.io.runs import write_text
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
-from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights, Move, score_pairs
+from vfgym.plant.uncertainty import PlantVariant
+from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights, Move, score_robust
 
 
 @dataclass(frozen=True)
@@ -109,6 +110,7 @@ def move_optima(
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
     progress: Callable[[str], None] | None = None,
+    plants: Sequence[PlantVariant] = (),
 ) -> list[MoveOptimum]:
     """The best settings of each move (coarse grid, then local refinement; module doc).
 
@@ -122,6 +124,9 @@ def move_optima(
         The scoring path's inputs (:func:`vfgym.evaluate`).
     progress : callable or None
         Called with one line after each stage.
+    plants : sequence of PlantVariant
+        True plants a setting must also be feasible on to count as feasible (an axis's
+        :meth:`~vfgym.moves.axis.Axis.design_plants`): robust optima.
 
     Returns
     -------
@@ -142,9 +147,10 @@ def move_optima(
         for a in range(0, len(pairs), search.batch):
             chunk = pairs[a : a + search.batch]
             ctrls = [space.from_action(u, search.accel_law) for _, u in chunk]
-            res = score_pairs(
+            res = score_robust(
                 ctrls,
                 [moves[i] for i, _ in chunk],
+                plants,
                 measures=measures,
                 weights=weights,
                 bounds=bounds,

@@ -19,6 +19,7 @@ from vfgym._validate import check_choice, check_int
 from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.plant.uncertainty import PlantVariant
 
 from .optima import MoveOptimum
 from .targets import TargetModel, model_head, settings_targets, target_settings
@@ -165,6 +166,7 @@ class PickModel(TargetModel):
         scenario: Scenario,
         plant: Plant = PAPER_PLANT,
         measures: Measures = DEFAULT_MEASURES,
+        plants: Sequence[PlantVariant] = (),
     ) -> Settings:
         """The settings the model picks for a move: the best-ranked candidate, or with
         :attr:`check` > 1 the best on the move of the ``check`` best-ranked (feasible
@@ -178,13 +180,16 @@ class PickModel(TargetModel):
             The base plant (an axis's), before the move's load.
         measures : Measures
             The axis's measures, which the check scores with.
+        plants : sequence of PlantVariant
+            True plants a candidate must also be feasible on in the check (the axis's
+            :meth:`~vfgym.moves.axis.Axis.design_plants`).
 
         Returns
         -------
         Settings
             Inside the search space.
         """
-        from vfgym.scoring import Move, score_pairs
+        from vfgym.scoring import Move, score_robust
 
         loaded = scenario.plant(plant)
         order = self.ranked(scenario_features(scenario, plant, loaded))
@@ -193,7 +198,7 @@ class PickModel(TargetModel):
         if len(cands) == 1:
             return cands[0]
         move = Move.of(scenario, plant)
-        scores = score_pairs(cands, [move] * len(cands), measures=measures)
+        scores = score_robust(cands, [move] * len(cands), plants, measures=measures)
 
         def key(i: int) -> tuple[bool, float, int]:
             r = scores[i]

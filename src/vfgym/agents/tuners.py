@@ -35,7 +35,8 @@ class TunerWarning(UserWarning):
 
 
 def machine_digest(axis: Axis) -> str:
-    """A fingerprint of what a tuner learns on besides the moves: the plant and measures.
+    """A fingerprint of what a tuner learns on besides the moves: the plant, the measures
+    and what the axis does not know exactly.
 
     Parameters
     ----------
@@ -45,10 +46,13 @@ def machine_digest(axis: Axis) -> str:
     Returns
     -------
     str
-        12 hex digits of the SHA-256 of the plant and measures of :func:`axis_to_dict`.
+        12 hex digits of the SHA-256 of the plant, measures and (where stated) uncertainty
+        of :func:`axis_to_dict`.
     """
     d = axis_to_dict(axis)
-    return content_digest({"plant": d["plant"], "measures": d["measures"]})
+    # an axis with uncertainty is another machine to tune for; an exact one keeps its digest
+    keys = ("plant", "measures", "uncertainty")
+    return content_digest({k: d[k] for k in keys if k in d})
 
 
 def trained_on(axis: Axis) -> dict[str, str]:
@@ -210,12 +214,12 @@ def load_tuner(
             f"{source}: learnt on axis {own.get('axis')!r}, used on axis {ax.name!r} with "
             f"another plant or measures; fit one for it: vfgym fit --axis FILE"
         )
-    plant = ax.plant
+    plant, design = ax.plant, ax.design_plants()
     return Tuner(
         source,
         ax,
         str(own.get("axis")),
-        lambda sc: model.settings(sc, plant, ax.measures),
+        lambda sc: model.settings(sc, plant, ax.measures, design),
         _outside_ranges(_model_ranges(model), ax),
         warn,
     )

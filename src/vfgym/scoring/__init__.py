@@ -24,8 +24,8 @@ from vfgym.scoring._cost import (
     score,
     yardsticks,
 )
-from vfgym.scoring._evaluate import Evaluation, Move, evaluate, score_across, score_pairs
-from vfgym.scoring._plants import AcrossPlants, PlantSummary
+from vfgym.scoring._evaluate import Evaluation, Move, evaluate, on_plant, score_pairs
+from vfgym.scoring._plants import AcrossPlants, PlantSummary, score_across, score_robust
 
 __all__ = [
     "CONSTRAINTS",
@@ -44,8 +44,10 @@ __all__ = [
     "arrival_constraint",
     "arrival_term",
     "evaluate",
+    "on_plant",
     "score",
     "score_across",
     "score_pairs",
+    "score_robust",
     "yardsticks",
 ]

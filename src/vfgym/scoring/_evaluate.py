@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 import threading
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
 
 import numba
 import numpy as np
@@ -36,6 +36,10 @@ from vfgym.plant._threads import keeps_torch_threads
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.plant.measures import from_acc
 from vfgym.plant.uncertainty import NOMINAL, PlantVariant
+
+if TYPE_CHECKING:
+    from vfgym.scoring._plants import AcrossPlants
+
 from vfgym.scoring._cost import (
     CONSTRAINTS,
     DEFAULT_BOUNDS,
@@ -46,7 +50,6 @@ from vfgym.scoring._cost import (
     Score,
     score,
 )
-from vfgym.scoring._plants import AcrossPlants
 
 
 @dataclass
@@ -193,6 +196,26 @@ class Move:
         if variant.nominal:
             return cls(scenario, plant, cmd, end)
         return cls(scenario, variant.apply(plant), cmd, end, model=plant)
+
+
+def on_plant(move: Move, variant: PlantVariant) -> Move:
+    """The same move on a true plant (its command and controllers' plant unchanged).
+
+    Parameters
+    ----------
+    move : Move
+        A move on its modelled plant.
+    variant : PlantVariant
+        The true plant relative to the modelled one.
+
+    Returns
+    -------
+    Move
+        The move on ``variant.apply(move.plant)``, its ``model`` the modelled plant.
+    """
+    if variant.nominal:
+        return move
+    return replace(move, plant=variant.apply(move.plant), model=move.plant)
 
 
 def _as_run(c: Controller, move: Any) -> tuple[Settings, np.ndarray | None] | None:
@@ -423,8 +446,10 @@ def evaluate(
     results = [r for ci in range(nc) for r in scored[ci * per : ci * per + ns]]
     across = None
     if variants:
+        from vfgym.scoring._plants import across_arrays
+
         rest = [scored[ci * per + ns : (ci + 1) * per] for ci in range(nc)]
-        across = _across(rest, variants, plant_seed, ns)
+        across = across_arrays(rest, variants, plant_seed, ns)
     nan_m = dict.fromkeys(METRIC_NAMES, math.nan)
     metrics = [[dict(nan_m) for _ in range(ns)] for _ in range(nc)]
     cost = np.full((nc, ns), np.nan)
@@ -450,75 +475,3 @@ def evaluate(
                 decimation=decimation,
             )
     return Evaluation(ctrls, scens, metrics, cost, cons, objs, traces, across)
-
-
-def score_across(
-    controllers: Sequence[Sequence[Controller | None]],
-    scenarios: Sequence[Scenario],
-    plants: Sequence[PlantVariant],
-    *,
-    plant: Plant = PAPER_PLANT,
-    measures: Measures = DEFAULT_MEASURES,
-    weights: CostWeights = DEFAULT_WEIGHTS,
-    bounds: Bounds = DEFAULT_BOUNDS,
-    seed: int | None = None,
-) -> AcrossPlants:
-    """Per-move controllers scored on true plants, in one batched call.
-
-    What a verdict judges every tuner with (fixed settings, a baseline, per-move settings
-    a model chose): the controller each ran on each move, on each true plant.
-
-    Parameters
-    ----------
-    controllers : sequence of sequence
-        ``controllers[c][s]``: controller ``c``'s choice on move ``s`` (settings, a pulse
-        source, a baseline or its name; ``None``, or anything else, e.g. a scheduler's
-        own run: not scored, NaN).
-    scenarios : sequence of Scenario
-        The moves.
-    plants : sequence of PlantVariant
-        The true plants, relative to the modelled one.
-    plant, measures, weights, bounds : Plant, Measures, CostWeights, Bounds
-        The axis's modelled plant, measures and scoring.
-    seed : int or None
-        The seed ``plants`` were drawn from, recorded with them.
-
-    Returns
-    -------
-    AcrossPlants
-        Cost and constraints of every (controller, plant, move).
-    """
-    kinds = (Settings, FixedFrequency, SCurveSource, Baseline)
-    variants, scens = tuple(plants), list(scenarios)
-    moves = [Move.of(sc, plant, v) for v in variants for sc in scens]
-    ctrls: list[Controller] = []
-    on: list[Move] = []
-    at: list[tuple[int, int]] = []
-    for ci, row in enumerate(controllers):
-        for k, mv in enumerate(moves):
-            c = row[k % len(scens)]
-            c = Baseline(c) if isinstance(c, str) else c
-            if isinstance(c, kinds):
-                ctrls.append(c)
-                on.append(mv)
-                at.append((ci, k))
-    scored = score_pairs(ctrls, on, measures=measures, weights=weights, bounds=bounds)
-    rows: list[list[Score | None]] = [[None] * len(moves) for _ in controllers]
-    for (ci, k), res in zip(at, scored, strict=True):
-        rows[ci][k] = res
-    return _across(rows, variants, seed, len(scens))
-
-
-def _across(
-    rows: list[list[Score | None]], plants: tuple[PlantVariant, ...], seed: int | None, ns: int
-) -> AcrossPlants:
-    """Each controller's scores on the true plants (plant-major), as arrays."""
-    nc, npl = len(rows), len(plants)
-    cost = np.full((nc, npl, ns), np.nan)
-    cons = np.full((nc, npl, ns, len(CONSTRAINTS)), np.nan)
-    for ci, row in enumerate(rows):
-        for k, res in enumerate(row):
-            if res is not None:
-                pi, si = divmod(k, ns)
-                cost[ci, pi, si], cons[ci, pi, si] = res.cost, res.constraints
-    return AcrossPlants(plants, seed, cost, cons)

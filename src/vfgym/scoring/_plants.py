@@ -4,11 +4,24 @@ with ``plants=``."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from vfgym.moves.baselines import Baseline, Controller, FixedFrequency, SCurveSource
+from vfgym.moves.scenarios import Scenario
+from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.plant.uncertainty import PlantVariant
+from vfgym.scoring._cost import (
+    CONSTRAINTS,
+    DEFAULT_BOUNDS,
+    DEFAULT_WEIGHTS,
+    Bounds,
+    CostWeights,
+    Score,
+)
+from vfgym.scoring._evaluate import Move, on_plant, score_pairs
 
 
 @dataclass(frozen=True)
@@ -91,3 +104,129 @@ class AcrossPlants:
             mean_cost=float(np.nanmean(self.cost[c])) if applies.any() else float("nan"),
             worst_plant="" if all_ok else self.plants[worst].label(),
         )
+
+
+def score_across(
+    controllers: Sequence[Sequence[Controller | None]],
+    scenarios: Sequence[Scenario],
+    plants: Sequence[PlantVariant],
+    *,
+    plant: Plant = PAPER_PLANT,
+    measures: Measures = DEFAULT_MEASURES,
+    weights: CostWeights = DEFAULT_WEIGHTS,
+    bounds: Bounds = DEFAULT_BOUNDS,
+    seed: int | None = None,
+) -> AcrossPlants:
+    """Per-move controllers scored on true plants, in one batched call.
+
+    What a verdict judges every tuner with (fixed settings, a baseline, per-move settings
+    a model chose): the controller each ran on each move, on each true plant.
+
+    Parameters
+    ----------
+    controllers : sequence of sequence
+        ``controllers[c][s]``: controller ``c``'s choice on move ``s`` (settings, a pulse
+        source, a baseline or its name; ``None``, or anything else, e.g. a scheduler's
+        own run: not scored, NaN).
+    scenarios : sequence of Scenario
+        The moves.
+    plants : sequence of PlantVariant
+        The true plants, relative to the modelled one.
+    plant, measures, weights, bounds : Plant, Measures, CostWeights, Bounds
+        The axis's modelled plant, measures and scoring.
+    seed : int or None
+        The seed ``plants`` were drawn from, recorded with them.
+
+    Returns
+    -------
+    AcrossPlants
+        Cost and constraints of every (controller, plant, move).
+    """
+    kinds = (Settings, FixedFrequency, SCurveSource, Baseline)
+    variants, scens = tuple(plants), list(scenarios)
+    moves = [Move.of(sc, plant, v) for v in variants for sc in scens]
+    ctrls: list[Controller] = []
+    on: list[Move] = []
+    at: list[tuple[int, int]] = []
+    for ci, row in enumerate(controllers):
+        for k, mv in enumerate(moves):
+            c = row[k % len(scens)]
+            c = Baseline(c) if isinstance(c, str) else c
+            if isinstance(c, kinds):
+                ctrls.append(c)
+                on.append(mv)
+                at.append((ci, k))
+    scored = score_pairs(ctrls, on, measures=measures, weights=weights, bounds=bounds)
+    rows: list[list[Score | None]] = [[None] * len(moves) for _ in controllers]
+    for (ci, k), res in zip(at, scored, strict=True):
+        rows[ci][k] = res
+    return across_arrays(rows, variants, seed, len(scens))
+
+
+def across_arrays(
+    rows: list[list[Score | None]], plants: tuple[PlantVariant, ...], seed: int | None, ns: int
+) -> AcrossPlants:
+    """Each controller's scores on the true plants (``rows[c]`` plant-major: plant ``p``,
+    move ``s`` at ``p * ns + s``), as arrays."""
+    nc, npl = len(rows), len(plants)
+    cost = np.full((nc, npl, ns), np.nan)
+    cons = np.full((nc, npl, ns, len(CONSTRAINTS)), np.nan)
+    for ci, row in enumerate(rows):
+        for k, res in enumerate(row):
+            if res is not None:
+                pi, si = divmod(k, ns)
+                cost[ci, pi, si], cons[ci, pi, si] = res.cost, res.constraints
+    return AcrossPlants(plants, seed, cost, cons)
+
+
+def score_robust(
+    controllers: Sequence[Controller],
+    moves: Sequence[Move],
+    plants: Sequence[PlantVariant],
+    *,
+    measures: Measures = DEFAULT_MEASURES,
+    weights: CostWeights = DEFAULT_WEIGHTS,
+    bounds: Bounds = DEFAULT_BOUNDS,
+) -> list[Score | None]:
+    """Score ``controllers[i]`` on ``moves[i]`` as :func:`score_pairs` does, feasible only
+    if feasible on every true plant too: what a robust tuner ranks by.
+
+    The cost is the modelled plant's; the constraints are the worst over the modelled plant
+    and ``plants``. A pair infeasible as modelled is not run on the plants (it cannot turn
+    feasible), so the plants cost simulations only where they can change the answer; all
+    of them run in one batched call.
+
+    Parameters
+    ----------
+    controllers, moves : sequence
+        As :func:`score_pairs` takes them.
+    plants : sequence of PlantVariant
+        The true plants (an axis's :meth:`~vfgym.moves.axis.Axis.design_plants`); empty:
+        :func:`score_pairs` alone.
+    measures, weights, bounds : Measures, CostWeights, Bounds
+        The scoring path's inputs.
+
+    Returns
+    -------
+    list of Score or None
+        One per pair, its constraints the worst over the plants.
+    """
+    out = score_pairs(controllers, moves, measures=measures, weights=weights, bounds=bounds)
+    variants = tuple(plants)
+    todo = [i for i, r in enumerate(out) if r is not None and r.feasible]
+    if not variants or not todo:
+        return out
+    scored = score_pairs(
+        [controllers[i] for i in todo for _ in variants],
+        [on_plant(moves[i], v) for i in todo for v in variants],
+        measures=measures,
+        weights=weights,
+        bounds=bounds,
+    )
+    n = len(variants)
+    for k, i in enumerate(todo):
+        worst = out[i].constraints  # type: ignore[union-attr]
+        for r in scored[k * n : (k + 1) * n]:
+            worst = worst if r is None else np.fmax(worst, r.constraints)
+        out[i] = out[i]._replace(constraints=worst)  # type: ignore[union-attr]
+    return out
