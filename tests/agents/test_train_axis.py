@@ -13,6 +13,7 @@ pytest.importorskip("stable_baselines3")
 
 from vfgym.agents import load_tuner, policy_settings
 from vfgym.agents.hyperparams import HYPERPARAMS_DIR
+from vfgym.agents.supervised import PRETRAINED
 from vfgym.agents.training import VALIDATION_SEED0, validation_scenarios
 from vfgym.cli import main
 from vfgym.commands._common import load_settings
@@ -28,6 +29,32 @@ SMALL = {
 }
 
 
+def _own_model(runs: Path, name: str = "small") -> Path:
+    """A settings model where ``vfgym fit --axis small.yaml --name small`` writes it (the
+    shipped one's copy: a fit takes minutes)."""
+    own = runs / "fit" / name / "settings_model.json"
+    own.parent.mkdir(parents=True)
+    own.write_bytes(PRETRAINED.read_bytes())
+    return own
+
+
+def test_train_on_an_axis_starts_from_the_axis_own_model_or_says_how_to_make_it(tmp_path, capsys):
+    path = tmp_path / "small.yaml"
+    path.write_text(yaml.safe_dump(SMALL))
+    args = ["train", "--algo", "ppo", "--axis", str(path), "--runs-dir", str(tmp_path),
+            "--name", "m", "--no-progress", "--hyperparams", "n_timesteps=32", "n_envs=4",
+            "n_steps=8", "batch_size=16", "eval_freq=16", "n_eval_scenarios=2"]  # fmt: skip
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "this axis's settings model" in err
+    assert f"vfgym fit --axis {path} --name small" in err
+    assert not (tmp_path / "train").exists()
+    own = _own_model(tmp_path)
+    assert main(args) == 0
+    cfg = yaml.safe_load((tmp_path / "train" / "m" / "config.yaml").read_text())
+    assert cfg["hyperparams"]["env_kwargs"]["residual_base"] == f"model-lookup:{own}"
+
+
 def test_validation_moves_come_from_the_axis_train_set(tmp_path):
     path = tmp_path / "small.yaml"
     path.write_text(yaml.safe_dump(SMALL))
@@ -41,6 +68,7 @@ def test_validation_moves_come_from_the_axis_train_set(tmp_path):
 def test_cli_train_on_an_axis_then_predict_on_it(tmp_path, capsys):
     path = tmp_path / "small.yaml"
     path.write_text(yaml.safe_dump(SMALL))
+    _own_model(tmp_path)
     args = ["train", "--algo", "ppo", "--axis", str(path), "--runs-dir", str(tmp_path)]
     args += ["--name", "t", "--no-progress", "--hyperparams-file",
              str(HYPERPARAMS_DIR / "ppo.yml"), "--hyperparams", "n_timesteps=32",
@@ -82,6 +110,7 @@ def test_train_on_an_axis_ends_with_fits_verdict(tmp_path, capsys):
     fixed setting of a sweep on the axis's train moves, the paper's and the S-curve."""
     path = tmp_path / "small.yaml"
     path.write_text(yaml.safe_dump(SMALL))
+    _own_model(tmp_path)
     args = ["train", "--algo", "ppo", "--axis", str(path), "--runs-dir", str(tmp_path),
             "--name", "v", "--no-progress", "--hyperparams", "n_timesteps=32", "n_envs=4",
             "n_steps=8", "batch_size=16", "eval_freq=16", "n_eval_scenarios=2"]  # fmt: skip
@@ -94,3 +123,19 @@ def test_train_on_an_axis_ends_with_fits_verdict(tmp_path, capsys):
     labels = [r["controller"] for r in summary["verdict"]["controllers"]]
     assert labels[0] == "agent" and {"best-fixed", "paper", "scurve"} <= set(labels)
     assert set(summary["best_fixed"]) >= {"value_rad", "error_limit_rad", "k", "ts_over_tf"}
+
+
+def test_residual_base_takes_a_settings_models_path(tmp_path):
+    from vfgym.agents.training import CheckedBase, env_options
+    from vfgym.moves.distribution import get_scenario
+    from vfgym.params import PAPER_PLANT
+
+    for spec in (str(PRETRAINED), f"model:{PRETRAINED}", f"model-lookup:{PRETRAINED}"):
+        base = env_options({"residual_base": spec})["residual_base"]
+        assert isinstance(base, CheckedBase)
+    sc = get_scenario("test-3")
+    lookup = env_options({"residual_base": f"model-lookup:{PRETRAINED}"})["residual_base"]
+    shipped = env_options({"residual_base": "model-lookup"})["residual_base"]
+    assert lookup(sc, PAPER_PLANT) == shipped(sc, PAPER_PLANT)
+    with pytest.raises(ValueError, match="residual_base='model:nowhere.json': nowhere.json"):
+        env_options({"residual_base": "model:nowhere.json"})

@@ -68,8 +68,10 @@ def run(args: argparse.Namespace) -> int:
     if args.axis:  # the envs draw their moves from the axis (env_kwargs: axis=FILE)
         from vfgym.commands._common import axis_from_args
 
-        axis_from_args(args)  # a bad file fails before a run folder is made
+        axis = axis_from_args(args)  # a bad file fails before a run folder is made
         params["env_kwargs"] = {**(params.get("env_kwargs") or {}), "axis": args.axis}
+        if axis is not None:
+            _axis_base(params["env_kwargs"], axis, args)
     if args.name is not None:
         check_name("--name", args.name)
     name = args.name or f"{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}"
@@ -105,6 +107,25 @@ def run(args: argparse.Namespace) -> int:
         ) from None
     print(f"best model: {run_dir / 'best_model.zip'}")
     return 0
+
+
+def _axis_base(env_kwargs: dict, axis: object, args: argparse.Namespace) -> None:
+    """On an axis, a residual base of ``model`` (the shipped model, fitted on the paper's
+    axis) becomes the axis's own settings model, ``RUNS/fit/AXIS/settings_model.json``
+    (``vfgym fit --axis FILE --name AXIS`` makes it); without it, one line says so."""
+    base = env_kwargs.get("residual_base")
+    if base not in ("model", "model-lookup"):
+        return
+    name = getattr(axis, "name", "")
+    own = Path(args.runs_dir) / "fit" / name / "settings_model.json"
+    if not own.is_file():
+        raise ValueError(
+            f"residual_base={base!r} on axis {name!r}: this axis's settings model {own} is "
+            f"missing (the shipped one is fitted on the paper's axis); make it with vfgym fit "
+            f"--axis {args.axis} --name {name}, or set env_kwargs.residual_base (paper, "
+            "FILE.json) in a --hyperparams-file"
+        )
+    env_kwargs["residual_base"] = f"{base}:{own}"
 
 
 def _check_env_kwargs(env_id: str, env_kwargs: dict) -> None:
