@@ -9,6 +9,7 @@ import warnings
 from pathlib import Path
 
 import pytest
+import yaml
 
 from vfgym import PAPER_AXIS, Settings, cli, evaluate, load_axis
 from vfgym.moves._axis_checks import holding_counts
@@ -77,3 +78,23 @@ def test_an_option_the_axis_overrides_is_refused(tmp_path, capsys):
         err = capsys.readouterr().err
         assert code == 2 and f"{flag}='4' is ignored with --axis" in err
     assert not (tmp_path / "sweep").exists()
+
+
+def test_a_best_yaml_used_on_another_axis_is_noted(tmp_path, capsys):
+    axes = Path(__file__).resolve().parents[2] / "experiments" / "axes"
+    runs = str(tmp_path / "runs")
+    assert cli.main(["sweep", "--scenarios", "short-move", "--trials", "3", "--no-progress",
+                     "--study", "s", "--runs-dir", runs]) == 0  # fmt: skip
+    best = tmp_path / "runs" / "sweep" / "s" / "best.yaml"
+    assert yaml.safe_load(best.read_text())["machine"]
+    capsys.readouterr()
+    args = ["evaluate", "--settings", str(best), "--against", "paper", "--runs-dir", runs]
+    assert cli.main([*args, "--scenarios", "short-move", "--name", "same"]) == 0
+    assert "note:" not in capsys.readouterr().err
+    assert cli.main([*args, "--axis", str(axes / "belt.yaml"), "--name", "other"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("tuned on axis paper, used on axis belt") == 1, err
+    lu = str(axes / "loads-uncertain.yaml")
+    assert cli.main(["simulate", "--settings", str(best), "--axis", lu, "--scenario",
+                     "short-move"]) == 0  # fmt: skip
+    assert "used on axis loads-uncertain" in capsys.readouterr().err

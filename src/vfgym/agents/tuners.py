@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
-from vfgym.moves.axis import PAPER_AXIS, Axis, axis_to_dict, content_digest, load_axis
+from vfgym.moves.axis import PAPER_AXIS, Axis, load_axis, machine_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 
@@ -32,27 +32,6 @@ AGENT_DRAWS = 512
 
 class TunerWarning(UserWarning):
     """A tuner used on another machine than its own, or on moves unlike its training's."""
-
-
-def machine_digest(axis: Axis) -> str:
-    """A fingerprint of what a tuner learns on besides the moves: the plant, the measures
-    and what the axis does not know exactly.
-
-    Parameters
-    ----------
-    axis : Axis
-        The axis.
-
-    Returns
-    -------
-    str
-        12 hex digits of the SHA-256 of the plant, measures and (where stated) uncertainty
-        of :func:`axis_to_dict`.
-    """
-    d = axis_to_dict(axis)
-    # an axis with uncertainty is another machine to tune for; an exact one keeps its digest
-    keys = ("plant", "measures", "uncertainty")
-    return content_digest({k: d[k] for k in keys if k in d})
 
 
 def trained_on(axis: Axis) -> dict[str, str]:

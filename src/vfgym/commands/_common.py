@@ -18,12 +18,15 @@ class Interrupted(KeyboardInterrupt):
     where it is and how to continue (:func:`vfgym.cli.main` prints it, exit status 130)."""
 
 
-def load_settings(path: str) -> Settings:
+def load_settings(path: str, axis: Any = None) -> Settings:
     """Settings from a YAML file: a mapping of the tuned settings, or one under the key
     ``settings`` (as ``best.yaml`` of a sweep and ``vfgym predict`` write). Any problem
-    raises a one-line ``ValueError`` that names the file."""
+    raises a one-line ``ValueError`` that names the file. Given the axis they are used on
+    (``None``: the paper's), a ``best.yaml`` tuned for another machine (its ``machine``)
+    is noted in one line (:class:`~vfgym.moves.axis.AxisNote`)."""
     try:
         data = read_yaml(path)
+        _note_machine(path, data, axis)
         if isinstance(data, dict) and "settings" in data:
             data = data["settings"]
             if not isinstance(data, dict):
@@ -37,10 +40,29 @@ def load_settings(path: str) -> Settings:
         raise ValueError(msg if msg.startswith(str(path)) else f"{path}: {msg}") from None
 
 
-def controller_from_args(args: argparse.Namespace) -> Any:
-    """The controller named by --settings FILE or --baseline NAME (default: paper)."""
+def _note_machine(path: str, data: Any, axis: Any) -> None:
+    import warnings
+
+    from vfgym.moves.axis import PAPER_AXIS, AxisNote, machine_digest
+
+    if not isinstance(data, dict) or not isinstance(data.get("machine"), str):
+        return
+    ax = PAPER_AXIS if axis is None else axis
+    if data["machine"] != machine_digest(ax):
+        warnings.warn(
+            f"{path}: tuned on axis {data.get('axis') or 'paper'}, used on axis {ax.name} with "
+            "another plant, measures or uncertainty: its verdict does not carry over; tune "
+            "for this axis (vfgym sweep --axis FILE)",
+            AxisNote,
+            stacklevel=3,
+        )
+
+
+def controller_from_args(args: argparse.Namespace, axis: Any = None) -> Any:
+    """The controller named by --settings FILE or --baseline NAME (default: paper), on
+    ``axis`` (:func:`load_settings`)."""
     if getattr(args, "settings", None):
-        return load_settings(args.settings)
+        return load_settings(args.settings, axis)
     return Baseline(getattr(args, "baseline", None) or "paper")
 
 

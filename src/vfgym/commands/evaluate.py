@@ -176,7 +176,7 @@ def run(args: argparse.Namespace) -> int:
     if against in ("all", ""):
         against = ",".join(BASELINE_NAMES)
     base = [] if against == "none" else baseline_candidates(against)
-    settings = [load_settings(f) for f in args.settings]
+    settings = [load_settings(f, axis) for f in args.settings]
     taken = {b.label for b in base}
     s_labels = _labels(args.settings, taken)
     m_labels = [

@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"{s.name:12s} {s.description}")
         return 0
     scenario = scenario_from_args(args, axis)
-    ev = evaluate(controller_from_args(args), [scenario], **axis_kwargs(axis))
+    ev = evaluate(controller_from_args(args, axis), [scenario], **axis_kwargs(axis))
     m = ev.metrics[0][0]
     print(f"{ev.labels()[0]} on {scenario.name}: cost {ev.cost[0, 0]:.4g}")
     for key in sorted(m):

@@ -437,6 +437,27 @@ def content_digest(data: Any) -> str:
     return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:12]
 
 
+def machine_digest(axis: Axis) -> str:
+    """A fingerprint of what a tuner learns on besides the moves: the plant, the measures
+    and what the axis does not know exactly (``machine`` in ``best.yaml`` and in a
+    settings model's ``trained_on``).
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis.
+
+    Returns
+    -------
+    str
+        12 hex digits of the SHA-256 of the plant, measures and (where stated) uncertainty
+        of :func:`axis_to_dict`.
+    """
+    d = axis_to_dict(axis)
+    # an axis with uncertainty is another machine to tune for; an exact one keeps its digest
+    return content_digest({k: d[k] for k in ("plant", "measures", "uncertainty") if k in d})
+
+
 def axis_digest(axis: Axis | None) -> str | None:
     """A fingerprint of everything the axis holds.
 
@@ -549,5 +570,6 @@ __all__ = [
     "axis_notes",
     "axis_to_dict",
     "load_axis",
+    "machine_digest",
     "write_axis",
 ]

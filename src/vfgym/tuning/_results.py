@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 from vfgym import report, space
 from vfgym.io.runs import read_yaml, write_text
+from vfgym.moves.axis import PAPER_AXIS, machine_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, PAPER_SETTINGS, Measures, Plant, Settings
 from vfgym.report import Candidate, Report
@@ -425,6 +426,9 @@ class BestRecord:
         The paper's settings' cost on the same scenarios.
     reference : ReferenceGap or None
         The gap to a grid reference, if one was found.
+    machine : str or None
+        The axis's :func:`~vfgym.moves.axis.machine_digest`: a settings file used on an
+        axis with another plant, measures or uncertainty is noted.
     """
 
     settings: dict[str, float | str]
@@ -442,6 +446,7 @@ class BestRecord:
     axis: str | None
     paper_cost: float | None = None
     reference: ReferenceGap | None = None
+    machine: str | None = None
 
     def with_reference(self, gap: ReferenceGap) -> BestRecord:
         """This record with its gap to a grid reference.
@@ -528,4 +533,5 @@ def best_record(
         laws=list(cfg.laws),
         axis=cfg.axis,
         paper_cost=paper_cost,
+        machine=machine_digest(cfg.load_axis() or PAPER_AXIS),
     )
