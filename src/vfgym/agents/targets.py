@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -107,6 +108,7 @@ class TargetModel:
         scenario: Scenario,
         plant: Plant = PAPER_PLANT,
         measures: Measures = DEFAULT_MEASURES,
+        plants: Sequence[Any] = (),
     ) -> Settings:
         """The settings the model picks for a move.
 
@@ -118,6 +120,9 @@ class TargetModel:
             The base plant (an axis's), before the move's load.
         measures : Measures
             The axis's measures (for a model that scores candidates on the move).
+        plants : sequence of PlantVariant
+            True plants a model that scores candidates keeps them feasible on (unused by
+            a model that does not).
 
         Returns
         -------

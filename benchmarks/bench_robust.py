@@ -1,0 +1,154 @@
+"""Tuning that holds on the machine: prints figures, asserts nothing (machines are noisy).
+
+Four measurements, each selectable:
+
+- ``fit``: ``vfgym fit`` on an axis with ``uncertainty:`` (default
+  ``experiments/axes/loads-uncertain.yaml``), timed, then judged on its test moves ×
+  ``--plants`` plants drawn within the uncertainty (seed ``--plant-seed``): the share of
+  feasible (move, plant) pairs, its mean cost on the modelled plant against the robust
+  per-move optima of the same moves (feasible on the axis's design plants, found by the
+  per-move search of :func:`vfgym.agents.optima.move_optima` with its default, finer
+  grid), and its wins against the paper's settings;
+- ``sweep``: the main job's budget (``experiments/quick.yaml``) on the same axis, its
+  tuned setting judged on the same pairs;
+- ``evaluate``: the cost of a robust evaluation, P plants of a setting in one batched
+  call against one plant (the ratio should be at most P);
+- ``nominal``: the ±5 % inertia line of the main job's setting on the paper axis.
+
+    python benchmarks/bench_robust.py [--parts fit,sweep,evaluate,nominal]
+        [--axis FILE] [--plants 16] [--plant-seed 20261204] [--runs-dir DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from vfgym import PAPER_AXIS, Settings, cli, evaluate, load_axis
+from vfgym.agents.optima import OptimumSearch, move_optima
+from vfgym.agents.supervised import load_settings_model
+from vfgym.commands._common import load_settings
+from vfgym.plant.uncertainty import VERDICT_PLANT_SEED, VERDICT_PLANTS, draw_plants
+from vfgym.scoring import score_across
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def judge(label: str, per_move: list[Settings], axis, plants, seed: int, optima=None) -> None:
+    """Print one tuner's figures on the axis's test moves across the drawn plants."""
+    test = axis.scenarios("test")
+    variants = draw_plants(axis.uncertainty, axis.plant.motor, plants, seed)
+    a = score_across([per_move, ["paper"] * len(test)], test, variants,
+                     plant=axis.plant, measures=axis.measures, seed=seed)  # fmt: skip
+    s, paper = a.summary(0), a.summary(1)
+    nominal = evaluate(per_move, test, plant=axis.plant, measures=axis.measures)
+    own = np.array([nominal.cost[i, i] for i in range(len(test))])
+    ok = np.array([bool(nominal.feasible[i, i]) for i in range(len(test))])
+    base = evaluate(["paper"], test, plant=axis.plant, measures=axis.measures)
+    wins = int(np.sum(own < base.cost[0]))
+    print(f"{label}: feasible on {s.feasible}/{s.pairs} (move, plant) pairs "
+          f"({100 * s.feasible / s.pairs:.1f} %), {s.moves_feasible}/{s.moves} moves on every "
+          f"plant; modelled plant: feasible {ok.sum()}/{len(test)}, mean cost {own.mean():.4f}; "
+          f"beats the paper's settings on {wins}/{len(test)} moves "
+          f"(paper: {paper.feasible}/{paper.pairs} pairs)")  # fmt: skip
+    if optima is not None:
+        best = np.array([o.cost for o in optima])
+        feas = sum(o.feasible for o in optima)
+        print(f"  robust per-move optima: mean {best.mean():.4f} ({feas}/{len(optima)} "
+              f"feasible on the design); {label} / optima = {own.mean() / best.mean():.4f}, "
+              f"median per move {np.median(own / best):.4f}")  # fmt: skip
+
+
+def part_fit(axis_file: str, axis, args) -> None:
+    runs = Path(args.runs_dir)
+    t0 = time.perf_counter()
+    code = cli.main(["fit", "--axis", axis_file, "--name", "bench", "--runs-dir", str(runs),
+                     "--no-progress"])  # fmt: skip
+    wall = time.perf_counter() - t0
+    print(f"\nfit: exit {code}, {wall:.1f} s wall (goal: within 300 s)")
+    model = load_settings_model(runs / "fit" / "bench" / "settings_model.json")
+    design = axis.design_plants()
+    test = axis.scenarios("test")
+    chosen = [model.settings(sc, axis.plant, axis.measures, design) for sc in test]
+    t0 = time.perf_counter()
+    optima = move_optima(test, OptimumSearch(), plant=axis.plant, measures=axis.measures,
+                         plants=design)  # fmt: skip
+    print(f"robust per-move optima of the {len(test)} test moves: "
+          f"{time.perf_counter() - t0:.1f} s")  # fmt: skip
+    judge("fit", chosen, axis, args.plants, args.plant_seed, optima)
+
+
+def part_sweep(axis_file: str, axis, args) -> None:
+    runs = Path(args.runs_dir)
+    t0 = time.perf_counter()
+    code = cli.main(["sweep", "--config", "experiments/quick.yaml", "--axis", axis_file,
+                     "--study", "bench", "--runs-dir", str(runs), "--no-progress"])  # fmt: skip
+    print(f"\nsweep: exit {code}, {time.perf_counter() - t0:.1f} s wall")
+    best = load_settings(str(runs / "sweep" / "bench" / "best.yaml"), axis)
+    judge("sweep", [best] * len(axis.scenarios("test")), axis, args.plants, args.plant_seed)
+
+
+def part_evaluate(axis, args) -> None:
+    test = axis.scenarios("test")
+    s = Settings(value_rad=0.882, error_limit_rad=0.872, k=430.9, ts_over_tf=1.0)
+    variants = draw_plants(axis.uncertainty, axis.plant.motor, args.plants, args.plant_seed)
+    evaluate([s], test, plant=axis.plant, measures=axis.measures)  # compiled
+    one, many = [], []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        evaluate([s], test, plant=axis.plant, measures=axis.measures)
+        one.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        evaluate([s], test, plant=axis.plant, measures=axis.measures, plants=variants)
+        many.append(time.perf_counter() - t0)
+    p = len(variants)
+    ratio = min(many) / min(one)
+    print(f"\nevaluate: one plant {min(one) * 1e3:.1f} ms, the modelled plant and {p} more in "
+          f"one call {min(many) * 1e3:.1f} ms: {ratio:.2f}x for {p + 1} plants "
+          f"({ratio / (p + 1):.2f} of {p + 1}x; goal at most 1)")  # fmt: skip
+
+
+def part_nominal() -> None:
+    s = Settings(value_rad=0.882, error_limit_rad=0.872, k=430.9, ts_over_tf=1.0)
+    test = PAPER_AXIS.scenarios("test")
+    from vfgym.plant.uncertainty import PlantVariant
+
+    line = []
+    for f in (0.95, 1.02, 1.05, 1.10, 1.25):
+        ev = evaluate([s, "paper"], test, plants=[PlantVariant(inertia=f)])
+        assert ev.across is not None
+        line.append(f"x{f:g}: {ev.across.summary(0).feasible}/32 "
+                    f"(paper {ev.across.summary(1).feasible}/32)")  # fmt: skip
+    print("\nnominal: the main job's setting on the paper axis's test moves, feasible at "
+          "inertia " + ", ".join(line))  # fmt: skip
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--parts", default="fit,sweep,evaluate,nominal")
+    ap.add_argument("--axis", default="experiments/axes/loads-uncertain.yaml")
+    ap.add_argument("--plants", type=int, default=VERDICT_PLANTS)
+    ap.add_argument("--plant-seed", type=int, default=VERDICT_PLANT_SEED)
+    ap.add_argument("--runs-dir", default=tempfile.mkdtemp(prefix="bench-robust-"))
+    args = ap.parse_args()
+    axis_file = str(ROOT / args.axis)
+    axis = load_axis(axis_file)
+    parts = args.parts.split(",")
+    print(f"axis {axis.name}: uncertainty {axis.uncertainty.to_dict()}, "
+          f"{len(axis.design_plants())} design plants; runs in {args.runs_dir}")  # fmt: skip
+    if "nominal" in parts:
+        part_nominal()
+    if "evaluate" in parts:
+        part_evaluate(axis, args)
+    if "sweep" in parts:
+        part_sweep(axis_file, axis, args)
+    if "fit" in parts:
+        part_fit(axis_file, axis, args)
+
+
+if __name__ == "__main__":
+    main()
