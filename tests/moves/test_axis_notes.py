@@ -98,3 +98,29 @@ def test_a_best_yaml_used_on_another_axis_is_noted(tmp_path, capsys):
     assert cli.main(["simulate", "--settings", str(best), "--axis", lu, "--scenario",
                      "short-move"]) == 0  # fmt: skip
     assert "used on axis loads-uncertain" in capsys.readouterr().err
+
+
+def test_a_users_earlier_work_is_not_replaced_without_a_word(tmp_path, capsys):
+    """A fit of an edited axis under the same name, and a study continued in another kind
+    of storage, are refused in one line before anything is written."""
+    from vfgym.moves.axis import write_axis
+
+    axes = Path(__file__).resolve().parents[2] / "experiments" / "axes"
+    runs = tmp_path / "runs"
+    (runs / "fit" / "x").mkdir(parents=True)
+    write_axis(load_axis(axes / "belt.yaml"), runs / "fit" / "x" / "axis.yaml")
+    before = sorted(p.name for p in (runs / "fit" / "x").iterdir())
+    code = cli.main(["fit", "--axis", str(axes / "paper.yaml"), "--name", "x", "--runs-dir",
+                     str(runs), "--no-progress"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2 and "holds a fit of another axis" in err and err.count("\n") == 1
+    assert sorted(p.name for p in (runs / "fit" / "x").iterdir()) == before
+    sweep = ["sweep", "--scenarios", "short-move", "--trials", "2", "--no-progress",
+             "--study", "s", "--runs-dir", str(runs)]  # fmt: skip
+    assert cli.main(sweep) == 0
+    capsys.readouterr()
+    assert cli.main([*sweep, "--storage", "journal"]) == 2
+    err = capsys.readouterr().err
+    assert "its study lives in sqlite:" in err and err.count("\n") == 1
+    assert not (runs / "sweep" / "s" / "journal.log").exists()
+    assert cli.main([*sweep, "--trials", "3"]) == 0  # the same storage continues

@@ -60,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
     )
     d = FitConfig()
     cfg = replace(d, moves=args.moves, library=min(d.library, args.moves))
+    _check_same_axis(Path(args.runs_dir) / "fit" / name, axis, args.axis)
     run_dir = new_run_dir(args.runs_dir, "fit", name)
     write_yaml(run_dir / "config.yaml", {"kind": "fit", "axis": args.axis} | config_dict(cfg))
     record_command(run_dir)
@@ -86,3 +87,19 @@ def run(args: argparse.Namespace) -> int:
     total = sum(res.seconds.values())
     print(f"\nsettings model: {run_dir / 'settings_model.json'} ({total:.0f} s)")
     return 0
+
+
+def _check_same_axis(run_dir: Path, axis: object, axis_file: str) -> None:
+    """A fit continues only on the axis it was started on: an edited axis under the same
+    name would silently replace the earlier fit's optima and model."""
+    from vfgym.moves.axis import AXIS_FILE, axis_digest, load_axis
+
+    old = run_dir / AXIS_FILE
+    if not old.is_file():
+        return
+    if axis_digest(load_axis(old)) != axis_digest(axis):  # type: ignore[arg-type]
+        raise ValueError(
+            f"--name {run_dir.name}: {run_dir} holds a fit of another axis (its {AXIS_FILE} "
+            f"differs from {axis_file}): give another --name, or remove that folder to fit "
+            "again"
+        )

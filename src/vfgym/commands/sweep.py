@@ -110,6 +110,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_path("runs_dir", run_dir, folder=True, shown=cfg.runs_dir, root=cfg.runs_dir)
     spec = tuning.resolve_storage(cfg.storage, run_dir)
     _check_storage_file(cfg.storage, spec)
+    _check_same_storage(run_dir, spec.display)
     axis = cfg.load_axis()
     reference = (
         tuning.find_reference(cfg.reference, cfg.runs_dir, scenarios, cfg.laws, axis_digest(axis))
@@ -171,6 +172,34 @@ def _done(complete: int, budget: int) -> str:
         f"{complete} trials done, --trials {budget} asked: nothing to run; give --trials "
         f"above {complete} to continue it"
     )
+
+
+def _check_same_storage(run_dir, display: str) -> None:
+    """A run folder's study continues only in the storage it lives in: another storage
+    would start a second study beside it without a word."""
+    from vfgym.io.runs import read_yaml
+
+    conf = run_dir / "config.yaml"
+    if not conf.is_file():
+        return
+    old = read_yaml(conf)
+    old = old.get("storage") if isinstance(old, dict) else None
+    if not isinstance(old, str):
+        return
+
+    def kind(s: str) -> str | None:  # a file may have moved with its folder: same kind
+        if s.startswith("sqlite:"):
+            return "sqlite"
+        if s.endswith(".log"):
+            return "journal"
+        return s if s.startswith("postgresql") else None
+
+    if kind(old) is not None and kind(old) != kind(display):
+        raise ValueError(
+            f"--storage={display!r} is not allowed for run folder {run_dir}: its study "
+            f"lives in {old}; continue it there (leave --storage out, or give the same), "
+            "or give another --study"
+        )
 
 
 def _check_storage_file(text: str, spec) -> None:
