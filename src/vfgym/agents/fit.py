@@ -407,7 +407,8 @@ def fit_axis(
             [Candidate("best-fixed", fixed, source="sweep", role="baseline"),
              *baseline_candidates(("paper", "scurve"))],
             test,
-            **kw,
+            plant=axis.plant,
+            measures=axis.measures,
         )  # fmt: skip
         v = verdict(report, "fitted", train, f"the {len(test)} test moves of axis {axis.name}")
         v = across_plants(v, axis.plant, axis.measures, axis.uncertainty)

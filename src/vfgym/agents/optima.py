@@ -7,7 +7,10 @@ values per dimension, in unit coordinates), then ``rounds`` of local refinement,
 3⁴ pattern (every unit coordinate at −h, 0, +h) around the ``keep`` best distinct points
 so far, the step h halving each round. All moves' settings of a stage go through one
 compiled call. The best of a move is its feasible setting of least cost (of least cost,
-if none is feasible), as the grid's (:func:`vfgym.tuning.run_grid`).
+if none is feasible), as the grid's (:func:`vfgym.tuning.run_grid`). On an axis with
+uncertainty, feasible means feasible on its design plants too: the ``keep`` best of each
+move are checked on them after every stage (best first, until the ``keep`` best are all
+checked), and one that fails ranks as infeasible.
 
 The optima are cached in a CSV (:func:`write_optima`, :func:`read_optima`), one row per
 move: the scenario's name, the four settings, cost, feasible.
@@ -30,7 +33,15 @@ from vfgym.io.runs import write_text
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.plant.uncertainty import PlantVariant
-from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, Bounds, CostWeights, Move, score_robust
+from vfgym.scoring import (
+    DEFAULT_BOUNDS,
+    DEFAULT_WEIGHTS,
+    Bounds,
+    CostWeights,
+    Move,
+    score_pairs,
+    worst_on,
+)
 
 
 @dataclass(frozen=True)
@@ -126,7 +137,8 @@ def move_optima(
         Called with one line after each stage.
     plants : sequence of PlantVariant
         True plants a setting must also be feasible on to count as feasible (an axis's
-        :meth:`~vfgym.moves.axis.Axis.design_plants`): robust optima.
+        :meth:`~vfgym.moves.axis.Axis.design_plants`): robust optima. Only the
+        contenders are checked on them, best first (the module doc).
 
     Returns
     -------
@@ -134,8 +146,9 @@ def move_optima(
         One per scenario, in order.
     """
     moves = [Move.of(sc, plant) for sc in scenarios]
-    # per move: unit point (rounded) -> (rank, u)
-    seen: list[dict[tuple, tuple[tuple[int, float], np.ndarray, bool, float]]] = [{} for _ in moves]
+    design = tuple(plants)
+    # per move: unit point (rounded) -> [rank, u, feasible, cost, checked on the design]
+    seen: list[dict[tuple, list]] = [{} for _ in moves]
 
     def run(points: list[list[np.ndarray]]) -> None:
         pairs = [
@@ -147,10 +160,9 @@ def move_optima(
         for a in range(0, len(pairs), search.batch):
             chunk = pairs[a : a + search.batch]
             ctrls = [space.from_action(u, search.accel_law) for _, u in chunk]
-            res = score_robust(
+            res = score_pairs(
                 ctrls,
                 [moves[i] for i, _ in chunk],
-                plants,
                 measures=measures,
                 weights=weights,
                 bounds=bounds,
@@ -158,7 +170,37 @@ def move_optima(
             for (i, u), r in zip(chunk, res, strict=True):
                 assert r is not None  # V-F settings run every move
                 feas = r.feasible
-                seen[i][tuple(np.round(u, 12))] = (_rank(r.cost, feas), u, feas, float(r.cost))
+                entry = [_rank(r.cost, feas), u, feas, float(r.cost), not design or not feas]
+                seen[i][tuple(np.round(u, 12))] = entry
+        settle(search.keep)
+
+    def settle(keep: int) -> None:
+        """Check on the design plants, best first, until each move's ``keep`` best are
+        all checked: a setting feasible as modelled but not on a design plant ranks as
+        infeasible. Only the contenders are checked, so the design costs a few
+        simulations a move and round, not one per plant for every setting."""
+        while True:
+            todo = [
+                (i, e)
+                for i in range(len(moves))
+                for e in sorted(seen[i].values(), key=lambda e: e[0])[:keep]
+                if not e[4]
+            ]
+            if not todo:
+                return
+            worst = worst_on(
+                [space.from_action(e[1], search.accel_law) for _, e in todo],
+                [moves[i] for i, _ in todo],
+                design,
+                measures=measures,
+                weights=weights,
+                bounds=bounds,
+            )
+            for (_, e), w in zip(todo, worst, strict=True):
+                e[4] = True
+                if not bool(np.all(w <= 0.0)):
+                    e[2] = False
+                    e[0] = _rank(e[3], False)
 
     coarse = np.linspace(-1.0, 1.0, search.points)
     grid = np.array(list(itertools.product(coarse, repeat=len(space.SPACE))))
@@ -171,7 +213,8 @@ def move_optima(
         todo = []
         for i in range(len(moves)):
             centers: list[np.ndarray] = []
-            for _, u, _, _ in sorted(seen[i].values(), key=lambda v: v[0]):
+            for e in sorted(seen[i].values(), key=lambda v: v[0]):
+                u = e[1]
                 if all(np.max(np.abs(u - c)) > h for c in centers):
                     centers.append(u)
                 if len(centers) == search.keep:
@@ -183,7 +226,7 @@ def move_optima(
         h /= 2.0
     out = []
     for sc, s in zip(scenarios, seen, strict=True):
-        _, u, feas, cost = min(s.values(), key=lambda v: v[0])
+        _, u, feas, cost, _ = min(s.values(), key=lambda v: v[0])
         out.append(MoveOptimum(sc.name, space.from_action(u, search.accel_law), cost, feas))
     return out
 

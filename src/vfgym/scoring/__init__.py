@@ -25,7 +25,13 @@ from vfgym.scoring._cost import (
     yardsticks,
 )
 from vfgym.scoring._evaluate import Evaluation, Move, evaluate, on_plant, score_pairs
-from vfgym.scoring._plants import AcrossPlants, PlantSummary, score_across, score_robust
+from vfgym.scoring._plants import (
+    AcrossPlants,
+    PlantSummary,
+    score_across,
+    score_robust,
+    worst_on,
+)
 
 __all__ = [
     "CONSTRAINTS",
@@ -49,5 +55,6 @@ __all__ = [
     "score_across",
     "score_pairs",
     "score_robust",
+    "worst_on",
     "yardsticks",
 ]

@@ -179,6 +179,51 @@ def across_arrays(
     return AcrossPlants(plants, seed, cost, cons)
 
 
+def worst_on(
+    controllers: Sequence[Controller],
+    moves: Sequence[Move],
+    plants: Sequence[PlantVariant],
+    *,
+    measures: Measures = DEFAULT_MEASURES,
+    weights: CostWeights = DEFAULT_WEIGHTS,
+    bounds: Bounds = DEFAULT_BOUNDS,
+) -> list[np.ndarray]:
+    """The worst constraints of ``controllers[i]`` on ``moves[i]`` over true plants, all
+    pairs and plants in one batched call.
+
+    Parameters
+    ----------
+    controllers, moves : sequence
+        As :func:`score_pairs` takes them (the moves on their modelled plants).
+    plants : sequence of PlantVariant
+        The true plants.
+    measures, weights, bounds : Measures, CostWeights, Bounds
+        The scoring path's inputs.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        Per pair, the largest value of each constraint over the plants (NaN where the
+        controller cannot run the move).
+    """
+    variants = tuple(plants)
+    scored = score_pairs(
+        [c for c in controllers for _ in variants],
+        [on_plant(mv, v) for mv in moves for v in variants],
+        measures=measures,
+        weights=weights,
+        bounds=bounds,
+    )
+    n, out = len(variants), []
+    for k in range(len(moves)):
+        worst = np.full(len(CONSTRAINTS), np.nan)
+        for r in scored[k * n : (k + 1) * n]:
+            if r is not None:
+                worst = np.fmax(worst, r.constraints)
+        out.append(worst)
+    return out
+
+
 def score_robust(
     controllers: Sequence[Controller],
     moves: Sequence[Move],
@@ -212,21 +257,19 @@ def score_robust(
         One per pair, its constraints the worst over the plants.
     """
     out = score_pairs(controllers, moves, measures=measures, weights=weights, bounds=bounds)
-    variants = tuple(plants)
     todo = [i for i, r in enumerate(out) if r is not None and r.feasible]
-    if not variants or not todo:
+    if not plants or not todo:
         return out
-    scored = score_pairs(
-        [controllers[i] for i in todo for _ in variants],
-        [on_plant(moves[i], v) for i in todo for v in variants],
+    worst = worst_on(
+        [controllers[i] for i in todo],
+        [moves[i] for i in todo],
+        plants,
         measures=measures,
         weights=weights,
         bounds=bounds,
     )
-    n = len(variants)
-    for k, i in enumerate(todo):
-        worst = out[i].constraints  # type: ignore[union-attr]
-        for r in scored[k * n : (k + 1) * n]:
-            worst = worst if r is None else np.fmax(worst, r.constraints)
-        out[i] = out[i]._replace(constraints=worst)  # type: ignore[union-attr]
+    for i, w in zip(todo, worst, strict=True):
+        r = out[i]
+        assert r is not None  # (todo: scored pairs)
+        out[i] = r._replace(constraints=np.fmax(r.constraints, w))
     return out

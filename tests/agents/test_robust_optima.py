@@ -1,0 +1,36 @@
+"""Robust per-move optima and the settings model on an axis with uncertainty: what they
+call feasible is feasible on every plant of the axis's design, checked by evaluating the
+chosen settings on each design plant on its own."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from vfgym import evaluate, load_axis
+from vfgym.agents.optima import OptimumSearch, move_optima
+from vfgym.plant.uncertainty import Uncertainty
+
+AXES = Path(__file__).resolve().parents[2] / "experiments" / "axes"
+SEARCH = OptimumSearch(points=3, rounds=3, keep=2)
+
+
+def test_robust_optima_are_feasible_on_every_design_plant_and_cost_no_less():
+    axis = load_axis(AXES / "paper.yaml")
+    axis = replace(axis, uncertainty=Uncertainty(inertia=(0.85, 1.2)))
+    design = axis.design_plants()
+    moves = axis.scenarios("test")[:4]
+    kw = {"plant": axis.plant, "measures": axis.measures}
+    nominal = move_optima(moves, SEARCH, **kw)
+    robust = move_optima(moves, SEARCH, **kw, plants=design)
+    assert any(not np.isclose(a.cost, b.cost) for a, b in zip(nominal, robust, strict=True))
+    for o_n, o_r, sc in zip(nominal, robust, moves, strict=True):
+        assert o_r.feasible
+        ev = evaluate([o_r.settings, o_n.settings], [sc], **kw, plants=design)
+        assert ev.across is not None
+        assert ev.across.feasible[0].all() and ev.feasible[0, 0]
+        assert o_r.cost >= o_n.cost - 1e-12  # a constrained optimum costs no less
+        if not ev.across.feasible[1].all():  # the nominal optimum breaks on a design plant
+            assert o_r.settings != o_n.settings
