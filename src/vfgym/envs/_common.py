@@ -25,6 +25,7 @@ from vfgym.params import (
     Plant,
     Settings,
 )
+from vfgym.plant.uncertainty import EXACT, NOMINAL, PlantVariant, draw_plant
 from vfgym.scoring import (
     CONSTRAINTS,
     DEFAULT_BOUNDS,
@@ -52,7 +53,7 @@ RESIDUAL_SCALE = 0.25
 """With residual actions, an action of ±1 moves a setting this far (in the search space's
 unit coordinates, [-1, 1]) from its base: an eighth of each setting's (log) range either
 way (both envs)."""
-RESET_OPTIONS = ("scenario", "scenario_seed")
+RESET_OPTIONS = ("scenario", "scenario_seed", "plant")
 
 SETTING_FIELDS = ("value_rad", "error_limit_rad", "k", "ts_over_tf")
 """The order in which the compiled step reads the search space's dimensions."""
@@ -178,7 +179,13 @@ def scenario_features(sc: Scenario, base: Plant, plant: Plant | None = None) -> 
 
 @dataclass(frozen=True)
 class Episode:
-    """A scenario made ready to simulate: its plant, command and yardsticks."""
+    """A scenario made ready to simulate: its (true) plant, command and yardsticks.
+
+    On an axis with uncertainty ``plant`` is the episode's true plant (``variant`` of the
+    modelled one, ``model``): the move is simulated and scored on it, while its command,
+    its features (the observation) and the controllers' settings are the modelled plant's,
+    as a controller knows it.
+    """
 
     scenario: Scenario
     plant: Plant
@@ -193,15 +200,21 @@ class Episode:
     features: np.ndarray
     yardsticks: Yardsticks
     """What the scoring path judges the move against (ideal time, window, ...)."""
+    variant: PlantVariant = NOMINAL
+    model: Plant | None = None
+    """The modelled plant where ``plant`` is a true plant that differs from it."""
 
     @classmethod
-    def make(cls, sc: Scenario, base: Plant, measures: Measures) -> Episode:
-        plant = sc.plant(base)
+    def make(
+        cls, sc: Scenario, base: Plant, measures: Measures, variant: PlantVariant = NOMINAL
+    ) -> Episode:
+        model = sc.plant(base)
+        plant = variant.apply(model)
         if sc.ideal_time_s(plant) <= 0.0:
             raise ValueError(
                 f"scenario={sc.name!r} has no move (distance 0): nothing to tune or score"
             )
-        cmd = sc.command(plant)
+        cmd = sc.command(model)
         target = float(cmd[-1])
         y = yardsticks(sc, plant, measures, cmd)
         window = y.window_rad
@@ -220,8 +233,10 @@ class Episode:
             ideal_time_s=y.ideal_time_s,
             window_rad=window,
             scale_rad=scale,
-            features=scenario_features(sc, base, plant),
+            features=scenario_features(sc, base, model),
             yardsticks=y,
+            variant=variant,
+            model=None if variant.nominal else model,
         )
 
 
@@ -294,32 +309,39 @@ class ScenarioSource:
         self.base = base
         self.measures = measures
         self.axis = axis
+        self.uncertainty = EXACT if axis is None else axis.uncertainty
         self.fixed = None if scenario is None else self._named(scenario)
-        self._cache: dict[Scenario, Episode] = {}
+        self._cache: dict[tuple[Scenario, PlantVariant], Episode] = {}
         if self.fixed is not None:
             self.episode(self.fixed)  # a bad scenario fails here, not at reset
 
-    def episode(self, sc: Scenario) -> Episode:
-        """The (cached) episode data of a scenario."""
-        ep = self._cache.get(sc)
+    def episode(self, sc: Scenario, variant: PlantVariant = NOMINAL) -> Episode:
+        """The (cached) episode data of a scenario on a true plant (default: as modelled)."""
+        key = (sc, variant)
+        ep = self._cache.get(key)
         if ep is None:
             if len(self._cache) >= 64:
                 self._cache.clear()
-            ep = self._cache[sc] = Episode.make(sc, self.base, self.measures)
+            ep = self._cache[key] = Episode.make(sc, self.base, self.measures, variant)
         return ep
 
     def draw(self, rng: np.random.Generator, options: dict[str, Any] | None) -> Episode:
-        """The next episode: from ``options`` if they name one, else fixed, else drawn."""
+        """The next episode: from ``options`` if they name one, else fixed, else drawn; on
+        an axis with uncertainty its true plant drawn within it after the move (or
+        ``options["plant"]``, a :class:`~vfgym.plant.uncertainty.PlantVariant`)."""
         opts = check_options(options)
         if "scenario" in opts:
-            return self.episode(self._named(opts["scenario"]))
-        if "scenario_seed" in opts:
+            sc = self._named(opts["scenario"])
+        elif "scenario_seed" in opts:
             seed = check_int("scenario_seed", opts["scenario_seed"], 0, SEED_LIMIT - 1)
-            return self.episode(self.seeded(seed))
-        if self.fixed is not None:
-            return self.episode(self.fixed)
-        seed = int(rng.integers(self.seed_range[0], self.seed_range[1]))
-        return self.episode(self.seeded(seed))
+            sc = self.seeded(seed)
+        elif self.fixed is not None:
+            sc = self.fixed
+        else:
+            sc = self.seeded(int(rng.integers(self.seed_range[0], self.seed_range[1])))
+        if "plant" in opts:
+            return self.episode(sc, opts["plant"])
+        return self.episode(sc, draw_plant(self.uncertainty, self.base.motor, rng))
 
     def _named(self, scenario: Any) -> Scenario:
         sc = _check_scenario(scenario)
@@ -543,6 +565,11 @@ def check_options(options: Any) -> dict[str, Any]:
         )
     if "scenario" in options and "scenario_seed" in options:
         raise ValueError("options: give either 'scenario' or 'scenario_seed', not both")
+    if "plant" in options and not isinstance(options["plant"], PlantVariant):
+        raise ValueError(
+            f"options['plant']={options['plant']!r} must be a "
+            "vfgym.plant.uncertainty.PlantVariant (the episode's true plant)"
+        )
     return options
 
 
@@ -575,6 +602,8 @@ def scored_info(
     """The info of a scored move: the scenario, every measure, the cost and each
     constraint value (feasible when ≤ 0)."""
     info: dict[str, Any] = {"scenario": ep.scenario.name}
+    if not ep.variant.nominal:  # for evaluation only: a controller does not know it
+        info["true_plant"] = ep.variant
     info.update(metrics)
     info["cost"] = float(cost)
     for name, value in zip(CONSTRAINTS, constraints, strict=True):

@@ -18,7 +18,6 @@ from vfgym.scoring import (
     Bounds,
     CostWeights,
     Score,
-    evaluate,
     score_pairs,
 )
 from vfgym.space import SPACE, from_action, settings_to_dict, to_action
@@ -354,16 +353,12 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         ep = self._ep
         settings = self.action_map.settings(action, self._base)
         c = self.config
-        ev = evaluate(
-            settings,
-            ep.scenario,
-            plant=c.plant,
-            measures=c.measures,
-            weights=c.weights,
-            bounds=c.bounds,
+        # the episode as the vector env scores it: on its true plant where it has one
+        (res,) = evaluate_pairs(
+            [settings], [ep], measures=c.measures, weights=c.weights, bounds=c.bounds
         )
-        cost = float(ev.cost[0, 0])
-        info = scored_info(ep, ev.metrics[0][0], cost, ev.constraints[0, 0])
+        cost = float(res.cost)
+        info = scored_info(ep, res.metrics, cost, res.constraints)
         info.update(settings_to_dict(settings))
         self._settings = settings
         self._done = True

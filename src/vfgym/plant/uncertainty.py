@@ -278,6 +278,29 @@ def _stratified(n: int, d: int, rng: np.random.Generator) -> np.ndarray:
     return pts
 
 
+def draw_plant(unc: Uncertainty, motor: Motor, rng: np.random.Generator) -> PlantVariant:
+    """One true plant drawn uniformly within the ranges from a generator (an env's
+    episode; :data:`NOMINAL` where nothing is uncertain, drawing nothing).
+
+    Parameters
+    ----------
+    unc : Uncertainty
+        The axis's uncertainty.
+    motor : Motor
+        The axis's modelled motor.
+    rng : numpy.random.Generator
+        The generator (an env's ``np_random``).
+
+    Returns
+    -------
+    PlantVariant
+        The true plant.
+    """
+    if unc.exact:
+        return NOMINAL
+    return _variant(unc, motor, rng.random(len(unc.ranges())))
+
+
 def plant_design(
     unc: Uncertainty, motor: Motor, drawn: int = DESIGN_DRAWN, seed: int = DESIGN_SEED
 ) -> tuple[PlantVariant, ...]:
@@ -355,6 +378,7 @@ __all__ = [
     "VERDICT_PLANT_SEED",
     "PlantVariant",
     "Uncertainty",
+    "draw_plant",
     "draw_plants",
     "plant_design",
     "sensitivity_variants",
