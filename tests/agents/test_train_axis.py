@@ -139,3 +139,14 @@ def test_residual_base_takes_a_settings_models_path(tmp_path):
     assert lookup(sc, PAPER_PLANT) == shipped(sc, PAPER_PLANT)
     with pytest.raises(ValueError, match="residual_base='model:nowhere.json': nowhere.json"):
         env_options({"residual_base": "model:nowhere.json"})
+
+
+def test_validation_pairs_on_an_uncertain_axis_are_fixed_true_plants():
+    from vfgym.agents.training import validation_plants
+    from vfgym.plant.uncertainty import NOMINAL
+
+    axis = REPO / "experiments" / "axes" / "loads-uncertain.yaml"
+    plants = validation_plants(8, str(axis))
+    assert plants == validation_plants(8, load_axis(axis))  # every evaluation the same
+    assert len(set(plants)) == 8 and all(0.8 <= p.inertia <= 1.25 for p in plants)
+    assert validation_plants(3) == [NOMINAL] * 3

@@ -137,9 +137,11 @@ def load_agent(model_path: str | Path) -> Agent:
     return Agent(model, cfg, normalizer, env_id)
 
 
-def rollout_info(agent: Agent, env: Any, scenario: Scenario | str) -> dict[str, Any]:
-    """Run the agent (deterministic) through one episode on ``scenario``; the scoring
-    path's info of the move at the end.
+def rollout_info(
+    agent: Agent, env: Any, scenario: Scenario | str, plant: Any = None
+) -> dict[str, Any]:
+    """Run the agent (deterministic) through one episode on ``scenario`` (on the true
+    ``plant``, if given); the scoring path's info of the move at the end.
 
     Parameters
     ----------
@@ -149,13 +151,18 @@ def rollout_info(agent: Agent, env: Any, scenario: Scenario | str) -> dict[str, 
         Its environment.
     scenario : Scenario or str
         The move.
+    plant : PlantVariant or None
+        The episode's true plant (an axis with uncertainty); ``None``: as the env draws.
 
     Returns
     -------
     dict
         The info of the episode's last step (cost, constraints, measures).
     """
-    obs, _ = env.reset(options={"scenario": scenario})
+    opts: dict[str, Any] = {"scenario": scenario}
+    if plant is not None:
+        opts["plant"] = plant
+    obs, _ = env.reset(options=opts)
     while True:
         obs, _, terminated, truncated, info = env.step(agent.act(obs))
         if terminated or truncated:

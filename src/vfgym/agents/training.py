@@ -73,6 +73,38 @@ def beats(costs: np.ndarray, best: np.ndarray | None, z: float = SIGNIFICANCE) -
     return gain > 0.0 and gain > z * se
 
 
+VALIDATION_PLANT_SEED = 2**40
+"""Seed of the validation moves' true plants on an axis with uncertainty (one a move)."""
+
+
+def validation_plants(n: int, axis: Any = None) -> list[Any]:
+    """The true plant of each validation move: drawn within the axis's uncertainty from
+    :data:`VALIDATION_PLANT_SEED` (fixed, so that every evaluation scores the same
+    (move, plant) pairs and a model is compared with the best on them), or the modelled
+    plant where the axis states none.
+
+    Parameters
+    ----------
+    n : int
+        Validation moves.
+    axis : Axis, str or None
+        The axis (or its file); ``None``: the paper's.
+
+    Returns
+    -------
+    list of PlantVariant
+        One per validation move.
+    """
+    from vfgym.moves.axis import PAPER_AXIS, load_axis
+    from vfgym.plant.uncertainty import NOMINAL, draw_plants
+
+    ax = PAPER_AXIS if axis is None else axis
+    ax = load_axis(ax) if isinstance(ax, (str, Path)) else ax
+    if ax.uncertainty.exact:
+        return [NOMINAL] * n
+    return list(draw_plants(ax.uncertainty, ax.plant.motor, n, VALIDATION_PLANT_SEED))
+
+
 def validation_scenarios(n: int, axis: Any = None) -> list[Scenario]:
     """The held-out scenarios the evaluation callback scores (never drawn in training);
     on an axis (an :class:`~vfgym.moves.axis.Axis` or its file), its train move set's."""
@@ -219,20 +251,32 @@ def make_env(env_id: str, env_kwargs: dict[str, Any] | None = None, **kw: Any) -
 
 
 def rollout_cost(
-    model: Any, env: Any, scenario: Scenario, normalizer: Any = None
+    model: Any, env: Any, scenario: Scenario, normalizer: Any = None, plant: Any = None
 ) -> dict[str, Any]:
-    """Run the policy (deterministic) on one scenario, its observations through
-    ``normalizer`` (a ``VecNormalize``) if given; the scoring path's info at the end."""
+    """Run the policy (deterministic) on one scenario (on the true ``plant``, if given),
+    its observations through ``normalizer`` (a ``VecNormalize``) if given; the scoring
+    path's info at the end."""
     from vfgym.agents.loaded import Agent, rollout_info
 
-    return rollout_info(Agent(model, {}, normalizer, ""), env, scenario)
+    return rollout_info(Agent(model, {}, normalizer, ""), env, scenario, plant)
 
 
 def evaluate_policy_costs(
-    model: Any, env: Any, scenarios: list[Scenario], normalizer: Any = None
+    model: Any,
+    env: Any,
+    scenarios: list[Scenario],
+    normalizer: Any = None,
+    plants: list[Any] | None = None,
 ) -> np.ndarray:
-    """The scoring path's cost of the policy on each scenario."""
-    return np.array([float(rollout_cost(model, env, sc, normalizer)["cost"]) for sc in scenarios])
+    """The scoring path's cost of the policy on each scenario (each on its true plant of
+    ``plants``, if given)."""
+    on = plants or [None] * len(scenarios)
+    return np.array(
+        [
+            float(rollout_cost(model, env, sc, normalizer, p)["cost"])
+            for sc, p in zip(scenarios, on, strict=True)
+        ]
+    )
 
 
 def _callbacks(
@@ -253,9 +297,9 @@ def _callbacks(
         """Every ``eval_freq`` steps: mean cost on the held-out scenarios; the best model
         is saved as ``best_model.zip``, every evaluation logged to ``evaluations.csv``."""
 
-        def __init__(self, freq: int, scenarios: list[Scenario]) -> None:
+        def __init__(self, freq: int, scenarios: list[Scenario], plants: list[Any]) -> None:
             super().__init__()
-            self.freq, self.scenarios = freq, scenarios
+            self.freq, self.scenarios, self.plants = freq, scenarios, plants
             self.env = make_env(env_id, env_kwargs)
             self.best, self.best_costs = _best_so_far(run)
             self.next_at = 0
@@ -263,7 +307,9 @@ def _callbacks(
         def _on_step(self) -> bool:
             if self.num_timesteps >= self.next_at:
                 self.next_at = self.num_timesteps + self.freq
-                costs = evaluate_policy_costs(self.model, self.env, self.scenarios, normalizer)
+                costs = evaluate_policy_costs(
+                    self.model, self.env, self.scenarios, normalizer, self.plants
+                )
                 mean = float(np.mean(costs))
                 self.logger.record("eval/mean_cost", mean)
                 if self.best_costs is None and np.isfinite(self.best):
@@ -306,9 +352,11 @@ def _callbacks(
         def _on_training_end(self) -> None:
             self.bar.close()
 
+    n_eval = params.get("n_eval_scenarios", 16)
     evaluator = HeldOutEval(
         params.get("eval_freq", 10_000),
-        validation_scenarios(params.get("n_eval_scenarios", 16), env_kwargs.get("axis")),
+        validation_scenarios(n_eval, env_kwargs.get("axis")),
+        validation_plants(n_eval, env_kwargs.get("axis")),
     )
     ckpt = CheckpointCallback(
         save_freq=max(1, params.get("checkpoint_freq", 20_000) // n_envs),
