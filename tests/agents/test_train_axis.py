@@ -137,7 +137,7 @@ def test_residual_base_takes_a_settings_models_path(tmp_path):
     lookup = env_options({"residual_base": f"model-lookup:{PRETRAINED}"})["residual_base"]
     shipped = env_options({"residual_base": "model-lookup"})["residual_base"]
     assert lookup(sc, PAPER_PLANT) == shipped(sc, PAPER_PLANT)
-    with pytest.raises(ValueError, match="residual_base='model:nowhere.json': nowhere.json"):
+    with pytest.raises(ValueError, match=r"residual_base='model:nowhere\.json': nowhere\.json"):
         env_options({"residual_base": "model:nowhere.json"})
 
 
