@@ -126,7 +126,7 @@ def test_train_on_an_axis_ends_with_fits_verdict(tmp_path, capsys):
 
 
 def test_residual_base_takes_a_settings_models_path(tmp_path):
-    from vfgym.agents.training import CheckedBase, env_options
+    from vfgym.agents.bases import CheckedBase, env_options
     from vfgym.moves.distribution import get_scenario
     from vfgym.params import PAPER_PLANT
 

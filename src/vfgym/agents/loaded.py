@@ -124,7 +124,7 @@ def load_agent(model_path: str | Path) -> Agent:
     if stats.is_file():
         from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
-        from vfgym.agents.training import make_env
+        from vfgym.agents.bases import make_env
 
         kw = dict((cfg.get("hyperparams") or {}).get("env_kwargs") or {})
         normalizer = VecNormalize.load(str(stats), DummyVecEnv([lambda: make_env(env_id, kw)]))
@@ -172,7 +172,7 @@ def rollout_info(
 def settings_policy(agent: Agent, axis: str | Axis | None = None) -> Callable[[Any], Settings]:
     """A VFTune-v0 agent as a function: scenario → the settings it picks (with residual
     actions, its offset from the move's base)."""
-    from vfgym.agents.training import make_env
+    from vfgym.agents.bases import make_env
 
     env = make_env(agent.env_id, agent.env_kwargs(axis))
 
@@ -191,7 +191,7 @@ def scheduler_policy(agent: Agent, axis: str | None = None) -> Callable[[Any], S
     constraints and measures of the move (the same numbers :func:`vfgym.evaluate` gives
     a fixed setting); the settings change during the move, so none is reported.
     """
-    from vfgym.agents.training import make_env
+    from vfgym.agents.bases import make_env
     from vfgym.scoring import CONSTRAINTS
 
     env = make_env(agent.env_id, agent.env_kwargs(axis))
@@ -226,7 +226,7 @@ def schedule_of(agent: Agent, scenario: Scenario | str, axis: str | None = None)
         ``{"schedule": [{"from_ms": ..., "settings": {...}}, ...], "cost": ...,
         "feasible": ...}``, a row where the settings change.
     """
-    from vfgym.agents.training import make_env
+    from vfgym.agents.bases import make_env
     from vfgym.envs.servo import SERVO_FEATURES
     from vfgym.space import from_action, settings_to_dict
 
