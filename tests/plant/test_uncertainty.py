@@ -213,3 +213,24 @@ def test_evaluate_takes_plants_and_a_seed(tmp_path, capsys):
     code = cli.main(["evaluate", "--settings", str(best), "--plants", "4"])
     err = capsys.readouterr().err
     assert code == 2 and "--plants=4 is ignored: axis paper states no uncertainty" in err
+
+
+def test_evaluate_takes_an_axis_a_plant_count_and_any_tuner():
+    from vfgym.agents import load_tuner
+
+    axis = load_axis(AXES / "loads-uncertain.yaml")
+    test = axis.scenarios("test")[:5]
+    tuner = load_tuner(None, axis)  # the shipped settings model, on this axis
+    ev = evaluate([TUNED, tuner, "paper"], test, axis=axis, plants=4, plant_seed=9)
+    assert ev.across is not None and ev.across.seed == 9 and len(ev.across.plants) == 4
+    assert ev.across.plants == draw_plants(axis.uncertainty, axis.plant.motor, 4, 9)
+    by_hand = evaluate([tuner(sc) for sc in test], test, plant=axis.plant,
+                       measures=axis.measures, plants=ev.across.plants)  # fmt: skip
+    assert by_hand.across is not None
+    assert np.array_equal(ev.cost[1], np.diag(by_hand.cost))
+    assert np.array_equal(ev.across.cost[1], by_hand.across.cost[np.arange(5), :, np.arange(5)].T)
+    exact = evaluate([TUNED], PAPER_AXIS.scenarios("test")[:3], axis=PAPER_AXIS, plants=2)
+    assert exact.across is not None and exact.across.seed is None
+    assert [p.inertia for p in exact.across.plants] == [0.95, 1.05]
+    with pytest.raises(ValueError, match="is not allowed with axis='loads-uncertain'"):
+        evaluate([TUNED], test, axis=axis, plant=PAPER_AXIS.plant.with_motor(inertia_ratio=1))

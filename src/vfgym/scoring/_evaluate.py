@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numba
 import numpy as np
 
+from vfgym.moves.axis import Axis
 from vfgym.moves.baselines import (
     Baseline,
     Controller,
@@ -35,7 +36,13 @@ from vfgym.plant._notice import announce_compile
 from vfgym.plant._threads import keeps_torch_threads
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.plant.measures import from_acc
-from vfgym.plant.uncertainty import NOMINAL, PlantVariant
+from vfgym.plant.uncertainty import (
+    EXACT,
+    NOMINAL,
+    VERDICT_PLANT_SEED,
+    PlantVariant,
+    draw_plants,
+)
 
 if TYPE_CHECKING:
     from vfgym.scoring._plants import AcrossPlants
@@ -125,19 +132,38 @@ class Evaluation:
         list of str
             One per controller (:func:`vfgym.moves.baselines.controller_label`).
         """
-        return [controller_label(c) for c in self.controllers]
+        return [
+            controller_label(c)
+            if isinstance(c, (Settings, FixedFrequency, SCurveSource, Baseline))
+            else str(getattr(c, "source", None) or getattr(c, "__name__", "tuner"))
+            for c in self.controllers
+        ]
 
 
-def _check_controllers(controllers: Any) -> list[Controller]:
+def _choose(c: Any, sc: Scenario) -> Controller:
+    """A controller as it runs on a move: a tuner's choice for it, else itself."""
+    if isinstance(c, (Settings, FixedFrequency, SCurveSource, Baseline)):
+        return c
+    out = c(sc)
+    if not isinstance(out, Settings):
+        raise ValueError(
+            f"the tuner {c!r} gave {out!r} for move {sc.name!r}: a tuner gives vfgym.Settings "
+            "(a VFServo-v0 agent schedules its own move: vfgym.report.compare runs it)"
+        )
+    return out
+
+
+def _check_controllers(controllers: Any) -> list[Any]:
     kinds = (Settings, FixedFrequency, SCurveSource, Baseline)
-    if isinstance(controllers, (*kinds, str)):
+    if isinstance(controllers, (*kinds, str)) or callable(controllers):
         controllers = [controllers]
     out = [Baseline(c) if isinstance(c, str) else c for c in controllers]
     for i, c in enumerate(out):
-        if not isinstance(c, kinds):
+        if not isinstance(c, kinds) and not callable(c):
             raise ValueError(
-                f"settings[{i}]={c!r} is not allowed: give vfgym.Settings or a baseline "
-                "pulse source (FixedFrequency, SCurveSource)"
+                f"settings[{i}]={c!r} is not allowed: give vfgym.Settings, a baseline "
+                "pulse source (FixedFrequency, SCurveSource) or a tuner (move -> Settings, "
+                "e.g. vfgym.agents.load_tuner's)"
             )
     if not out:
         raise ValueError("settings=[] is not allowed: give at least one")
@@ -367,9 +393,10 @@ def _join(worker: threading.Thread) -> None:
 
 
 def evaluate(
-    settings: Controller | Sequence[Controller],
+    settings: Any,
     scenarios: str | Scenario | Sequence[str | Scenario] = "paper-step",
     *,
+    axis: Axis | None = None,
     plant: Plant = PAPER_PLANT,
     measures: Measures = DEFAULT_MEASURES,
     weights: CostWeights = DEFAULT_WEIGHTS,
@@ -377,7 +404,7 @@ def evaluate(
     keep_traces: bool = False,
     decimation: int = 1,
     while_running: Callable[[], None] | None = None,
-    plants: Sequence[PlantVariant] = (),
+    plants: Sequence[PlantVariant] | int = (),
     plant_seed: int | None = None,
 ) -> Evaluation:
     """Score every controller on every scenario through one batched kernel call.
@@ -387,12 +414,17 @@ def evaluate(
 
     Parameters
     ----------
-    settings : Settings, pulse source, str, Baseline, or a sequence of these
+    settings : Settings, pulse source, str, Baseline, tuner, or a sequence of these
         V-F :class:`~vfgym.Settings`, a baseline pulse source, a baseline name or
-        :class:`~vfgym.moves.baselines.Baseline` (derived per scenario plant).
+        :class:`~vfgym.moves.baselines.Baseline` (derived per scenario plant), or a tuner:
+        a callable from a move to its settings (:func:`vfgym.agents.load_tuner`'s
+        settings models and VFTune-v0 agents), asked once per move.
     scenarios : str, Scenario, or a sequence of these
         Names, :class:`~vfgym.Scenario` objects, or a set spec (``named``, ``train`` …;
-        see :func:`vfgym.scenario_set`).
+        see :func:`vfgym.scenario_set`; on an ``axis``, its move sets and moves).
+    axis : Axis or None
+        The problem: its plant, measures, moves and uncertainty (instead of ``plant`` and
+        ``measures``); ``plants`` as a count draws within its uncertainty.
     plant : Plant
         The base plant; each scenario applies its load to it.
     measures : Measures
@@ -409,13 +441,15 @@ def evaluate(
     while_running : callable or None
         Work of the caller's to do while the compiled call runs (a sweep writes the
         trials being simulated): as :func:`score_pairs` runs it.
-    plants : sequence of PlantVariant
+    plants : sequence of PlantVariant, or int
         True plants within an axis's uncertainty
         (:func:`vfgym.plant.uncertainty.draw_plants`): every pair is also scored on each,
-        in the same batched call, into :attr:`Evaluation.across`. Empty: the modelled
-        plant only.
+        in the same batched call, into :attr:`Evaluation.across`. A count draws that many
+        within the axis's uncertainty from ``plant_seed`` (an exactly known axis: the ±5 %
+        inertia plants). Empty: the modelled plant only.
     plant_seed : int or None
-        The seed ``plants`` were drawn from, recorded with them.
+        The seed ``plants`` were (or are) drawn from, recorded with them (default for a
+        count: :data:`vfgym.plant.uncertainty.VERDICT_PLANT_SEED`).
 
     Returns
     -------
@@ -428,14 +462,32 @@ def evaluate(
         If a controller or a scenario is not known or not allowed.
     """
     ctrls = _check_controllers(settings)
-    scens = scenario_set(scenarios)
+    if axis is not None:
+        for name, value, default in (
+            ("plant", plant, PAPER_PLANT),
+            ("measures", measures, DEFAULT_MEASURES),
+        ):
+            if value != default and value != getattr(axis, name):
+                raise ValueError(f"{name}= is not allowed with axis={axis.name!r}: the axis "
+                                 f"gives its own {name}")  # fmt: skip
+        plant, measures = axis.plant, axis.measures
+        scens = axis.scenario_set(scenarios) if not isinstance(scenarios, Scenario) else [scenarios]
+    else:
+        scens = scenario_set(scenarios)
+    if isinstance(plants, int) and not isinstance(plants, bool):
+        if plant_seed is None:
+            plant_seed = VERDICT_PLANT_SEED
+        unc = EXACT if axis is None else axis.uncertainty
+        plants = draw_plants(unc, plant.motor, plants, plant_seed)
+        plant_seed = None if unc.exact else plant_seed
     moves = [Move.of(sc, plant) for sc in scens]
     nc, ns = len(ctrls), len(scens)
     variants = tuple(plants)
     true_moves = [Move.of(sc, plant, v) for v in variants for sc in scens]
     all_moves = moves + true_moves
+    chosen = [[_choose(c, sc) for sc in scens] for c in ctrls]  # a tuner asked once a move
     scored = score_pairs(
-        [c for c in ctrls for _ in all_moves],
+        [chosen[ci][k % ns] for ci in range(nc) for k in range(len(all_moves))],
         [mv for _ in ctrls for mv in all_moves],
         measures=measures,
         weights=weights,
@@ -465,7 +517,7 @@ def evaluate(
         cost[ci, si], cons[ci, si], objs[ci, si] = res.cost, res.constraints, res.objectives
         metrics[ci][si] = res.metrics
         if traces is not None:
-            s, ext = _as_run(ctrls[ci], moves[si])
+            s, ext = _as_run(chosen[ci][si], moves[si])
             traces[ci][si] = simulate(
                 moves[si].command,
                 s,
