@@ -140,7 +140,7 @@ class Evaluation:
         ]
 
 
-def _choose(c: Any, sc: Scenario) -> Controller:
+def _choose(c: Any, sc: Scenario) -> Controller | Baseline:
     """A controller as it runs on a move: a tuner's choice for it, else itself."""
     if isinstance(c, (Settings, FixedFrequency, SCurveSource, Baseline)):
         return c
@@ -471,18 +471,21 @@ def evaluate(
                 raise ValueError(f"{name}= is not allowed with axis={axis.name!r}: the axis "
                                  f"gives its own {name}")  # fmt: skip
         plant, measures = axis.plant, axis.measures
-        scens = axis.scenario_set(scenarios) if not isinstance(scenarios, Scenario) else [scenarios]
+        spec: Any = scenarios if isinstance(scenarios, (str, Scenario)) else list(scenarios)
+        scens = axis.scenario_set(spec)
     else:
-        scens = scenario_set(scenarios)
-    if isinstance(plants, int) and not isinstance(plants, bool):
+        scens = scenario_set(scenarios)  # type: ignore[arg-type]
+    variants: tuple[PlantVariant, ...]
+    if isinstance(plants, int):
         if plant_seed is None:
             plant_seed = VERDICT_PLANT_SEED
         unc = EXACT if axis is None else axis.uncertainty
-        plants = draw_plants(unc, plant.motor, plants, plant_seed)
+        variants = draw_plants(unc, plant.motor, plants, plant_seed)
         plant_seed = None if unc.exact else plant_seed
+    else:
+        variants = tuple(plants)
     moves = [Move.of(sc, plant) for sc in scens]
     nc, ns = len(ctrls), len(scens)
-    variants = tuple(plants)
     true_moves = [Move.of(sc, plant, v) for v in variants for sc in scens]
     all_moves = moves + true_moves
     chosen = [[_choose(c, sc) for sc in scens] for c in ctrls]  # a tuner asked once a move
@@ -517,7 +520,9 @@ def evaluate(
         cost[ci, si], cons[ci, si], objs[ci, si] = res.cost, res.constraints, res.objectives
         metrics[ci][si] = res.metrics
         if traces is not None:
-            s, ext = _as_run(chosen[ci][si], moves[si])
+            run = _as_run(chosen[ci][si], moves[si])
+            assert run is not None  # (it was scored)
+            s, ext = run
             traces[ci][si] = simulate(
                 moves[si].command,
                 s,
