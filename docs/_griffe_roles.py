@@ -93,6 +93,10 @@ class ReSTRoles(griffe.Extension):
         _paths(pkg, index)
         self._walk(pkg, index)
 
+    # older Griffe versions name the same event ``on_package_loaded``; the
+    # conversion is idempotent (no role is left), so a Griffe calling both is fine
+    on_package_loaded = on_package
+
     def _walk(self, obj: griffe.Object, index: dict[str, set[str]]) -> None:
         if obj.docstring is not None:
             new = convert(obj.docstring.value, obj, index)
