@@ -149,3 +149,25 @@ def test_every_figure_is_on_a_page():
     text = "".join(p.read_text(encoding="utf-8") for p in DOCS.rglob("*.md"))
     for image in sorted((DOCS / "images").glob("*.png")):
         assert f"images/{image.name}" in text, image.name
+
+
+def test_the_servo_interval_is_stated_as_shipped():
+    """README and the training guide give VFServo-v0's default control interval and the
+    one the shipped hyperparameter files train with, as those files and the env say."""
+    import yaml
+
+    from vfgym.envs._common import SERVO_INTERVAL_S
+
+    files = sorted((ROOT / "src/vfgym/agents/hyperparams_files").glob("*.yml"))
+    shipped = {
+        yaml.safe_load(f.read_text(encoding="utf-8"))["vfgym/VFServo-v0"]["env_kwargs"][
+            "interval_s"
+        ]
+        for f in files
+    }
+    assert len(files) == 3 and len(shipped) == 1
+    default_ms, shipped_ms = SERVO_INTERVAL_S * 1e3, shipped.pop() * 1e3
+    for name in ("README.md", "docs/guide/train.md"):
+        text = " ".join((ROOT / name).read_text(encoding="utf-8").split()).replace("*", "")
+        assert re.search(rf"(?<![\d.]){default_ms:g} ms by default", text), name
+        assert re.search(rf"(?<![\d.]){shipped_ms:g} ms", text), name
