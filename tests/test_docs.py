@@ -90,7 +90,8 @@ def test_visible_text_has_the_role_pattern_when_a_role_is_raw():
 def test_no_page_shows_a_raw_rest_role(site: Path):
     shown = {}
     for path in sorted(site.rglob("*.html")):
-        found = ROLE.findall(visible_text(path.read_text(encoding="utf-8")))
+        text = visible_text(path.read_text(encoding="utf-8"))
+        found = ROLE.findall(text) + re.findall(r"</?autoref\b", text)  # or one left unresolved
         if found:
             shown[str(path.relative_to(site))] = len(found)
     assert not shown, f"raw reST roles in the built pages: {shown}"
