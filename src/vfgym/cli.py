@@ -71,6 +71,16 @@ class Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+def _version() -> str:
+    """The installed package's version (its metadata, as ``pip show vfgym`` gives it)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("vfgym")
+    except PackageNotFoundError:  # run from a source tree that was never installed
+        return "unknown (not installed)"
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The parser with every sub-command found in :mod:`vfgym.commands`."""
     parser = Parser(
@@ -78,6 +88,10 @@ def build_parser() -> argparse.ArgumentParser:
         description="Simulate, tune and evaluate a V-F transformation pulse-train "
         "position controller and the digital servo it drives.",
     )
+    parser.add_argument(
+        "--version", action="version", version=f"%(prog)s {_version()}",
+        help="print the installed vfgym's version and exit",
+    )  # fmt: skip
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
         if not info.name.startswith("_"):

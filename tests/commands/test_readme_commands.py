@@ -222,6 +222,14 @@ README_RUNS: dict[str, list[Run]] = {
             ("predict-out",),
         ),
     ],
+    "vfgym plot compare --scenario test-3 --settings test-3.yaml": [
+        Run(
+            "plot-test-3",
+            ["plot", "compare", "--scenario", "test-3", "--settings", "test-3.yaml"],
+            ("predict-out",),
+            ("compare-test-3.png",),
+        ),
+    ],
     "vfgym train --algo ppo --env vfgym/VFTune-v0 --name tune-ppo": [
         Run(
             "tune-ppo",

@@ -31,7 +31,7 @@ def test_the_loaded_loop_keeps_the_bare_natural_frequency_and_damping(ratio):
     loaded = PAPER_PLANT.with_motor(inertia_ratio=ratio)
     assert loaded.torque_per_count_nm == pytest.approx(5.3e-4 * (1 + ratio), rel=1e-15)
     assert loop(loaded) == pytest.approx(bare, rel=1e-12)
-    assert bare[1] == pytest.approx(0.8, abs=0.01)  # docs/axes.md's ζ = 0.8
+    assert bare[1] == pytest.approx(0.8, abs=0.01)  # docs/reference/axis.md's ζ = 0.8
     mistuned = loaded.with_servo(follows_load=False)
     assert mistuned.torque_per_count_nm == 5.3e-4
     wn, zeta = loop(mistuned)

@@ -190,6 +190,9 @@ def _callbacks(
                 )
                 mean = float(np.mean(costs))
                 self.logger.record("eval/mean_cost", mean)
+                # written now, at this step: the next dump (a rollout's end) comes later
+                # and TensorBoard would give the cost that step, not evaluations.csv's
+                self.logger.dump(self.num_timesteps)
                 if self.best_costs is None and np.isfinite(self.best):
                     new = mean < self.best  # (a run continued from before the costs were kept)
                 else:
@@ -214,7 +217,7 @@ def _callbacks(
             from tqdm.auto import tqdm
 
             self.bar = tqdm(
-                total=total,
+                total=_final_steps(self.model, total),
                 initial=self.model.num_timesteps,
                 unit="step",
                 desc="train",
@@ -224,6 +227,8 @@ def _callbacks(
         def _on_step(self) -> bool:
             if np.isfinite(self.evaluator.best):
                 self.bar.set_postfix(best_cost=f"{self.evaluator.best:.3f}", refresh=False)
+            if self.model.num_timesteps > self.bar.total:  # an off-policy run's last steps
+                self.bar.total = self.model.num_timesteps
             self.bar.update(self.model.num_timesteps - self.bar.n)  # redraws at most 10/s
             return True
 
@@ -247,6 +252,18 @@ def _callbacks(
     if progress:
         cbs.append(Progress(evaluator))
     return cbs
+
+
+def _final_steps(model: Any, total: int) -> int:
+    """The step count ``model.learn`` ends at for ``total`` timesteps: an on-policy
+    algorithm collects whole rollouts of ``n_steps`` steps on each env, so it ends at the
+    first multiple of a rollout at or past ``total`` (20 224 for 20 000 with 8 steps on 32
+    envs); otherwise ``total``, which the bar grows past if a last step overruns it."""
+    start = model.num_timesteps
+    rollout = getattr(model, "n_steps", 0) * getattr(model, "n_envs", 1)
+    if rollout <= 0 or total <= start:
+        return max(total, start)
+    return start + -(-(total - start) // rollout) * rollout
 
 
 BEST_COSTS = "best_model_costs.json"

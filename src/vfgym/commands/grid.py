@@ -90,6 +90,8 @@ def run(args: argparse.Namespace) -> int:
     t0 = time.monotonic()
     try:
         result = tuning.run_grid(cfg, progress)
+        bar.total = bar.n  # the estimate counted refinement points already on the grid
+        bar.refresh()
     finally:
         bar.close()
     elapsed = time.monotonic() - t0
