@@ -8,9 +8,10 @@ Four measurements, each selectable:
   feasible (move, plant) pairs, its mean cost on the modelled plant against the robust
   per-move optima of the same moves (feasible on the axis's design plants, found by the
   per-move search of :func:`vfgym.agents.optima.move_optima` with its default, finer
-  grid), and its wins against the paper's settings;
-- ``sweep``: the main job's budget (``experiments/quick.yaml``) on the same axis, its
-  tuned setting judged on the same pairs;
+  grid), its wins against the paper's settings, and the same for 8 to 64 candidates
+  checked by the model on each move;
+- ``sweep``: the main job's budget (``experiments/quick.yaml``) on the same axis, and on
+  the axis with its uncertainty left out, each tuned setting judged on the same pairs;
 - ``evaluate``: the cost of a robust evaluation, P plants of a setting in one batched
   call against one plant (the ratio should be at most P);
 - ``nominal``: the ±5 % inertia line of the main job's setting on the paper axis.
@@ -24,6 +25,7 @@ from __future__ import annotations
 import argparse
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -32,7 +34,8 @@ from vfgym import PAPER_AXIS, Settings, cli, evaluate, load_axis
 from vfgym.agents.optima import OptimumSearch, move_optima
 from vfgym.agents.supervised import load_settings_model
 from vfgym.commands._common import load_settings
-from vfgym.plant.uncertainty import VERDICT_PLANT_SEED, VERDICT_PLANTS, draw_plants
+from vfgym.moves.axis import write_axis
+from vfgym.plant.uncertainty import EXACT, VERDICT_PLANT_SEED, VERDICT_PLANTS, draw_plants
 from vfgym.scoring import score_across
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -80,16 +83,33 @@ def part_fit(axis_file: str, axis, args) -> None:
     print(f"robust per-move optima of the {len(test)} test moves: "
           f"{time.perf_counter() - t0:.1f} s")  # fmt: skip
     judge("fit", chosen, axis, args.plants, args.plant_seed, optima)
+    best = np.mean([o.cost for o in optima])
+    print("candidates the model checks on a move (its check; the fit's is "
+          f"{model.check}): mean cost / robust optima, time for the {len(test)} moves")  # fmt: skip
+    for check in (8, 16, 32, 64):
+        m = replace(model, check=check)
+        t0 = time.perf_counter()
+        picks = [m.settings(sc, axis.plant, axis.measures, design) for sc in test]
+        dt = time.perf_counter() - t0
+        ev = evaluate(picks, test, plant=axis.plant, measures=axis.measures)
+        own = np.diag(ev.cost)
+        print(f"  check {check}: {own.mean() / best:.4f} ({dt:.1f} s)")
 
 
 def part_sweep(axis_file: str, axis, args) -> None:
+    """The main job's budget on the axis, and on the same axis without its uncertainty,
+    both judged on the same (move, plant) pairs."""
     runs = Path(args.runs_dir)
-    t0 = time.perf_counter()
-    code = cli.main(["sweep", "--config", "experiments/quick.yaml", "--axis", axis_file,
-                     "--study", "bench", "--runs-dir", str(runs), "--no-progress"])  # fmt: skip
-    print(f"\nsweep: exit {code}, {time.perf_counter() - t0:.1f} s wall")
-    best = load_settings(str(runs / "sweep" / "bench" / "best.yaml"), axis)
-    judge("sweep", [best] * len(axis.scenarios("test")), axis, args.plants, args.plant_seed)
+    exact = runs / "exact.yaml"
+    write_axis(replace(axis, uncertainty=EXACT, name=f"{axis.name}-exact"), exact)
+    for label, path in (("sweep", axis_file), ("sweep, uncertainty left out", str(exact))):
+        t0 = time.perf_counter()
+        study = "bench" if path == axis_file else "bench-exact"
+        code = cli.main(["sweep", "--config", "experiments/quick.yaml", "--axis", path,
+                         "--study", study, "--runs-dir", str(runs), "--no-progress"])  # fmt: skip
+        print(f"\n{label}: exit {code}, {time.perf_counter() - t0:.1f} s wall")
+        best = load_settings(str(runs / "sweep" / study / "best.yaml"))
+        judge(label, [best] * len(axis.scenarios("test")), axis, args.plants, args.plant_seed)
 
 
 def part_evaluate(axis, args) -> None:

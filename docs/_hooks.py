@@ -97,6 +97,7 @@ def axis_keys_markdown() -> str:
     """A table of keys for each dataclass an axis file is written in."""
     import vfgym
     from vfgym.moves.distribution import MoveDistribution
+    from vfgym.plant.uncertainty import Uncertainty
 
     where = [
         ("plant", vfgym.Plant),
@@ -105,6 +106,7 @@ def axis_keys_markdown() -> str:
         ("measures", vfgym.Measures),
         ("moves: train / test, each move", vfgym.Scenario),
         ("moves: train / test, random", MoveDistribution),
+        ("uncertainty", Uncertainty),
     ]
     parts = []
     for key, cls in where:

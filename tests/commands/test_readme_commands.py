@@ -114,6 +114,45 @@ README_RUNS: dict[str, list[Run]] = {
             trim="trials",
         ),
     ],
+    "vfgym sweep --config experiments/quick.yaml --axis experiments/axes/loads-uncertain.yaml "
+    "--study lu": [
+        Run(
+            "lu",
+            [
+                "sweep",
+                "--config",
+                "experiments/quick.yaml",
+                "--axis",
+                "experiments/axes/loads-uncertain.yaml",
+                "--study",
+                "lu",
+                *SWEEP_TRIM,
+            ],
+            writes=("runs/sweep/lu/best.yaml",),
+            trim="trials",
+        ),
+    ],
+    "vfgym evaluate --settings runs/sweep/lu/best.yaml --axis "
+    "experiments/axes/loads-uncertain.yaml --plants 16 --plant-seed 1": [
+        Run(
+            "eval-lu",
+            [
+                "evaluate",
+                "--settings",
+                "runs/sweep/lu/best.yaml",
+                "--axis",
+                "experiments/axes/loads-uncertain.yaml",
+                "--plants",
+                "16",
+                "--plant-seed",
+                "1",
+                "--bootstrap",
+                "200",
+            ],
+            ("lu",),
+            trim="evaluate",
+        ),
+    ],
     "vfgym evaluate --settings runs/sweep/belt/best.yaml --axis experiments/axes/belt.yaml": [
         Run(
             "eval-belt",
