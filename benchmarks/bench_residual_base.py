@@ -47,7 +47,7 @@ def batched_ms(moves: int = 64) -> dict[int, float]:
     from vfgym import random_scenario
     from vfgym.agents.supervised import load_settings_model
     from vfgym.agents.targets import target_settings
-    from vfgym.envs._common import scenario_features
+    from vfgym.moves.features import scenario_features
     from vfgym.params import PAPER_PLANT
     from vfgym.scoring import Move, score_pairs
 

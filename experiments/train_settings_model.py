@@ -49,9 +49,9 @@ from vfgym.agents.supervised import (
     ratio_table,
     train_settings_model,
 )
-from vfgym.envs._common import scenario_features
 from vfgym.io.runs import write_text, write_yaml
 from vfgym.moves import LOAD_DISTRIBUTION
+from vfgym.moves.features import scenario_features
 
 ROOT = Path(__file__).resolve().parents[1]
 

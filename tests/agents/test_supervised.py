@@ -30,8 +30,8 @@ from vfgym.agents.supervised import (
     train_settings_model,
 )
 from vfgym.cli import main
-from vfgym.envs._common import scenario_features
 from vfgym.moves import LOAD_DISTRIBUTION as LOAD
+from vfgym.moves.features import scenario_features
 from vfgym.params import DEFAULT_MEASURES
 from vfgym.space import SPACE, from_action
 

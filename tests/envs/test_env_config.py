@@ -14,10 +14,11 @@ from hypothesis import strategies as st
 
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, Settings
 from vfgym.envs import _batch as B
-from vfgym.envs._common import OBS_BOUND, EnvConfig, clip_feature
+from vfgym.envs._common import EnvConfig
 from vfgym.envs.servo import ServoConfig, ServoCore, VFServoEnv
 from vfgym.envs.tune import TuneConfig, VFTuneEnv
 from vfgym.envs.vector import VFServoVectorEnv, VFTuneVectorEnv
+from vfgym.moves.features import OBS_BOUND, clip_feature
 
 
 @settings(deadline=None)  # the first call compiles

@@ -30,9 +30,9 @@ from vfgym import (
     get_scenario,
 )
 from vfgym.envs import _batch as B
-from vfgym.envs._common import SCENARIO_FEATURES
 from vfgym.envs.servo import SERVO_FEATURES, VFServoEnv
 from vfgym.envs.tune import VFTuneEnv
+from vfgym.moves.features import SCENARIO_FEATURES
 from vfgym.plant import _layout as L
 from vfgym.plant import pack
 from vfgym.plant.measures import NAMES as METRIC_NAMES

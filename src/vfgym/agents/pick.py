@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from vfgym._validate import check_choice, check_int
-from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
+from vfgym.moves.features import SCENARIO_FEATURES, scenario_features
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.plant.uncertainty import PlantVariant

@@ -1,6 +1,6 @@
 """The supervised settings models: learnt from per-move optima (:mod:`vfgym.agents.optima`)
 of training moves, they map a move's features (the ones the envs observe,
-:func:`vfgym.envs._common.scenario_features`) to settings in one plain-numpy look-up, no
+:func:`vfgym.moves.features.scenario_features`) to settings in one plain-numpy look-up, no
 torch needed. Both work in the coordinates of :mod:`vfgym.agents.targets`.
 
 - ``pick`` (:class:`vfgym.agents.pick.PickModel`, the shipped one): the library candidate
@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from vfgym._validate import check_choice, check_int
-from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
+from vfgym.moves.features import SCENARIO_FEATURES, scenario_features
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_PLANT, Plant
 

@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from vfgym import space
-from vfgym.envs._common import SCENARIO_FEATURES, scenario_features
 from vfgym.io.runs import write_text
+from vfgym.moves.features import SCENARIO_FEATURES, scenario_features
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings, usable_k
 

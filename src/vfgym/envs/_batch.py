@@ -26,6 +26,7 @@ import math
 import numba
 import numpy as np
 
+from vfgym.moves.features import clip_feature
 from vfgym.plant import _jit as J
 from vfgym.plant import _kernel as K
 from vfgym.plant import _lanes as LN
@@ -36,7 +37,6 @@ from vfgym.plant._threads import keeps_torch_threads
 from vfgym.scoring import _cost_compiled as CC
 
 from . import _common
-from ._common import clip_feature
 
 _jit = J.jit
 
@@ -596,5 +596,5 @@ def ring_size(prm: np.ndarray) -> int:
 
 
 # The functions here compile the kernel, its tick, the lane kernel, the compiled cost and
-# the observation clip (_common.clip_feature) into themselves.
+# the observation clip (vfgym.moves.features.clip_feature) into themselves.
 J.guard_cache(step_one, (K, TK, LN, L, CC, _common))

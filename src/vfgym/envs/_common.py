@@ -12,9 +12,9 @@ from typing import Any
 import numpy as np
 
 from vfgym._validate import check_choice, check_int, check_real
-from vfgym.moves import profiles
 from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.distribution import get_scenario, random_scenario
+from vfgym.moves.features import main_move, scenario_features
 from vfgym.moves.scenarios import SPLITS, Scenario
 from vfgym.params import (
     ACCEL_LAWS,
@@ -79,102 +79,6 @@ def space_table(ratio: bool = False) -> np.ndarray:
         lo, hi = (math.log(d.low), math.log(d.high)) if d.log else (d.low, d.high)
         rows.append((float(names.index(d.name)), lo, hi, 1.0 if d.log else 0.0))
     return np.array(rows, dtype=np.float64).reshape(-1)
-
-
-# scales of the scenario features: the random distribution's ranges (vfgym.moves.scenarios)
-INERTIA_RATIO_SCALE = 5.0
-COULOMB_SCALE_NM = 0.004
-VISCOUS_SCALE_NM_S_RAD = 3e-4
-LOAD_SCALE_NM = 0.004
-
-SCENARIO_FEATURES = (
-    "direction",
-    "log_distance",
-    "log_ideal_time",
-    "time_budget",
-    *(f"profile_{p}" for p in profiles.PROFILES),
-    "moves",
-    "profile_speed",
-    "profile_accel",
-    "sine_freq",
-    "inertia_ratio",
-    "coulomb",
-    "viscous",
-    "load_torque",
-    "torque_accel",
-)
-"""The features describing a move and its plant (definitions in :func:`scenario_features`)."""
-
-
-OBS_BOUND = 10.0
-"""Every observation feature of both envs is clipped to [-OBS_BOUND, OBS_BOUND]."""
-
-
-def clip_feature(x: float) -> float:
-    """An observation feature clipped to [-OBS_BOUND, OBS_BOUND] (NaN passes through).
-
-    Plain comparisons, so that the envs' compiled step (``_batch._clip``, this function
-    compiled by numba) computes the same numbers.
-
-    Parameters
-    ----------
-    x : float
-        The feature.
-
-    Returns
-    -------
-    float
-        ``x`` clipped.
-    """
-    if x > OBS_BOUND:
-        return OBS_BOUND
-    if x < -OBS_BOUND:
-        return -OBS_BOUND
-    return x
-
-
-def main_move(sc: Scenario, plant: Plant) -> float:
-    """The move that sets the scale of a scenario (rad, signed): the distance of a single
-    move or the amplitude of a sine; for several moves, the largest one."""
-    moves = sc.move_list(plant)
-    if len(moves) <= 1 or sc.tracking:
-        return float(sc.distance_rad)
-    return float(max((d for _, d in moves), key=abs))
-
-
-def scenario_features(sc: Scenario, base: Plant, plant: Plant | None = None) -> np.ndarray:
-    """The move and its plant, normalised (float64, each clipped by :func:`clip_feature`).
-
-    direction: sign of :func:`main_move`; log_distance: log10(|move| / 1 rad) / 2;
-    log_ideal_time: log10(ideal time / 1 ms) / 2; time_budget: duration / ideal time / 10;
-    profile_*: one-hot of the command profile; moves: point-to-point moves / 5;
-    profile_speed, profile_accel: the profile's cruise speed / δ·f and acceleration / the
-    motor's limit; sine_freq: frequency / 100 Hz (0 unless a sine); inertia_ratio / 5,
-    coulomb / 4 mN·m, viscous / 0.3 mN·m·s/rad, load_torque / 4 mN·m (the random
-    distribution's ranges); torque_accel: peak torque / (J · acceleration limit), ≥ 1 when
-    the loaded motor can reach the limit.
-    """
-    plant = sc.plant(base) if plant is None else plant
-    m = plant.motor
-    d = main_move(sc, plant)
-    ideal = sc.ideal_time_s(plant)
-    out = [
-        math.copysign(1.0, d) if d != 0.0 else 0.0,
-        math.log10(max(abs(d), 1e-6)) / 2.0,
-        math.log10(ideal / 1e-3) / 2.0,
-        sc.duration_s / ideal / 10.0,
-        *(1.0 if sc.profile == p else 0.0 for p in profiles.PROFILES),
-        len(sc.move_list(plant)) / 5.0,
-        sc.speed(plant) / plant.pulse_top_speed_rad_s,
-        sc.accel(plant) / m.accel_limit_rad_s2,
-        sc.freq_hz / 100.0 if sc.tracking else 0.0,
-        m.inertia_ratio / INERTIA_RATIO_SCALE,
-        m.coulomb_nm / COULOMB_SCALE_NM,
-        m.viscous_nm_s_rad / VISCOUS_SCALE_NM_S_RAD,
-        m.load_torque_nm / LOAD_SCALE_NM,
-        m.peak_torque_nm / (m.inertia_kgm2 * m.accel_limit_rad_s2),
-    ]
-    return np.array([clip_feature(x) for x in out], dtype=np.float64)
 
 
 @dataclass(frozen=True)

@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from vfgym._validate import check_choice, check_real
+from vfgym.moves.features import OBS_BOUND, SCENARIO_FEATURES
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.plant import _kernel as K
@@ -23,8 +24,6 @@ from vfgym.space import SPACE, from_action, to_action
 
 from . import _batch as B
 from ._common import (
-    OBS_BOUND,
-    SCENARIO_FEATURES,
     SERVO_INTERVAL_S,
     SERVO_SETTLE_TIME_S,
     SERVO_TRACKING_WEIGHT,

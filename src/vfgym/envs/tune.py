@@ -11,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 
 from vfgym._validate import check_choice, check_real
+from vfgym.moves.features import OBS_BOUND, SCENARIO_FEATURES
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Measures, Settings
 from vfgym.plant import simulate
@@ -23,14 +24,7 @@ from vfgym.scoring import (
 from vfgym.space import SPACE, from_action, settings_to_dict, to_action
 
 from . import _batch as B
-from ._common import (
-    OBS_BOUND,
-    SCENARIO_FEATURES,
-    EnvConfig,
-    Episode,
-    as_action,
-    scored_info,
-)
+from ._common import EnvConfig, Episode, as_action, scored_info
 
 
 @dataclass(frozen=True)
