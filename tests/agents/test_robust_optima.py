@@ -34,3 +34,20 @@ def test_robust_optima_are_feasible_on_every_design_plant_and_cost_no_less():
         assert o_r.cost >= o_n.cost - 1e-12  # a constrained optimum costs no less
         if not ev.across.feasible[1].all():  # the nominal optimum breaks on a design plant
             assert o_r.settings != o_n.settings
+
+
+def test_fit_best_fixed_is_the_sweep_with_as_many_trials(tmp_path):
+    """The fit's best fixed setting is what ``vfgym sweep`` finds with as many trials on
+    the same axis: the same warm starts, sampler and feasibility (the design included)."""
+    from vfgym import cli
+    from vfgym.agents.fit import best_fixed
+    from vfgym.commands._common import load_settings
+
+    path = tmp_path / "lu.yaml"
+    path.write_text((AXES / "loads-uncertain.yaml").read_text())
+    axis = load_axis(path)
+    got = best_fixed(axis.scenarios("train"), axis, 12)
+    assert cli.main(["sweep", "--config", str(AXES.parent / "quick.yaml"), "--axis", str(path),
+                     "--trials", "12", "--study", "s", "--runs-dir", str(tmp_path),
+                     "--no-progress"]) == 0  # fmt: skip
+    assert got == load_settings(str(tmp_path / "sweep" / "s" / "best.yaml"))

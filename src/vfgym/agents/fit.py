@@ -305,9 +305,9 @@ def checkpointed_optima(
 
 
 def best_fixed(scenarios: Sequence[Scenario], axis: Axis, trials: int) -> Settings:
-    """The best fixed setting a short sweep (the default sampler on the axis's plant, the
-    paper's settings first, feasible on the axis's plant design) finds on moves, as
-    ``vfgym sweep`` picks it.
+    """The best fixed setting a short sweep finds on moves, as ``vfgym sweep`` would with
+    as many trials: the default sampler on the axis's plant, the sweep's warm starts first
+    (the paper's settings, the rule of thumb), feasible on the axis's plant design.
 
     Parameters
     ----------
@@ -323,17 +323,20 @@ def best_fixed(scenarios: Sequence[Scenario], axis: Axis, trials: int) -> Settin
     Settings
         The best trial's settings (feasible first).
     """
-    from vfgym.params import PAPER_SETTINGS
+    from vfgym.tuning import warm_starts
 
     from .refine import short_sweep
 
+    # the sweep's own warm starts: the paper's settings, then the rule of thumb
+    (_, first), *rest = warm_starts(list(scenarios), axis.plant)
     return short_sweep(
         scenarios,
-        PAPER_SETTINGS,
+        first,
         trials,
         plant=axis.plant,
         measures=axis.measures,
         plants=axis.design_plants(),
+        also=[s for _, s in rest],
     ).settings
 
 

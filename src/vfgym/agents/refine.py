@@ -94,6 +94,7 @@ def short_sweep(
     measures: Measures = DEFAULT_MEASURES,
     seed: int | None = 0,
     plants: Sequence[PlantVariant] = (),
+    also: Sequence[Settings] = (),
 ) -> Refinement:
     """``trials`` trials of the default sampler on moves (the mean cost), ``start`` first.
 
@@ -112,6 +113,8 @@ def short_sweep(
     plants : sequence of PlantVariant
         True plants every trial must also be feasible on (an axis's
         :meth:`~vfgym.moves.axis.Axis.design_plants`).
+    also : sequence of Settings
+        More settings enqueued after ``start`` (a sweep's other warm starts).
 
     Returns
     -------
@@ -138,7 +141,8 @@ def short_sweep(
         # coordinates from the moves on the axis's plant
         sampler = make_sampler(cfg, cfg.seed, list(scenarios), plant=plant)
         study = optuna.create_study(direction="minimize", sampler=sampler)
-    study.enqueue_trial(baseline_params(laws, start))
+    for s in (start, *also):
+        study.enqueue_trial(baseline_params(laws, s))
     objective = Objective(
         list(scenarios), laws, "cost", plant=plant, measures=measures, plants=plants
     )
