@@ -24,6 +24,8 @@ K3 = PAPER_AXIS.plant.torque_per_count_nm  # 5.3e-4 N·m per count on the bare p
         ("", "the file is empty: give at least one of plant, measures, moves"),
         ("{}\n", "the file is empty"),
         ("plant: {motor: {accel_limit_rad_s2: 20}}\n", "accel_limit_rad_s2=20 is out of range"),
+        ("plant: {servo: {torque_per_count_nm: 0.005}}\n", "speed_gain_b=12.5 and sample_ticks"),
+        ("plant: {servo: {torque_per_count_nm: 0.005}}\n", "is unstable: after a step of 8"),
         (
             "plant: {motor: {coulomb_nm: 0.001, load_torque_nm: 0.01}}\n",
             "no controller can arrive",
@@ -124,3 +126,13 @@ def test_a_users_earlier_work_is_not_replaced_without_a_word(tmp_path, capsys):
     assert "its study lives in sqlite:" in err and err.count("\n") == 1
     assert not (runs / "sweep" / "s" / "journal.log").exists()
     assert cli.main([*sweep, "--trials", "3"]) == 0  # the same storage continues
+
+
+def test_a_stable_servo_passes_the_stability_check(tmp_path):
+    """Twice the default gain, or half the speed gain B, still settles: the check takes the
+    loop's own response, not a fixed bound."""
+    for text in ("plant: {servo: {torque_per_count_nm: 0.002}}\n",
+                 "plant: {servo: {speed_gain_b: 3}}\n"):  # fmt: skip
+        f = tmp_path / f"s{len(text)}.yaml"
+        f.write_text(text)
+        load_axis(f)

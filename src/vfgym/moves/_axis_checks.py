@@ -234,3 +234,54 @@ def check_holding(measures: Measures, plant: Plant, listed: Mapping[str, Scenari
                 "controller"
             )
     return note
+
+
+STEP_PULSES = 8
+"""The step the servo's stability check simulates (command pulses): small enough that
+the torque does not saturate on any shipped motor, so the linear loop shows."""
+SETTLE_S = 0.3
+"""How long the check lets the step settle (s): about 50 time constants of the default
+servo (Kv = 160 s⁻¹)."""
+
+
+def check_servo(plant: Plant) -> None:
+    """The servo must be stable: the model itself decides, by a small step simulated on
+    the axis's plant (the paper's settings, :data:`STEP_PULSES` pulses).
+
+    A loop whose gain K3 is too high for its sample period and speed gain does not settle:
+    over the last quarter of the window the motor still swings over more than half its
+    largest error (a stable loop stays within a count or so; friction may hold it still
+    off target, which is no swing).
+
+    Parameters
+    ----------
+    plant : Plant
+        The axis's plant.
+
+    Raises
+    ------
+    ValueError
+        Naming ``plant.servo.torque_per_count_nm`` and ``speed_gain_b``, with the errors
+        seen.
+    """
+    import numpy as np
+
+    from vfgym.params import PAPER_SETTINGS
+    from vfgym.plant import simulate, step_command
+
+    n = round(SETTLE_S * plant.tick_hz)
+    target = STEP_PULSES * plant.pulse_rad
+    tr = simulate(step_command(target, n), PAPER_SETTINGS, plant)
+    err = (np.asarray(tr.motor_rad) - target) / plant.motor.count_rad
+    tail = err[-(len(err) // 4) :]
+    late = float(tail.max() - tail.min())  # a swing, not an offset friction holds still
+    peak = float(np.abs(err).max())
+    if late > max(0.5 * peak, 2.0):
+        sv = plant.servo
+        raise ValueError(
+            f"plant.servo: torque_per_count_nm={sv.torque_per_count_nm:g} with speed_gain_b="
+            f"{sv.speed_gain_b:g} and sample_ticks={sv.sample_ticks} is unstable: after a "
+            f"step of {STEP_PULSES} pulses the motor still swings over {late:.3g} counts "
+            f"{SETTLE_S:g} s later (largest error {peak:.3g}); allowed a loop that "
+            "settles: lower torque_per_count_nm or raise speed_gain_b"
+        )

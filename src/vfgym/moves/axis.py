@@ -32,7 +32,13 @@ from pathlib import Path
 from typing import Any
 
 from vfgym.io.runs import read_yaml, write_yaml
-from vfgym.moves._axis_checks import check_arrives, check_holding, check_limit, check_measures
+from vfgym.moves._axis_checks import (
+    check_arrives,
+    check_holding,
+    check_limit,
+    check_measures,
+    check_servo,
+)
 from vfgym.moves._move_sets import MoveSet, MoveSets
 from vfgym.moves.distribution import MoveDistribution
 from vfgym.moves.scenarios import SCENARIOS, SPLITS, Scenario
@@ -508,6 +514,7 @@ def _load(path: str, stamp: tuple[int, int] | None) -> Axis:
         )
     try:
         axis = axis_from_dict(data, Path(path).stem)
+        check_servo(axis.plant)  # a simulation: once a file, as the load is cached
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
     for note in axis_notes(axis):  # once a file: the load is cached
