@@ -55,7 +55,9 @@ class FitConfig:
         The pick model's neighbours and library size (at most ``moves``).
     check : int
         Best-ranked candidates the model simulates on each new move, the best returned
-        (:class:`vfgym.agents.pick.PickModel`), 0 to ``library``.
+        (:class:`vfgym.agents.pick.PickModel`), 0 to ``library``. On an axis with
+        uncertainty feasibility on its design prunes more candidates, so more are checked
+        (how many: docs/results/robust.md).
     sweep_trials : int
         Trials of the sweep for the best fixed setting, 1 to 10000.
     chunk : int
@@ -66,7 +68,7 @@ class FitConfig:
     search: OptimumSearch = FIT_SEARCH
     neighbours: int = 6
     library: int = 64
-    check: int = 8
+    check: int = 32
     sweep_trials: int = 60
     chunk: int = 16
 

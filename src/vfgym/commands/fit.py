@@ -59,7 +59,8 @@ def run(args: argparse.Namespace) -> int:
         "--runs-dir", Path(args.runs_dir) / "fit" / name, folder=True, shown=args.runs_dir
     )
     d = FitConfig()
-    cfg = replace(d, moves=args.moves, library=min(d.library, args.moves))
+    library = min(d.library, args.moves)
+    cfg = replace(d, moves=args.moves, library=library, check=min(d.check, library))
     _check_same_axis(Path(args.runs_dir) / "fit" / name, axis, args.axis)
     run_dir = new_run_dir(args.runs_dir, "fit", name)
     write_yaml(run_dir / "config.yaml", {"kind": "fit", "axis": args.axis} | config_dict(cfg))
