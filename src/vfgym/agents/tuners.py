@@ -122,7 +122,7 @@ def _agent_ranges(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The feature ranges of an agent's training moves: ``draws`` moves drawn as its
     training env drew them (its split, seed range and axis)."""
-    from vfgym.envs._common import EnvConfig
+    from vfgym.envs import EnvConfig
 
     keys = ("scenario", "split", "seed_range", "plant")
     kw = {k: env_kwargs[k] for k in keys if k in env_kwargs}

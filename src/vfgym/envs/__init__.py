@@ -31,6 +31,7 @@ _ENTRY_POINTS = {
     ),
 }
 _LAZY = {
+    "EnvConfig": "vfgym.envs._common",
     "VFTuneEnv": "vfgym.envs.tune",
     "VFServoEnv": "vfgym.envs.servo",
     "VFTuneVectorEnv": "vfgym.envs.vector",
@@ -62,6 +63,7 @@ register_envs()
 
 __all__ = [
     "ENV_IDS",
+    "EnvConfig",
     "VFServoEnv",
     "VFServoVectorEnv",
     "VFTuneEnv",

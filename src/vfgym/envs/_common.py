@@ -366,8 +366,13 @@ class EnvConfig:
             )
 
     def residual_scales(self) -> np.ndarray:
-        """Each setting's ``residual_scale``, in the compiled mapping's order (value, L, k,
-        Ts/Tf: :data:`vfgym.envs._batch.SETTING_FIELDS`)."""
+        """Each setting's ``residual_scale``, in the compiled mapping's order.
+
+        Returns
+        -------
+        numpy.ndarray
+            float, one per setting (value, L, k, Ts/Tf: ``SETTING_FIELDS``).
+        """
         from vfgym.space import SPACE
 
         scale = self.residual_scale
@@ -376,8 +381,13 @@ class EnvConfig:
         return np.array([by_name[f] for f in SETTING_FIELDS])
 
     def default_base(self) -> Settings:
-        """The base of residual actions when ``residual_base`` is None: the paper's
-        settings (under ``accel_law``)."""
+        """The base of residual actions when ``residual_base`` is None.
+
+        Returns
+        -------
+        Settings
+            The paper's settings, under ``accel_law``.
+        """
         return PAPER_SETTINGS.replace(accel_law=self.accel_law)
 
     def base_settings(self, scenario: Scenario) -> Settings:
