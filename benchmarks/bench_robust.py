@@ -14,9 +14,11 @@ Four measurements, each selectable:
   the axis with its uncertainty left out, each tuned setting judged on the same pairs;
 - ``evaluate``: the cost of a robust evaluation, P plants of a setting in one batched
   call against one plant (the ratio should be at most P);
-- ``nominal``: the ±5 % inertia line of the main job's setting on the paper axis.
+- ``nominal``: the ±5 % inertia line of the main job's setting on the paper axis;
+- ``grid``: the per-move search the optima come from, against ``vfgym grid`` on three
+  test moves (the modelled plant).
 
-    python benchmarks/bench_robust.py [--parts fit,sweep,evaluate,nominal]
+    python benchmarks/bench_robust.py [--parts fit,sweep,evaluate,nominal,grid]
         [--axis FILE] [--plants 16] [--plant-seed 20261204] [--runs-dir DIR]
 """
 
@@ -147,9 +149,27 @@ def part_nominal() -> None:
           "inertia " + ", ".join(line))  # fmt: skip
 
 
+def part_grid(axis_file: str, axis, args) -> None:
+    """The per-move search (modelled plant) against ``vfgym grid`` (12 points a
+    dimension, refined twice) on three test moves: the search the optima come from."""
+    from vfgym.tuning import GridConfig, run_grid
+
+    test = axis.scenarios("test")[:3]
+    mine = move_optima(test, OptimumSearch(), plant=axis.plant, measures=axis.measures)
+    print()
+    for sc, o in zip(test, mine, strict=True):
+        t0 = time.perf_counter()
+        g = run_grid(GridConfig(axis=axis_file, scenarios=sc.name, progress=False))
+        took = time.perf_counter() - t0
+        ok = "feasible" if o.feasible else "infeasible"
+        gok = "feasible" if g.best.feasible else "infeasible"
+        print(f"grid check {sc.name}: per-move search {o.cost:.4f} ({ok}), grid "
+              f"{g.best.cost:.4f} ({gok}): {o.cost / g.best.cost:.4f}x ({took:.0f} s)")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--parts", default="fit,sweep,evaluate,nominal")
+    ap.add_argument("--parts", default="fit,sweep,evaluate,nominal,grid")
     ap.add_argument("--axis", default="experiments/axes/loads-uncertain.yaml")
     ap.add_argument("--plants", type=int, default=VERDICT_PLANTS)
     ap.add_argument("--plant-seed", type=int, default=VERDICT_PLANT_SEED)
@@ -168,6 +188,8 @@ def main() -> None:
         part_sweep(axis_file, axis, args)
     if "fit" in parts:
         part_fit(axis_file, axis, args)
+    if "grid" in parts:
+        part_grid(axis_file, axis, args)
 
 
 if __name__ == "__main__":
