@@ -1,0 +1,456 @@
+"""The estimator: the plant whose simulated response to the recorded pulses matches the
+recorded encoder count, by least squares, with 95 % intervals.
+
+Five parameters, relative to the nominal axis's plant (as a
+:class:`~vfgym.plant.uncertainty.PlantVariant` applies them): a factor on the total
+inertia, the Coulomb friction, the viscous friction, a constant load torque, and a factor
+on the drive's gain K3 as set. They are fitted in scaled coordinates (log factors,
+torques in % of the rated torque, viscous friction as its torque at the pulse train's top
+speed in % of rated) by :func:`scipy.optimize.least_squares`, residuals in encoder counts
+(:mod:`vfgym.identify.model`), with the Jacobian taken by central differences, every
+perturbed plant simulated in one batch. A parameter the captures do not excite
+(:mod:`vfgym.identify.excite`) is held at its nominal value.
+
+The intervals come from the Jacobian at the optimum. The residuals are not independent
+from sample to sample (the count's quantisation and the loop's limit cycles last many
+samples), so the covariance is the sandwich (JᵀJ)⁻¹ S (JᵀJ)⁻¹ with S the Newey–West
+(Bartlett-weighted) sum of the score's autocovariances up to the residuals' correlation
+length, rather than s²·(JᵀJ)⁻¹, which would be far too narrow.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from vfgym.identify.excite import MIN_SATURATED_S, Excitation, excitation
+from vfgym.identify.model import SAMPLE_TICKS, Record, Response, respond_many
+from vfgym.params import Plant, Settings
+from vfgym.plant.uncertainty import FACTOR_RANGE, PlantVariant
+
+PARAMS = ("inertia", "coulomb_nm", "viscous_nm_s_rad", "load_torque_nm", "torque_per_count")
+"""The estimated quantities, named as the fields of an axis's ``uncertainty:`` block."""
+
+STEPS = np.array([0.02, 0.3, 0.3, 0.3, 0.02])
+"""Central-difference steps in the scaled coordinates (2 % on the factors, 0.3 % of rated
+torque on the torques): large enough to step over the count's quantisation."""
+
+Z95 = 1.959963984540054
+"""The two-sided 95 % quantile of the normal distribution."""
+
+QUANTISATION_FLOOR = 1.0 / math.sqrt(12.0)
+"""RMS error (counts) of reading a position as whole counts: the floor of the residual."""
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """One estimated quantity.
+
+    Attributes
+    ----------
+    name : str
+        One of :data:`PARAMS`.
+    value : float
+        The estimate: a factor on the nominal total inertia or gain, else N·m or
+        N·m·s/rad.
+    low, high : float
+        Its 95 % interval (the nominal value and a wide range when not excited).
+    nominal : float
+        The nominal axis's value (factor 1 for inertia and gain).
+    excited : bool
+        False when the captures cannot show it: held at its nominal value.
+    """
+
+    name: str
+    value: float
+    low: float
+    high: float
+    nominal: float
+    excited: bool
+
+
+@dataclass(frozen=True)
+class Fit:
+    """The least-squares fit of the captures.
+
+    Attributes
+    ----------
+    estimates : tuple of Estimate
+        One per :data:`PARAMS`, in that order.
+    variant : PlantVariant
+        The estimate as a true plant relative to the nominal one.
+    plant : Plant
+        The fitted plant (the variant applied to the nominal plant).
+    residual_rms_counts : float
+        RMS of the residuals at the optimum (counts).
+    residual_max_counts : float
+        Largest residual (counts).
+    samples : int
+        Residuals (samples of all captures).
+    saturated_s : float
+        Time the fitted plant spends at its torque limit over the captures (s).
+    excitation : Excitation
+        The constant-speed segments found.
+    evaluations : int
+        Simulations run.
+    residuals : tuple of numpy.ndarray
+        The residuals of each capture (measured − simulated, counts).
+    responses : tuple of Response
+        The fitted plant's response to each capture.
+    """
+
+    estimates: tuple[Estimate, ...]
+    variant: PlantVariant
+    plant: Plant
+    residual_rms_counts: float
+    residual_max_counts: float
+    samples: int
+    saturated_s: float
+    excitation: Excitation
+    evaluations: int
+    residuals: tuple[np.ndarray, ...]
+    responses: tuple[Response, ...]
+
+    def estimate(self, name: str) -> Estimate:
+        """The estimate of one quantity.
+
+        Parameters
+        ----------
+        name : str
+            One of :data:`PARAMS`.
+
+        Returns
+        -------
+        Estimate
+            Its estimate.
+        """
+        return next(e for e in self.estimates if e.name == name)
+
+
+class _Scale:
+    """Scaled coordinates z ↔ the physical parameters, around a nominal plant."""
+
+    def __init__(self, nominal: Plant) -> None:
+        m = nominal.motor
+        self.nominal = nominal
+        self.tau = 0.01 * m.rated_torque_nm  # 1 % of rated torque
+        self.speed = nominal.pulse_top_speed_rad_s
+        self.z0 = np.array(
+            [
+                0.0,
+                m.coulomb_nm / self.tau,
+                m.viscous_nm_s_rad * self.speed / self.tau,
+                m.load_torque_nm / self.tau,
+                0.0,
+            ]
+        )
+        lf, hf = math.log(FACTOR_RANGE[0]), math.log(FACTOR_RANGE[1])
+        peak = m.peak_torque_nm / self.tau
+        b_max = m.peak_torque_nm / m.knee_speed_rad_s * self.speed / self.tau
+        self.lo = np.array([lf, 0.0, 0.0, -0.45 * peak, lf])
+        self.hi = np.array([hf, 0.45 * peak, 0.95 * b_max, 0.45 * peak, hf])
+
+    def physical(self, z: np.ndarray) -> np.ndarray:
+        return np.array(
+            [
+                math.exp(z[0]),
+                z[1] * self.tau,
+                z[2] * self.tau / self.speed,
+                z[3] * self.tau,
+                math.exp(z[4]),
+            ]
+        )
+
+    def jacobian_diag(self, z: np.ndarray) -> np.ndarray:
+        """d physical / d z for each parameter (each depends on its own z only)."""
+        return np.array([math.exp(z[0]), self.tau, self.tau / self.speed, self.tau, math.exp(z[4])])
+
+    def variant(self, z: np.ndarray) -> PlantVariant:
+        p = self.physical(z)
+        m = self.nominal.motor
+        return PlantVariant(
+            inertia=float(p[0]),
+            coulomb_offset_nm=float(p[1]) - m.coulomb_nm,
+            viscous_offset_nm_s_rad=float(p[2]) - m.viscous_nm_s_rad,
+            load_offset_nm=float(p[3]) - m.load_torque_nm,
+            torque_per_count=float(p[4]),
+        )
+
+    def plant(self, z: np.ndarray) -> Plant:
+        return self.variant(z).apply(self.nominal)
+
+
+class _Problem:
+    """The residual function over the free coordinates, counting simulations."""
+
+    def __init__(
+        self, records: Sequence[Record], scale: _Scale, settings: Settings, free: np.ndarray
+    ) -> None:
+        self.records = list(records)
+        self.scale = scale
+        self.settings = settings
+        self.free = free
+        self.base = scale.z0.copy()
+        self.evaluations = 0
+        self._cache: dict[bytes, np.ndarray] = {}
+
+    def full(self, zf: np.ndarray) -> np.ndarray:
+        z = self.base.copy()
+        z[self.free] = zf
+        return z
+
+    def residuals_of(self, zs: Sequence[np.ndarray]) -> list[np.ndarray]:
+        """Residual vectors for several full coordinate vectors, simulated as one batch."""
+        todo = [z for z in zs if z.tobytes() not in self._cache]
+        if todo:
+            plants = [self.scale.plant(z) for z in todo]
+            out = respond_many(self.records, plants, self.settings)
+            self.evaluations += len(todo)
+            for z, resp in zip(todo, out, strict=True):
+                self._cache[z.tobytes()] = np.concatenate(
+                    [r.measured - s.counts for r, s in zip(self.records, resp, strict=True)]
+                )
+        return [self._cache[z.tobytes()] for z in zs]
+
+    def fun(self, zf: np.ndarray) -> np.ndarray:
+        return self.residuals_of([self.full(zf)])[0]
+
+    def jac(self, zf: np.ndarray) -> np.ndarray:
+        z = self.full(zf)
+        pts, spans = [], []
+        for i in np.flatnonzero(self.free):
+            h = STEPS[i]
+            up = min(z[i] + h, self.scale.hi[i])
+            dn = max(z[i] - h, self.scale.lo[i])
+            zu, zd = z.copy(), z.copy()
+            zu[i], zd[i] = up, dn
+            pts += [zu, zd]
+            spans.append(up - dn)
+        res = self.residuals_of(pts)
+        cols = [(res[2 * k] - res[2 * k + 1]) / spans[k] for k in range(len(spans))]
+        return np.stack(cols, axis=1)  # d(measured − simulated)/dz
+
+
+def _hac(jac: np.ndarray, res: np.ndarray, lengths: Sequence[int]) -> np.ndarray:
+    """Newey–West estimate of the score's covariance, Σ_l w_l Σ_t g_t g_{t+l}ᵀ, per
+    capture (``lengths`` splits the rows), with g_t = J_t·r_t and Bartlett weights up to
+    the residuals' correlation length."""
+    p = jac.shape[1]
+    S = np.zeros((p, p))
+    start = 0
+    for n in lengths:
+        r = res[start : start + n]
+        g = jac[start : start + n] * r[:, None]
+        start += n
+        lag = _correlation_length(r)
+        size = 1 << int(np.ceil(np.log2(2 * n)))
+        G = np.fft.rfft(g, size, axis=0)
+        for a in range(p):
+            for b in range(a, p):
+                cc = np.fft.irfft(np.conj(G[:, a]) * G[:, b], size)  # Σ_t g_a(t) g_b(t+l)
+                w = 1.0 - np.arange(lag + 1) / (lag + 1)
+                s = cc[0] + np.sum(w[1:] * (cc[1 : lag + 1] + cc[size - lag :][::-1]))
+                S[a, b] = S[b, a] = s
+    return S
+
+
+def _correlation_length(r: np.ndarray) -> int:
+    """Lags (samples) until the residuals' autocorrelation first falls below 0.05, times
+    two (Bartlett weights halve the sum at the window's middle), at least 1."""
+    x = r - r.mean()
+    n = x.size
+    size = 1 << int(np.ceil(np.log2(2 * n)))
+    f = np.fft.rfft(x, size)
+    ac = np.fft.irfft(f * np.conj(f), size)[:n]
+    if ac[0] <= 0:
+        return 1
+    ac = ac / ac[0]
+    below = np.flatnonzero(ac < 0.05)
+    first = int(below[0]) if below.size else n // 4
+    return int(min(max(1, 2 * first), n // 4 or 1))
+
+
+def _saturated_s(responses: Sequence[Response], plant: Plant) -> float:
+    ticks = sum(int(np.count_nonzero(r.saturated)) for r in responses) * SAMPLE_TICKS
+    return ticks / plant.tick_hz
+
+
+WIDE = {
+    "inertia": (0.5, 2.0),
+    "torque_per_count": (0.5, 2.0),
+}
+"""Ranges (factors) of a factor the captures leave unknown; torques: :func:`wide_range`."""
+
+
+def wide_range(name: str, nominal: Plant) -> tuple[float, float]:
+    """The wide range a quantity the captures do not excite is left with.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`PARAMS`.
+    nominal : Plant
+        The nominal plant (its rated torque and top speed give the torques' scale).
+
+    Returns
+    -------
+    tuple of float
+        Factors (0.5, 2) for inertia and gain; up to 10 % of rated torque for Coulomb
+        friction, ±10 % for the load torque around nominal; viscous friction up to a
+        torque of 10 % of rated at the pulse train's top speed.
+    """
+    m = nominal.motor
+    t = 0.10 * m.rated_torque_nm
+    if name in WIDE:
+        return WIDE[name]
+    if name == "coulomb_nm":
+        return (0.0, max(m.coulomb_nm, t))
+    if name == "viscous_nm_s_rad":
+        return (0.0, max(m.viscous_nm_s_rad, t / nominal.pulse_top_speed_rad_s))
+    return (m.load_torque_nm - t, m.load_torque_nm + t)
+
+
+def _start(problem: _Problem) -> np.ndarray:
+    """A start for the local search: the best of one batch over the inertia factor on a
+    log grid in steps of :data:`GRID_STEP` (the response is sharp in J where the torque
+    saturates), every other parameter nominal, friction a little inside its bound."""
+    base = problem.base.copy()
+    for i in (1, 2):
+        if problem.free[i]:
+            base[i] = max(base[i], 0.5)
+    lo, hi = FACTOR_GRID
+    grid = np.log(np.geomspace(lo, hi, round(math.log(hi / lo) / math.log(1 + GRID_STEP)) + 1))
+    pts = []
+    for g in grid:
+        z = base.copy()
+        z[0] = g
+        pts.append(z)
+    res = problem.residuals_of(pts)
+    best = int(np.argmin([float(r @ r) for r in res]))
+    return pts[best][problem.free]
+
+
+GRID_STEP = 0.05
+"""Step of the starting grid over the inertia factor."""
+
+FACTOR_GRID = (0.25, 16.0)
+"""The inertia factors the starting grid spans."""
+
+
+def fit(
+    records: Sequence[Record],
+    nominal: Plant,
+    settings: Settings,
+) -> Fit:
+    """Fit the captures: the plant near ``nominal`` whose response best matches them.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The captures on the tick grid (:func:`vfgym.identify.model.record_of`).
+    nominal : Plant
+        The nominal axis's plant.
+    settings : Settings
+        The servo's filter ratio in force (:func:`vfgym.identify.model.respond`).
+
+    Returns
+    -------
+    Fit
+        The estimates with their 95 % intervals, and the residuals.
+    """
+    from scipy.optimize import least_squares
+
+    scale = _Scale(nominal)
+    exc = excitation(records, nominal)
+    free = np.array([True, exc.coulomb, exc.viscous, exc.load, True])
+    z = scale.z0.copy()
+    evaluations = 0
+    for _attempt in range(3):
+        problem = _Problem(records, scale, settings, free)
+        problem.base = z.copy()
+        zf0 = _start(problem) if _attempt == 0 else z[free]
+        sol = least_squares(
+            problem.fun,
+            zf0,
+            jac=problem.jac,
+            bounds=(scale.lo[free], scale.hi[free]),
+            method="trf",
+            x_scale=1.0,
+            xtol=1e-6,
+            ftol=1e-8,
+            max_nfev=60,
+        )
+        z = problem.full(sol.x)
+        evaluations += problem.evaluations
+        plant = scale.plant(z)
+        resp = respond_many(records, [plant], settings)[0]
+        sat = _saturated_s(resp, nominal)
+        gain_seen = sat >= MIN_SATURATED_S
+        if gain_seen == bool(free[4]):
+            break
+        free = free.copy()
+        free[4] = gain_seen
+        if not gain_seen:
+            z[4] = scale.z0[4]
+    jac = problem.jac(sol.x)
+    res = problem.fun(sol.x)
+    lengths = [r.measured.size for r in records]
+    A = jac.T @ jac
+    try:
+        Ainv = np.linalg.inv(A)
+    except np.linalg.LinAlgError:
+        Ainv = np.linalg.pinv(A)
+    cov = Ainv @ _hac(jac, res, lengths) @ Ainv
+    sd_z = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    phys = scale.physical(z)
+    nominal_phys = scale.physical(scale.z0)
+    estimates = []
+    k = 0
+    for i, name in enumerate(PARAMS):
+        if free[i]:
+            half = Z95 * sd_z[k]
+            k += 1
+            lo_z, hi_z = z[i] - half, z[i] + half
+            if i in (0, 4):
+                lo, hi = math.exp(lo_z), math.exp(hi_z)
+            else:
+                d = scale.jacobian_diag(z)[i]
+                lo, hi = phys[i] - half * d, phys[i] + half * d
+                if name in ("coulomb_nm", "viscous_nm_s_rad"):
+                    lo = max(0.0, lo)
+            estimates.append(Estimate(name, float(phys[i]), lo, hi, float(nominal_phys[i]), True))
+        else:
+            lo, hi = wide_range(name, nominal)
+            v = float(nominal_phys[i])
+            estimates.append(Estimate(name, v, lo, hi, v, False))
+    residuals = []
+    start = 0
+    for n in lengths:
+        residuals.append(res[start : start + n])
+        start += n
+    return Fit(
+        estimates=tuple(estimates),
+        variant=scale.variant(z),
+        plant=scale.plant(z),
+        residual_rms_counts=float(np.sqrt(np.mean(res**2))),
+        residual_max_counts=float(np.max(np.abs(res))),
+        samples=int(res.size),
+        saturated_s=_saturated_s(resp, nominal),
+        excitation=exc,
+        evaluations=evaluations,
+        residuals=tuple(residuals),
+        responses=tuple(resp),
+    )
+
+
+__all__ = [
+    "PARAMS",
+    "QUANTISATION_FLOOR",
+    "Estimate",
+    "Fit",
+    "fit",
+    "wide_range",
+]

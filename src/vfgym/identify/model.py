@@ -1,0 +1,261 @@
+"""A capture on the simulator's tick grid, and the simulations of it for candidate plants.
+
+The recorded pulse train drives the axis's servo and motor in the exact simulator (an
+external pulse train, ``pulses=`` of :func:`vfgym.plant.simulate`). The capture's pulses
+are placed on the controller's tick grid: a pulse rises half a tick after its tick
+starts (as :mod:`vfgym.io.vcd` writes it), so the grid's phase is the circular mean of
+the pulse times modulo T, and each pulse goes to the nearest tick (a rounded time stamp
+moves it by far less than half a tick at a sample clock ≥ 4× the pulse rate).
+
+The simulation starts :data:`PREROLL_S` before the capture, at rest, so that a load
+torque has sagged the axis to its held position when the capture begins, as it had on
+the machine. The measured count (relative to its value at the capture's start) is
+compared with the simulated motor angle in counts (relative to the simulated count at
+the same instant), plus half a count (a count c means θ/q in [c, c + 1)), every
+:data:`SAMPLE_TICKS` ticks: these are the residuals, in encoder counts.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from vfgym.identify.capture import Capture
+from vfgym.params import Plant, Settings
+from vfgym.plant import simulate
+
+PREROLL_S = 0.05
+"""Idle time simulated before the capture's start (s): the held position settles."""
+
+SAMPLE_TICKS = 5
+"""Residuals are taken every this many controller ticks."""
+
+SETTLE_S = 0.01
+"""A capture must run at least this long after its last pulse (s), so that its last move
+is seen whole."""
+
+
+@dataclass(frozen=True)
+class Record:
+    """One capture on the simulator's tick grid.
+
+    Attributes
+    ----------
+    source : str
+        The capture's file.
+    pulses : numpy.ndarray
+        int8 per simulated tick (−1, 0, +1), the pre-roll's idle ticks first.
+    preroll_ticks : int
+        Idle ticks simulated before the capture's first whole tick (a multiple of
+        :data:`SAMPLE_TICKS`).
+    measured : numpy.ndarray
+        The measured count (relative to the capture's start) plus ½, at the end of every
+        :data:`SAMPLE_TICKS`-th tick from the capture's start.
+    phase : float
+        The tick grid's phase: tick i starts at (i + phase)·T in the capture's time.
+    misplaced : int
+        Pulses moved to the next free tick because two fell on one.
+    """
+
+    source: str
+    pulses: np.ndarray
+    preroll_ticks: int
+    measured: np.ndarray
+    phase: float
+    misplaced: int
+
+    @property
+    def n_ticks(self) -> int:
+        """Ticks simulated."""
+        return int(self.pulses.size)
+
+
+def record_of(capture: Capture, plant: Plant) -> Record:
+    """Place a capture on the tick grid of ``plant`` (see the module doc).
+
+    Parameters
+    ----------
+    capture : Capture
+        The capture.
+    plant : Plant
+        Gives the controller's tick T.
+
+    Returns
+    -------
+    Record
+        The pulse train per tick and the measured counts at the sample ticks.
+
+    Raises
+    ------
+    ValueError
+        Naming the file: the capture starts inside a move (a pulse in its first tick) or
+        ends less than :data:`SETTLE_S` after its last pulse (shorter than its moves).
+    """
+    T = plant.tick_s
+    src = capture.source
+    x = capture.pulse_s / T
+    ang = 2.0 * math.pi * (x - 0.5)
+    phase = math.atan2(float(np.sin(ang).mean()), float(np.cos(ang).mean())) / (2.0 * math.pi)
+    ticks = np.rint(x - 0.5 - phase).astype(np.int64)
+    first = math.ceil(-phase - 1e-9)  # the first whole tick
+    last = math.floor(capture.end_s / T - phase) - 1
+    if ticks[0] <= first:
+        raise ValueError(
+            f"{src}: the first pulse comes at {capture.pulse_s[0]:.6g} s, in the capture's "
+            "first tick: expected the capture to start before the moves, with the axis at rest"
+        )
+    settle = round(SETTLE_S / T)
+    if ticks[-1] > last - settle:
+        raise ValueError(
+            f"{src}: the capture ends {capture.end_s - capture.pulse_s[-1]:.4g} s after its "
+            f"last pulse: expected it to run at least {SETTLE_S:g} s after the last move's "
+            "last pulse (a capture shorter than a move)"
+        )
+    pre = SAMPLE_TICKS * math.ceil(PREROLL_S / T / SAMPLE_TICKS)
+    n_cap = (last - first + 1) // SAMPLE_TICKS * SAMPLE_TICKS
+    pulses = np.zeros(pre + n_cap, dtype=np.int8)
+    idx = ticks - first + pre
+    misplaced = 0
+    # two pulses on one tick (a clock that is not quite the axis's): the later one moves on
+    for j in np.flatnonzero(np.diff(idx) <= 0):
+        if idx[j + 1] <= idx[j]:
+            idx[j + 1] = idx[j] + 1
+            misplaced += 1
+    keep = idx < pulses.size
+    pulses[idx[keep]] = capture.pulse_sign[keep]
+    ends = (np.arange(SAMPLE_TICKS, n_cap + 1, SAMPLE_TICKS) + first + phase) * T
+    measured = capture.count_at(ends).astype(np.float64) - float(capture.count_at(np.zeros(1))[0])
+    return Record(
+        source=src,
+        pulses=pulses,
+        preroll_ticks=pre,
+        measured=measured + 0.5,
+        phase=phase,
+        misplaced=misplaced,
+    )
+
+
+@dataclass(frozen=True)
+class Response:
+    """What a candidate plant does with one record's pulse train.
+
+    Attributes
+    ----------
+    counts : numpy.ndarray
+        Simulated motor angle in counts relative to the simulated count at the capture's
+        start, at the record's sample ticks.
+    torque_nm : numpy.ndarray
+        The torque applied at the sample ticks (N·m).
+    saturated : numpy.ndarray
+        bool, the torque at its limit (the torque–speed curve or the peak) at the sample.
+    speed_rad_s : numpy.ndarray
+        Motor speed at the sample ticks (rad/s).
+    """
+
+    counts: np.ndarray
+    torque_nm: np.ndarray
+    saturated: np.ndarray
+    speed_rad_s: np.ndarray
+
+
+def torque_limit(plant: Plant, speed_rad_s: np.ndarray, torque_nm: np.ndarray) -> np.ndarray:
+    """The torque available at each speed in the torque's direction (docs/model.md §3).
+
+    Parameters
+    ----------
+    plant : Plant
+        Gives the motor's torque–speed characteristic.
+    speed_rad_s : numpy.ndarray
+        Motor speed (rad/s).
+    torque_nm : numpy.ndarray
+        The torque's sign decides motoring (with the speed) or braking (the peak).
+
+    Returns
+    -------
+    numpy.ndarray
+        The limit (N·m), ≥ 0.
+    """
+    m = plant.motor
+    w = np.abs(speed_rad_s)
+    slope = (m.torque_at_max_speed_nm - m.peak_torque_nm) / (m.max_speed_rad_s - m.knee_speed_rad_s)
+    curve = np.where(
+        w <= m.knee_speed_rad_s,
+        m.peak_torque_nm,
+        np.where(w < m.max_speed_rad_s, m.peak_torque_nm + slope * (w - m.knee_speed_rad_s), 0.0),
+    )
+    return np.where(torque_nm * speed_rad_s > 0.0, curve, m.peak_torque_nm)
+
+
+def respond(record: Record, plant: Plant, settings: Settings) -> Response:
+    """Simulate one record's pulse train on one plant.
+
+    Parameters
+    ----------
+    record : Record
+        The capture on the tick grid.
+    plant : Plant
+        The candidate plant.
+    settings : Settings
+        The servo's filter ratio (``ts_over_tf``) is the one setting an external train
+        leaves in force.
+
+    Returns
+    -------
+    Response
+        The simulated counts and torque at the sample ticks.
+    """
+    n = record.n_ticks
+    tr = simulate(np.zeros(n), settings, plant, pulses=record.pulses, decimation=SAMPLE_TICKS)
+    q = plant.motor.count_rad
+    j0 = record.preroll_ticks // SAMPLE_TICKS - 1  # the sample at the capture's start
+    theta = tr.motor_rad / q
+    counts = theta[j0 + 1 :] - math.floor(theta[j0])
+    tau = tr.torque_nm[j0 + 1 :]
+    w = tr.speed_rad_s[j0 + 1 :]
+    sat = np.abs(tau) >= torque_limit(plant, w, tau) * (1.0 - 1e-9)
+    return Response(counts=counts, torque_nm=tau, saturated=sat, speed_rad_s=w)
+
+
+def respond_many(
+    records: Sequence[Record], plants: Sequence[Plant], settings: Settings
+) -> list[list[Response]]:
+    """Every record on every plant, as one batch over threads (the kernel releases the GIL).
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The captures.
+    plants : sequence of Plant
+        The candidate plants.
+    settings : Settings
+        As in :func:`respond`.
+
+    Returns
+    -------
+    list of list of Response
+        ``out[i][k]``: plant i, record k.
+    """
+    jobs = [(i, k) for i in range(len(plants)) for k in range(len(records))]
+    workers = max(1, min(len(jobs), os.cpu_count() or 1))
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        done = list(pool.map(lambda ik: respond(records[ik[1]], plants[ik[0]], settings), jobs))
+    it = iter(done)
+    return [[next(it) for _ in records] for _ in plants]
+
+
+__all__ = [
+    "PREROLL_S",
+    "SAMPLE_TICKS",
+    "SETTLE_S",
+    "Record",
+    "Response",
+    "record_of",
+    "respond",
+    "respond_many",
+    "torque_limit",
+]
