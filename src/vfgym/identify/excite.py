@@ -34,7 +34,7 @@ SPEED_LEVEL_TOL = 0.15
 MIN_PULSES_PER_WINDOW = 10
 """A constant-speed segment has at least this many pulses a window (slower is rest)."""
 
-MIN_SATURATED_S = 0.5e-3
+MIN_SATURATED_S = 5e-3
 """Time at the torque limit (s) from which the gain is taken as separable from inertia."""
 
 

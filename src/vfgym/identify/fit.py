@@ -41,6 +41,12 @@ torque on the torques): large enough to step over the count's quantisation."""
 Z95 = 1.959963984540054
 """The two-sided 95 % quantile of the normal distribution."""
 
+HAC_FLOOR_S = 0.15
+"""The Newey–West bandwidth is at least this long (s), a move's length: the residuals'
+nuisances (where within a count the axis started, the tick grid's phase) shift whole
+moves at once, so the scores stay correlated over a move even where the residuals'
+own autocorrelation has died out."""
+
 QUANTISATION_FLOOR = 1.0 / math.sqrt(12.0)
 """RMS error (counts) of reading a position as whole counts: the floor of the residual."""
 
@@ -234,7 +240,7 @@ class _Problem:
         return np.stack(cols, axis=1)  # d(measured − simulated)/dz
 
 
-def _hac(jac: np.ndarray, res: np.ndarray, lengths: Sequence[int]) -> np.ndarray:
+def _hac(jac: np.ndarray, res: np.ndarray, lengths: Sequence[int], floor: int) -> np.ndarray:
     """Newey–West estimate of the score's covariance, Σ_l w_l Σ_t g_t g_{t+l}ᵀ, per
     capture (``lengths`` splits the rows), with g_t = J_t·r_t and Bartlett weights up to
     the residuals' correlation length."""
@@ -245,7 +251,7 @@ def _hac(jac: np.ndarray, res: np.ndarray, lengths: Sequence[int]) -> np.ndarray
         r = res[start : start + n]
         g = jac[start : start + n] * r[:, None]
         start += n
-        lag = _correlation_length(r)
+        lag = _correlation_length(r, floor)
         size = 1 << int(np.ceil(np.log2(2 * n)))
         G = np.fft.rfft(g, size, axis=0)
         for a in range(p):
@@ -257,20 +263,20 @@ def _hac(jac: np.ndarray, res: np.ndarray, lengths: Sequence[int]) -> np.ndarray
     return S
 
 
-def _correlation_length(r: np.ndarray) -> int:
-    """Lags (samples) until the residuals' autocorrelation first falls below 0.05, times
-    two (Bartlett weights halve the sum at the window's middle), at least 1."""
+def _correlation_length(r: np.ndarray, floor: int) -> int:
+    """The Newey–West bandwidth (samples): twice the lag at which the residuals'
+    autocorrelation first falls below 0.05, at least ``floor``, at most a quarter of the
+    record."""
     x = r - r.mean()
     n = x.size
     size = 1 << int(np.ceil(np.log2(2 * n)))
     f = np.fft.rfft(x, size)
     ac = np.fft.irfft(f * np.conj(f), size)[:n]
-    if ac[0] <= 0:
-        return 1
-    ac = ac / ac[0]
-    below = np.flatnonzero(ac < 0.05)
-    first = int(below[0]) if below.size else n // 4
-    return int(min(max(1, 2 * first), n // 4 or 1))
+    first = n // 4
+    if ac[0] > 0:
+        below = np.flatnonzero(ac / ac[0] < 0.05)
+        first = int(below[0]) if below.size else n // 4
+    return int(min(max(floor, 2 * first, 1), max(1, n // 4)))
 
 
 def _saturated_s(responses: Sequence[Response], plant: Plant) -> float:
@@ -403,7 +409,8 @@ def fit(
         Ainv = np.linalg.inv(A)
     except np.linalg.LinAlgError:
         Ainv = np.linalg.pinv(A)
-    cov = Ainv @ _hac(jac, res, lengths) @ Ainv
+    floor = round(HAC_FLOOR_S * nominal.tick_hz / SAMPLE_TICKS)
+    cov = Ainv @ _hac(jac, res, lengths, floor) @ Ainv
     sd_z = np.sqrt(np.maximum(np.diag(cov), 0.0))
     phys = scale.physical(z)
     nominal_phys = scale.physical(scale.z0)
