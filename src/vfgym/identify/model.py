@@ -35,6 +35,10 @@ PREROLL_S = 0.05
 SAMPLE_TICKS = 5
 """Residuals are taken every this many controller ticks."""
 
+MOVING_STEPS = 4
+"""More encoder steps than this before the first pulse: the axis was moving when the
+capture started."""
+
 SETTLE_S = 0.01
 """A capture must run at least this long after its last pulse (s), so that its last move
 is seen whole."""
@@ -93,7 +97,8 @@ def record_of(capture: Capture, plant: Plant) -> Record:
     Raises
     ------
     ValueError
-        Naming the file: the capture starts inside a move (a pulse in its first tick) or
+        Naming the file: the capture starts inside a move (a pulse in its first tick, or
+        the encoder moving before the first pulse) or
         ends less than :data:`SETTLE_S` after its last pulse (shorter than its moves).
     """
     T = plant.tick_s
@@ -104,10 +109,12 @@ def record_of(capture: Capture, plant: Plant) -> Record:
     ticks = np.rint(x - 0.5 - phase).astype(np.int64)
     first = math.ceil(-phase - 1e-9)  # the first whole tick
     last = math.floor(capture.end_s / T - phase) - 1
-    if ticks[0] <= first:
+    early = int(np.count_nonzero(capture.count_s < capture.pulse_s[0]))
+    if ticks[0] <= first or early > MOVING_STEPS:
         raise ValueError(
-            f"{src}: the first pulse comes at {capture.pulse_s[0]:.6g} s, in the capture's "
-            "first tick: expected the capture to start before the moves, with the axis at rest"
+            f"{src}: the capture starts inside a move (its first pulse at "
+            f"{capture.pulse_s[0]:.6g} s, {early} encoder steps before it): expected it to "
+            "start before the moves, with the axis at rest"
         )
     settle = round(SETTLE_S / T)
     if ticks[-1] > last - settle:

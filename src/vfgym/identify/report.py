@@ -36,6 +36,10 @@ EXPLAINED = 3.0
 """A fit whose RMS residual exceeds this many quantisation floors does not explain the
 capture."""
 
+HOT_RATIO = 3.0
+"""Mean squared residual where the torque is at its limit or the speed above the knee,
+over the rest's, from which the torque–speed curve is named as the likely cause."""
+
 GEAR_TOLERANCE = 0.02
 """Counts per pulse at rest farther than this share from the gear: the gear is wrong."""
 
@@ -144,7 +148,12 @@ def uncertainty_of(fit: Fit, nominal: Plant) -> Uncertainty:
         if name != "load_torque_nm":
             lo = max(0.0, lo)
         ranges[name] = (lo, hi)
-    c_hi = ranges["coulomb_nm"][1]
+    b_lo, b_hi = ranges["viscous_nm_s_rad"]
+    b_most = 0.99 * m.peak_torque_nm / m.knee_speed_rad_s
+    ranges["viscous_nm_s_rad"] = (min(b_lo, b_most), min(b_hi, b_most))
+    c_lo, c_hi = ranges["coulomb_nm"]
+    c_hi = min(c_hi, 0.5 * m.peak_torque_nm)
+    ranges["coulomb_nm"] = (min(c_lo, c_hi), c_hi)
     room = 0.95 * m.peak_torque_nm - c_hi
     l_lo, l_hi = ranges["load_torque_nm"]
     ranges["load_torque_nm"] = (max(l_lo, -room), min(l_hi, room))
@@ -193,9 +202,9 @@ def likely_cause(fit: Fit, records: Sequence[Record], nominal: Plant) -> str:
 
     Checked in turn: the encoder counts per pulse at rest against the gear; a residual
     whose power sits in one narrow band (a resonance the one-mass model lacks); a
-    residual concentrated where the fitted plant is at its torque limit or above the
-    motor's knee speed (its torque–speed curve: another motor); else the motor preset or
-    the encoder's lines in general.
+    residual :data:`HOT_RATIO` times larger (mean square) where the fitted plant is at
+    its torque limit or above the motor's knee speed (its torque–speed curve: another
+    motor); else the motor preset or the encoder's lines in general.
 
     Parameters
     ----------
@@ -233,7 +242,7 @@ def likely_cause(fit: Fit, records: Sequence[Record], nominal: Plant) -> str:
     hot = np.concatenate(
         [r.saturated | (np.abs(r.speed_rad_s) > m.knee_speed_rad_s) for r in fit.responses]
     )
-    if hot.any() and hot.mean() < 0.5 and (res[hot] ** 2).sum() > 0.5 * (res**2).sum():
+    if 0 < hot.sum() < hot.size and np.mean(res[hot] ** 2) > HOT_RATIO * np.mean(res[~hot] ** 2):
         return (
             "the motor's torque-speed curve or peak torque: the residual sits where the "
             "torque is at its limit or the speed above the knee; a wrong motor preset "

@@ -100,10 +100,8 @@ def trace_edges(trace: object, *, start_s: float = 0.0, stop_s: float | None = N
     e = train_edges(p, f, lead_s=-start_s)
     tick, frac, after, _ = encoder_edges(trace)
     ts = (tick + frac) * T - start_s
-    q = trace.plant.motor.count_rad  # type: ignore[attr-defined]
-    th = np.asarray(trace.motor_rad)  # type: ignore[attr-defined]
-    i0 = int(start_s * f) - 1
-    c0 = int(np.floor(th[i0] / q)) if i0 >= 0 else 0
+    before = np.flatnonzero(ts <= 0)
+    c0 = int(after[before[-1]]) if before.size else 0  # the count when the record starts
     end = (trace.n_ticks * T if stop_s is None else stop_s) - start_s  # type: ignore[attr-defined]
     keep_p = (e.pulse_s > 0) & (e.pulse_s <= end)
     keep_c = (ts > 0) & (ts <= end)
