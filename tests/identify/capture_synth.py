@@ -13,13 +13,13 @@ from pathlib import Path
 
 import numpy as np
 
-from vfgym.identify.signals import trace_edges, write_edges_vcd
-from vfgym.params import PAPER_SETTINGS, Plant
-from vfgym.plant import simulate
+from vfgym.identify.signals import record_capture
+from vfgym.params import Plant
 from vfgym.plant.uncertainty import PlantVariant
 
-REST_S = 0.1
-"""Rest simulated before the pulse train (s)."""
+REST_S = 0.5
+"""Rest simulated before the pulse train (s): the record starts after 40–90 % of it, the
+axis long settled (a load torque sags it for tens of ms after the simulation's start)."""
 
 
 @dataclass(frozen=True)
@@ -60,17 +60,8 @@ def capture_vcd(
     pulses: np.ndarray,
     path: Path,
     rng: np.random.Generator,
-    *,
-    tail_s: float = 0.05,
-    names: tuple[str, str, str, str] = ("pulse", "dir", "enc_a", "enc_b"),
-    scope: str = "vfgym",
 ) -> Path:
     """Record ``pulses`` run on ``plant`` as a 1 MHz logic analyser would (see the module doc)."""
-    f = plant.tick_hz
-    rest = round(REST_S * f)
-    tail = round(tail_s * f)
-    train = np.concatenate([np.zeros(rest, np.int8), pulses, np.zeros(tail, np.int8)])
-    tr = simulate(np.zeros(train.size), PAPER_SETTINGS, plant, pulses=train)
-    start = REST_S * rng.uniform(0.3, 0.9)
-    edges = trace_edges(tr, start_s=start)
-    return write_edges_vcd(edges, path, timescale="1 us", names=names, scope=scope)
+    return record_capture(
+        plant, pulses, path, start_s=REST_S * rng.uniform(0.4, 0.9), rest_s=REST_S
+    )

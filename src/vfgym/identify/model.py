@@ -29,7 +29,7 @@ from vfgym.identify.capture import Capture
 from vfgym.params import Plant, Settings
 from vfgym.plant import simulate
 
-PREROLL_S = 0.05
+PREROLL_S = 0.2
 """Idle time simulated before the capture's start (s): the held position settles."""
 
 SAMPLE_TICKS = 5

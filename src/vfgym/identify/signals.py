@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from vfgym.io.vcd import encoder_edges, parse_timescale
+from vfgym.params import PAPER_SETTINGS, Plant, Settings
+from vfgym.plant import simulate
 
 
 @dataclass(frozen=True)
@@ -196,4 +198,55 @@ def write_edges_vcd(
     return p
 
 
-__all__ = ["Edges", "trace_edges", "train_edges", "write_edges_vcd"]
+def record_capture(
+    plant: Plant,
+    pulses: np.ndarray,
+    path: str | Path,
+    *,
+    start_s: float,
+    rest_s: float = 0.5,
+    length_s: float | None = None,
+    timescale: str = "1 us",
+    settings: Settings = PAPER_SETTINGS,
+) -> Path:
+    """A capture of ``pulses`` run on ``plant`` as a logic analyser records it: the pulse
+    train after ``rest_s`` at rest, the record starting ``start_s`` into that rest (an
+    arbitrary instant), every edge rounded to ``timescale`` (``1 us``: 1 MHz), the encoder
+    only as its A/B edges. For tests and benchmarks of the estimator, and a dry run.
+
+    Parameters
+    ----------
+    plant : Plant
+        The (true) plant.
+    pulses : numpy.ndarray
+        −1, 0, +1 per controller tick.
+    path : str or Path
+        The VCD to write.
+    start_s : float
+        When the record starts, in [0, ``rest_s``) (s).
+    rest_s : float
+        Rest before the pulse train (s).
+    length_s : float or None
+        Length of the record (s); default to 50 ms after the train.
+    timescale : str
+        The analyser's sample period as a VCD timescale.
+    settings : Settings
+        The servo's filter ratio in force.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    f = plant.tick_hz
+    end_s = rest_s + pulses.size / f + 0.05 if length_s is None else start_s + length_s
+    n = max(round(end_s * f) + 1, round(rest_s * f) + pulses.size)
+    train = np.zeros(n, dtype=np.int8)
+    train[round(rest_s * f) : round(rest_s * f) + pulses.size] = pulses
+    tr = simulate(np.zeros(n), settings, plant, pulses=train)
+    return write_edges_vcd(
+        trace_edges(tr, start_s=start_s, stop_s=end_s), path, timescale=timescale
+    )
+
+
+__all__ = ["Edges", "record_capture", "trace_edges", "train_edges", "write_edges_vcd"]
