@@ -19,6 +19,12 @@ length, rather than s²·(JᵀJ)⁻¹, which would be far too narrow. The load t
 interval is also widened to where a profile along it (the others held) leaves the RMS
 residual within 10 % of its least: below the torque limit it is bounded on one side
 only, which the Jacobian at the optimum does not show.
+
+One nuisance is fitted and then accounted for: the phase of the servo's sample clock
+against the pulses (its speed counter latches every Ns ticks), which no capture records.
+The start tries every phase in steps of the residuals' sample and keeps the best; the
+covariance adds the spread of the Gauss–Newton steps the residuals at
+:data:`NUISANCE_PHASES` other phases would take from the optimum.
 """
 
 from __future__ import annotations
@@ -44,6 +50,10 @@ torque on the torques): large enough to step over the count's quantisation."""
 
 Z95 = 1.959963984540054
 """The two-sided 95 % quantile of the normal distribution."""
+
+NUISANCE_PHASES = 6
+"""Other phases of the servo's sample clock whose effect on the estimate is added to the
+covariance."""
 
 HAC_FLOOR_S = 0.15
 """The Newey–West bandwidth is at least this long (s), a move's length: the residuals'
@@ -72,6 +82,9 @@ class Estimate:
         The nominal axis's value (factor 1 for inertia and gain).
     excited : bool
         False when the captures cannot show it: held at its nominal value.
+    one_sided : bool
+        True when the residual stays flat along it to the profile's end on one side
+        (the load torque below the torque limit): the interval is then a bound.
     """
 
     name: str
@@ -80,6 +93,7 @@ class Estimate:
     high: float
     nominal: float
     excited: bool
+    one_sided: bool = False
 
 
 @dataclass(frozen=True)
@@ -205,6 +219,7 @@ class _Problem:
         self.free = free
         self.base = scale.z0.copy()
         self.evaluations = 0
+        self.delay = 0  # ticks moving the servo's sample clock (model.respond)
         self._cache: dict[bytes, np.ndarray] = {}
 
     def full(self, zf: np.ndarray) -> np.ndarray:
@@ -214,16 +229,32 @@ class _Problem:
 
     def residuals_of(self, zs: Sequence[np.ndarray]) -> list[np.ndarray]:
         """Residual vectors for several full coordinate vectors, simulated as one batch."""
-        todo = [z for z in zs if z.tobytes() not in self._cache]
+
+        def key(z: np.ndarray) -> bytes:
+            return z.tobytes() + self.delay.to_bytes(4, "little")
+
+        todo = [z for z in zs if key(z) not in self._cache]
         if todo:
             plants = [self.scale.plant(z) for z in todo]
-            out = respond_many(self.records, plants, self.settings)
+            out = respond_many(self.records, plants, self.settings, self.delay)
             self.evaluations += len(todo)
             for z, resp in zip(todo, out, strict=True):
-                self._cache[z.tobytes()] = np.concatenate(
+                self._cache[key(z)] = np.concatenate(
                     [r.measured - s.counts for r, s in zip(self.records, resp, strict=True)]
                 )
-        return [self._cache[z.tobytes()] for z in zs]
+        return [self._cache[key(z)] for z in zs]
+
+    def at_delays(self, z: np.ndarray, delays: Sequence[int]) -> list[np.ndarray]:
+        """Residuals of one point with the servo's sample clock moved by each delay."""
+        keep = self.delay
+        out = []
+        try:
+            for d in delays:
+                self.delay = int(d)
+                out.append(self.residuals_of([z])[0])
+        finally:
+            self.delay = keep
+        return out
 
     def fun(self, zf: np.ndarray) -> np.ndarray:
         return self.residuals_of([self.full(zf)])[0]
@@ -383,7 +414,7 @@ valley has side minima a local search stops in."""
 LOAD_SCANS = 3
 """At most this many scans and restarts."""
 
-PROFILE_STEPS = (0.5, 1.0, 2.0, 3.0, 5.0, 8.0)
+PROFILE_STEPS = (0.5, 1.0, 2.0, 3.0, 5.0, 8.0, 12.0, 20.0)
 """Load torque offsets (% of rated) of the profile check (:func:`_load_profile`)."""
 
 PROFILE_TOL = 0.1
@@ -437,10 +468,17 @@ def fit(
     free = np.array([True, exc.coulomb, exc.viscous, exc.load, True])
     z = scale.z0.copy()
     evaluations = 0
+    delays = list(range(0, nominal.servo.sample_ticks, SAMPLE_TICKS))
+    delay = 0
     for _attempt in range(3):
         problem = _Problem(records, scale, settings, free)
         problem.base = z.copy()
+        problem.delay = delay
         zf0 = _start(problem) if _attempt == 0 else z[free]
+        if _attempt == 0 and len(delays) > 1:
+            # the servo's sample clock against the pulses: the best-fitting phase
+            rs = problem.at_delays(problem.full(zf0), delays)
+            delay = problem.delay = delays[int(np.argmin([float(r @ r) for r in rs]))]
         sol = _solve(problem, zf0)
         for _scan in range(LOAD_SCANS if free[3] else 0):
             # the load torque's valley has side minima: scan it, the others held
@@ -480,6 +518,13 @@ def fit(
         Ainv = np.linalg.pinv(A)
     floor = round(HAC_FLOOR_S * nominal.tick_hz / SAMPLE_TICKS)
     cov = Ainv @ _hac(jac, res, lengths, floor) @ Ainv
+    # the estimate's spread over the servo's sample-clock phase, which no capture records:
+    # the Gauss–Newton step each other phase's residuals would take from the optimum
+    others = [d for d in delays if d != delay][:: max(1, (len(delays) - 1) // NUISANCE_PHASES)]
+    if others:
+        steps = [-Ainv @ (jac.T @ r) for r in problem.at_delays(z, others)]
+        cov = cov + sum(np.outer(d, d) for d in steps) / len(steps)
+        evaluations += len(others)
     sd_z = np.sqrt(np.maximum(np.diag(cov), 0.0))
     rms = float(np.sqrt(np.mean(res**2)))
     flat = _load_profile(problem, z, rms) if free[3] else (0.0, 0.0)
@@ -488,6 +533,7 @@ def fit(
     estimates = []
     k = 0
     for i, name in enumerate(PARAMS):
+        one_sided = False
         if free[i]:
             half = Z95 * sd_z[k]
             k += 1
@@ -499,9 +545,22 @@ def fit(
                 lo, hi = phys[i] - half * d, phys[i] + half * d
                 if name == "load_torque_nm":  # a flat side the Jacobian does not show
                     lo, hi = min(lo, phys[i] + flat[0] * d), max(hi, phys[i] + flat[1] * d)
+                    one_sided = max(-flat[0], flat[1]) >= PROFILE_STEPS[-1] - 1e-9 or (
+                        z[3] + flat[0] <= scale.lo[3] or z[3] + flat[1] >= scale.hi[3]
+                    )
                 if name in ("coulomb_nm", "viscous_nm_s_rad"):
                     lo = max(0.0, lo)
-            estimates.append(Estimate(name, float(phys[i]), lo, hi, float(nominal_phys[i]), True))
+            estimates.append(
+                Estimate(
+                    name,
+                    float(phys[i]),
+                    lo,
+                    hi,
+                    float(nominal_phys[i]),
+                    True,
+                    one_sided=i not in (0, 4) and one_sided,
+                )
+            )
         else:
             lo, hi = wide_range(name, nominal)
             v = float(nominal_phys[i])

@@ -198,7 +198,7 @@ def torque_limit(plant: Plant, speed_rad_s: np.ndarray, torque_nm: np.ndarray) -
     return np.where(torque_nm * speed_rad_s > 0.0, curve, m.peak_torque_nm)
 
 
-def respond(record: Record, plant: Plant, settings: Settings) -> Response:
+def respond(record: Record, plant: Plant, settings: Settings, delay_ticks: int = 0) -> Response:
     """Simulate one record's pulse train on one plant.
 
     Parameters
@@ -210,16 +210,22 @@ def respond(record: Record, plant: Plant, settings: Settings) -> Response:
     settings : Settings
         The servo's filter ratio (``ts_over_tf``) is the one setting an external train
         leaves in force.
+    delay_ticks : int
+        Idle ticks added before the pre-roll, a multiple of :data:`SAMPLE_TICKS`: they
+        move the servo's sample clock against the pulses (its phase on the machine is
+        not recorded).
 
     Returns
     -------
     Response
         The simulated counts and torque at the sample ticks.
     """
-    n = record.n_ticks
-    tr = simulate(np.zeros(n), settings, plant, pulses=record.pulses, decimation=SAMPLE_TICKS)
+    pulses = record.pulses
+    if delay_ticks:
+        pulses = np.concatenate([np.zeros(delay_ticks, dtype=np.int8), pulses])
+    tr = simulate(np.zeros(pulses.size), settings, plant, pulses=pulses, decimation=SAMPLE_TICKS)
     q = plant.motor.count_rad
-    j0 = record.preroll_ticks // SAMPLE_TICKS - 1  # the sample at the capture's start
+    j0 = (record.preroll_ticks + delay_ticks) // SAMPLE_TICKS - 1  # the capture's start
     theta = tr.motor_rad / q
     counts = theta[j0 + 1 :] - math.floor(theta[j0])
     tau = tr.torque_nm[j0 + 1 :]
@@ -229,7 +235,10 @@ def respond(record: Record, plant: Plant, settings: Settings) -> Response:
 
 
 def respond_many(
-    records: Sequence[Record], plants: Sequence[Plant], settings: Settings
+    records: Sequence[Record],
+    plants: Sequence[Plant],
+    settings: Settings,
+    delay_ticks: int = 0,
 ) -> list[list[Response]]:
     """Every record on every plant, as one batch over threads (the kernel releases the GIL).
 
@@ -241,6 +250,8 @@ def respond_many(
         The candidate plants.
     settings : Settings
         As in :func:`respond`.
+    delay_ticks : int
+        As in :func:`respond`.
 
     Returns
     -------
@@ -249,8 +260,12 @@ def respond_many(
     """
     jobs = [(i, k) for i in range(len(plants)) for k in range(len(records))]
     workers = max(1, min(len(jobs), os.cpu_count() or 1))
+
+    def one(ik: tuple[int, int]) -> Response:
+        return respond(records[ik[1]], plants[ik[0]], settings, delay_ticks)
+
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        done = list(pool.map(lambda ik: respond(records[ik[1]], plants[ik[0]], settings), jobs))
+        done = list(pool.map(one, jobs))
     it = iter(done)
     return [[next(it) for _ in records] for _ in plants]
 

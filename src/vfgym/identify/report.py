@@ -161,7 +161,7 @@ def uncertainty_of(fit: Fit, nominal: Plant) -> Uncertainty:
 
 
 def not_excited_notes(fit: Fit) -> list[str]:
-    """One line for each quantity the captures do not excite.
+    """One line for each quantity the captures do not excite or bound on one side only.
 
     Parameters
     ----------
@@ -189,6 +189,14 @@ def not_excited_notes(fit: Fit) -> list[str]:
         why["viscous_nm_s_rad"] = why["load_torque_nm"]
     out = []
     for e in fit.estimates:
+        if e.one_sided:
+            out.append(
+                f"{e.name}: seen only as a bound (below the torque limit a load torque larger "
+                "than the Coulomb friction only shifts the servo's following error, at rest as "
+                "in motion, which a count relative to the capture's start cannot see; a move "
+                "that saturates the torque both ways pins it): estimate "
+                f"{e.value:.4g} within [{e.low:.4g}, {e.high:.4g}]"
+            )
         if not e.excited:
             out.append(
                 f"{e.name}: not excited ({why[e.name]}): left at its nominal value "
