@@ -170,18 +170,18 @@ def read_capture(path: str | Path, signals: dict[str, str] | None = None) -> Cap
 def _header(p: Path, text: bytes) -> tuple[float, dict[str, str], int]:
     """The VCD header read with pyvcd's tokenizer: (seconds per time unit, identifier of
     each variable name, byte offset of the body after ``$enddefinitions $end``)."""
-    from vcd.reader import TokenKind, VCDParseError, tokenize
+    from vcd.reader import Timescale, TokenKind, VarDecl, VCDParseError, tokenize
 
     unit = 1e-9
     ids: dict[str, str] = {}
     lines = text.split(b"\n")
     try:
         for tok in tokenize(io.BytesIO(text)):
-            if tok.kind is TokenKind.TIMESCALE:
-                ts = tok.data
-                unit = parse_timescale(f"{int(ts.magnitude)} {ts.unit.value}")
-            elif tok.kind is TokenKind.VAR:
-                ids.setdefault(tok.data.reference, tok.data.id_code)
+            data = tok.data
+            if isinstance(data, Timescale):
+                unit = parse_timescale(f"{int(data.magnitude)} {data.unit.value}")
+            elif isinstance(data, VarDecl):
+                ids.setdefault(data.reference, data.id_code)
             elif tok.kind is TokenKind.ENDDEFINITIONS:
                 end = tok.span.end
                 offset = sum(len(x) + 1 for x in lines[: end.line - 1]) + end.column - 1
@@ -310,7 +310,7 @@ def _read_vcd(p: Path, data: bytes, signals: dict[str, str] | None) -> Capture:
         if not roles:
             continue
         for r in roles:
-            if r == 0 and v == 1 and level[0] == 0 and time > first:
+            if r == 0 and v == 1 and level[0] == 0 and first is not None and time > first:
                 pulse_t.append(time)
                 pulse_sign.append(0)  # the dir level is read once the stamp ends
             level[r] = v

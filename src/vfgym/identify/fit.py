@@ -497,13 +497,14 @@ def fit(
                 break
             sol = again
         z = problem.full(sol.x)
-        evaluations += problem.evaluations
         plant = scale.plant(z)
-        resp = respond_many(records, [plant], settings)[0]
+        resp = respond_many(records, [plant], settings, delay)[0]
+        evaluations += 1
         sat = _saturated_s(resp, nominal)
         gain_seen = sat >= MIN_SATURATED_S
         if gain_seen == bool(free[4]):
             break
+        evaluations += problem.evaluations  # the next attempt has a problem of its own
         free = free.copy()
         free[4] = gain_seen
         if not gain_seen:
@@ -524,7 +525,6 @@ def fit(
     if others:
         steps = [-Ainv @ (jac.T @ r) for r in problem.at_delays(z, others)]
         cov = cov + sum(np.outer(d, d) for d in steps) / len(steps)
-        evaluations += len(others)
     sd_z = np.sqrt(np.maximum(np.diag(cov), 0.0))
     rms = float(np.sqrt(np.mean(res**2)))
     flat = _load_profile(problem, z, rms) if free[3] else (0.0, 0.0)
@@ -579,7 +579,7 @@ def fit(
         samples=int(res.size),
         saturated_s=_saturated_s(resp, nominal),
         excitation=exc,
-        evaluations=evaluations,
+        evaluations=evaluations + problem.evaluations,
         residuals=tuple(residuals),
         responses=tuple(resp),
     )
