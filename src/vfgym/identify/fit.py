@@ -24,12 +24,14 @@ One nuisance is fitted and then accounted for: the phase of the servo's sample c
 against the pulses (its speed counter latches every Ns ticks), which no capture records.
 The start tries every phase in steps of the residuals' sample and keeps the best; the
 covariance adds the spread of the Gauss–Newton steps the residuals at
-:data:`NUISANCE_PHASES` other phases would take from the optimum.
+:data:`NUISANCE_PHASES` other phases would take from the optimum, and likewise for where
+within its first count the motor started (:data:`NUISANCE_STARTS`).
 """
 
 from __future__ import annotations
 
 import math
+import struct
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -54,6 +56,10 @@ Z95 = 1.959963984540054
 NUISANCE_PHASES = 6
 """Other phases of the servo's sample clock whose effect on the estimate is added to the
 covariance."""
+
+NUISANCE_STARTS = (0.25, 0.5, 0.75)
+"""Starting positions of the motor within its first count (counts) whose effect on the
+estimate is added to the covariance."""
 
 HAC_FLOOR_S = 0.15
 """The Newey–West bandwidth is at least this long (s), a move's length: the residuals'
@@ -220,6 +226,7 @@ class _Problem:
         self.base = scale.z0.copy()
         self.evaluations = 0
         self.delay = 0  # ticks moving the servo's sample clock (model.respond)
+        self.start = 0.0  # where within its first count the motor starts (model.respond)
         self._cache: dict[bytes, np.ndarray] = {}
 
     def full(self, zf: np.ndarray) -> np.ndarray:
@@ -231,12 +238,12 @@ class _Problem:
         """Residual vectors for several full coordinate vectors, simulated as one batch."""
 
         def key(z: np.ndarray) -> bytes:
-            return z.tobytes() + self.delay.to_bytes(4, "little")
+            return z.tobytes() + self.delay.to_bytes(4, "little") + struct.pack("d", self.start)
 
         todo = [z for z in zs if key(z) not in self._cache]
         if todo:
             plants = [self.scale.plant(z) for z in todo]
-            out = respond_many(self.records, plants, self.settings, self.delay)
+            out = respond_many(self.records, plants, self.settings, self.delay, self.start)
             self.evaluations += len(todo)
             for z, resp in zip(todo, out, strict=True):
                 self._cache[key(z)] = np.concatenate(
@@ -254,6 +261,18 @@ class _Problem:
                 out.append(self.residuals_of([z])[0])
         finally:
             self.delay = keep
+        return out
+
+    def at_starts(self, z: np.ndarray, starts: Sequence[float]) -> list[np.ndarray]:
+        """Residuals of one point with the motor starting elsewhere within its count."""
+        keep = self.start
+        out = []
+        try:
+            for f in starts:
+                self.start = float(f)
+                out.append(self.residuals_of([z])[0])
+        finally:
+            self.start = keep
         return out
 
     def fun(self, zf: np.ndarray) -> np.ndarray:
@@ -525,6 +544,9 @@ def fit(
     if others:
         steps = [-Ainv @ (jac.T @ r) for r in problem.at_delays(z, others)]
         cov = cov + sum(np.outer(d, d) for d in steps) / len(steps)
+    # and over where within its first count the motor started, which no count shows
+    steps = [-Ainv @ (jac.T @ r) for r in problem.at_starts(z, NUISANCE_STARTS)]
+    cov = cov + sum(np.outer(d, d) for d in steps) / len(steps)
     sd_z = np.sqrt(np.maximum(np.diag(cov), 0.0))
     rms = float(np.sqrt(np.mean(res**2)))
     flat = _load_profile(problem, z, rms) if free[3] else (0.0, 0.0)

@@ -198,7 +198,36 @@ def torque_limit(plant: Plant, speed_rad_s: np.ndarray, torque_nm: np.ndarray) -
     return np.where(torque_nm * speed_rad_s > 0.0, curve, m.peak_torque_nm)
 
 
-def respond(record: Record, plant: Plant, settings: Settings, delay_ticks: int = 0) -> Response:
+def _run_from(
+    pulses: np.ndarray, plant: Plant, settings: Settings, theta0_rad: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`vfgym.plant.simulate`'s run of an external train, the motor starting at
+    ``theta0_rad`` (within the first count) instead of 0: (θ, τ, ω) every
+    :data:`SAMPLE_TICKS`-th tick."""
+    from vfgym.params import DEFAULT_MEASURES
+    from vfgym.plant import _kernel as K
+    from vfgym.plant import _layout as L
+    from vfgym.plant import pack
+
+    n = pulses.size
+    prm = pack(settings, plant, DEFAULT_MEASURES, 0.0, n, True)
+    st = np.empty(L.N_STATE, dtype=np.float64)
+    ring = np.empty(K.ring_size.py_func(prm), dtype=np.float64)
+    K.init_state.py_func(prm, st, ring)
+    st[L.S_THETA] = theta0_rad
+    rec = np.empty((L.N_ROWS, n // SAMPLE_TICKS), dtype=np.float64)
+    ext = np.ascontiguousarray(pulses, dtype=np.int8)
+    K.run_segment(np.zeros(n), ext, prm, st, ring, n, rec, SAMPLE_TICKS)
+    return rec[L.R_THETA], rec[L.R_TORQUE], rec[L.R_OMEGA]
+
+
+def respond(
+    record: Record,
+    plant: Plant,
+    settings: Settings,
+    delay_ticks: int = 0,
+    start_count: float = 0.0,
+) -> Response:
     """Simulate one record's pulse train on one plant.
 
     Parameters
@@ -214,6 +243,9 @@ def respond(record: Record, plant: Plant, settings: Settings, delay_ticks: int =
         Idle ticks added before the pre-roll, a multiple of :data:`SAMPLE_TICKS`: they
         move the servo's sample clock against the pulses (its phase on the machine is
         not recorded).
+    start_count : float
+        Where within its first count the motor starts, in [0, 1) counts (on the machine
+        it is not known).
 
     Returns
     -------
@@ -223,13 +255,19 @@ def respond(record: Record, plant: Plant, settings: Settings, delay_ticks: int =
     pulses = record.pulses
     if delay_ticks:
         pulses = np.concatenate([np.zeros(delay_ticks, dtype=np.int8), pulses])
-    tr = simulate(np.zeros(pulses.size), settings, plant, pulses=pulses, decimation=SAMPLE_TICKS)
     q = plant.motor.count_rad
+    if start_count == 0.0:
+        tr = simulate(
+            np.zeros(pulses.size), settings, plant, pulses=pulses, decimation=SAMPLE_TICKS
+        )
+        theta_rad, tau_nm, w_rad_s = tr.motor_rad, tr.torque_nm, tr.speed_rad_s
+    else:
+        theta_rad, tau_nm, w_rad_s = _run_from(pulses, plant, settings, start_count * q)
     j0 = (record.preroll_ticks + delay_ticks) // SAMPLE_TICKS - 1  # the capture's start
-    theta = tr.motor_rad / q
+    theta = theta_rad / q
     counts = theta[j0 + 1 :] - math.floor(theta[j0])
-    tau = tr.torque_nm[j0 + 1 :]
-    w = tr.speed_rad_s[j0 + 1 :]
+    tau = tau_nm[j0 + 1 :]
+    w = w_rad_s[j0 + 1 :]
     sat = np.abs(tau) >= torque_limit(plant, w, tau) * (1.0 - 1e-9)
     return Response(counts=counts, torque_nm=tau, saturated=sat, speed_rad_s=w)
 
@@ -239,6 +277,7 @@ def respond_many(
     plants: Sequence[Plant],
     settings: Settings,
     delay_ticks: int = 0,
+    start_count: float = 0.0,
 ) -> list[list[Response]]:
     """Every record on every plant, as one batch over threads (the kernel releases the GIL).
 
@@ -250,7 +289,7 @@ def respond_many(
         The candidate plants.
     settings : Settings
         As in :func:`respond`.
-    delay_ticks : int
+    delay_ticks, start_count
         As in :func:`respond`.
 
     Returns
@@ -262,7 +301,7 @@ def respond_many(
     workers = max(1, min(len(jobs), os.cpu_count() or 1))
 
     def one(ik: tuple[int, int]) -> Response:
-        return respond(records[ik[1]], plants[ik[0]], settings, delay_ticks)
+        return respond(records[ik[1]], plants[ik[0]], settings, delay_ticks, start_count)
 
     with ThreadPoolExecutor(max_workers=workers) as pool:
         done = list(pool.map(one, jobs))
