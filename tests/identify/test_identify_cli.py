@@ -38,6 +38,14 @@ def test_plan_then_identify_from_the_command_line(tmp_path, capsys):
                 level["pulse"] = tok.data.value
     assert set(ids.values()) == {"pulse", "dir"}
     assert rises == np.count_nonzero(make_plan(PAPER_AXIS).pulses)
+    # the dry run: a simulated capture of the moves on the nominal plant gives it back
+    dry = tmp_path / "plan" / "identify-moves-nominal.vcd"
+    assert main(["identify", "--capture", str(dry), "--out", str(tmp_path / "dry.yaml")]) == 0
+    out = capsys.readouterr().out
+    assert load_axis(tmp_path / "dry.yaml").plant.motor.inertia_kgm2 == pytest.approx(
+        PAPER_PLANT.motor.inertia_kgm2, rel=0.005
+    )
+    assert "note: load_torque_nm: seen only as a bound" in out
 
     rng = np.random.default_rng([27_182, 1])
     truth = draw_truth(PAPER_PLANT, rng, inertia_ratio=(0.0, 4.0))

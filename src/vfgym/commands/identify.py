@@ -13,8 +13,9 @@ block (the intervals widened by a stated margin).
 
 ``vfgym identify --plan --axis NOMINAL.yaml --out DIR`` writes the moves to run for an
 identification: ``DIR/identify-moves.yaml`` (the axis with those moves as its ``moves:``
-block) and ``DIR/identify-moves.vcd`` (their pulse/direction train, to replay). See
-docs/guide/identify.md.
+block), ``DIR/identify-moves.vcd`` (their pulse/direction train, to replay) and
+``DIR/identify-moves-nominal.vcd`` (a simulated 1 MHz capture of them on the nominal
+plant: what a capture looks like, and a dry run). See docs/guide/identify.md.
 """
 
 from __future__ import annotations
@@ -88,7 +89,7 @@ def _plan(axis: Any, settings: Any, out: Path) -> int:
 
     from vfgym._validate import check_output_path
     from vfgym.identify.plan import make_plan
-    from vfgym.identify.signals import train_edges, write_edges_vcd
+    from vfgym.identify.signals import record_capture, train_edges, write_edges_vcd
     from vfgym.moves.axis import MoveSet, MoveSets, write_axis
 
     if out.exists() and not out.is_dir():
@@ -103,6 +104,7 @@ def _plan(axis: Any, settings: Any, out: Path) -> int:
     )
     yaml_path = check_output_path("--out", str(out / "identify-moves.yaml"))
     vcd_path = check_output_path("--out", str(out / "identify-moves.vcd"))
+    dry_path = check_output_path("--out", str(out / "identify-moves-nominal.vcd"))
     write_axis(plan_axis, yaml_path)
     comment = (
         f"vfgym identify --plan: the identification moves of axis {axis.name}, "
@@ -112,6 +114,8 @@ def _plan(axis: Any, settings: Any, out: Path) -> int:
     write_edges_vcd(
         train_edges(plan.pulses, plan.tick_hz), vcd_path, encoder=False, comment=comment
     )
+    # what a 1 MHz capture of the moves on the nominal plant looks like: a dry run
+    record_capture(axis.plant, plan.pulses, dry_path, start_s=DRY_START_S, rest_s=DRY_REST_S)
     print(f"identification moves of axis {axis.name}: {plan.duration_s:.3g} s in all")
     for sc in plan.moves:
         print(
@@ -130,7 +134,18 @@ def _plan(axis: Any, settings: Any, out: Path) -> int:
             "separate unless the real axis is heavier (the gain is kept as set)"
         )
     print(f"wrote {yaml_path} (the moves: block) and {vcd_path} (pulse/dir to replay)")
+    print(
+        f"wrote {dry_path}: a 1 MHz capture of the moves on the nominal plant (simulated), "
+        "for a dry run of vfgym identify"
+    )
     return 0
+
+
+DRY_REST_S = 0.5
+"""The dry run's simulated rest before the moves (s)."""
+
+DRY_START_S = 0.3
+"""When the dry run's capture starts, within that rest (s)."""
 
 
 def _identify(axis: Any, settings: Any, args: argparse.Namespace) -> int:

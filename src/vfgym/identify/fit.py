@@ -89,8 +89,9 @@ class Estimate:
     excited : bool
         False when the captures cannot show it: held at its nominal value.
     one_sided : bool
-        True when the residual stays flat along it to the profile's end on one side
-        (the load torque below the torque limit): the interval is then a bound.
+        True when the residual stays flat along it for :data:`ONE_SIDED` % of the rated
+        torque or more (the load torque below the torque limit): the interval is then
+        a bound.
     """
 
     name: str
@@ -436,6 +437,10 @@ LOAD_SCANS = 3
 PROFILE_STEPS = (0.5, 1.0, 2.0, 3.0, 5.0, 8.0, 12.0, 20.0)
 """Load torque offsets (% of rated) of the profile check (:func:`_load_profile`)."""
 
+ONE_SIDED = 2.0
+"""A profile flat for this % of the rated torque or more marks the load torque as seen
+only as a bound (:attr:`Estimate.one_sided`)."""
+
 PROFILE_TOL = 0.1
 """The profile check's rise of the RMS residual that counts as seen (10 %)."""
 
@@ -567,9 +572,7 @@ def fit(
                 lo, hi = phys[i] - half * d, phys[i] + half * d
                 if name == "load_torque_nm":  # a flat side the Jacobian does not show
                     lo, hi = min(lo, phys[i] + flat[0] * d), max(hi, phys[i] + flat[1] * d)
-                    one_sided = max(-flat[0], flat[1]) >= PROFILE_STEPS[-1] - 1e-9 or (
-                        z[3] + flat[0] <= scale.lo[3] or z[3] + flat[1] >= scale.hi[3]
-                    )
+                    one_sided = max(-flat[0], flat[1]) >= ONE_SIDED
                 if name in ("coulomb_nm", "viscous_nm_s_rad"):
                     lo = max(0.0, lo)
             estimates.append(
