@@ -17,6 +17,8 @@ excite
     What the moves excite: constant-speed segments, directions, torque saturation.
 fit
     The least-squares estimator and its intervals.
+covariance
+    The Newey–West covariance of the estimates.
 plan
     The moves to run for an identification.
 report

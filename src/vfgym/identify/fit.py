@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from vfgym.identify.covariance import newey_west
 from vfgym.identify.excite import MIN_SATURATED_S, Excitation, excitation
 from vfgym.identify.model import SAMPLE_TICKS, Record, Response, respond_many
 from vfgym.params import Plant, Settings
@@ -295,45 +296,6 @@ class _Problem:
         return np.stack(cols, axis=1)  # d(measured − simulated)/dz
 
 
-def _hac(jac: np.ndarray, res: np.ndarray, lengths: Sequence[int], floor: int) -> np.ndarray:
-    """Newey–West estimate of the score's covariance, Σ_l w_l Σ_t g_t g_{t+l}ᵀ, per
-    capture (``lengths`` splits the rows), with g_t = J_t·r_t and Bartlett weights up to
-    the residuals' correlation length."""
-    p = jac.shape[1]
-    S = np.zeros((p, p))
-    start = 0
-    for n in lengths:
-        r = res[start : start + n]
-        g = jac[start : start + n] * r[:, None]
-        start += n
-        lag = _correlation_length(r, floor)
-        size = 1 << int(np.ceil(np.log2(2 * n)))
-        G = np.fft.rfft(g, size, axis=0)
-        for a in range(p):
-            for b in range(a, p):
-                cc = np.fft.irfft(np.conj(G[:, a]) * G[:, b], size)  # Σ_t g_a(t) g_b(t+l)
-                w = 1.0 - np.arange(lag + 1) / (lag + 1)
-                s = cc[0] + np.sum(w[1:] * (cc[1 : lag + 1] + cc[size - lag :][::-1]))
-                S[a, b] = S[b, a] = s
-    return S
-
-
-def _correlation_length(r: np.ndarray, floor: int) -> int:
-    """The Newey–West bandwidth (samples): twice the lag at which the residuals'
-    autocorrelation first falls below 0.05, at least ``floor``, at most a quarter of the
-    record."""
-    x = r - r.mean()
-    n = x.size
-    size = 1 << int(np.ceil(np.log2(2 * n)))
-    f = np.fft.rfft(x, size)
-    ac = np.fft.irfft(f * np.conj(f), size)[:n]
-    first = n // 4
-    if ac[0] > 0:
-        below = np.flatnonzero(ac / ac[0] < 0.05)
-        first = int(below[0]) if below.size else n // 4
-    return int(min(max(floor, 2 * first, 1), max(1, n // 4)))
-
-
 def _saturated_s(responses: Sequence[Response], plant: Plant) -> float:
     ticks = sum(int(np.count_nonzero(r.saturated)) for r in responses) * SAMPLE_TICKS
     return ticks / plant.tick_hz
@@ -542,7 +504,7 @@ def fit(
     except np.linalg.LinAlgError:
         Ainv = np.linalg.pinv(A)
     floor = round(HAC_FLOOR_S * nominal.tick_hz / SAMPLE_TICKS)
-    cov = Ainv @ _hac(jac, res, lengths, floor) @ Ainv
+    cov = Ainv @ newey_west(jac, res, lengths, floor) @ Ainv
     # the estimate's spread over the servo's sample-clock phase, which no capture records:
     # the Gauss–Newton step each other phase's residuals would take from the optimum
     others = [d for d in delays if d != delay][:: max(1, (len(delays) - 1) // NUISANCE_PHASES)]
