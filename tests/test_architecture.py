@@ -31,7 +31,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("plant",),  # params -> Trace
     ("moves",),  # what the plant is asked to do
     ("scoring",),  # measures -> constraints -> cost
-    ("tuning", "report", "envs"),  # built on the scoring path
+    ("tuning", "report", "envs", "identify"),  # built on the scoring path (identify: plant, moves)
     ("vfgym",),  # the public API (vfgym/__init__.py): re-exports of the layers below
     ("agents",),  # stable-baselines3 on the envs
     ("commands", "cli"),  # the command line

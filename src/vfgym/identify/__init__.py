@@ -1,0 +1,26 @@
+"""Identification of an axis's plant from a logic analyser's capture (``vfgym identify``).
+
+The recorded pulse train drives the axis's servo and motor in the exact simulator; the
+plant whose simulated encoder count best matches the recorded one, by least squares, gives
+the estimates (inertia, Coulomb and viscous friction, load torque, the drive's gain) and
+their 95 % intervals, written back as an axis with an ``uncertainty:`` block.
+
+Modules
+-------
+capture
+    Reading a capture: VCD (a logic analyser's, or ``vfgym export``'s) or CSV.
+signals
+    Writing pulse/direction and encoder edges as VCD (a plan to replay, a simulated capture).
+model
+    A capture on the simulator's tick grid, and its simulation on candidate plants.
+excite
+    What the moves excite: constant-speed segments, directions, torque saturation.
+fit
+    The least-squares estimator and its intervals.
+covariance
+    The Newey–West covariance of the estimates.
+plan
+    The moves to run for an identification.
+report
+    The identified axis, its uncertainty block, and what the captures cannot show.
+"""

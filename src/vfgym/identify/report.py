@@ -1,0 +1,363 @@
+"""The identified axis, its ``uncertainty:`` block, and what the captures cannot show.
+
+The identified axis is the nominal one with the estimates written in: the total inertia
+as the load's ``inertia_ratio`` (the rotor's inertia kept; below the rotor's own, the
+rotor's inertia itself is lowered, ratio 0), the friction and load torque as absolute
+values, and the drive's gain so that the K3 in force is the estimate (``follows_load``
+kept as set). Its ``uncertainty:`` block is made of the 95 % intervals widened by
+:data:`MARGIN` (and at least :data:`MIN_HALF` each side), relative to the identified
+plant as :class:`~vfgym.plant.uncertainty.Uncertainty` states them. A quantity the
+captures leave unknown keeps its nominal value with a wide range
+(:func:`vfgym.identify.fit.wide_range`); without a saturating move, every torque and the
+inertia are known only relative to the gain, so their ranges widen by the gain's.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from vfgym.identify.fit import PARAMS, QUANTISATION_FLOOR, Estimate, Fit
+from vfgym.identify.model import SAMPLE_TICKS, Record
+from vfgym.moves.axis import Axis
+from vfgym.params import Plant
+from vfgym.plant.uncertainty import FACTOR_RANGE, Uncertainty
+
+MARGIN = 2.0
+"""The uncertainty block's half-widths are this many times the 95 % intervals'."""
+
+MIN_HALF = {"inertia": 0.005, "torque_per_count": 0.005, "torque_share": 0.002}
+"""Least half-widths of the uncertainty block: 0.5 % on the factors, 0.2 % of the rated
+torque on the torques (viscous friction: its torque at the pulse train's top speed)."""
+
+EXPLAINED = 3.0
+"""A fit whose RMS residual exceeds this many quantisation floors does not explain the
+capture."""
+
+HOT_RATIO = 3.0
+"""Mean squared residual where the torque is at its limit or the speed above the knee,
+over the rest's, from which the torque–speed curve is named as the likely cause."""
+
+GEAR_TOLERANCE = 0.02
+"""Counts per pulse at rest farther than this share from the gear: the gear is wrong."""
+
+
+@dataclass(frozen=True)
+class Identified:
+    """The identified axis and what to say about it.
+
+    Attributes
+    ----------
+    axis : Axis
+        The nominal axis with the estimates and their uncertainty block.
+    fit : Fit
+        The fit it comes from.
+    notes : tuple of str
+        One line for each thing the captures cannot show.
+    explained : bool
+        False when the residual is far above the quantisation floor.
+    cause : str or None
+        The likely cause of a residual far above the floor.
+    """
+
+    axis: Axis
+    fit: Fit
+    notes: tuple[str, ...]
+    explained: bool
+    cause: str | None
+
+
+def identified_plant(nominal: Plant, fit: Fit) -> Plant:
+    """The nominal plant with the estimates written in (see the module doc).
+
+    Parameters
+    ----------
+    nominal : Plant
+        The nominal axis's plant.
+    fit : Fit
+        The fit.
+
+    Returns
+    -------
+    Plant
+        Simulates as :attr:`Fit.plant` does.
+    """
+    m, sv = nominal.motor, nominal.servo
+    total = (1.0 + m.inertia_ratio) * fit.estimate("inertia").value
+    rotor, ratio = m.rotor_inertia_kgm2, total - 1.0
+    if ratio < 0.0:
+        rotor, ratio = m.rotor_inertia_kgm2 * total, 0.0
+    motor = replace(
+        m,
+        rotor_inertia_kgm2=rotor,
+        inertia_ratio=ratio,
+        coulomb_nm=fit.estimate("coulomb_nm").value,
+        viscous_nm_s_rad=fit.estimate("viscous_nm_s_rad").value,
+        load_torque_nm=fit.estimate("load_torque_nm").value,
+    )
+    k3 = nominal.torque_per_count_nm * fit.estimate("torque_per_count").value
+    per = k3 / (1.0 + ratio) if sv.follows_load else k3
+    return replace(nominal, motor=motor, servo=replace(sv, torque_per_count_nm=per))
+
+
+def _widen(e: Estimate, scale: float) -> tuple[float, float]:
+    """The estimate's interval times :data:`MARGIN`, at least ``scale`` each side."""
+    lo = e.value - max(MARGIN * (e.value - e.low), scale)
+    hi = e.value + max(MARGIN * (e.high - e.value), scale)
+    return lo, hi
+
+
+def uncertainty_of(fit: Fit, nominal: Plant) -> Uncertainty:
+    """The uncertainty block of the identified axis (see the module doc).
+
+    Parameters
+    ----------
+    fit : Fit
+        The fit.
+    nominal : Plant
+        The nominal plant (its rated torque and top speed give the least half-widths).
+
+    Returns
+    -------
+    Uncertainty
+        Inertia and gain as factors on the identified values, the torques absolute.
+    """
+    m = nominal.motor
+    t_min = MIN_HALF["torque_share"] * m.rated_torque_nm
+    ranges: dict[str, tuple[float, float]] = {}
+    gain = fit.estimate("torque_per_count")
+    g_lo, g_hi = (1.0, 1.0) if gain.excited else (gain.low, gain.high)
+    for name in PARAMS:
+        e = fit.estimate(name)
+        if name in ("inertia", "torque_per_count"):
+            if e.excited:
+                lo, hi = _widen(e, MIN_HALF[name] * e.value)
+                f_lo, f_hi = lo / e.value, hi / e.value
+            else:
+                f_lo, f_hi = e.low, e.high
+            if name == "inertia":
+                f_lo, f_hi = f_lo * g_lo, f_hi * g_hi
+            ranges[name] = (max(FACTOR_RANGE[0], f_lo), min(FACTOR_RANGE[1], f_hi))
+            continue
+        scale = t_min / nominal.pulse_top_speed_rad_s if name == "viscous_nm_s_rad" else t_min
+        lo, hi = _widen(e, scale) if e.excited else (e.low, e.high)
+        ends = [lo * g_lo, lo * g_hi, hi * g_lo, hi * g_hi]
+        lo, hi = min(ends), max(ends)
+        if name != "load_torque_nm":
+            lo = max(0.0, lo)
+        ranges[name] = (lo, hi)
+    b_lo, b_hi = ranges["viscous_nm_s_rad"]
+    b_most = 0.99 * m.peak_torque_nm / m.knee_speed_rad_s
+    ranges["viscous_nm_s_rad"] = (min(b_lo, b_most), min(b_hi, b_most))
+    c_lo, c_hi = ranges["coulomb_nm"]
+    c_hi = min(c_hi, 0.5 * m.peak_torque_nm)
+    ranges["coulomb_nm"] = (min(c_lo, c_hi), c_hi)
+    room = 0.95 * m.peak_torque_nm - c_hi
+    l_lo, l_hi = ranges["load_torque_nm"]
+    ranges["load_torque_nm"] = (max(l_lo, -room), min(l_hi, room))
+    return Uncertainty(**ranges)
+
+
+def not_excited_notes(fit: Fit) -> list[str]:
+    """One line for each quantity the captures do not excite or bound on one side only.
+
+    Parameters
+    ----------
+    fit : Fit
+        The fit.
+
+    Returns
+    -------
+    list of str
+        The lines, naming the quantity, why, and the value and range it is left with.
+    """
+    exc = fit.excitation
+    why = {
+        "coulomb_nm": "constant speed in one direction only: only Coulomb friction plus load "
+        "torque is seen; run the moves both ways",
+        "viscous_nm_s_rad": "constant speed at fewer than two speeds: run constant-speed "
+        "segments at two or more speeds",
+        "load_torque_nm": "no constant-speed segment: run moves that cruise",
+        "torque_per_count": "the torque never reaches its limit, so the response fixes only "
+        "J/K3 and torque/K3; inertia, friction and load ranges are widened by the gain's",
+        "inertia": "no move accelerates the axis",
+    }
+    if not exc.speeds_rad_s:
+        why["coulomb_nm"] = why["load_torque_nm"]
+        why["viscous_nm_s_rad"] = why["load_torque_nm"]
+    out = []
+    for e in fit.estimates:
+        if e.one_sided:
+            out.append(
+                f"{e.name}: seen only as a bound (below the torque limit a load torque larger "
+                "than the Coulomb friction only shifts the servo's following error, at rest as "
+                "in motion, which a count relative to the capture's start cannot see; a move "
+                "that saturates the torque both ways pins it): estimate "
+                f"{e.value:.4g} within [{e.low:.4g}, {e.high:.4g}]"
+            )
+        if not e.excited:
+            out.append(
+                f"{e.name}: not excited ({why[e.name]}): left at its nominal value "
+                f"{e.value:.4g} with the range [{e.low:.4g}, {e.high:.4g}]"
+            )
+    return out
+
+
+def likely_cause(fit: Fit, records: Sequence[Record], nominal: Plant) -> str:
+    """The likely cause of a residual far above the quantisation floor.
+
+    Checked in turn: the encoder counts per pulse at rest against the gear; a residual
+    whose power sits in one narrow band (a resonance the one-mass model lacks); a
+    residual :data:`HOT_RATIO` times larger (mean square) where the fitted plant is at
+    its torque limit or above the motor's knee speed (its torque–speed curve: another
+    motor); else the motor preset or the encoder's lines in general.
+
+    Parameters
+    ----------
+    fit : Fit
+        The fit.
+    records : sequence of Record
+        The captures it fitted.
+    nominal : Plant
+        The nominal plant.
+
+    Returns
+    -------
+    str
+        One clause naming the likely cause and the axis file's key to check.
+    """
+    gear = nominal.servo.gear
+    ratio = counts_per_pulse(records, nominal.tick_hz)
+    if ratio is not None and abs(ratio - gear) > GEAR_TOLERANCE * gear:
+        return (
+            f"the gear: the capture moves {ratio:.4g} encoder counts per pulse, the "
+            f"axis says plant.servo.gear = {gear} (or plant.motor.encoder_lines is wrong)"
+        )
+    res = np.concatenate(fit.residuals)
+    spec = np.abs(np.fft.rfft(res - res.mean())) ** 2
+    freqs = np.fft.rfftfreq(res.size, SAMPLE_TICKS / nominal.tick_hz)
+    if spec.size > 10:
+        k = int(np.argmax(spec[1:])) + 1
+        band = (freqs > 0.9 * freqs[k]) & (freqs < 1.1 * freqs[k])
+        if freqs[k] > 5.0 and spec[band].sum() > 0.5 * spec[1:].sum():
+            return (
+                f"a resonance near {freqs[k]:.3g} Hz that the one-mass model lacks (a "
+                "compliant coupling or belt): the residual's power sits in that band"
+            )
+    m = nominal.motor
+    hot = np.concatenate(
+        [r.saturated | (np.abs(r.speed_rad_s) > m.knee_speed_rad_s) for r in fit.responses]
+    )
+    if 0 < hot.sum() < hot.size and np.mean(res[hot] ** 2) > HOT_RATIO * np.mean(res[~hot] ** 2):
+        return (
+            "the motor's torque-speed curve or peak torque: the residual sits where the "
+            "torque is at its limit or the speed above the knee; a wrong motor preset "
+            "(plant.motor.preset)"
+        )
+    return (
+        "a wrong motor preset (plant.motor.preset) or encoder lines "
+        "(plant.motor.encoder_lines), or a capture of another axis"
+    )
+
+
+def counts_per_pulse(records: Sequence[Record], tick_hz: float) -> float | None:
+    """Encoder counts moved per command pulse, between rests of at least 20 ms.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The captures.
+    tick_hz : float
+        The controller's tick rate (Hz).
+
+    Returns
+    -------
+    float or None
+        The ratio (the gear, on a machine the axis file describes), or ``None`` without
+        two rests.
+    """
+    moved = pulses = 0.0
+    for r in records:
+        n = np.cumsum(r.pulses[r.preroll_ticks :].astype(np.int64))
+        rest = _rest_samples(r, tick_hz)
+        if rest.size >= 2:
+            moved += float(np.abs(np.diff(r.measured[rest])).sum())
+            pulses += float(np.abs(np.diff(n[(rest + 1) * SAMPLE_TICKS - 1])).sum())
+    return moved / pulses if pulses > 0 else None
+
+
+def _rest_samples(record: Record, tick_hz: float) -> np.ndarray:
+    """The last sample of each idle stretch of at least 20 ms (the axis at rest)."""
+    s = SAMPLE_TICKS
+    p = record.pulses[record.preroll_ticks :]
+    n = p.size // s
+    busy = np.abs(p[: n * s]).reshape(n, s).sum(axis=1) > 0
+    need = max(1, round(0.02 * tick_hz / s))
+    out = []
+    run = 0
+    for j in range(n):
+        run = 0 if busy[j] else run + 1
+        if run >= need and (j + 1 == n or busy[j + 1]):
+            out.append(j)
+    return np.asarray(out, dtype=np.int64)
+
+
+def identify_report(nominal_axis: Axis, fit: Fit, records: Sequence[Record]) -> Identified:
+    """The identified axis and its notes.
+
+    Parameters
+    ----------
+    nominal_axis : Axis
+        The nominal axis.
+    fit : Fit
+        The fit of the captures.
+    records : sequence of Record
+        The captures.
+
+    Returns
+    -------
+    Identified
+        The axis with the estimates and the uncertainty block, and what cannot be known.
+    """
+    plant = identified_plant(nominal_axis.plant, fit)
+    unc = uncertainty_of(fit, nominal_axis.plant)
+    axis = replace(
+        nominal_axis,
+        plant=plant,
+        uncertainty=unc,
+        description=(nominal_axis.description + " " if nominal_axis.description else "")
+        + f"(identified from {', '.join(r.source for r in records)})",
+    )
+    notes = not_excited_notes(fit)
+    explained = fit.residual_rms_counts <= EXPLAINED * QUANTISATION_FLOOR
+    cause = None
+    if not explained:
+        cause = likely_cause(fit, records, nominal_axis.plant)
+        notes.append(
+            f"the model does not explain the capture: residual {fit.residual_rms_counts:.3g} "
+            f"counts RMS against a quantisation floor of {QUANTISATION_FLOOR:.3g}; likely "
+            f"cause: {cause}"
+        )
+    for r in records:
+        if r.misplaced:
+            notes.append(
+                f"{r.source}: {r.misplaced} pulses fell on a tick already holding one and were "
+                "moved to the next: the pulse clock is not the axis's tick (plant.tick_hz)"
+            )
+    return Identified(axis=axis, fit=fit, notes=tuple(notes), explained=explained, cause=cause)
+
+
+__all__ = [
+    "EXPLAINED",
+    "MARGIN",
+    "MIN_HALF",
+    "Identified",
+    "counts_per_pulse",
+    "identified_plant",
+    "identify_report",
+    "likely_cause",
+    "not_excited_notes",
+    "uncertainty_of",
+]

@@ -1,0 +1,67 @@
+"""Captures as a logic analyser records them, simulated from plants drawn at random.
+
+A true plant (never named by a test: drawn from a seed within the benchmark's ranges)
+runs the pulse train after a long rest, as the machine did; the record starts at an
+arbitrary instant during that rest, every edge is rounded to the analyser's 1 µs samples
+(1 MHz), and the encoder is seen only as its A/B edges.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from vfgym.identify.signals import record_capture
+from vfgym.params import Plant
+from vfgym.plant.uncertainty import PlantVariant
+
+REST_S = 0.5
+"""Rest simulated before the pulse train (s): the record starts after 40–90 % of it, the
+axis long settled (a load torque sags it for tens of ms after the simulation's start)."""
+
+
+@dataclass(frozen=True)
+class Truth:
+    """A drawn true plant and its parameters as the fit states them."""
+
+    plant: Plant
+    inertia: float
+    coulomb_nm: float
+    viscous_nm_s_rad: float
+    load_torque_nm: float
+    torque_per_count: float = 1.0
+
+    def value(self, name: str) -> float:
+        return float(getattr(self, name))
+
+
+def draw_truth(nominal: Plant, rng: np.random.Generator, *, inertia_ratio=(0.0, 8.0)) -> Truth:
+    """A true plant: inertia ratio, Coulomb (≤ 5 % rated), viscous (≤ 3e-4), load (±5 %)."""
+    rated = nominal.motor.rated_torque_nm
+    r = rng.uniform(*inertia_ratio)
+    factor = (1.0 + r) / (1.0 + nominal.motor.inertia_ratio)
+    c = rng.uniform(0.0, 0.05) * rated
+    b = rng.uniform(0.0, 3e-4)
+    load = rng.uniform(-0.05, 0.05) * rated
+    m = nominal.motor
+    v = PlantVariant(
+        inertia=factor,
+        coulomb_offset_nm=c - m.coulomb_nm,
+        viscous_offset_nm_s_rad=b - m.viscous_nm_s_rad,
+        load_offset_nm=load - m.load_torque_nm,
+    )
+    return Truth(v.apply(nominal), factor, c, b, load)
+
+
+def capture_vcd(
+    plant: Plant,
+    pulses: np.ndarray,
+    path: Path,
+    rng: np.random.Generator,
+) -> Path:
+    """Record ``pulses`` run on ``plant`` as a 1 MHz logic analyser would (see the module doc)."""
+    return record_capture(
+        plant, pulses, path, start_s=REST_S * rng.uniform(0.4, 0.9), rest_s=REST_S
+    )

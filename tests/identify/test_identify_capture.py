@@ -1,0 +1,115 @@
+"""Reading captures: against the simulated trace itself, through sigrok-cli, and as CSV."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from vfgym.identify.capture import parse_signal_map, read_capture
+from vfgym.identify.signals import trace_edges, write_edges_vcd
+from vfgym.io.trace_csv import write_trace_csv
+from vfgym.io.vcd import edge_counts, write_vcd
+from vfgym.moves.scenarios import SCENARIOS
+from vfgym.params import PAPER_PLANT, PAPER_SETTINGS
+from vfgym.plant import simulate
+
+
+@pytest.fixture(scope="module")
+def trace():
+    """The paper's reversal move (both directions) by the V-F controller."""
+    sc = SCENARIOS["reversal"]
+    plant = sc.plant(PAPER_PLANT)
+    return simulate(sc.command(plant), PAPER_SETTINGS, plant)
+
+
+def _tick_end_counts(trace, cap, ticks):
+    """The capture's count at the end of the given ticks (a hair after, for rounding)."""
+    T = trace.plant.tick_s
+    return cap.count_at((ticks + 1) * T + 1e-12)
+
+
+def test_an_export_reads_as_the_trace_it_was_written_from(trace, tmp_path):
+    path = write_vcd(trace, tmp_path / "move.vcd")
+    cap = read_capture(path)
+    want = edge_counts(trace)
+    assert np.count_nonzero(cap.pulse_sign > 0) == want["pulses_pos"]
+    assert np.count_nonzero(cap.pulse_sign < 0) == want["pulses_neg"]
+    assert cap.count[-1] == want["final_count"]
+    assert cap.end_s == pytest.approx(trace.n_ticks * trace.plant.tick_s, abs=1e-9)
+    # the pulse of tick i rises half a tick in, with the sign of the train
+    T = trace.plant.tick_s
+    ticks = np.flatnonzero(trace.pulses)
+    assert np.allclose(cap.pulse_s, (ticks + 0.5) * T, atol=1e-9)
+    assert np.array_equal(cap.pulse_sign, trace.pulses[ticks])
+    # the decoded count is floor(theta / q) at every tick boundary
+    every = np.arange(0, trace.n_ticks, 7)
+    q = trace.plant.motor.count_rad
+    want_c = np.floor(trace.motor_rad[every] / q).astype(np.int64)
+    assert np.array_equal(_tick_end_counts(trace, cap, every), want_c)
+
+
+@pytest.mark.skipif(
+    shutil.which("sigrok-cli") is None,
+    reason="sigrok-cli is not installed (Debian package sigrok-cli; .ci/sigrok.sh installs it)",
+)
+def test_an_export_round_tripped_through_sigrok_reads_the_same(trace, tmp_path):
+    src = write_vcd(trace, tmp_path / "move.vcd")
+    out = tmp_path / "sigrok.vcd"
+    subprocess.run(
+        ["sigrok-cli", "-I", "vcd", "-i", str(src), "-O", "vcd", "-o", str(out)],
+        check=True,
+        capture_output=True,
+        timeout=120,
+    )
+    assert b"libsigrok" in out.read_bytes()[:2000]
+    a, b = read_capture(src), read_capture(out)
+    for name in ("pulse_s", "pulse_sign", "count_s", "count"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    assert a.end_s == pytest.approx(b.end_s)
+
+
+def test_sigrok_channel_names_are_mapped_with_signals(trace, tmp_path):
+    rng_start = 0.0123456
+    edges = trace_edges(trace, start_s=rng_start)
+    path = write_edges_vcd(
+        edges,
+        tmp_path / "d.vcd",
+        timescale="1 us",
+        names=("D0", "D1", "D2", "D3"),
+        scope="libsigrok",
+    )
+    with pytest.raises(ValueError, match=r"signal 'pulse' .*missing.*--signals"):
+        read_capture(path)
+    cap = read_capture(path, parse_signal_map("pulse=D0,dir=D1,enc_a=D2,enc_b=D3"))
+    assert cap.pulse_s.size == edges.pulse_s.size
+    assert cap.count[-1] == edges.count[-1]
+
+
+def test_a_1mhz_record_keeps_every_pulse_and_the_count(trace, tmp_path):
+    """Rounded to 1 µs the A/B edges of fast counting may share a sample: two steps on."""
+    edges = trace_edges(trace, start_s=0.0004321)
+    cap = read_capture(write_edges_vcd(edges, tmp_path / "r.vcd", timescale="1 us"))
+    assert np.array_equal(cap.pulse_sign, edges.pulse_sign)
+    assert np.max(np.abs(cap.pulse_s - edges.pulse_s)) <= 0.5e-6 + 1e-12
+    assert cap.count[-1] == edges.count[-1]
+
+
+def test_a_csv_trace_reads_as_the_trace(trace, tmp_path):
+    path = write_trace_csv(trace, tmp_path / "move.csv")
+    cap = read_capture(path)
+    want = edge_counts(trace)
+    assert np.count_nonzero(cap.pulse_sign > 0) == want["pulses_pos"]
+    assert np.count_nonzero(cap.pulse_sign < 0) == want["pulses_neg"]
+    assert cap.count[-1] == want["final_count"]
+    T = trace.plant.tick_s
+    ticks = np.flatnonzero(trace.pulses)
+    assert np.allclose(cap.pulse_s, (ticks + 0.5) * T - T, atol=1e-9)  # from the first row
+
+
+def test_signal_map_refuses_unknown_signals():
+    with pytest.raises(ValueError, match="--signals="):
+        parse_signal_map("clock=D0")
+    assert parse_signal_map("pulse=D0")["enc_a"] == "enc_a"

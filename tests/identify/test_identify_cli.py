@@ -1,0 +1,171 @@
+"""``vfgym identify`` end to end, and every bad input as one line with exit status 2."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from capture_synth import capture_vcd, draw_truth
+
+from vfgym.cli import main
+from vfgym.identify.plan import make_plan
+from vfgym.identify.signals import trace_edges, train_edges, write_edges_vcd
+from vfgym.io.trace_csv import write_trace_csv
+from vfgym.moves.axis import PAPER_AXIS, load_axis
+from vfgym.moves.scenarios import SCENARIOS
+from vfgym.params import PAPER_PLANT, PAPER_SETTINGS
+from vfgym.plant import simulate
+
+
+def test_plan_then_identify_from_the_command_line(tmp_path, capsys):
+    assert main(["identify", "--plan", "--out", str(tmp_path / "plan")]) == 0
+    out = capsys.readouterr().out
+    assert "identify-step-fwd" in out and "identify-speed3-back" in out
+    plan_axis = load_axis(tmp_path / "plan" / "identify-moves.yaml")
+    names = [sc.name for sc in plan_axis.scenarios("train")]
+    assert names == [sc.name for sc in make_plan(PAPER_AXIS).moves]
+    # the VCD to replay holds the plan's pulse train, as pyvcd's reader sees it
+    from vcd.reader import TokenKind, tokenize
+
+    rises = 0
+    with (tmp_path / "plan" / "identify-moves.vcd").open("rb") as fh:
+        ids = {}
+        level = {}
+        for tok in tokenize(fh):
+            if tok.kind is TokenKind.VAR:
+                ids[tok.data.id_code] = tok.data.reference
+            elif tok.kind is TokenKind.CHANGE_SCALAR and ids[tok.data.id_code] == "pulse":
+                rises += tok.data.value == "1" and level.get("pulse") == "0"
+                level["pulse"] = tok.data.value
+    assert set(ids.values()) == {"pulse", "dir"}
+    assert rises == np.count_nonzero(make_plan(PAPER_AXIS).pulses)
+    # the dry run: a simulated capture of the moves on the nominal plant gives it back
+    dry = tmp_path / "plan" / "identify-moves-nominal.vcd"
+    assert main(["identify", "--capture", str(dry), "--out", str(tmp_path / "dry.yaml")]) == 0
+    out = capsys.readouterr().out
+    assert load_axis(tmp_path / "dry.yaml").plant.motor.inertia_kgm2 == pytest.approx(
+        PAPER_PLANT.motor.inertia_kgm2, rel=0.005
+    )
+    assert "note: load_torque_nm: seen only as a bound" in out
+
+    rng = np.random.default_rng([27_182, 1])
+    truth = draw_truth(PAPER_PLANT, rng, inertia_ratio=(0.0, 4.0))
+    cap = capture_vcd(truth.plant, make_plan(PAPER_AXIS).pulses, tmp_path / "cap.vcd", rng)
+    out_axis = tmp_path / "identified.yaml"
+    assert main(["identify", "--capture", str(cap), "--out", str(out_axis)]) == 0
+    out = capsys.readouterr().out
+    assert "beside the quantisation floor 0.289 counts RMS" in out
+    ident = load_axis(out_axis)
+    assert not ident.uncertainty.exact
+    assert ident.plant.motor.inertia_kgm2 == pytest.approx(truth.plant.motor.inertia_kgm2, rel=0.02)
+
+
+@pytest.fixture(scope="module")
+def move():
+    """A simulated move with rest before and after (the paper's reversal, delayed)."""
+    sc = SCENARIOS["reversal"]
+    f = PAPER_PLANT.tick_hz
+    cmd = np.concatenate([np.zeros(round(0.02 * f)), sc.command(PAPER_PLANT)])
+    return simulate(cmd, PAPER_SETTINGS, PAPER_PLANT)
+
+
+def _vcd(move, path, **kw):
+    start = kw.pop("start_s", 0.01)
+    stop = kw.pop("stop_s", None)
+    return write_edges_vcd(trace_edges(move, start_s=start, stop_s=stop), path, **kw)
+
+
+def _csv(move, path, drop=None, cell=None):
+    write_trace_csv(move, path)
+    lines = path.read_text().splitlines()
+    if drop:
+        head = lines[0].split(",")
+        k = head.index(drop)
+        lines = [",".join(x for j, x in enumerate(row.split(",")) if j != k) for row in lines]
+    if cell:
+        row = lines[5].split(",")
+        row[lines[0].split(",").index("time_s")] = cell
+        lines[5] = ",".join(row)
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+BAD = {
+    "missing-file": (lambda m, d: d / "none.vcd", [], ["none.vcd", "cannot be read"]),
+    "not-a-vcd": (
+        lambda m, d: (d / "junk.vcd").write_bytes(b"\x00\x01 hello") and d / "junk.vcd",
+        [],
+        ["junk.vcd", "expected a VCD"],
+    ),
+    "corrupt-body": (
+        lambda m, d: (
+            (d / "c.vcd").write_text(_vcd(m, d / "c0.vcd").read_text().replace("#", "#x", 3))
+            and d / "c.vcd"
+        ),
+        [],
+        ["c.vcd", "is not a whole number"],
+    ),
+    "missing-signal": (
+        lambda m, d: _vcd(m, d / "s.vcd", encoder=False),
+        [],
+        ["s.vcd", "signal 'enc_a'", "--signals"],
+    ),
+    "sigrok-names-unmapped": (
+        lambda m, d: _vcd(m, d / "n.vcd", names=("D0", "D1", "D2", "D3"), scope="libsigrok"),
+        [],
+        ["n.vcd", "signal 'pulse' (named 'pulse') is missing", "D0"],
+    ),
+    "bad-signal-map": (
+        lambda m, d: _vcd(m, d / "m.vcd"),
+        ["--signals", "pulse:D0"],
+        ["--signals='pulse:D0'", "signal=name"],
+    ),
+    "shorter-than-a-move": (
+        lambda m, d: _vcd(m, d / "short.vcd", stop_s=0.05),
+        [],
+        ["short.vcd", "after its last pulse", "shorter than a move"],
+    ),
+    "starts-inside-a-move": (
+        lambda m, d: _vcd(m, d / "late.vcd", start_s=0.03),
+        [],
+        ["late.vcd", "starts inside a move"],
+    ),
+    "no-pulse": (
+        lambda m, d: write_edges_vcd(
+            train_edges(np.zeros(1000, np.int8), PAPER_PLANT.tick_hz), d / "idle.vcd"
+        ),
+        [],
+        ["idle.vcd", "no command pulse"],
+    ),
+    "csv-column-missing": (
+        lambda m, d: _csv(m, d / "m.csv", drop="encoder_count"),
+        [],
+        ["m.csv", "column 'encoder_count' is missing", "time_s, pulse_count, encoder_count"],
+    ),
+    "csv-not-a-number": (
+        lambda m, d: _csv(m, d / "x.csv", cell="abc"),
+        [],
+        ["x.csv", "line 6", "'time_s' holds 'abc'", "expected a number"],
+    ),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD))
+def test_a_bad_capture_is_one_line_and_exit_2(move, tmp_path, capsys, case):
+    make, extra, words = BAD[case]
+    path = make(move, tmp_path)
+    code = main(["identify", "--capture", str(path), "--out", str(tmp_path / "o.yaml"), *extra])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("vfgym identify: error: "), err
+    for w in words:
+        assert w in lines[0], (w, lines[0])
+    assert not (tmp_path / "o.yaml").exists()
+
+
+def test_identify_without_a_capture_or_with_both_is_refused(tmp_path, capsys):
+    assert main(["identify", "--out", str(tmp_path / "o.yaml")]) == 2
+    assert "--capture FILE is required" in capsys.readouterr().err
+    code = main(["identify", "--plan", "--capture", "x.vcd", "--out", str(tmp_path)])
+    assert code == 2
+    assert "--capture is not allowed with --plan" in capsys.readouterr().err
