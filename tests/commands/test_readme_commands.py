@@ -153,6 +153,34 @@ README_RUNS: dict[str, list[Run]] = {
             trim="evaluate",
         ),
     ],
+    "vfgym identify --plan --axis experiments/axes/paper.yaml --out id-plan": [
+        Run(
+            "identify-plan",
+            ["identify", "--plan", "--axis", "experiments/axes/paper.yaml", "--out", "id-plan"],
+            writes=(
+                "id-plan/identify-moves.yaml",
+                "id-plan/identify-moves.vcd",
+                "id-plan/identify-moves-nominal.vcd",
+            ),
+        ),
+    ],
+    "vfgym identify --axis experiments/axes/paper.yaml --capture "
+    "id-plan/identify-moves-nominal.vcd --out identified.yaml": [
+        Run(
+            "identify-dry-run",
+            [
+                "identify",
+                "--axis",
+                "experiments/axes/paper.yaml",
+                "--capture",
+                "id-plan/identify-moves-nominal.vcd",
+                "--out",
+                "identified.yaml",
+            ],
+            ("identify-plan",),
+            ("identified.yaml",),
+        ),
+    ],
     "vfgym evaluate --settings runs/sweep/belt/best.yaml --axis experiments/axes/belt.yaml": [
         Run(
             "eval-belt",

@@ -73,6 +73,15 @@ class AxisNote(UserWarning):
         super().__init__(message)
 
 
+def _listed(axis: Axis) -> dict[str, Scenario]:  # (Axis: a forward reference)
+    """The axis's listed moves by key path (``moves.train[0]``)."""
+    return {
+        f"moves.{split}[{i}]": sc
+        for split in SPLITS
+        for i, sc in enumerate(axis.moves.of(split).moves)
+    }
+
+
 @dataclass(frozen=True)
 class Axis:
     """One machine and its moves: the plant (with its load), the measures' windows, and
@@ -125,11 +134,7 @@ class Axis:
             if not isinstance(getattr(self, key), kind):
                 raise ValueError(f"{key}={getattr(self, key)!r} must be a vfgym {kind.__name__}")
         self.uncertainty.check_motor(self.plant.motor)
-        listed = {
-            f"moves.{split}[{i}]": sc
-            for split in SPLITS
-            for i, sc in enumerate(self.moves.of(split).moves)
-        }
+        listed = _listed(self)
         for key, sc in listed.items():
             check_arrives(sc, self.plant, key)
         drawn = {
@@ -139,7 +144,6 @@ class Axis:
         }
         check_measures(self.measures, self.plant, listed, drawn)
         check_limit(self.plant)
-        check_holding(self.measures, self.plant, listed)
 
     def design_plants(self) -> tuple[PlantVariant, ...]:
         """The true plants a tuner must stay feasible on: the corners of the axis's
@@ -514,7 +518,10 @@ def _load(path: str, stamp: tuple[int, int] | None) -> Axis:
         )
     try:
         axis = axis_from_dict(data, Path(path).stem)
+        # what the model says of the machine, for a file a command is to run on (an Axis
+        # made in Python, e.g. one identified from a capture, is only noted)
         check_servo(axis.plant)  # a simulation: once a file, as the load is cached
+        check_holding(axis.measures, axis.plant, _listed(axis))
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
     for note in axis_notes(axis):  # once a file: the load is cached
@@ -536,13 +543,11 @@ def axis_notes(axis: Axis) -> list[str]:
     list of str
         The notes, each naming its key.
     """
-    listed = {
-        f"moves.{split}[{i}]": sc
-        for split in SPLITS
-        for i, sc in enumerate(axis.moves.of(split).moves)
-    }
     notes = [f"plant.motor: {n}" for n in (axis.plant.motor.accel_note,) if n is not None]
-    held = check_holding(axis.measures, axis.plant, listed)
+    try:
+        held = check_holding(axis.measures, axis.plant, _listed(axis))
+    except ValueError as exc:  # (load_axis refuses it; an Axis made in Python is noted)
+        held = str(exc)
     return notes + ([] if held is None else [held])
 
 
