@@ -20,14 +20,7 @@ from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, aggregate_costs
-from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
-from vfgym.tuning._stored import (
-    FORMAT,
-    RESULT_ATTR,
-    constraint_writes,
-    result_attr,
-    stored_result,
-)
+from vfgym.tuning._stored import CONSTRAINTS_KEY, RESULT_ATTR, result_attr, stored_result
 
 if TYPE_CHECKING:
     from optuna import Study, Trial
@@ -132,12 +125,6 @@ class Objective:
         Windows and bands of the measures (an axis's).
     aggregate, cvar_alpha : str, float
         The cost's aggregate over the scenarios (:func:`aggregate`).
-
-    Attributes
-    ----------
-    trial_format : int
-        How :meth:`record` stores a result (:mod:`vfgym.tuning._stored`): the study's
-        format, which a worker sets from the study it runs (new studies: the latest).
     """
 
     def __init__(
@@ -157,7 +144,6 @@ class Objective:
         self.measures = measures
         self.laws = laws
         self.form = form
-        self.trial_format = FORMAT
         self.cache: dict[tuple, Result] = {}
         self.simulated = 0
         self.on_enter: Callable[[], None] | None = None
@@ -167,9 +153,6 @@ class Objective:
         self._found_in: tuple | None = None
 
     def __call__(self, trial: Trial) -> float | list[float]:
-        # Before the claim lock goes: a retried trial inherits its dead worker's attribute,
-        # and another worker's recovery must not see this one running under that name.
-        trial.set_user_attr(WORKER_ATTR, _worker_id())
         if self.on_enter:
             self.on_enter()
         settings = space.suggest(trial, self.laws)
@@ -235,9 +218,9 @@ class Objective:
         return [r for r in out if r is not None]
 
     def record(self, trial: Trial, res: Result, trial_id: int | None = None) -> None:
-        """Store a result on the trial: its user attribute(s), unless the trial holds
-        them already (a retried trial), and its constraints (:mod:`vfgym.tuning._stored`:
-        one write each in the latest format, a write a part in format 1).
+        """Store a result on the trial: its user attribute, unless the trial holds it
+        already (a retried trial), and its constraints (:mod:`vfgym.tuning._stored`: one
+        write each).
 
         Parameters
         ----------
@@ -249,15 +232,11 @@ class Objective:
             The trial's id in ``trial.storage`` (default: looked up, :func:`trial_id_of`).
         """
         have = trial.user_attrs  # (the trial's own copy: no read)
-        if self.trial_format >= 2:
-            writes = {RESULT_ATTR: result_attr(res.attrs)}
-        else:
-            writes = dict(res.attrs)
-        for k, v in writes.items():
-            if k not in have or have[k] != v:
-                trial.set_user_attr(k, v)
+        result = result_attr(res.attrs)
+        if have.get(RESULT_ATTR) != result:
+            trial.set_user_attr(RESULT_ATTR, result)
         values = dict(zip(CONSTRAINTS, res.attrs["constraints"], strict=True))
-        set_constraints(trial, values, trial_id, self.trial_format)
+        set_constraints(trial, values, trial_id)
 
     def score(self, settings: Settings) -> Result:
         """Values and user attributes of one setting (one batched evaluation).
@@ -381,9 +360,7 @@ def trial_id_of(trial: Any, study_id: int | None = None) -> int:
     return int(storage.get_trial_id_from_study_id_trial_number(study_id, trial.number))
 
 
-def set_constraints(
-    trial: Any, values: dict[str, float], trial_id: int | None = None, fmt: int = 1
-) -> None:
+def set_constraints(trial: Any, values: dict[str, float], trial_id: int | None = None) -> None:
     """Set the trial's constraints, as ``trial.set_constraint`` does (Optuna 5 reads them
     from the trial; its ``constraints_func`` is deprecated), without reading the trial
     first: on an RDB storage each read rebuilds the whole trial. A retried trial carries
@@ -398,11 +375,6 @@ def set_constraints(
         The constraints by name (≤ 0: met).
     trial_id : int or None
         The trial's id in ``trial.storage`` (default: :func:`trial_id_of`).
-    fmt : int
-        The study's trial format (:mod:`vfgym.tuning._stored`): from 2, constraints named
-        as :data:`vfgym.scoring.CONSTRAINTS`, in its order, are stored as one list (one
-        write); otherwise each as ``constraints:NAME``.
-
     Raises
     ------
     ValueError
@@ -412,5 +384,4 @@ def set_constraints(
     for name, v in values.items():
         if math.isnan(float(v)):
             raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
-    for key, value in constraint_writes(values, fmt):
-        trial.storage.set_trial_system_attr(tid, key, value)
+    trial.storage.set_trial_system_attr(tid, CONSTRAINTS_KEY, [float(v) for v in values.values()])
