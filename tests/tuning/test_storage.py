@@ -3,6 +3,7 @@ resolve_storage and found again by find_storage, which `vfgym plot history|paret
 
 from __future__ import annotations
 
+import os
 import shutil
 
 import optuna
@@ -72,22 +73,37 @@ sys.exit(cli.main(sys.argv[2:]))
 """
 
 
-@pytest.mark.parametrize("kind", ["sqlite", "journal"])
+PG_URL = os.environ.get("VFGYM_TEST_POSTGRES_URL")
+
+
+@pytest.mark.parametrize(
+    "kind",
+    [
+        "sqlite",
+        "journal",
+        pytest.param(
+            "postgresql",
+            marks=pytest.mark.skipif(not PG_URL, reason="VFGYM_TEST_POSTGRES_URL is not set"),
+        ),
+    ],
+)
 def test_two_sweeps_started_at_the_same_moment_on_a_new_study_both_run(tmp_path, kind):
     """Both processes create the storage's tables and the study at once: neither fails
     (Optuna's table creation races: "table studies already exists"), the warm starts are
     enqueued once, and the study ends with the trials asked for."""
-    import os
     import subprocess
     import sys
     import time
+    import uuid
     from collections import Counter
     from pathlib import Path
 
     src = str(Path(__file__).resolve().parents[2] / "src")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([src, os.environ.get("PYTHONPATH", "")]))
-    store = f"sqlite:///{tmp_path}/s.db" if kind == "sqlite" else f"journal:{tmp_path}/s.log"
-    argv = ["sweep", "--runs-dir", str(tmp_path), "--study", "s", "--storage", store,
+    store = {"sqlite": f"sqlite:///{tmp_path}/s.db", "journal": f"journal:{tmp_path}/s.log"}
+    store["postgresql"] = str(PG_URL)
+    name = f"race-{uuid.uuid4().hex[:10]}"  # new, also on a shared server
+    argv = ["sweep", "--runs-dir", str(tmp_path), "--study", name, "--storage", store[kind],
             "--scenarios", "short-move", "--trials", "8", "--no-plots",
             "--no-progress"]  # fmt: skip
     at = str(time.time() + 6.0)
@@ -96,8 +112,8 @@ def test_two_sweeps_started_at_the_same_moment_on_a_new_study_both_run(tmp_path,
     procs = [subprocess.Popen(run, env=env, text=True, stdout=pipe, stderr=pipe) for _ in range(2)]
     outs = [p.communicate(timeout=300) for p in procs]
     assert [p.returncode for p in procs] == [0, 0], [err for _, err in outs]
-    spec = tuning.resolve_storage(store, tmp_path)
-    study = optuna.load_study(study_name="s", storage=tuning.open_storage(spec))
+    spec = tuning.resolve_storage(store[kind], tmp_path)
+    study = optuna.load_study(study_name=name, storage=tuning.open_storage(spec))
     states = Counter(t.state for t in study.trials)
     assert states[optuna.trial.TrialState.COMPLETE] == 8
     assert set(states) <= {optuna.trial.TrialState.COMPLETE, optuna.trial.TrialState.PRUNED}

@@ -2,8 +2,7 @@
 constraints set on the trial for the samplers that learn them.
 
 Trials are scored one at a time (:meth:`Objective.__call__`, what ``study.optimize``
-calls) or as a batch whose settings are simulated in ONE batched, multi-threaded kernel
-call (:meth:`Objective.results`, then :meth:`Objective.record` per trial).
+calls); :meth:`Objective.results` also scores several settings in ONE batched kernel call.
 """
 
 from __future__ import annotations
@@ -146,26 +145,19 @@ class Objective:
         self.form = form
         self.cache: dict[tuple, Result] = {}
         self.simulated = 0
-        self.on_enter: Callable[[], None] | None = None
         self.guard: Callable[[], Any] = nullcontext
         self._found: dict[tuple, Result] = {}
         self._seen: set[int] = set()
         self._found_in: tuple | None = None
 
     def __call__(self, trial: Trial) -> float | list[float]:
-        if self.on_enter:
-            self.on_enter()
         settings = space.suggest(trial, self.laws)
         (res,) = self.results(trial.study, [trial.number], [settings])
         self.record(trial, res)
         return res.values
 
     def results(
-        self,
-        study: Study | None,
-        numbers: Sequence[int] | Callable[[], Sequence[int]],
-        settings: list[Settings],
-        while_running: Callable[[], None] | None = None,
+        self, study: Study | None, numbers: Sequence[int], settings: list[Settings]
     ) -> list[Result]:
         """The result of each setting, simulating only those never scored.
 
@@ -176,16 +168,11 @@ class Objective:
         Parameters
         ----------
         study : optuna.Study or None
-            The study whose completed trials may already hold a setting's result (None:
-            those :meth:`learn` read last, without reading the study again).
-        numbers : sequence of int, or a callable giving them
-            The trials' numbers (recorded as ``cached_from`` of the results they create);
-            a callable is called after ``while_running`` (which may number the trials).
+            The study whose completed trials may already hold a setting's result.
+        numbers : sequence of int
+            The trials' numbers (recorded as ``cached_from`` of the results they create).
         settings : list of Settings
             The settings, one per trial.
-        while_running : callable or None
-            Work to do while the batch is simulated (:func:`vfgym.evaluate`'s), else
-            before the results are copied; it holds interrupts back itself, if it must.
 
         Returns
         -------
@@ -193,8 +180,8 @@ class Objective:
             One per setting, in order.
         """
         out: list[Result | None] = [self.cache.get(settings_key(s)) for s in settings]
-        if any(r is None for r in out):
-            found = self._completed(study) if study is not None else self._found
+        if any(r is None for r in out) and study is not None:
+            found = self._completed(study)
             for i, s in enumerate(settings):
                 if out[i] is None:
                     out[i] = found.get(settings_key(s))
@@ -204,17 +191,14 @@ class Objective:
                 todo.setdefault(settings_key(s), i)
         if todo:
             with self.guard():
-                scored = self.score_many([settings[i] for i in todo.values()], while_running)
+                scored = self.score_many([settings[i] for i in todo.values()])
             self.simulated += len(todo)
-            nums = numbers() if callable(numbers) else numbers
             for (key, i), res in zip(todo.items(), scored, strict=True):
-                self.cache[key] = Result(res.values, res.attrs | {"cached_from": nums[i]})
+                self.cache[key] = Result(res.values, res.attrs | {"cached_from": numbers[i]})
                 out[i] = res
             for i, s in enumerate(settings):
                 if out[i] is None:
                     out[i] = self.cache[settings_key(s)]
-        elif while_running is not None:
-            while_running()
         return [r for r in out if r is not None]
 
     def record(self, trial: Trial, res: Result, trial_id: int | None = None) -> None:
@@ -255,17 +239,13 @@ class Objective:
         """
         return self.score_many([settings])[0]
 
-    def score_many(
-        self, settings: list[Settings], while_running: Callable[[], None] | None = None
-    ) -> list[Result]:
+    def score_many(self, settings: list[Settings]) -> list[Result]:
         """Values and user attributes of each setting, all in one batched evaluation.
 
         Parameters
         ----------
         settings : list of Settings
             The settings.
-        while_running : callable or None
-            Work to do while the batch is simulated (:func:`vfgym.evaluate`'s).
 
         Returns
         -------
@@ -278,7 +258,6 @@ class Objective:
                 self.scenarios,
                 plant=self.plant,
                 measures=self.measures,
-                while_running=while_running,
             ),
             *self.how,
         )
@@ -295,18 +274,6 @@ class Objective:
             }
             out.append(Result(cost if self.form == "cost" else objectives, attrs))
         return out
-
-    def learn(self, study: Study) -> None:
-        """Read the study's trials completed since the last read (a worker does, before it
-        claims a batch, so that the batch's results need not read the study again: that
-        read would rebuild the batch's own running trials).
-
-        Parameters
-        ----------
-        study : optuna.Study
-            The study.
-        """
-        self._completed(study)
 
     def _completed(self, study: Study) -> dict[tuple, Result]:
         """Results of the study's completed trials, by settings (the lowest-numbered of each).
