@@ -6,12 +6,14 @@ workers and enqueueing them again with their settings (RDB storages, :mod:`._sto
 the timeout, the trials' bookkeeping. What is kept here, each for what Optuna does not do:
 the trial budget of the whole study (``MaxTrialsCallback`` counts after a trial, so
 several workers would overshoot it), the dead workers of a journal (its storage has no
-heartbeat), and a Ctrl-C that only lands inside a simulation (:class:`DeferredInterrupt`).
+heartbeat) and of a trial killed before its first heartbeat (Optuna never takes it as
+stale), and a Ctrl-C that only lands inside a simulation (:class:`DeferredInterrupt`).
 """
 
 from __future__ import annotations
 
 import copy
+import datetime
 import json
 import os
 import signal
@@ -237,7 +239,8 @@ class _Budget:
     """The study's trial budget across workers: :meth:`wait` says whether a trial may run
     (waiting, interrupts allowed, while the running ones could fill the budget), looking
     for dead workers' trials meanwhile (Optuna's ``fail_stale_trials`` on RDB storages,
-    which ``optimize`` only runs when a trial starts; on a journal, by process)."""
+    which ``optimize`` only runs when a trial starts; on a journal, by process; and a
+    trial whose worker died before writing its name, which has no heartbeat either)."""
 
     def __init__(
         self, study: Study, budget: int, every: float, journal: bool, interrupts: Any
@@ -245,6 +248,7 @@ class _Budget:
         self.study, self.budget, self.every, self.journal = study, budget, every, journal
         self.interrupts = interrupts
         self.recovered: list[int] = []
+        self.orphan_s = max(30.0, 6.0 * every)
         self._due = 0.0
 
     def done(self) -> bool:
@@ -283,11 +287,15 @@ class _Budget:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
                 optuna.storages.fail_stale_trials(self.study)
-            return
+        now = datetime.datetime.now()
         running = (optuna.trial.TrialState.RUNNING,)
         for t in self.study.get_trials(deepcopy=False, states=running):
             worker = t.user_attrs.get(WORKER_ATTR)
-            dead = worker is not None and _worker_alive(worker) is False
+            age = (now - t.datetime_start).total_seconds() if t.datetime_start else 0.0
+            if worker is None:  # its worker died before it began (Optuna: no heartbeat)
+                dead = age > self.orphan_s
+            else:  # (a retry holds its dead worker's name until its new worker writes its own)
+                dead = self.journal and age > self.every and _worker_alive(worker) is False
             if dead and _fail_and_retry(self.study, copy.deepcopy(t)):
                 self.recovered.append(t.number)
 
