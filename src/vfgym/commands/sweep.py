@@ -133,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
         interrupted = True
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     finally:
-        bar.update(study)
+        bar.update(study, force=True)
         bar.close()
     elapsed = time.monotonic() - t0
     code = _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapsed, reports)
@@ -246,7 +246,8 @@ def _record(run_dir, args, cfg, name, spec) -> None:
 
 
 class _Bar:
-    """tqdm over completed trials, with the best cost so far."""
+    """tqdm over completed trials, with the best cost so far (read at most twice a second:
+    each read is the study's, a storage query a trial would otherwise add)."""
 
     def __init__(self, cfg, total: int, initial: int, name: str) -> None:
         from tqdm import tqdm
@@ -260,10 +261,16 @@ class _Bar:
             dynamic_ncols=True,
         )
         self._n = min(initial, total)
+        self._at = 0.0
 
-    def update(self, study) -> None:
+    def update(self, study, force: bool = False) -> None:
+        import time
+
         from vfgym.tuning import best_trial, stored_result
 
+        if not force and time.monotonic() - self._at < 0.5:
+            return
+        self._at = time.monotonic()
         n = min(_counts(study)["complete"], self._bar.total)
         best = best_trial(study)
         res = None if best is None else stored_result(best)

@@ -40,6 +40,9 @@ if TYPE_CHECKING:
     from optuna import Study, Trial
     from optuna.trial import FrozenTrial
 
+RETRY = "failed_trial"
+"""System attribute of a retried trial (Optuna's ``RetryHeartbeatStaleTrialCallback``)."""
+
 WORKER_ATTR = "worker"
 """User attribute of a trial: ``host/pid/start-time`` of the process that ran it."""
 
@@ -203,7 +206,10 @@ def run_worker(
 
         def run_trial(trial: Trial) -> float | list[float]:
             trial.set_user_attr(WORKER_ATTR, worker_id())
-            if not gate.wait(trial.number):
+            go = gate.wait(trial.number)
+            if go is None:
+                raise optuna.TrialPruned("a retried trial takes the last place")
+            if not go:
                 study.stop()
                 raise optuna.TrialPruned("the study already holds the trials asked for")
             current[:] = [trial.number]
@@ -215,7 +221,7 @@ def run_worker(
                 rep.trials.append(trial.number)
             if on_trial is not None:
                 on_trial(st)
-            if not gate.wait():
+            if not gate.wait(made=trial.number + 1):
                 st.stop()
             interrupts.check()
 
@@ -250,6 +256,8 @@ class _Budget:
         self.recovered: list[int] = []
         self.orphan_s = max(30.0, 6.0 * every)
         self._due = 0.0
+        # trials made, and those completed, running or waiting, at the last read
+        self._last = (0, budget)
 
     def done(self) -> bool:
         """Whether the study holds the trials asked for."""
@@ -258,24 +266,42 @@ class _Budget:
         complete = (optuna.trial.TrialState.COMPLETE,)
         return len(self.study.get_trials(deepcopy=False, states=complete)) >= self.budget
 
-    def wait(self, number: int | None = None, poll_s: float = 0.2) -> bool:
+    def wait(self, number: int | None = None, made: int = 0, poll_s: float = 0.2) -> bool | None:
         """Wait until a trial may run: False once the study holds its trials, else True
         when the completed and running trials (those numbered below ``number``: the
-        trial's own is running) are fewer than asked."""
+        trial's own is running) are fewer than asked; None when trial ``number`` must give
+        its place to a dead worker's retried trial (waiting, it runs next). No read is
+        needed while the last one left room for every trial made since (``number``, else
+        ``made``, trials known to exist), each of which may be running, as may every
+        trial then waiting."""
         import optuna
 
         state = optuna.trial.TrialState
+        self._recover()
+        made_then, busy = self._last
+        if busy + ((made if number is None else number) - made_then) < self.budget:
+            return True
         while True:
-            self._recover()
             trials = self.study.get_trials(deepcopy=False)
             n = sum(t.state == state.COMPLETE for t in trials)
+            waiting = sum(t.state == state.WAITING for t in trials)
+            running = sum(t.state == state.RUNNING for t in trials)
+            self._last = (len(trials), n + running + waiting)
             if n >= self.budget:
                 return False
             lower = trials if number is None else trials[:number]
-            if n + sum(t.state == state.RUNNING for t in lower) < self.budget:
+            taken = n + sum(t.state == state.RUNNING for t in lower)
+            if number is not None and taken < self.budget:
+                retries = [
+                    t for t in trials if t.state == state.WAITING and RETRY in t.system_attrs
+                ]
+                if taken + len(retries) >= self.budget:
+                    return None  # a dead worker's retried trial takes the place first
+            if taken < self.budget:
                 return True
             with self.interrupts.allowed():
                 time.sleep(poll_s)
+            self._recover()
 
     def _recover(self) -> None:
         import optuna
