@@ -1,5 +1,5 @@
 """The default sampler: a compass search in coordinates that fit the problem, from the warm
-starts, with Gaussian-process checks for a better basin; one generation per batch.
+starts, with Gaussian-process checks for a better basin; one generation at a time.
 
 The sweep's optimum sits on constraint edges (the acceleration limit, L = value), where a
 model of the cost is poor and a compass (pattern) search is good: it moves one axis at a
