@@ -351,8 +351,9 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     )
     lines = [
         f"study {study.study_name}: {done} "
-        f"({n['fail']} failed, {n['running']} running, {n['waiting']} waiting) "
-        f"in {elapsed:.1f} s"
+        f"({n['fail']} failed, {n['running']} running, {n['waiting']} waiting"
+        + (f", {n['pruned']} pruned: over the budget" if n["pruned"] else "")
+        + f") in {elapsed:.1f} s"
     ]
     if reports:
         sims = sum(int(r.get("simulated", 0)) for r in reports)
