@@ -154,16 +154,18 @@ def test_worker_killed_mid_trial_loses_nothing(tmp_path, kind, n):
     assert p.returncode == 0, err
     final = load(tmp_path, study_name, kind)
     trials = final.trials
-    # The killed worker's trial failed; it is retried exactly once.
+    # The killed worker's trial failed (and, on a loaded machine, maybe a live worker's
+    # whose heartbeat came late: that worker goes on); each is retried exactly once.
     failed = [t.number for t in trials if t.state == FAIL]
-    assert failed == [victim]
+    assert victim in failed
     for number in failed:
         retries = [t for t in trials if t.system_attrs.get("failed_trial") == number]
         assert len(retries) == 1 and retries[0].state == COMPLETE
         # Settings chosen before the kill are kept; the rest are drawn when it runs again.
         assert trials[number].params.items() <= retries[0].params.items()
     states = Counter(t.state for t in trials)
-    assert states[COMPLETE] == n and states[FAIL] == 1 and set(states) <= {COMPLETE, FAIL, PRUNED}
+    assert states[COMPLETE] == n and states[FAIL] == len(failed)
+    assert set(states) <= {COMPLETE, FAIL, PRUNED}
     for n, values in kept.items():  # nothing a worker finished is lost
         assert trials[n].state == COMPLETE and trials[n].values == values
     summary = yaml.safe_load((tmp_path / "sweep" / study_name / "summary.yaml").read_text())

@@ -11,6 +11,8 @@ the kernel drops when its holder dies.
 
 from __future__ import annotations
 
+import contextlib
+import copy
 import os
 import random
 import re
@@ -234,7 +236,7 @@ def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = Non
                 from optuna.storages.journal import JournalFileBackend, JournalStorage
 
                 Path(spec.url).parent.mkdir(parents=True, exist_ok=True)
-                return JournalStorage(JournalFileBackend(spec.url, _JournalFlock(spec.url)))  # type: ignore[arg-type]
+                return JournalStorage(JournalFileBackend(spec.url, _Flock(spec.url + ".flock")))  # type: ignore[arg-type]
             if spec.path:
                 Path(spec.path).parent.mkdir(parents=True, exist_ok=True)
             storage = _rdb(spec, heartbeat, grace)
@@ -278,7 +280,7 @@ def _rdb(spec: StorageSpec, heartbeat: int, grace: int | None) -> RDBStorage:
                 engine_kwargs=kw,
                 heartbeat_interval=heartbeat,
                 grace_period=grace or 2 * heartbeat,
-                heartbeat_stale_trial_callback=RetryStale(),
+                heartbeat_stale_trial_callback=RetryStale(spec.path),
             )
         except (sqlalchemy.exc.SQLAlchemyError, optuna.exceptions.StorageInternalError):
             if attempt == CREATE_TRIES - 1:
@@ -291,33 +293,69 @@ MAX_RETRY = 3
 """A trial whose worker died is enqueued again at most this many times."""
 
 
-class RetryStale:
-    """Optuna's ``RetryHeartbeatStaleTrialCallback`` (at most :data:`MAX_RETRY` times), also
-    noting the trials it retried: kept because a sweep reports which dead workers' trials
-    this process retried, which Optuna's callback does not record."""
+def retry_once(study: Study, trial: FrozenTrial, lock: str | None = None) -> bool:
+    """Enqueue a failed trial again with its settings (Optuna's
+    ``RetryHeartbeatStaleTrialCallback``, at most :data:`MAX_RETRY` times) unless a worker
+    already has: kept because Optuna fails a stale trial in a read and a write, which two
+    workers on SQLite (no row locks) or a journal may both pass, and both would retry it.
 
-    def __init__(self) -> None:
-        import optuna
+    Parameters
+    ----------
+    study : optuna.Study
+        The trial's study.
+    trial : optuna.trial.FrozenTrial
+        The failed trial.
+    lock : str or None
+        A file locked (``flock``) around the check and the retry: the storage file's
+        ``.retry`` (SQLite, journal); None on PostgreSQL, whose rows are locked.
 
-        self.failed: list[int] = []
+    Returns
+    -------
+    bool
+        Whether this call enqueued it.
+    """
+    import optuna
+
+    history = [*trial.system_attrs.get("retry_history", []), trial.number]
+    with _Flock(lock + ".retry") if lock else contextlib.nullcontext():
+        trials = study.get_trials(deepcopy=False)
+        if any(t.system_attrs.get("retry_history") == history for t in trials):
+            return False
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-            self._retry = optuna.storages.RetryHeartbeatStaleTrialCallback(max_retry=MAX_RETRY)
+            retry = optuna.storages.RetryHeartbeatStaleTrialCallback(max_retry=MAX_RETRY)
+            retry(study, copy.deepcopy(trial))
+    return True
+
+
+class RetryStale:
+    """The heartbeat-stale trial callback: :func:`retry_once`, noting the trials it
+    retried (a sweep reports them; Optuna's callback does not record them).
+
+    Parameters
+    ----------
+    lock : str or None
+        :func:`retry_once`'s lock.
+    """
+
+    def __init__(self, lock: str | None = None) -> None:
+        self.lock = lock
+        self.failed: list[int] = []
 
     def __call__(self, study: Study, trial: FrozenTrial) -> None:
-        self.failed.append(trial.number)
-        self._retry(study, trial)
+        if retry_once(study, trial, self.lock):
+            self.failed.append(trial.number)
 
 
-class _JournalFlock:
-    """An ``flock`` on ``PATH.flock`` guarding journal appends (Optuna's journal backend
-    only calls ``acquire``/``release``): kept because, unlike Optuna's own file locks, the
-    kernel drops it when its holder dies, so a worker killed while writing does not stall
-    the others for the stale-lock grace period. Every process writing the journal must
-    use it (vfgym's workers do; readers take no lock)."""
+class _Flock:
+    """An ``flock`` on the file ``path``; guarding journal appends (on ``PATH.flock``:
+    Optuna's journal backend only calls ``acquire``/``release``) it is kept because, unlike
+    Optuna's own file locks, the kernel drops it when its holder dies, so a worker killed
+    while writing does not stall the others for the stale-lock grace period. Every process
+    writing the journal must use it (vfgym's workers do; readers take no lock)."""
 
     def __init__(self, path: str) -> None:
-        self._path = path + ".flock"
+        self._path = path
         self._fd: int | None = None
 
     def acquire(self) -> bool:
@@ -327,6 +365,13 @@ class _JournalFlock:
         fcntl.flock(fd, fcntl.LOCK_EX)
         self._fd = fd
         return True
+
+    def __enter__(self) -> _Flock:
+        self.acquire()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
 
     def release(self) -> None:
         import fcntl

@@ -33,7 +33,7 @@ from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
 from vfgym.tuning._objective import Objective
-from vfgym.tuning._storage import MAX_RETRY, RetryStale, StorageSpec, open_storage
+from vfgym.tuning._storage import RetryStale, StorageSpec, open_storage, retry_once
 from vfgym.tuning._study import make_sampler, trial_budget
 
 if TYPE_CHECKING:
@@ -183,7 +183,6 @@ def run_worker(
     warnings.filterwarnings("ignore", message="Constraints have been set, but CmaEsSampler")
     rep = WorkerReport()
     scenarios = cfg.scenario_list()
-    budget = trial_budget(cfg)
     seed = None if cfg.seed is None else cfg.seed + index
     with DeferredInterrupt() as interrupts:
         storage = open_storage(spec, cfg.heartbeat, cfg.grace)
@@ -201,7 +200,7 @@ def run_worker(
         objective.guard = interrupts.allowed
         # First call compiles/loads the kernel before any trial is started.
         evaluate(PAPER_SETTINGS, scenarios[:1], **on_axis)
-        gate = _Budget(study, budget, cfg.heartbeat, spec.kind == "journal", interrupts)
+        gate = _Budget(study, cfg, spec, interrupts)
         current: list[int] = []
 
         def run_trial(trial: Trial) -> float | list[float]:
@@ -226,12 +225,18 @@ def run_worker(
             interrupts.check()
 
         try:
-            if gate.wait():
-                study.optimize(run_trial, timeout=cfg.timeout, callbacks=[after])
+            while gate.wait():
+                try:
+                    study.optimize(run_trial, timeout=cfg.timeout, callbacks=[after])
+                    break
+                except optuna.exceptions.UpdateFinishedTrialError:
+                    # Another worker took this one's trial as dead (its heartbeat late past
+                    # the grace period) and retried it: go on with the next.
+                    current.clear()
             rep.stopped = "done" if gate.done() else "timeout"
         except KeyboardInterrupt:
             rep.stopped = "interrupted"
-            _retry_interrupted(study, current)
+            _retry_interrupted(study, current, spec.path)
             raise
         finally:
             rep.simulated = objective.simulated
@@ -248,16 +253,16 @@ class _Budget:
     which ``optimize`` only runs when a trial starts; on a journal, by process; and a
     trial whose worker died before writing its name, which has no heartbeat either)."""
 
-    def __init__(
-        self, study: Study, budget: int, every: float, journal: bool, interrupts: Any
-    ) -> None:
-        self.study, self.budget, self.every, self.journal = study, budget, every, journal
+    def __init__(self, study: Study, cfg: SweepConfig, spec: StorageSpec, interrupts: Any) -> None:
+        self.study, self.budget, self.every = study, trial_budget(cfg), cfg.heartbeat
+        self.workers = cfg.workers  # (this command's; other commands on the study: rare)
+        self.journal, self.lock = spec.kind == "journal", spec.path
         self.interrupts = interrupts
         self.recovered: list[int] = []
-        self.orphan_s = max(30.0, 6.0 * every)
+        self.orphan_s = max(30.0, 6.0 * self.every)
         self._due = 0.0
         # trials made, and those completed, running or waiting, at the last read
-        self._last = (0, budget)
+        self._last = (0, self.budget)
 
     def done(self) -> bool:
         """Whether the study holds the trials asked for."""
@@ -279,7 +284,9 @@ class _Budget:
         state = optuna.trial.TrialState
         self._recover()
         made_then, busy = self._last
-        if busy + ((made if number is None else number) - made_then) < self.budget:
+        # Between trials, room also for a trial each other worker may have made since.
+        known = number if number is not None else made + self.workers
+        if busy + (known - made_then) < self.budget:
             return True
         while True:
             trials = self.study.get_trials(deepcopy=False)
@@ -322,23 +329,23 @@ class _Budget:
                 dead = age > self.orphan_s
             else:  # (a retry holds its dead worker's name until its new worker writes its own)
                 dead = self.journal and age > self.every and _worker_alive(worker) is False
-            if dead and _fail_and_retry(self.study, copy.deepcopy(t)):
+            if dead and _fail_and_retry(self.study, copy.deepcopy(t), self.lock):
                 self.recovered.append(t.number)
 
 
-def _retry_interrupted(study: Study, current: list[int]) -> None:
+def _retry_interrupted(study: Study, current: list[int], lock: str | None) -> None:
     """Enqueue again the trial an interrupt failed (its settings kept)."""
     import optuna
 
     for number in current:
         t = copy.deepcopy(study.get_trials(deepcopy=False)[number])
         if t.state == optuna.trial.TrialState.FAIL:
-            _retry(study, t)
+            retry_once(study, t, lock)
         elif t.state == optuna.trial.TrialState.RUNNING:
-            _fail_and_retry(study, t)
+            _fail_and_retry(study, t, lock)
 
 
-def _fail_and_retry(study: Study, trial: FrozenTrial) -> bool:
+def _fail_and_retry(study: Study, trial: FrozenTrial, lock: str | None) -> bool:
     """Mark a running trial failed and enqueue its settings again; False if it had ended."""
     import optuna
 
@@ -346,16 +353,7 @@ def _fail_and_retry(study: Study, trial: FrozenTrial) -> bool:
         study.tell(trial.number, state=optuna.trial.TrialState.FAIL)
     except (RuntimeError, ValueError, optuna.exceptions.UpdateFinishedTrialError):
         return False
-    _retry(study, trial)
-    return True
-
-
-def _retry(study: Study, trial: FrozenTrial) -> None:
-    import optuna
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-        optuna.storages.RetryHeartbeatStaleTrialCallback(max_retry=MAX_RETRY)(study, trial)
+    return retry_once(study, trial, lock)
 
 
 def worker_id() -> str:
