@@ -56,7 +56,7 @@ class Seconds(NamedTuple):
 class Sweep(NamedTuple):
     """A timed sweep: its seconds, the settings of its completed trials, the wall
     seconds each trial took, by completion (from the previous completion, or the sweep's
-    start: a batch's time falls on its first trial), and the SQL statements it ran."""
+    start), and the SQL statements it ran."""
 
     seconds: Seconds
     settings: list

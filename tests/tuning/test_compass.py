@@ -1,4 +1,4 @@
-"""The compass sampler's local model step (no simulation: synthetic observations)."""
+"""The compass sampler's search steps (no simulation: synthetic observations)."""
 
 from __future__ import annotations
 
@@ -7,55 +7,7 @@ from typing import NamedTuple
 import numpy as np
 import pytest
 
-from vfgym.tuning._model import Observation, propose_local
-
-
-def _observe(points: np.ndarray) -> list[Observation]:
-    """A cost falling along the diagonal (u0 + u1) behind a diagonal constraint edge
-    u1 - u0 <= 0.05: an axis poll from the centre (0.5, 0.5) either breaks the constraint
-    or raises the cost; only a move along the edge both ways at once pays."""
-    out = []
-    for i, u in enumerate(points):
-        cost = float(np.exp(2.0 - (u[0] + u[1]) + 0.1 * (u[2] - 0.5) ** 2))
-        g = float(u[1] - u[0] - 0.05)
-        out.append(Observation(i, u.copy(), "rise", cost, max(g, 0.0), g <= 0.0, np.array([g])))
-    return out
-
-
-def test_local_points_stay_in_the_box_and_follow_the_diagonal_edge():
-    rng = np.random.default_rng(0)
-    centre = np.array([0.5, 0.5, 0.5, 0.5])
-    steps = 0.04
-    polls = [centre + s * steps * np.eye(4)[d] for d in range(4) for s in (1, -1)]
-    x = np.vstack([centre, *polls, centre + rng.uniform(-0.15, 0.15, (20, 4))])
-    obs = _observe(x)
-    radius = np.full(4, 2 * steps)
-    pts = propose_local(x, obs, centre, radius, [], 3, np.random.default_rng(1))
-    assert len(pts) == 3
-    for p in pts:
-        assert np.all(np.abs(p - centre) <= radius + 1e-12)  # within the box
-    best_centre = obs[0].cost
-    wins = [o for o in _observe(np.array(pts)) if o.feasible and o.cost < best_centre]
-    assert wins  # at least one beats the centre, feasibly: a diagonal move
-    moved = np.array(pts[0]) - centre
-    assert moved[0] > 0 and moved[1] > 0  # both coordinates at once, up the edge
-
-
-def test_local_points_are_a_function_of_the_seed():
-    x = np.random.default_rng(2).uniform(0.3, 0.7, (25, 4))
-    obs = _observe(x)
-    centre = x[np.argmin([o.cost if o.feasible else np.inf for o in obs])]
-    a = propose_local(x, obs, centre, np.full(4, 0.1), [], 2, np.random.default_rng(5))
-    b = propose_local(x, obs, centre, np.full(4, 0.1), [], 2, np.random.default_rng(5))
-    assert np.array_equal(np.array(a), np.array(b))
-
-
-def _study(options, seed: int, trials: int = 45):
-    from vfgym.tuning._compass import ATTR
-
-    study = _run(options, seed, trials)
-    roles = [t.system_attrs[ATTR]["role"] for t in study.trials if ATTR in t.system_attrs]
-    return [(t.params, t.value) for t in study.trials], roles
+from vfgym.tuning._model import Observation
 
 
 def _run(options, seed: int, trials: int, with_storage: bool = True):
@@ -86,17 +38,6 @@ def _run(options, seed: int, trials: int, with_storage: bool = True):
     return study
 
 
-def test_local_options_add_search_points_and_keep_the_trials_a_function_of_the_seed():
-    from vfgym.tuning._compass import LOCAL, CompassOptions
-
-    a, roles = _study(LOCAL, seed=1)
-    b, _ = _study(LOCAL, seed=1)
-    assert a == b
-    assert "search" in roles
-    _, plain = _study(CompassOptions(), seed=1)
-    assert "search" not in plain and "composite" not in plain  # off by default
-
-
 def test_a_compass_without_the_storage_draws_the_same_trials():
     # Given no storage, the sampler keeps the generations of the trials it draws itself
     # (none is written to the trials), and draws what it draws with the storage.
@@ -118,7 +59,7 @@ def test_diagonal_polls_move_value_and_the_limit_ratio_together():
     from vfgym import space
     from vfgym.tuning._compass import ATTR, CompassOptions
 
-    study = _run(CompassOptions(diagonal=True), seed=0, trials=40)
+    study = _run(CompassOptions(), seed=0, trials=40)
     lo, hi = space.Relative(430.0).bounds()[:2].T
     by_number = {t.number: t.params for t in study.trials}
     diag = [
@@ -141,25 +82,20 @@ def test_diagonal_polls_move_value_and_the_limit_ratio_together():
         assert abs(dv) > 0.01 and dv == pytest.approx(dr, abs=1e-9)
         assert p["k"] == pytest.approx(c["k"]) and p["ts_over_tf"] == pytest.approx(c["ts_over_tf"])
     assert checked >= 2
-    plain = _run(CompassOptions(diagonal=False), seed=0, trials=40)
-    roles = [t.system_attrs.get(ATTR, {}).get("role", "") for t in plain.trials]
-    assert not any(r.startswith("axis:4:") for r in roles)  # off: the four axes only
 
 
 @pytest.mark.parametrize(
-    ("moved", "patience", "mode"),
+    ("moved", "mode"),
     [
-        (True, False, "model"),  # budget spent: the model, though the compass still moves
-        (True, True, "compass"),  # patience: a compass that moved goes on
-        (False, True, "model"),  # one that did not move stops at its budget either way
-        (False, False, "model"),
+        (True, "compass"),  # a compass that moved goes on past its budget
+        (False, "model"),  # one that did not move stops at its budget
     ],
 )
-def test_patience_keeps_a_moving_compass_past_its_budget(moved, patience, mode):
+def test_a_moving_compass_goes_on_past_its_budget(moved, mode):
     from vfgym import space
     from vfgym.tuning._compass import ATTR, CompassOptions, CompassSampler
 
-    opts = CompassOptions(compass_trials=8, patience=patience, diagonal=False)
+    opts = CompassOptions(compass_trials=8)
     sampler = CompassSampler(space.Relative(430.0), seed=0, options=opts)
     mid = sampler._lo + 0.5 * sampler._span
     ok = np.array([-1.0])
@@ -170,7 +106,7 @@ def test_patience_keeps_a_moving_compass_past_its_budget(moved, patience, mode):
         obs.append(Observation(i + 1, x, "rise", cost, 0.0, True, ok))
     tags = [
         {"gen": 3, "mode": "compass", "role": f"axis:{i // 2}:{1 if i % 2 == 0 else -1:+d}",
-         "centre": 0, "steps": [opts.step0] * 4, "since": 0, "rounds": 0}
+         "centre": 0, "steps": [opts.step0] * 4, "since": 0}
         for i in range(8)
     ]  # fmt: skip
     tagged = [_Trial(i + 1, {ATTR: t}) for i, t in enumerate(tags)]
@@ -179,22 +115,19 @@ def test_patience_keeps_a_moving_compass_past_its_budget(moved, patience, mode):
 
 
 @pytest.mark.parametrize(
-    ("cons", "split", "expected"),
+    ("cons", "expected"),
     [
         # each broken constraint alone; one never broken is left out
-        ([[-1.0, 0.5, -2.0], [0.2, -0.5, -1.0]], True, [[-1.0, 0.2], [0.5, -0.5]]),
-        # the worst of them
-        ([[-1.0, 0.5, -2.0], [0.2, -0.5, -1.0]], False, [[0.5, 0.2]]),
-        # none broken: no feasibility model, either way
-        ([[-1.0, -0.5], [-0.2, 0.0]], True, []),
-        ([[-1.0, -0.5], [-0.2, 0.0]], False, []),
+        ([[-1.0, 0.5, -2.0], [0.2, -0.5, -1.0]], [[-1.0, 0.2], [0.5, -0.5]]),
+        # none broken: no feasibility model
+        ([[-1.0, -0.5], [-0.2, 0.0]], []),
     ],
 )
-def test_constraint_targets(cons, split, expected):
-    from vfgym.tuning._model import _constraint_targets
+def test_constraint_targets(cons, expected):
+    from vfgym.tuning._model import _constraint_models
 
-    got = _constraint_targets(np.array(cons), split)
-    assert [list(c) for c in got] == expected
+    got = _constraint_models(np.array(cons))
+    assert [list(c) for _, c in got] == expected
 
 
 def test_one_feasibility_model_per_broken_constraint():
@@ -206,8 +139,7 @@ def test_one_feasibility_model_per_broken_constraint():
         g = np.array([u[0] - 0.7, 0.3 - u[1], -1.0])  # the third never broken
         v = float(np.maximum(g, 0.0).sum())
         obs.append(Observation(i, u, "rise", float(1.0 + u @ u), v, v <= 0.0, g))
-    assert len(_fit(x, obs, 0.0, [], split=True).cgps) == 2
-    assert len(_fit(x, obs, 0.0, [], split=False).cgps) == 1
+    assert len(_fit(x, obs, 0.0, []).cgps) == 2
 
 
 class _Trial(NamedTuple):
@@ -216,20 +148,19 @@ class _Trial(NamedTuple):
 
 
 @pytest.mark.parametrize(
-    ("cost", "far", "gap", "mode"),
+    ("cost", "far", "mode"),
     [
-        (1.05, True, 0.1, "compass"),  # another basin's point nearly as good: searched
-        (1.2, True, 0.1, "model"),  # too much worse: the model again
-        (1.05, False, 0.1, "model"),  # near the centre: its basin, already searched
-        (1.05, True, 0.0, "model"),  # off
-        (0.9, False, 0.0, "compass"),  # better: the compass from it, either way
+        (1.05, True, "compass"),  # another basin's point nearly as good: searched
+        (1.2, True, "model"),  # too much worse: the model again
+        (1.05, False, "model"),  # near the centre: its basin, already searched
+        (0.9, False, "model"),  # better: the centre, and (steps converged) the model from it
     ],
 )
-def test_a_model_point_of_another_basin_gets_a_compass(cost, far, gap, mode):
+def test_a_model_point_of_another_basin_gets_a_compass(cost, far, mode):
     from vfgym import space
     from vfgym.tuning._compass import ATTR, CompassOptions, CompassSampler
 
-    opts = CompassOptions(explore_gap=gap)
+    opts = CompassOptions()
     sampler = CompassSampler(space.Relative(430.0), seed=0, options=opts)
     mid = sampler._lo + 0.5 * sampler._span
     away = mid + np.array([1.0, -1.0, 0.0, 0.0]) * (3.0 if far else 1.0) * opts.step0
@@ -239,37 +170,36 @@ def test_a_model_point_of_another_basin_gets_a_compass(cost, far, gap, mode):
         Observation(2, mid + 0.1, "rise", 5.0, 0.0, True, np.array([-1.0])),
     ]
     # The compass before the model converged (steps below resume_floor): with steps left
-    # it would go on from the centre whatever the model found (``resume``).
+    # it would go on from the centre whatever the model found.
     tag = {"gen": 4, "mode": "model", "role": "model", "centre": 0, "steps": [0.02] * 4,
-           "since": 0, "rounds": 1}  # fmt: skip
+           "since": 0}  # fmt: skip
     tagged = [_Trial(n, {ATTR: tag}) for n in (1, 2)]
     plan = sampler._generation(obs, tagged, 4)
     assert plan[0]["tag"]["mode"] == mode
-    if mode == "compass":
+    if mode == "compass" or cost < 1.0:
         assert plan[0]["tag"]["centre"] == 1
 
 
 @pytest.mark.parametrize(
-    ("steps", "resume", "mode"),
+    ("steps", "mode"),
     [
-        (0.2, True, "compass"),  # cut short by its budget: the compass goes on, same steps
-        (0.2, False, "model"),  # off: model batches until one beats the centre
-        (0.05, True, "compass"),  # below min_step, above resume_floor: goes on too
-        (0.02, True, "model"),  # below resume_floor: converged, the model again
+        (0.2, "compass"),  # cut short by its budget: the compass goes on, same steps
+        (0.05, "compass"),  # below min_step, above resume_floor: goes on too
+        (0.02, "model"),  # below resume_floor: converged, the model again
     ],
 )
-def test_a_compass_cut_short_goes_on_after_a_model_batch(steps, resume, mode):
+def test_a_compass_cut_short_goes_on_after_a_model_batch(steps, mode):
     from vfgym import space
     from vfgym.tuning._compass import ATTR, CompassOptions, CompassSampler
 
-    opts = CompassOptions(resume=resume, diagonal=False)
+    opts = CompassOptions()
     sampler = CompassSampler(space.Relative(430.0), seed=0, options=opts)
     mid = sampler._lo + 0.5 * sampler._span
     ok = np.array([-1.0])
     obs = [Observation(0, mid, "rise", 1.0, 0.0, True, ok)]
     obs += [Observation(n, mid + 0.3 * n, "rise", 2.0, 0.0, True, ok) for n in (1, 2)]
     tag = {"gen": 6, "mode": "model", "role": "model", "centre": 0, "steps": [steps] * 4,
-           "since": 0, "rounds": 1}  # fmt: skip
+           "since": 0}  # fmt: skip
     plan = sampler._generation(obs, [_Trial(n, {ATTR: tag}) for n in (1, 2)], 6)
     assert {p["tag"]["mode"] for p in plan} == {mode}
     if mode == "compass":

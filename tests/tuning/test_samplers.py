@@ -14,6 +14,7 @@ import pytest
 from vfgym import tuning
 from vfgym.params import Settings
 from vfgym.scoring import evaluate
+from vfgym.tuning._study import SAMPLER_NEEDS
 
 # Infeasible on short-move (the pulse train's acceleration over the limit) and cheaper than
 # any feasible setting of a short sweep (cost 5.19 at k = 54; found by a random scan).
@@ -30,7 +31,7 @@ EARLY += [dataclasses.replace(s, ts_over_tf=0.7) for s in EARLY]
 def _samplers() -> list:
     out = []
     for name in tuning.SAMPLERS:
-        needs = tuning.SAMPLER_NEEDS.get(name, ())
+        needs = SAMPLER_NEEDS.get(name, ())
         slow = name == "gp"  # a trial takes seconds: fewer of them
         out.append(pytest.param(name, 10 if slow else 24, id=name, marks=_needs(needs)))
     return out

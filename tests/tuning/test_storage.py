@@ -3,6 +3,7 @@ resolve_storage and found again by find_storage, which `vfgym plot history|paret
 
 from __future__ import annotations
 
+import os
 import shutil
 
 import optuna
@@ -63,30 +64,58 @@ def test_plot_reads_a_journal_sweep_and_names_a_missing_storage(tmp_path, capsys
     assert "/nowhere/x.db: no such file" in err and "\n" not in err
 
 
-def test_the_claim_lock_file_is_removed_and_still_excludes(tmp_path):
-    """A worker removes the lock file when it closes; a worker that locked the removed
-    file must take the path's new one, so that two workers never hold the lock at once."""
-    import threading
+RACE = """
+import sys, time
+from vfgym import cli  # imported before the moment, so that both start at once
+at = float(sys.argv[1])
+time.sleep(max(0.0, at - time.time()))
+sys.exit(cli.main(sys.argv[2:]))
+"""
 
-    from vfgym.tuning._storage import _FileLock
 
-    base = str(tmp_path / "study.db")
-    a, b = _FileLock(base), _FileLock(base)
-    a.acquire()
-    a.release()
-    b.acquire()
-    b.release()
-    a.close()
-    assert not (tmp_path / "study.db.vfgym-lock").exists()
-    b.acquire()  # its descriptor is of the removed file
-    c = _FileLock(base)
-    got = threading.Event()
-    t = threading.Thread(target=lambda: (c.acquire(), got.set()))
-    t.start()
-    assert not got.wait(0.5)  # b holds it: c waits
-    b.release()
-    assert got.wait(10)
-    c.close()
-    t.join()
-    b.close()
-    assert list(tmp_path.iterdir()) == []
+PG_URL = os.environ.get("VFGYM_TEST_POSTGRES_URL")
+
+
+@pytest.mark.parametrize(
+    "kind",
+    [
+        "sqlite",
+        "journal",
+        pytest.param(
+            "postgresql",
+            marks=pytest.mark.skipif(not PG_URL, reason="VFGYM_TEST_POSTGRES_URL is not set"),
+        ),
+    ],
+)
+def test_two_sweeps_started_at_the_same_moment_on_a_new_study_both_run(tmp_path, kind):
+    """Both processes create the storage's tables and the study at once: neither fails
+    (Optuna's table creation races: "table studies already exists"), the warm starts are
+    enqueued once, and the study ends with the trials asked for."""
+    import subprocess
+    import sys
+    import time
+    import uuid
+    from collections import Counter
+    from pathlib import Path
+
+    src = str(Path(__file__).resolve().parents[2] / "src")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([src, os.environ.get("PYTHONPATH", "")]))
+    store = {"sqlite": f"sqlite:///{tmp_path}/s.db", "journal": f"journal:{tmp_path}/s.log"}
+    store["postgresql"] = str(PG_URL)
+    name = f"race-{uuid.uuid4().hex[:10]}"  # new, also on a shared server
+    argv = ["sweep", "--runs-dir", str(tmp_path), "--study", name, "--storage", store[kind],
+            "--scenarios", "short-move", "--trials", "8", "--no-plots",
+            "--no-progress"]  # fmt: skip
+    at = str(time.time() + 6.0)
+    run = [sys.executable, "-c", RACE, at, *argv]
+    pipe = subprocess.PIPE
+    procs = [subprocess.Popen(run, env=env, text=True, stdout=pipe, stderr=pipe) for _ in range(2)]
+    outs = [p.communicate(timeout=300) for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], [err for _, err in outs]
+    spec = tuning.resolve_storage(store[kind], tmp_path)
+    study = optuna.load_study(study_name=name, storage=tuning.open_storage(spec))
+    states = Counter(t.state for t in study.trials)
+    assert states[optuna.trial.TrialState.COMPLETE] == 8
+    assert set(states) <= {optuna.trial.TrialState.COMPLETE, optuna.trial.TrialState.PRUNED}
+    baselines = [t.user_attrs["baseline"] for t in study.trials if "baseline" in t.user_attrs]
+    assert sorted(baselines) == ["paper", "rule-of-thumb"]

@@ -1,7 +1,9 @@
-"""`vfgym sweep` across processes: workers sharing one study end with exactly the trials
-asked for; a worker killed mid-trial loses nothing (its trial is failed and retried); an
-interrupted sweep continues where it stopped. On the journal, SQLite and — when
-``VFGYM_TEST_POSTGRES_URL`` names a server (``.ci/postgres.sh`` starts one) — PostgreSQL."""
+"""`vfgym sweep` across processes (each worker Optuna's ``study.optimize``): workers sharing
+one study end with exactly the trials asked for; a worker killed with SIGKILL mid-trial
+loses nothing (its trial is failed by Optuna's heartbeat, or on a journal by its dead
+process, and retried); an interrupted sweep keeps every finished trial and continues where
+it stopped. On the journal, SQLite and — when ``VFGYM_TEST_POSTGRES_URL`` names a server
+(``.ci/postgres.sh`` starts one) — PostgreSQL."""
 
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ import pytest
 import yaml
 
 from vfgym import tuning
-from vfgym.tuning._study import BATCH
+from vfgym.tuning._workers import DeferredInterrupt
 
 SRC = Path(__file__).resolve().parents[2] / "src"
 PG_URL = os.environ.get("VFGYM_TEST_POSTGRES_URL")
@@ -33,6 +35,7 @@ COMPLETE = optuna.trial.TrialState.COMPLETE
 RUNNING = optuna.trial.TrialState.RUNNING
 FAIL = optuna.trial.TrialState.FAIL
 WAITING = optuna.trial.TrialState.WAITING
+PRUNED = optuna.trial.TrialState.PRUNED
 
 
 def storage_param(kind: str):
@@ -98,13 +101,16 @@ def test_three_workers_share_one_study_and_end_with_exactly_the_trials_asked(tmp
     )  # fmt: skip
     assert p.returncode == 0, p.stderr
     study = load(tmp_path, study_name, kind)
-    assert Counter(t.state for t in study.trials) == {COMPLETE: n}
-    assert sorted(t.number for t in study.trials) == list(range(n))
+    states = Counter(t.state for t in study.trials)
+    # Two workers starting a trial at the same moment for the last place: the later one
+    # is pruned (rare); nothing else is left besides the trials asked for.
+    assert states[COMPLETE] == n and set(states) <= {COMPLETE, PRUNED}
+    done = sorted(t.number for t in study.trials if t.state == COMPLETE)
     summary = yaml.safe_load((tmp_path / "sweep" / study_name / "summary.yaml").read_text())
     reports = summary["workers"]
     assert len(reports) == 3 and all(r["exit"] == 0 and r["stopped"] == "done" for r in reports)
     ran = [i for r in reports for i in r["trials"]]
-    assert sorted(ran) == list(range(n))  # each trial run by exactly one worker
+    assert sorted(ran) == done  # each trial run by exactly one worker
     workers = {t.user_attrs["worker"] for t in study.trials}
     assert len(workers) >= 2  # shared (a worker may start after the others are done)
     assert f"{n}/{n} completed trials" in p.stdout
@@ -148,8 +154,8 @@ def test_worker_killed_mid_trial_loses_nothing(tmp_path, kind, n):
     assert p.returncode == 0, err
     final = load(tmp_path, study_name, kind)
     trials = final.trials
-    # The killed worker's whole batch (the trials it had claimed together) failed, the
-    # caught one among them; each is retried exactly once.
+    # The killed worker's trial failed (and, on a loaded machine, maybe a live worker's
+    # whose heartbeat came late: that worker goes on); each is retried exactly once.
     failed = [t.number for t in trials if t.state == FAIL]
     assert victim in failed
     for number in failed:
@@ -157,7 +163,9 @@ def test_worker_killed_mid_trial_loses_nothing(tmp_path, kind, n):
         assert len(retries) == 1 and retries[0].state == COMPLETE
         # Settings chosen before the kill are kept; the rest are drawn when it runs again.
         assert trials[number].params.items() <= retries[0].params.items()
-    assert Counter(t.state for t in trials) == {COMPLETE: n, FAIL: len(failed)}
+    states = Counter(t.state for t in trials)
+    assert states[COMPLETE] == n and states[FAIL] == len(failed)
+    assert set(states) <= {COMPLETE, FAIL, PRUNED}
     for n, values in kept.items():  # nothing a worker finished is lost
         assert trials[n].state == COMPLETE and trials[n].values == values
     summary = yaml.safe_load((tmp_path / "sweep" / study_name / "summary.yaml").read_text())
@@ -179,9 +187,9 @@ def test_interrupted_sweep_continues_where_it_stopped(tmp_path, kind):
     states = Counter(t.state for t in study.trials)
     k = states[COMPLETE]
     assert 6 <= k < 2000 and states[RUNNING] == 0
-    # The interrupted batch (the trials claimed together, at most one batch) is failed and
-    # each of its trials enqueued again once; nothing else is left behind.
-    assert states[FAIL] == states[WAITING] <= max(BATCH.values())
+    # The interrupted trial (if the interrupt came during one) is failed and enqueued
+    # again once; nothing else is left behind.
+    assert states[FAIL] == states[WAITING] <= 1
     retried = sorted(t.system_attrs["failed_trial"] for t in study.trials if t.state == WAITING)
     assert retried == sorted(t.number for t in study.trials if t.state == FAIL)
     kept = {t.number: t.values for t in study.trials if t.state == COMPLETE}
@@ -207,12 +215,10 @@ def test_interrupted_sweep_continues_where_it_stopped(tmp_path, kind):
 @pytest.mark.parametrize("kind", ["sqlite", "journal"])
 def test_an_interrupt_at_any_moment_leaves_a_clean_study(tmp_path, kind):
     """Ctrl-C at many random moments of a worker's loop (evaluation, Optuna's storage
-    writes, the claim lock, waiting): each time the worker stops with KeyboardInterrupt and
-    nothing else, no trial is left running, completed trials are kept, and what waits is
-    a warm start not yet run or the one retry of a trial of the interrupted batch."""
-    # Batches of 2: a whole batch is lost (and retried) when interrupted, so the default
-    # compass generation (8 trials, over 0.15 s here) would never complete between interrupts.
-    cfg = tuning.SweepConfig(scenarios="short-move", trials=100_000, seed=3, storage=kind, batch=2)
+    writes, waiting): each time the worker stops with KeyboardInterrupt and nothing else,
+    no trial is left running, completed trials are kept, and what waits is a warm start
+    not yet run or the one retry of the interrupted trial."""
+    cfg = tuning.SweepConfig(scenarios="short-move", trials=100_000, seed=3, storage=kind)
     spec = tuning.resolve_storage(kind, tmp_path)
     scenarios = cfg.scenario_list()
     tuning.create_or_load(tuning.open_storage(spec), "s", cfg, scenarios)
@@ -222,7 +228,7 @@ def test_an_interrupt_at_any_moment_leaves_a_clean_study(tmp_path, kind):
     timing = dataclasses.replace(cfg, trials=2)
     tuning.create_or_load(tuning.open_storage(spec), "timing", timing, scenarios)
     start = time.perf_counter()
-    tuning.run_worker(timing, spec, "timing", poll_s=0.01)
+    tuning.run_worker(timing, spec, "timing")
     window = max(0.15, 3.0 * (time.perf_counter() - start))
     rng = random.Random(0)
     main = threading.get_ident()
@@ -233,7 +239,7 @@ def test_an_interrupt_at_any_moment_leaves_a_clean_study(tmp_path, kind):
         timer.start()
         try:
             with pytest.raises(KeyboardInterrupt):
-                tuning.run_worker(cfg, spec, "s", poll_s=0.01)
+                tuning.run_worker(cfg, spec, "s")
         finally:
             timer.cancel()
         study = optuna.load_study(study_name="s", storage=tuning.open_storage(spec))
@@ -253,3 +259,14 @@ def test_an_interrupt_at_any_moment_leaves_a_clean_study(tmp_path, kind):
             assert trials[n].state == COMPLETE and trials[n].values == values
         kept = {t.number: t.values for t in trials if t.state == COMPLETE}
     assert len(kept) >= 10, window
+
+
+def test_an_interrupt_is_held_back_outside_an_allowed_block():
+    with DeferredInterrupt() as interrupts:
+        signal.raise_signal(signal.SIGINT)  # held: no raise here
+        assert interrupts.pending
+        with pytest.raises(KeyboardInterrupt), interrupts.allowed():
+            pass  # the one held back, raised on entering
+        with pytest.raises(KeyboardInterrupt), interrupts.allowed():
+            signal.raise_signal(signal.SIGINT)  # allowed: raised at once
+        assert not interrupts.pending and not interrupts.open

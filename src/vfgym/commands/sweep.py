@@ -40,11 +40,10 @@ OPTIONS = (
     ("--reference", "a grid reference.yaml (or grid run folder) to report the gap to "
      "(default: the best matching RUNS/grid/*/reference.yaml)"),
     ("--grid-points", "values per dimension for --sampler grid (default 5)"),
-    ("--batch", "trials a worker claims and simulates in one batched call (default: the "
-     "sampler's own: compass one generation, cmaes/nsga2 8, grid/random 16, tpe/gp 1)"),
-    ("--heartbeat", "seconds between a running trial's heartbeats (RDB storages; default 10)"),
-    ("--grace", "seconds without a heartbeat before a trial is taken as dead "
-     "(default 2 x heartbeat)"),
+    ("--heartbeat", "seconds between a running trial's heartbeats (Optuna's heartbeat_interval, "
+     "RDB storages; default 10)"),
+    ("--grace", "seconds without a heartbeat before a trial is taken as dead and retried "
+     "(Optuna's grace_period; default 2 x heartbeat)"),
 )  # fmt: skip
 
 
@@ -120,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
     study, created = _open_study(cfg, spec, name, run_dir, scenarios)
     _record(run_dir, args, cfg, name, spec)
     budget = tuning.trial_budget(cfg)
-    n0 = tuning.counts(study)
+    n0 = _counts(study)
     print(
         f"vfgym sweep: study {name} ({'new' if created else 'continued'}: "
         f"{_done(n0['complete'], budget)}) on {spec.display}\n"
@@ -151,7 +150,7 @@ def run(args: argparse.Namespace) -> int:
         interrupted = True
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     finally:
-        bar.update(study)
+        bar.update(study, force=True)
         bar.close()
     elapsed = time.monotonic() - t0
     code = _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapsed, reports)
@@ -162,6 +161,15 @@ def run(args: argparse.Namespace) -> int:
             f"and --study {name}"
         )
     return code
+
+
+def _counts(study) -> dict[str, int]:
+    """Trials of the study by state: ``complete``, ``running``, ``waiting``, ``fail``,
+    ``pruned``."""
+    out = {"complete": 0, "running": 0, "waiting": 0, "fail": 0, "pruned": 0}
+    for t in study.get_trials(deepcopy=False):
+        out[t.state.name.lower()] += 1
+    return out
 
 
 def _done(complete: int, budget: int) -> str:
@@ -259,7 +267,7 @@ def _record(run_dir, args, cfg, name, spec) -> None:
     import sys
 
     from vfgym.io.runs import command_args, write_text, write_yaml
-    from vfgym.tuning import mask_url
+    from vfgym.tuning._storage import mask_url
 
     conf = cfg.to_dict() | {"study": name, "storage": spec.display}
     write_yaml(run_dir / "config.yaml", {"command": "sweep", **conf})
@@ -283,7 +291,8 @@ def _record(run_dir, args, cfg, name, spec) -> None:
 
 
 class _Bar:
-    """tqdm over completed trials, with the best cost so far."""
+    """tqdm over completed trials, with the best cost so far (read at most twice a second:
+    each read is the study's, a storage query a trial would otherwise add)."""
 
     def __init__(self, cfg, total: int, initial: int, name: str) -> None:
         from tqdm import tqdm
@@ -297,11 +306,17 @@ class _Bar:
             dynamic_ncols=True,
         )
         self._n = min(initial, total)
+        self._at = 0.0
 
-    def update(self, study) -> None:
-        from vfgym.tuning import best_trial, counts, stored_result
+    def update(self, study, force: bool = False) -> None:
+        import time
 
-        n = min(counts(study)["complete"], self._bar.total)
+        from vfgym.tuning import best_trial, stored_result
+
+        if not force and time.monotonic() - self._at < 0.5:
+            return
+        self._at = time.monotonic()
+        n = min(_counts(study)["complete"], self._bar.total)
         best = best_trial(study)
         res = None if best is None else stored_result(best)
         if res is not None:
@@ -371,7 +386,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     from vfgym.report import axis_verdict, compact_rows, format_compact, format_verdict
 
     tuning.write_trials_csv(study, run_dir / "trials.csv")
-    n = tuning.counts(study)
+    n = _counts(study)
     budget = tuning.trial_budget(cfg)
     stops = sorted({r.get("stopped", "") for r in reports})
     done = (
@@ -381,8 +396,9 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     )
     lines = [
         f"study {study.study_name}: {done} "
-        f"({n['fail']} failed, {n['running']} running, {n['waiting']} waiting) "
-        f"in {elapsed:.1f} s"
+        f"({n['fail']} failed, {n['running']} running, {n['waiting']} waiting"
+        + (f", {n['pruned']} pruned: over the budget" if n["pruned"] else "")
+        + f") in {elapsed:.1f} s"
     ]
     if reports:
         sims = sum(int(r.get("simulated", 0)) for r in reports)

@@ -11,30 +11,25 @@ the multi-objective (Pareto) form minimises :attr:`vfgym.Evaluation.objectives` 
 over the scenarios. The paper's settings are enqueued as the study's first trial, and a
 setting already scored in the study is not simulated again (its trial copies the result).
 
-Storage and workers. The default storage is a SQLite file in the run folder; ``journal``
-is Optuna's JournalStorage on a file (one machine, no server); a ``postgresql://`` URL
-is Optuna's RDB storage on a server that workers on many machines share. Each worker
-claims a trial under a study-wide lock (a file lock beside a SQLite or journal file,
-a PostgreSQL advisory lock on a server) only while the completed, running and waiting
-trials number fewer than asked, so a study ends with exactly the trials asked for,
-however many workers share it. A worker that dies mid-trial leaves a running trial
-behind: on RDB storages Optuna's heartbeat marks it failed after the grace period, on
-the journal the other workers see that its process is gone; either way it is marked
-failed and enqueued again with the settings it had drawn (the rest are drawn when it
-runs). A SQLite file is kept in write-ahead-log mode, so no reader waits on a worker
-frozen or killed mid-write; journal appends take an ``flock`` the kernel drops when its
-holder dies. Ctrl-C is only acted on inside a
-trial's evaluation or while waiting, so an interrupt never leaves a half-written trial:
-the interrupted trial is marked failed and enqueued again, and running the same command
-with the same ``--study`` continues where it stopped.
+Storage and workers: Optuna's own. The default storage is a SQLite file in the run folder;
+``journal`` is Optuna's JournalStorage on a file (processes on one machine, no server); a
+``postgresql://`` URL is Optuna's RDB storage on a server that workers on many machines
+share. Each worker is ``study.optimize`` in its own process; on RDB storages Optuna's
+heartbeat fails the trial of a worker that died (``heartbeat_interval``/``grace_period``,
+``fail_stale_trials``) and ``RetryHeartbeatStaleTrialCallback`` enqueues it again with its
+settings. vfgym adds only what Optuna lacks (:mod:`vfgym.tuning._workers`): a study-wide
+trial budget, dead workers on a journal, and Ctrl-C acted on only inside a simulation, so
+an interrupt never leaves a half-written trial; running the same command with the same
+``--study`` continues where it stopped (docs/guide/distributed.md).
 
 Over several scenarios the cost form minimises an aggregate of the per-scenario costs:
 the mean (default), the CVaR (mean of the costliest share) or the worst
 (``_aggregate``); a setting is feasible only if it is feasible on every scenario.
 
-Modules: ``_config`` (sweep and grid configurations), ``_storage`` (storages and the claim
-lock), ``_objective`` (a trial scored by the one path), ``_study`` (samplers, search space,
-budget), ``_workers`` and ``_recovery`` (workers sharing a study), ``_results`` (best trial,
+Modules: ``_config`` (sweep and grid configurations), ``_storage`` (storages),
+``_objective`` (a trial scored by the one path), ``_stored`` (how a trial stores its
+result), ``_study`` (samplers, search space, budget), ``_workers`` (workers sharing a
+study), ``_results`` (best trial,
 CSV, figures, the tuned settings against the paper's as a :class:`vfgym.report.Report`,
 gap to a reference), ``_grid`` (the exhaustive grid).
 
@@ -45,15 +40,13 @@ reported against (as a gap in %).
 
 from vfgym.tuning._aggregate import (
     AGGREGATES,
-    DEFAULT_AGGREGATE,
-    DEFAULT_CVAR_ALPHA,
     aggregate_costs,
     check_aggregate,
     cvar,
     describe,
     set_cost,
 )
-from vfgym.tuning._config import FORMS, SAMPLERS, SweepConfig, check_name
+from vfgym.tuning._config import FORMS, SAMPLERS, SweepConfig
 from vfgym.tuning._grid import (
     GridConfig,
     GridResult,
@@ -63,7 +56,6 @@ from vfgym.tuning._grid import (
     write_grid_csv,
 )
 from vfgym.tuning._objective import Aggregate, Objective, aggregate, settings_key
-from vfgym.tuning._recovery import WORKER_ATTR, counts
 from vfgym.tuning._results import (
     BestRecord,
     FoundReference,
@@ -77,18 +69,9 @@ from vfgym.tuning._results import (
     write_plots,
     write_trials_csv,
 )
-from vfgym.tuning._storage import (
-    STORAGE_HELP,
-    StorageSpec,
-    find_storage,
-    mask_url,
-    open_storage,
-    resolve_storage,
-)
+from vfgym.tuning._storage import StorageSpec, find_storage, open_storage, resolve_storage
 from vfgym.tuning._stored import StoredResult, stored_result
 from vfgym.tuning._study import (
-    SAMPLER_NEEDS,
-    StudyMeta,
     baseline_params,
     check_sampler,
     create_or_load,
@@ -97,20 +80,14 @@ from vfgym.tuning._study import (
     trial_budget,
     warm_starts,
 )
-from vfgym.tuning._workers import DeferredInterrupt, WorkerReport, run_worker, spawn_workers
+from vfgym.tuning._workers import WorkerReport, run_worker, spawn_workers
 
 __all__ = [
     "AGGREGATES",
-    "DEFAULT_AGGREGATE",
-    "DEFAULT_CVAR_ALPHA",
     "FORMS",
     "SAMPLERS",
-    "SAMPLER_NEEDS",
-    "STORAGE_HELP",
-    "WORKER_ATTR",
     "Aggregate",
     "BestRecord",
-    "DeferredInterrupt",
     "FoundReference",
     "GridConfig",
     "GridResult",
@@ -119,7 +96,6 @@ __all__ = [
     "ReferenceGap",
     "StorageSpec",
     "StoredResult",
-    "StudyMeta",
     "SweepConfig",
     "WorkerReport",
     "aggregate",
@@ -128,10 +104,8 @@ __all__ = [
     "best_record",
     "best_trial",
     "check_aggregate",
-    "check_name",
     "check_sampler",
     "compare",
-    "counts",
     "create_or_load",
     "cvar",
     "describe",
@@ -140,7 +114,6 @@ __all__ = [
     "gap_pct",
     "grid_reference",
     "make_sampler",
-    "mask_url",
     "open_storage",
     "relative_space",
     "resolve_storage",

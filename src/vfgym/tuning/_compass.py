@@ -1,5 +1,5 @@
 """The default sampler: a compass search in coordinates that fit the problem, from the warm
-starts, with Gaussian-process checks for a better basin; one generation per batch.
+starts, with Gaussian-process checks for a better basin; one generation at a time.
 
 The sweep's optimum sits on constraint edges (the acceleration limit, L = value), where a
 model of the cost is poor and a compass (pattern) search is good: it moves one axis at a
@@ -11,14 +11,14 @@ acceleration limit), and a compass stays in the first it finds. So the search al
    thumb) and ``n_init`` scrambled Sobol points, as one batch.
 2. ``compass``: from the best warm start (feasible first, then by cost; an infeasible one
    by its total violation), poll each of the four axes of :class:`vfgym.space.Relative`
-   both ways, and a fifth direction (``diagonal``): value and L/value moved together by
+   both ways, and a fifth direction (the diagonal): value and L/value moved together by
    the same step, L/value² held. That is the tail's deceleration at top speed,
    Kv·v_max = δ²f²·L/value², which the acceleration limit bounds: on a loaded axis the
    feasible edge, where the optimum lies, runs along it, and one-axis polls can only
    zigzag up it. Plus the pattern move (the last move again) when the last generation
    moved; move to the best poll if it beats the centre; per direction, widen the step
    ×1.5 where a poll beat the centre, else halve it. After ``compass_trials`` trials of
-   this compass (with ``patience``: and a generation that did not move, so that a
+   this compass (and a generation that did not move, so that a
    compass still descending is not cut short), or when every step is below
    ``min_step``, with a feasible centre:
 3. ``model``: a batch of points over the whole space maximising the expected improvement
@@ -26,8 +26,8 @@ acceleration limit), and a compass stays in the first it finds. So the search al
    (Gaussian processes on log cost and on each constraint some trial broke,
    :mod:`vfgym.tuning._gp`); a batch is chosen one point at a time, each conditioned on
    the previous ones at their predicted values. Repeated until a feasible point beats the
-   centre; the compass then starts again there with fresh steps. Between batches
-   (``resume``), a compass with a step still at or above ``resume_floor`` (finer than
+   centre; the compass then starts again there with fresh steps. Between batches, a
+   compass with a step still at or above ``resume_floor`` (finer than
    ``min_step``) goes on from the centre with its steps, a generation at a time: on a
    loaded axis the compass still descends along the acceleration edge at its budget, or
    stops on it a few percent of value from the optimum, and the model's batches, over
@@ -36,15 +36,6 @@ acceleration limit), and a compass stays in the first it finds. So the search al
    it along some axis (another basin, unexplored), gets a compass too (multi-level
    single-linkage's idea: a local search from each good point not already in a searched
    basin); the model after it aims at the best of all again.
-
-:data:`LOCAL` adds to each compass generation the composite move (the sum of the last
-generation's axis polls that beat the centre) and ``search`` model points chosen within
-``search_radius`` steps of the centre along every axis at once, from Gaussian processes
-on the observations nearest it (a pattern search's search step: the optimum lies along
-constraint edges that cut the axes diagonally, the acceleration limit binding value, L
-and k together, which one-axis polls cannot follow; a model or composite point that wins
-keeps the steps); and it caps the model's log costs at their median and stops after
-``model_rounds`` batches, then compasses on from the centre with fresh steps.
 
 Every choice is a deterministic function of the seed and the study's completed trials,
 and each sampled trial records its generation (system attribute ``vfgym:compass``), so a
@@ -64,7 +55,7 @@ import numpy as np
 import optuna
 
 from vfgym import space
-from vfgym.tuning._model import Observation, propose, propose_local, rank
+from vfgym.tuning._model import Observation, propose, rank
 from vfgym.tuning._stored import named_constraints
 
 ATTR = "vfgym:compass"
@@ -73,31 +64,34 @@ ATTR = "vfgym:compass"
 
 @dataclass(frozen=True)
 class CompassOptions:
-    """Settings of :class:`CompassSampler`: Latin-hypercube points of the first generation,
-    first and smallest compass step (natural-log units), trials of compass before the model
-    is consulted, model batch, least relative improvement sought, model points handed to
-    a worker that asks while another's generation runs (chosen before the benchmark of
-    ``experiments/trials_to_reference.py`` existed); the local model points of each compass
-    generation and their reach in steps, the composite poll, the model batches at most per
-    stall (0: until one beats the centre) and the model's cap on log costs: all off by
-    default, which is the search measured best overall (docs/tuning.md, "Samplers: trials
-    to the grid optimum"); :data:`LOCAL` turns them on. ``split_constraints``: one feasibility model
-    per constraint a trial broke, not one on the worst; ``explore_gap``: a model point of
-    another basin within this fraction of the centre's cost gets a compass (0: off);
-    ``diagonal``: the fifth poll direction (value and L/value together); ``patience``: a
-    compass whose last generation moved goes on past ``compass_trials`` (50: five
-    generations of ten polls, as 40 were of eight). All four on by default
-    (docs/tuning.md, "Samplers: trials to the grid optimum"). ``refit_growth``: a model
-    batch fits its Gaussian processes' hyperparameters again (from the last fit's) once
-    the completed trials number this many times those of the last fit, else keeps them
-    (a long sweep's model batches, one per 8 trials, cost a factorisation, not a fit:
-    docs/speed.md). ``resume``: after a model batch that did not beat the centre, a
-    compass with a step still at or above ``resume_floor`` (0: ``min_step``) goes on
-    from the centre with its steps, a generation between model batches, where without
-    it model batches follow until one beats the centre (``resume`` chosen on the two
-    loaded held-out problems of seed 20261202 it missed and ``multi-move``,
-    ``resume_floor`` on two of seed 20261204's; each judged on held-out problems drawn
-    after: docs/tuning.md, "Held-out problems")."""
+    """Settings of :class:`CompassSampler` (the search above, as it runs by default).
+
+    Attributes
+    ----------
+    n_init : int
+        Latin-hypercube points of the first generation.
+    step0, min_step : float
+        First and smallest compass step (natural-log units).
+    compass_trials : int
+        Trials of a compass before the model is consulted (a compass whose last
+        generation moved goes on past it).
+    model_batch : int
+        Points of a model batch.
+    xi : float
+        Least relative improvement the model seeks over the best feasible cost.
+    extra_batch : int
+        Model points handed to a worker that asks while another's generation runs.
+    explore_gap : float
+        A model point of another basin within this fraction of the centre's cost gets a
+        compass.
+    refit_growth : float
+        A model batch fits its Gaussian processes' hyperparameters again (from the last
+        fit's) once the completed trials number this many times those of the last fit,
+        else keeps them (docs/speed.md).
+    resume_floor : float
+        After a model batch that did not beat the centre, a compass with a step still at
+        or above this (0: ``min_step``) goes on from the centre with its steps.
+    """
 
     n_init: int = 6
     step0: float = 0.4
@@ -106,29 +100,9 @@ class CompassOptions:
     model_batch: int = 8
     xi: float = 0.03
     extra_batch: int = 4
-    search: int = 0
-    search_radius: float = 2.0
-    composite: bool = False
-    model_rounds: int = 0
-    cap_model: bool = False
-    diagonal: bool = True
-    patience: bool = True
-    split_constraints: bool = True
     explore_gap: float = 0.1
     refit_growth: float = 1.25
-    resume: bool = True
     resume_floor: float = 0.025
-
-
-LOCAL = CompassOptions(search=2, composite=True, model_rounds=2, cap_model=True,
-                       compass_trials=40, diagonal=False, patience=False,
-                       split_constraints=False, explore_gap=0.0,
-                       resume=False, resume_floor=0.0)  # fmt: skip
-"""The compass with its local model step: faster on ``heavy-load`` (within 1.5 % after 200
-trials, against 4.6 %), slower on ``paper-step``, ``multi-move`` and ``short-move``
-(docs/tuning.md); chosen on ``short-move`` and ``heavy-load`` among a few variants over 5 seeds,
-before ``split_constraints``, ``explore_gap``, ``diagonal``, ``patience`` and ``resume``
-(off here: the search as measured)."""
 
 
 class CompassSampler(optuna.samplers.BaseSampler):
@@ -169,18 +143,16 @@ class CompassSampler(optuna.samplers.BaseSampler):
         self._seen_in: tuple[int, str] | None = None  # the study they are of
         # The last model batch's hyperparameters, and the trials they were fitted on.
         self._starts: tuple[dict[str, list[float]], int] = ({}, 0)
-        # Poll directions: the four axes, and with ``diagonal`` value and L/value moved
-        # together (L/value² held: the tail's deceleration at top speed, δ²f²·L/value²).
-        self._dirs = np.eye(4)
-        if self.options.diagonal:
-            self._dirs = np.vstack([self._dirs, [1.0, 1.0, 0.0, 0.0]])
+        # Poll directions: the four axes, and value and L/value moved together (L/value²
+        # held: the tail's deceleration at top speed, δ²f²·L/value²).
+        self._dirs = np.vstack([np.eye(4), [1.0, 1.0, 0.0, 0.0]])
 
     # --- Optuna's sampler interface -----------------------------------------------------
     def infer_relative_search_space(self, study: Any, trial: Any) -> dict[str, Any]:
         return space.distributions(self.laws)
 
     def sample_relative(self, study: Any, trial: Any, search_space: dict[str, Any]) -> dict:
-        if not search_space or "fixed_params" in trial.system_attrs:
+        if not search_space or "fixed_params" in trial.system_attrs or trial.params:
             return {}  # an enqueued trial (a warm start, a retry) keeps its settings
         item = self._next(study, trial.number)
         self._record(study, trial.number, item["tag"])
@@ -219,63 +191,6 @@ class CompassSampler(optuna.samplers.BaseSampler):
             params["accel_law"] = s.accel_law
         return params
 
-    # --- trials made in one write ---------------------------------------------------------
-    def plan_trial(self, study: Any, first: bool) -> optuna.trial.FrozenTrial:
-        """The next trial of the search as a running trial to create in one write
-        (``storage.create_new_trial(study_id, template)``: its parameters and generation
-        with it), where :meth:`sample_relative` costs a write per parameter after the
-        trial's own; the same trial as ``study.ask()`` would draw.
-
-        Call under the claim lock, and create each trial before asking for the next (the
-        plan counts the study's trials); then :meth:`created` with its number.
-
-        Parameters
-        ----------
-        study : optuna.Study
-            The study.
-        first : bool
-            The first of a batch: the study is read again (another worker may have
-            drawn since).
-
-        Returns
-        -------
-        optuna.trial.FrozenTrial
-            The trial (state ``RUNNING``), numbered as the study's next.
-        """
-        import datetime
-
-        if first or self._checked < 0:
-            self._queue_for(study)
-        number = self._checked
-        item = self._next(study, number)
-        params = self._params(item)
-        dists = space.distributions(self.laws)
-        return optuna.trial.FrozenTrial(
-            number=number,
-            state=optuna.trial.TrialState.RUNNING,
-            value=None,
-            datetime_start=datetime.datetime.now(),
-            datetime_complete=None,
-            params=params,
-            distributions={k: dists[k] for k in params},
-            user_attrs={},
-            system_attrs={ATTR: item["tag"]},
-            intermediate_values={},
-            trial_id=-1,
-        )
-
-    def created(self, number: int) -> None:
-        """The trial :meth:`plan_trial` planned was created with this number (another
-        than planned: a trial made meanwhile, outside the claim lock; the next plan reads
-        the study again)."""
-        if number + 1 != self._checked:
-            self.replan()
-
-    def replan(self) -> None:
-        """Plan the next trial from the study again (trials were made meanwhile, outside
-        the claim lock, so the planned numbers no longer hold)."""
-        self._checked = -1
-
     def sample_independent(self, study: Any, trial: Any, name: str, dist: Any) -> Any:
         rng = np.random.default_rng([self.seed, trial.number, 7])
         return optuna.samplers.RandomSampler(seed=int(rng.integers(2**31))).sample_independent(
@@ -290,20 +205,6 @@ class CompassSampler(optuna.samplers.BaseSampler):
 
     def reseed_rng(self) -> None:
         return None
-
-    # --- batches --------------------------------------------------------------------------
-    def batch_hint(self, study: Any) -> int:
-        """How many trials the next batch should claim: the waiting (enqueued) ones, plus
-        the rest of the generation being handed out or the next one; while another
-        worker's generation runs, :attr:`CompassOptions.extra_batch` model points."""
-        import optuna
-
-        states = [t.state for t in study.get_trials(deepcopy=False)]
-        waiting = states.count(optuna.trial.TrialState.WAITING)
-        queue = self._queue_for(study)
-        if queue or waiting:
-            return waiting + len(queue)
-        return self.options.extra_batch
 
     def _next(self, study: Any, number: int) -> dict[str, Any]:
         # No trial made since the queue was checked but this one (numbers count the
@@ -373,66 +274,54 @@ class CompassSampler(optuna.samplers.BaseSampler):
         # The centre's trial may be gone (failed): the best instead.
         centre = by_num.get(st["centre"]) or min(obs, key=rank)
         done_here = [by_num[t.number] for t in mine if t.number in by_num]
-        roles = {t.number: t.system_attrs[ATTR]["role"] for t in mine}
         if st["mode"] == "compass":
             improved = np.zeros(len(steps), dtype=bool)
-            moves = np.zeros(4)  # the sum of the axis polls that beat the centre
             for t in mine:
                 role = t.system_attrs[ATTR]["role"]
                 ob = by_num.get(t.number)
                 if ob is not None and role.startswith("axis") and rank(ob) < rank(centre):
                     improved[int(role.split(":")[1])] = True
-                    moves += ob.x - centre.x
             best = min(done_here, key=rank, default=centre)
             prev = None
             if rank(best) < rank(centre):
                 prev, centre = centre, best
-            # A search (model) or composite point that won keeps the steps of the axes no
-            # poll improved on.
-            keep = prev is not None and roles.get(centre.number) in ("search", "composite")
-            steps = np.where(improved, np.minimum(steps * 1.5, 2.0), steps if keep else steps * 0.5)
+            steps = np.where(improved, np.minimum(steps * 1.5, 2.0), steps * 0.5)
             since = st["since"]
-            # patience: a compass whose last generation moved goes on past its budget.
-            spent = n_done - since >= o.compass_trials and not (o.patience and prev is not None)
+            # A compass whose last generation moved goes on past its budget.
+            spent = n_done - since >= o.compass_trials and prev is None
             stale = steps.max() < o.min_step or spent
             if centre.feasible and stale:
                 return self._model(last + 1, obs, centre, steps, since, [])
             if steps.max() < o.min_step:
                 steps = self._fresh_steps()
-            composite = None
-            if o.composite and improved.sum() >= 2 and prev is not None:
-                composite = prev.x + moves
-            return self._compass(
-                last + 1, obs, centre, prev, steps, since, composite
-            ) or self._model(last + 1, obs, centre, steps, since, [])
+            return self._compass(last + 1, obs, centre, prev, steps, since) or self._model(
+                last + 1, obs, centre, steps, since, []
+            )
         # One model batch, then the compass again: from its best point if that beats the
         # centre, else from the centre with fresh steps.
         best = min(done_here, key=rank, default=centre)
         top = min(obs, key=rank)  # a compass started from another basin may trail the best
-        if o.explore_gap and rank(top) < rank(centre):
+        if rank(top) < rank(centre):
             centre = top
         if best.feasible and rank(best) < rank(centre):
             centre = best
         elif (
-            o.explore_gap
-            and best.feasible
+            best.feasible
             and best.cost <= centre.cost * (1.0 + o.explore_gap)
             and np.abs(best.x - centre.x).max() > 2.0 * o.step0
         ):
             centre = best  # another basin's point nearly as good: a compass searches it
-        elif o.resume and steps.max() >= (o.resume_floor or o.min_step):
-            # resume: the compass before this batch was cut short by its budget or
-            # counted as converged with steps above resume_floor; it goes on from the
-            # centre with its steps (its budget still spent, its steps below min_step:
-            # a generation that does not move hands over to the model again, one batch
-            # between generations). No poll left (all clipped onto the centre): the
-            # model, as converged.
+        elif steps.max() >= (o.resume_floor or o.min_step):
+            # The compass before this batch was cut short by its budget or counted as
+            # converged with steps above resume_floor; it goes on from the centre with its
+            # steps (its budget still spent, its steps below min_step: a generation that
+            # does not move hands over to the model again, one batch between
+            # generations). No poll left (all clipped onto the centre): the model.
             return self._compass(last + 1, obs, centre, None, steps, st["since"]) or (
                 self._model(last + 1, obs, centre, np.zeros_like(steps), st["since"], [])
             )
-        elif not o.model_rounds or st.get("rounds", 1) < o.model_rounds:
-            return self._model(last + 1, obs, centre, steps, st["since"], [],
-                               rounds=st.get("rounds", 1) + 1)  # fmt: skip
+        else:
+            return self._model(last + 1, obs, centre, steps, st["since"], [])
         return self._compass(last + 1, obs, centre, None, self._fresh_steps(), n_done) or (
             self._model(last + 1, obs, centre, steps, n_done, [])
         )
@@ -442,7 +331,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         return np.full(len(self._dirs), self.options.step0)
 
     def _tag(self, gen: int, mode: str, role: str, centre: Observation | None,
-             steps: np.ndarray, since: int, rounds: int = 0) -> dict[str, Any]:  # fmt: skip
+             steps: np.ndarray, since: int) -> dict[str, Any]:  # fmt: skip
         return {
             "gen": gen,
             "mode": mode,
@@ -450,7 +339,6 @@ class CompassSampler(optuna.samplers.BaseSampler):
             "centre": None if centre is None else centre.number,
             "steps": [float(s) for s in steps],
             "since": since,
-            "rounds": rounds,
         }
 
     def _sobol(self, gen: int) -> list[dict[str, Any]]:
@@ -463,8 +351,8 @@ class CompassSampler(optuna.samplers.BaseSampler):
         ]
 
     def _compass(self, gen: int, obs: list[Observation], centre: Observation,
-                 prev: Observation | None, steps: np.ndarray, since: int,
-                 composite: np.ndarray | None = None) -> list[dict[str, Any]]:  # fmt: skip
+                 prev: Observation | None, steps: np.ndarray,
+                 since: int) -> list[dict[str, Any]]:  # fmt: skip
         lo, hi = self._lo, self._lo + self._span
         out: list[dict[str, Any]] = []
         seen = {tuple(centre.x)}
@@ -480,21 +368,12 @@ class CompassSampler(optuna.samplers.BaseSampler):
         seen = {(tuple(centre.x), centre.law)}
         if prev is not None:
             add(centre.x + (centre.x - prev.x), "pattern")
-        if composite is not None:
-            add(composite, "composite")
         for d in range(len(steps)):
             for sign in (1, -1):
                 add(centre.x + sign * steps[d] * self._dirs[d], f"axis:{d}:{sign:+d}")
         for law in self.laws:
             if law != centre.law:
                 add(centre.x.copy(), "law", law)
-        if out and self.options.search and len(obs) >= 4:
-            radius = np.maximum(self.options.search_radius * steps[:4], 0.05) / self._span
-            rng = self._rng(gen, 3)
-            pending = [self._input(p["x"], p["law"]) for p in out]
-            for p in propose_local(self._inputs(obs), obs, self._input(centre.x, centre.law),
-                                   radius, pending, self.options.search, rng):  # fmt: skip
-                add(self._from_unit(p[:4]), "search")
         return out
 
     def _law_of(self, p: np.ndarray) -> str:
@@ -505,8 +384,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
 
     def _model(self, gen: int, obs: list[Observation], centre: Observation,
                steps: np.ndarray, since: int, pending: list[tuple[np.ndarray, str]],
-               n: int | None = None, role: str = "model",
-               rounds: int = 1) -> list[dict[str, Any]]:  # fmt: skip
+               n: int | None = None, role: str = "model") -> list[dict[str, Any]]:  # fmt: skip
         o = self.options
         rng = self._rng(gen, 2 + len(pending))
         starts, fitted_at = self._starts
@@ -515,9 +393,9 @@ class CompassSampler(optuna.samplers.BaseSampler):
         refit = not starts or len(obs) >= o.refit_growth * fitted_at
         pts, thetas = propose(self._inputs(obs), obs,
                               [self._input(x, law) for x, law in pending],
-                              n or o.model_batch, o.xi, rng, len(self.laws), o.cap_model,
-                              o.split_constraints, starts, refit)  # fmt: skip
-        tag = self._tag(gen, "model", role, centre, steps, since, rounds) | {
+                              n or o.model_batch, o.xi, rng, len(self.laws), starts,
+                              refit)  # fmt: skip
+        tag = self._tag(gen, "model", role, centre, steps, since) | {
             "theta": thetas,
             "theta_n": len(obs) if refit else fitted_at,
         }

@@ -182,7 +182,7 @@ class SweepConfig(_Options):
     seed : int or None
         The sampler's seed (``None``: unseeded).
     storage : str
-        ``sqlite``, ``journal`` or a ``postgresql://`` URL (see :data:`STORAGE_HELP`).
+        ``sqlite``, ``journal`` or a ``postgresql://`` URL (see :func:`resolve_storage`).
     study : str or None
         The study's name, also the run folder's (default: config name + time).
     runs_dir : str
@@ -195,13 +195,12 @@ class SweepConfig(_Options):
         Draw the history and Pareto plots.
     progress : bool
         Show a progress bar.
-    batch : int or None
-        Trials a worker claims at once and simulates in one batched call, 1 to 1024
-        (default: the sampler's own, :func:`vfgym.tuning.batch_size`).
     heartbeat : int
-        Seconds between a running trial's heartbeats (RDB storages), ≥ 1.
+        Seconds between a running trial's heartbeats (Optuna's ``heartbeat_interval``, RDB
+        storages; a journal worker's death is seen this often), ≥ 1.
     grace : int or None
-        Seconds without a heartbeat before a trial is taken as dead.
+        Seconds without a heartbeat before a trial is taken as dead (Optuna's
+        ``grace_period``; default twice the heartbeat).
 
     Raises
     ------
@@ -227,7 +226,6 @@ class SweepConfig(_Options):
     runs_dir: str = "runs"
     reference: str | None = None
     grid_points: int = 5
-    batch: int | None = None
     plots: bool = True
     progress: bool = True
     heartbeat: int = 10
@@ -259,8 +257,6 @@ class SweepConfig(_Options):
         if self.reference is not None:
             s(self, "reference", str(self.reference))
         s(self, "grid_points", check_int("grid_points", self.grid_points, 2, 64))
-        if self.batch is not None:
-            s(self, "batch", check_int("batch", self.batch, 1, 1024))
         s(self, "plots", check_bool("plots", self.plots))
         s(self, "progress", check_bool("progress", self.progress))
         s(self, "heartbeat", check_int("heartbeat", self.heartbeat, 1))

@@ -1,7 +1,7 @@
 """The compass sampler's model step: Gaussian processes on the completed trials (log cost,
 and each constraint some trial broke), and batches of points chosen by the logarithm of
 expected improvement times probability of feasibility (:func:`propose`, over the whole
-space; :func:`propose_local`, in a box around the compass's centre).
+space).
 
 A batch's points are chosen one at a time among one set of candidates, each believed at
 its predicted values before the next is chosen (:class:`vfgym.tuning._gp.Believer`: the
@@ -45,15 +45,14 @@ MODEL_POINTS = 160
 
 def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
             xi: float, rng: np.random.Generator, n_laws: int = 1,
-            cap: bool = False, split: bool = True,
             starts: dict[str, list[float]] | None = None,
             refit: bool = True) -> Proposal:  # fmt: skip
     """``n`` points (unit coordinates) of highest expected improvement (by at least
     ``xi`` over the best feasible cost) times probability of feasibility, each conditioned
     on the previous ones and on ``pending`` at their predicted values. Gaussian
     processes: log cost (on the feasible points once there are three) and the
-    constraints (signed log, :func:`_constraint_targets`); ``cap``: log costs above their
-    median taken as the median; ``split``: one model per broken constraint; ``starts``:
+    constraints (signed log, one model per broken constraint, :func:`_constraint_targets`);
+    ``starts``:
     each model's fit starts from these log hyperparameters (a previous batch's
     :attr:`Proposal.thetas`, by model) and takes fewer steps; not ``refit``: a model
     with a start keeps it, unfitted (only factored on the points).
@@ -62,7 +61,7 @@ def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n:
     from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
     with threadpool_limits(1, user_api="blas"):
-        return _propose(x, obs, pending, n, xi, rng, n_laws, cap, split, starts, refit)
+        return _propose(x, obs, pending, n, xi, rng, n_laws, starts, refit)
 
 
 class Proposal(NamedTuple):
@@ -75,13 +74,12 @@ class Proposal(NamedTuple):
 
 def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
              xi: float, rng: np.random.Generator, n_laws: int,
-             cap: bool, split: bool,
              starts: dict[str, list[float]] | None, refit: bool) -> Proposal:  # fmt: skip
     if len(obs) > MODEL_POINTS:
         order = sorted(range(len(obs)), key=lambda i: rank(obs[i]))
         keep = sorted(set(order[: MODEL_POINTS // 2]) | set(range(len(obs))[-MODEL_POINTS // 2 :]))
         x, obs = x[keep], [obs[i] for i in keep]
-    fit = _fit(x, obs, xi, pending, cap, split, starts, refit)
+    fit = _fit(x, obs, xi, pending, starts, refit)
     feas = np.array([o.feasible for o in obs])
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     top = x[np.argsort(np.where(feas, y, np.inf), kind="stable")[:3]]
@@ -100,36 +98,6 @@ def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n
         return c
 
     return Proposal(fit.choose(n, candidates), fit.thetas())
-
-
-LOCAL_POINTS = 60
-"""At most this many observations, the nearest to the centre, inform the local model."""
-
-
-def propose_local(x: np.ndarray, obs: list[Observation], centre: np.ndarray,
-                  radius: np.ndarray, pending: list[np.ndarray], n: int,
-                  rng: np.random.Generator) -> list[np.ndarray]:  # fmt: skip
-    """``n`` points (unit coordinates) within ``radius`` of ``centre`` along every axis
-    (a box; the law, if searched, kept at the centre's) of highest expected improvement
-    over the best feasible cost near the centre, times probability of feasibility, from
-    Gaussian processes on the :data:`LOCAL_POINTS` observations nearest the centre (in
-    units of the radius); each point conditioned on ``pending`` and the previous ones."""
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(1, user_api="blas"):
-        dim = len(radius)
-        r = np.ones(x.shape[1])
-        r[:dim] = radius
-        near = np.argsort((((x - centre) / r) ** 2).sum(1), kind="stable")[:LOCAL_POINTS]
-        fit = _fit(x[near], [obs[i] for i in near], 0.0, pending)
-
-        def candidates() -> np.ndarray:
-            c = np.repeat(centre[None], 1536, axis=0)
-            c[:1024, :dim] += radius * rng.uniform(-1.0, 1.0, (1024, dim))
-            c[1024:, :dim] += radius * rng.normal(0.0, 0.25, (512, dim))
-            return np.clip(c, 0.0, 1.0)
-
-        return fit.choose(n, candidates)
 
 
 class _Fit(NamedTuple):
@@ -175,19 +143,16 @@ class _Fit(NamedTuple):
 
 
 def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndarray],
-         cap: bool = False, split: bool = True,
          starts: dict[str, list[float]] | None = None, refit: bool = True) -> _Fit:  # fmt: skip
     """Gaussian processes on log cost (on the feasible points once there are three) and
     on the constraints (signed log, :func:`_constraint_targets`), conditioned on ``pending``
     at their predicted values; each fit from ``starts``' hyperparameters of its name, if
-    given (:meth:`_Fit.thetas`); not ``refit``: kept as they are where given.
-    ``cap``: log costs above their median taken as the median, so that the model spends
-    itself on the good half of a space whose costs span decades."""
+    given (:meth:`_Fit.thetas`); not ``refit``: kept as they are where given."""
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     feas = np.array([o.feasible for o in obs])
     cons = np.array([o.constraints for o in obs])
     fit = feas if feas.sum() >= 3 else np.ones(len(obs), dtype=bool)
-    yf = np.minimum(y[fit], np.median(y[fit])) if cap else y[fit]
+    yf = y[fit]
     starts = starts or {}
 
     def model(data: tuple[np.ndarray, np.ndarray, str]) -> GaussianProcess:
@@ -198,7 +163,7 @@ def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndar
             m.condition(p[None], float(m.predict(p[None])[0][0]))
         return m
 
-    keyed = _constraint_models(cons, split)
+    keyed = _constraint_models(cons)
     gp, *cgps = each(model, [(x[fit], yf, "cost"), *((x, _signed_log(c), k) for k, c in keyed)])
     best = y[feas].min() + math.log1p(-xi) if feas.any() else None
     return _Fit(gp, cgps, best, tuple(k for k, _ in keyed))
@@ -223,24 +188,15 @@ def each(fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
     return list(_POOL[1].map(fn, items))
 
 
-def _constraint_targets(cons: np.ndarray, split: bool) -> list[np.ndarray]:
-    """The constraint values the feasibility models are fitted to, one array per model:
-    each constraint some observation violates (``split``), else the worst of them (if
-    any is violated). Each constraint alone is smoother than their maximum, which jumps
-    from one constraint's surface to another's: on ``short-move`` the worst's model took
-    the region of the better basin (lower value and L/value, where the acceleration
-    constraint gives way) as infeasible."""
-    return [c for _, c in _constraint_models(cons, split)]
-
-
-def _constraint_models(cons: np.ndarray, split: bool) -> list[tuple[str, np.ndarray]]:
-    """:func:`_constraint_targets`, each named: ``c<i>`` for constraint i, ``worst``."""
+def _constraint_models(cons: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """The constraint values the feasibility models are fitted to, each named ``c<i>``:
+    each constraint some observation violates. Each constraint alone is smoother than
+    their maximum, which jumps from one constraint's surface to another's: on
+    ``short-move`` the worst's model took the region of the better basin (lower value and
+    L/value, where the acceleration constraint gives way) as infeasible."""
     if not cons.size:
         return []
-    if split:
-        return [(f"c{i}", c) for i, c in enumerate(cons.T) if (c > 0).any()]
-    worst = cons.max(axis=1)
-    return [("worst", worst)] if (worst > 0).any() else []
+    return [(f"c{i}", c) for i, c in enumerate(cons.T) if (c > 0).any()]
 
 
 def _signed_log(v: np.ndarray) -> np.ndarray:

@@ -2,8 +2,7 @@
 constraints set on the trial for the samplers that learn them.
 
 Trials are scored one at a time (:meth:`Objective.__call__`, what ``study.optimize``
-calls) or as a batch whose settings are simulated in ONE batched, multi-threaded kernel
-call (:meth:`Objective.results`, then :meth:`Objective.record` per trial).
+calls); :meth:`Objective.results` also scores several settings in ONE batched kernel call.
 """
 
 from __future__ import annotations
@@ -21,14 +20,7 @@ from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Setting
 from vfgym.plant.uncertainty import PlantVariant
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, aggregate_costs
-from vfgym.tuning._recovery import WORKER_ATTR, _worker_id
-from vfgym.tuning._stored import (
-    FORMAT,
-    RESULT_ATTR,
-    constraint_writes,
-    result_attr,
-    stored_result,
-)
+from vfgym.tuning._stored import CONSTRAINTS_KEY, RESULT_ATTR, result_attr, stored_result
 
 if TYPE_CHECKING:
     from optuna import Study, Trial
@@ -139,12 +131,6 @@ class Objective:
     plants : sequence of PlantVariant
         True plants a setting must also be feasible on (an axis's
         :meth:`~vfgym.moves.axis.Axis.design_plants`); its cost is the modelled plant's.
-
-    Attributes
-    ----------
-    trial_format : int
-        How :meth:`record` stores a result (:mod:`vfgym.tuning._stored`): the study's
-        format, which a worker sets from the study it runs (new studies: the latest).
     """
 
     def __init__(
@@ -166,32 +152,21 @@ class Objective:
         self.measures = measures
         self.laws = laws
         self.form = form
-        self.trial_format = FORMAT
         self.cache: dict[tuple, Result] = {}
         self.simulated = 0
-        self.on_enter: Callable[[], None] | None = None
         self.guard: Callable[[], Any] = nullcontext
         self._found: dict[tuple, Result] = {}
         self._seen: set[int] = set()
         self._found_in: tuple | None = None
 
     def __call__(self, trial: Trial) -> float | list[float]:
-        # Before the claim lock goes: a retried trial inherits its dead worker's attribute,
-        # and another worker's recovery must not see this one running under that name.
-        trial.set_user_attr(WORKER_ATTR, _worker_id())
-        if self.on_enter:
-            self.on_enter()
         settings = space.suggest(trial, self.laws)
         (res,) = self.results(trial.study, [trial.number], [settings])
         self.record(trial, res)
         return res.values
 
     def results(
-        self,
-        study: Study | None,
-        numbers: Sequence[int] | Callable[[], Sequence[int]],
-        settings: list[Settings],
-        while_running: Callable[[], None] | None = None,
+        self, study: Study | None, numbers: Sequence[int], settings: list[Settings]
     ) -> list[Result]:
         """The result of each setting, simulating only those never scored.
 
@@ -202,16 +177,11 @@ class Objective:
         Parameters
         ----------
         study : optuna.Study or None
-            The study whose completed trials may already hold a setting's result (None:
-            those :meth:`learn` read last, without reading the study again).
-        numbers : sequence of int, or a callable giving them
-            The trials' numbers (recorded as ``cached_from`` of the results they create);
-            a callable is called after ``while_running`` (which may number the trials).
+            The study whose completed trials may already hold a setting's result.
+        numbers : sequence of int
+            The trials' numbers (recorded as ``cached_from`` of the results they create).
         settings : list of Settings
             The settings, one per trial.
-        while_running : callable or None
-            Work to do while the batch is simulated (:func:`vfgym.evaluate`'s), else
-            before the results are copied; it holds interrupts back itself, if it must.
 
         Returns
         -------
@@ -219,8 +189,8 @@ class Objective:
             One per setting, in order.
         """
         out: list[Result | None] = [self.cache.get(settings_key(s)) for s in settings]
-        if any(r is None for r in out):
-            found = self._completed(study) if study is not None else self._found
+        if any(r is None for r in out) and study is not None:
+            found = self._completed(study)
             for i, s in enumerate(settings):
                 if out[i] is None:
                     out[i] = found.get(settings_key(s))
@@ -230,23 +200,20 @@ class Objective:
                 todo.setdefault(settings_key(s), i)
         if todo:
             with self.guard():
-                scored = self.score_many([settings[i] for i in todo.values()], while_running)
+                scored = self.score_many([settings[i] for i in todo.values()])
             self.simulated += len(todo)
-            nums = numbers() if callable(numbers) else numbers
             for (key, i), res in zip(todo.items(), scored, strict=True):
-                self.cache[key] = Result(res.values, res.attrs | {"cached_from": nums[i]})
+                self.cache[key] = Result(res.values, res.attrs | {"cached_from": numbers[i]})
                 out[i] = res
             for i, s in enumerate(settings):
                 if out[i] is None:
                     out[i] = self.cache[settings_key(s)]
-        elif while_running is not None:
-            while_running()
         return [r for r in out if r is not None]
 
     def record(self, trial: Trial, res: Result, trial_id: int | None = None) -> None:
-        """Store a result on the trial: its user attribute(s), unless the trial holds
-        them already (a retried trial), and its constraints (:mod:`vfgym.tuning._stored`:
-        one write each in the latest format, a write a part in format 1).
+        """Store a result on the trial: its user attribute, unless the trial holds it
+        already (a retried trial), and its constraints (:mod:`vfgym.tuning._stored`: one
+        write each).
 
         Parameters
         ----------
@@ -258,15 +225,11 @@ class Objective:
             The trial's id in ``trial.storage`` (default: looked up, :func:`trial_id_of`).
         """
         have = trial.user_attrs  # (the trial's own copy: no read)
-        if self.trial_format >= 2:
-            writes = {RESULT_ATTR: result_attr(res.attrs)}
-        else:
-            writes = dict(res.attrs)
-        for k, v in writes.items():
-            if k not in have or have[k] != v:
-                trial.set_user_attr(k, v)
+        result = result_attr(res.attrs)
+        if have.get(RESULT_ATTR) != result:
+            trial.set_user_attr(RESULT_ATTR, result)
         values = dict(zip(CONSTRAINTS, res.attrs["constraints"], strict=True))
-        set_constraints(trial, values, trial_id, self.trial_format)
+        set_constraints(trial, values, trial_id)
 
     def score(self, settings: Settings) -> Result:
         """Values and user attributes of one setting (one batched evaluation).
@@ -285,17 +248,13 @@ class Objective:
         """
         return self.score_many([settings])[0]
 
-    def score_many(
-        self, settings: list[Settings], while_running: Callable[[], None] | None = None
-    ) -> list[Result]:
+    def score_many(self, settings: list[Settings]) -> list[Result]:
         """Values and user attributes of each setting, all in one batched evaluation.
 
         Parameters
         ----------
         settings : list of Settings
             The settings.
-        while_running : callable or None
-            Work to do while the batch is simulated (:func:`vfgym.evaluate`'s).
 
         Returns
         -------
@@ -308,7 +267,6 @@ class Objective:
                 self.scenarios,
                 plant=self.plant,
                 measures=self.measures,
-                while_running=while_running,
                 plants=self.plants,
             ),
             *self.how,
@@ -326,18 +284,6 @@ class Objective:
             }
             out.append(Result(cost if self.form == "cost" else objectives, attrs))
         return out
-
-    def learn(self, study: Study) -> None:
-        """Read the study's trials completed since the last read (a worker does, before it
-        claims a batch, so that the batch's results need not read the study again: that
-        read would rebuild the batch's own running trials).
-
-        Parameters
-        ----------
-        study : optuna.Study
-            The study.
-        """
-        self._completed(study)
 
     def _completed(self, study: Study) -> dict[tuple, Result]:
         """Results of the study's completed trials, by settings (the lowest-numbered of each).
@@ -391,9 +337,7 @@ def trial_id_of(trial: Any, study_id: int | None = None) -> int:
     return int(storage.get_trial_id_from_study_id_trial_number(study_id, trial.number))
 
 
-def set_constraints(
-    trial: Any, values: dict[str, float], trial_id: int | None = None, fmt: int = 1
-) -> None:
+def set_constraints(trial: Any, values: dict[str, float], trial_id: int | None = None) -> None:
     """Set the trial's constraints, as ``trial.set_constraint`` does (Optuna 5 reads them
     from the trial; its ``constraints_func`` is deprecated), without reading the trial
     first: on an RDB storage each read rebuilds the whole trial. A retried trial carries
@@ -408,11 +352,6 @@ def set_constraints(
         The constraints by name (≤ 0: met).
     trial_id : int or None
         The trial's id in ``trial.storage`` (default: :func:`trial_id_of`).
-    fmt : int
-        The study's trial format (:mod:`vfgym.tuning._stored`): from 2, constraints named
-        as :data:`vfgym.scoring.CONSTRAINTS`, in its order, are stored as one list (one
-        write); otherwise each as ``constraints:NAME``.
-
     Raises
     ------
     ValueError
@@ -422,5 +361,4 @@ def set_constraints(
     for name, v in values.items():
         if math.isnan(float(v)):
             raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
-    for key, value in constraint_writes(values, fmt):
-        trial.storage.set_trial_system_attr(tid, key, value)
+    trial.storage.set_trial_system_attr(tid, CONSTRAINTS_KEY, [float(v) for v in values.values()])

@@ -69,17 +69,22 @@ def trial_settings(trial: FrozenTrial) -> Settings:
     Parameters
     ----------
     trial : optuna.trial.FrozenTrial
-        A trial scored by a sweep (its settings as stored with its result, or, for a
-        study made before that, as its ``settings`` user attribute).
+        A trial scored by a sweep (its settings as stored with its result).
 
     Returns
     -------
     Settings
         Its settings.
+
+    Raises
+    ------
+    ValueError
+        If the trial holds no result.
     """
     res = stored_result(trial)
-    data = trial.user_attrs["settings"] if res is None or res.settings is None else res.settings
-    return space.settings_from_dict(data, source=f"trial {trial.number}")
+    if res is None or res.settings is None:
+        raise ValueError(f"trial {trial.number} holds no result")
+    return space.settings_from_dict(res.settings, source=f"trial {trial.number}")
 
 
 def write_trials_csv(study: Study, path: Path) -> Path:
@@ -128,7 +133,7 @@ def write_trials_csv(study: Study, path: Path) -> Path:
 
 def _flat_attrs(trial: FrozenTrial) -> dict[str, Any]:
     """A trial's user attributes with its stored result's parts as attributes of their
-    own (the trials CSV's columns whatever the study's trial format)."""
+    own (the trials CSV's columns)."""
     ua = dict(trial.user_attrs)
     res = ua.pop(RESULT_ATTR, None)
     return ua | res if isinstance(res, dict) else ua
@@ -516,7 +521,7 @@ def best_record(
         If the trial holds no result (it did not complete in a sweep).
     """
     r = stored_result(trial)
-    if r is None or r.settings is None:  # (either format: the settings with the result)
+    if r is None or r.settings is None:
         raise ValueError(f"trial {trial.number} holds no result")
     return BestRecord(
         settings=r.settings,

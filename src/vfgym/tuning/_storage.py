@@ -1,26 +1,31 @@
 """Where a study lives: SQLite in the run folder (default), Optuna's JournalStorage on a
-file, or PostgreSQL shared by workers on many machines; and the study-wide claim lock.
+file, or PostgreSQL shared by workers on many machines.
 
-A SQLite file is kept in write-ahead-log mode, so no reader waits on a worker frozen or
-killed mid-write; journal appends take an ``flock`` the kernel drops when its holder
-dies. Each worker claims a trial under a study-wide lock (a file lock beside a SQLite or
-journal file, a PostgreSQL advisory lock on a server).
+RDB storages (SQLite, PostgreSQL) run Optuna's heartbeat: a trial whose worker stopped
+beating for the grace period is failed by ``optuna.storages.fail_stale_trials`` (which
+``study.optimize`` calls before each trial) and enqueued again by Optuna's
+``RetryHeartbeatStaleTrialCallback``. A SQLite file is kept in write-ahead-log mode, so no
+reader waits on a worker frozen or killed mid-write; journal appends take an ``flock``
+the kernel drops when its holder dies.
 """
 
 from __future__ import annotations
 
-import hashlib
+import contextlib
+import copy
 import os
+import random
 import re
+import time
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from vfgym.tuning._recovery import RetryStale
-
 if TYPE_CHECKING:
+    from optuna import Study
     from optuna.storages import BaseStorage, RDBStorage
+    from optuna.trial import FrozenTrial
 
 STORAGE_HELP = (
     "sqlite, journal, sqlite:///FILE, journal:FILE or postgresql://USER:PASS@HOST:PORT/DB?OPTIONS"
@@ -231,21 +236,10 @@ def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = Non
                 from optuna.storages.journal import JournalFileBackend, JournalStorage
 
                 Path(spec.url).parent.mkdir(parents=True, exist_ok=True)
-                return JournalStorage(JournalFileBackend(spec.url, _JournalFlock(spec.url)))  # type: ignore[arg-type]
-            kw: dict[str, Any] = (
-                {"connect_args": {"timeout": 600}}
-                if spec.kind == "sqlite"
-                else {"pool_pre_ping": True, "pool_size": 2, "max_overflow": 2}
-            )
+                return JournalStorage(JournalFileBackend(spec.url, _Flock(spec.url + ".flock")))  # type: ignore[arg-type]
             if spec.path:
                 Path(spec.path).parent.mkdir(parents=True, exist_ok=True)
-            storage = optuna.storages.RDBStorage(
-                spec.url,
-                engine_kwargs=kw,
-                heartbeat_interval=heartbeat,
-                grace_period=grace or 2 * heartbeat,
-                heartbeat_stale_trial_callback=RetryStale(),
-            )
+            storage = _rdb(spec, heartbeat, grace)
             if spec.kind == "sqlite":
                 _sqlite_wal(storage)
             return storage
@@ -261,15 +255,107 @@ def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = Non
             raise ValueError(f"storage={spec.display!r} cannot be opened: {first}") from None
 
 
-class _JournalFlock:
-    """An ``flock`` on ``PATH.flock`` guarding journal appends (Optuna's journal backend
-    only calls ``acquire``/``release``). Unlike Optuna's default symlink lock, the kernel
-    drops it when its holder dies, so a worker killed while writing does not stall the
-    others for the stale-lock grace period. Every process writing the journal must use
-    it (vfgym's workers do; readers take no lock)."""
+CREATE_TRIES = 8
+"""Times a new database's tables are tried when processes create them at once."""
+
+
+def _rdb(spec: StorageSpec, heartbeat: int, grace: int | None) -> RDBStorage:
+    """Optuna's RDB storage with its heartbeat and retry of stale trials, tried again when
+    another process creating the same new database's tables at the same moment makes it
+    fail (Optuna's ``create_all`` and version row are not safe against that: "table
+    studies already exists", or a commit error "e.g. exceeding max length"); the second
+    try finds them made."""
+    import optuna
+    import sqlalchemy
+
+    kw: dict[str, Any] = (
+        {"connect_args": {"timeout": 600}}
+        if spec.kind == "sqlite"
+        else {"pool_pre_ping": True, "pool_size": 2, "max_overflow": 2}
+    )
+    for attempt in range(CREATE_TRIES):
+        try:
+            return optuna.storages.RDBStorage(
+                spec.url,
+                engine_kwargs=kw,
+                heartbeat_interval=heartbeat,
+                grace_period=grace or 2 * heartbeat,
+                heartbeat_stale_trial_callback=RetryStale(spec.path),
+            )
+        except (sqlalchemy.exc.SQLAlchemyError, optuna.exceptions.StorageInternalError):
+            if attempt == CREATE_TRIES - 1:
+                raise
+            time.sleep(random.uniform(0.05, 0.25) * (attempt + 1))
+    raise AssertionError("unreachable")
+
+
+MAX_RETRY = 3
+"""A trial whose worker died is enqueued again at most this many times."""
+
+
+def retry_once(study: Study, trial: FrozenTrial, lock: str | None = None) -> bool:
+    """Enqueue a failed trial again with its settings (Optuna's
+    ``RetryHeartbeatStaleTrialCallback``, at most :data:`MAX_RETRY` times) unless a worker
+    already has: kept because Optuna fails a stale trial in a read and a write, which two
+    workers on SQLite (no row locks) or a journal may both pass, and both would retry it.
+
+    Parameters
+    ----------
+    study : optuna.Study
+        The trial's study.
+    trial : optuna.trial.FrozenTrial
+        The failed trial.
+    lock : str or None
+        A file locked (``flock``) around the check and the retry: the storage file's
+        ``.retry`` (SQLite, journal); None on PostgreSQL, whose rows are locked.
+
+    Returns
+    -------
+    bool
+        Whether this call enqueued it.
+    """
+    import optuna
+
+    history = [*trial.system_attrs.get("retry_history", []), trial.number]
+    with _Flock(lock + ".retry") if lock else contextlib.nullcontext():
+        trials = study.get_trials(deepcopy=False)
+        if any(t.system_attrs.get("retry_history") == history for t in trials):
+            return False
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+            retry = optuna.storages.RetryHeartbeatStaleTrialCallback(max_retry=MAX_RETRY)
+            retry(study, copy.deepcopy(trial))
+    return True
+
+
+class RetryStale:
+    """The heartbeat-stale trial callback: :func:`retry_once`, noting the trials it
+    retried (a sweep reports them; Optuna's callback does not record them).
+
+    Parameters
+    ----------
+    lock : str or None
+        :func:`retry_once`'s lock.
+    """
+
+    def __init__(self, lock: str | None = None) -> None:
+        self.lock = lock
+        self.failed: list[int] = []
+
+    def __call__(self, study: Study, trial: FrozenTrial) -> None:
+        if retry_once(study, trial, self.lock):
+            self.failed.append(trial.number)
+
+
+class _Flock:
+    """An ``flock`` on the file ``path``; guarding journal appends (on ``PATH.flock``:
+    Optuna's journal backend only calls ``acquire``/``release``) it is kept because, unlike
+    Optuna's own file locks, the kernel drops it when its holder dies, so a worker killed
+    while writing does not stall the others for the stale-lock grace period. Every process
+    writing the journal must use it (vfgym's workers do; readers take no lock)."""
 
     def __init__(self, path: str) -> None:
-        self._path = path + ".flock"
+        self._path = path
         self._fd: int | None = None
 
     def acquire(self) -> bool:
@@ -279,6 +365,13 @@ class _JournalFlock:
         fcntl.flock(fd, fcntl.LOCK_EX)
         self._fd = fd
         return True
+
+    def __enter__(self) -> _Flock:
+        self.acquire()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
 
     def release(self) -> None:
         import fcntl
@@ -307,86 +400,3 @@ def _sqlite_wal(storage: RDBStorage) -> None:
         mode = conn.exec_driver_sql("PRAGMA journal_mode").scalar()
         if str(mode).lower() != "wal":
             conn.exec_driver_sql("PRAGMA journal_mode=WAL")
-
-
-class _FileLock:
-    """An exclusive ``flock`` on a file beside a SQLite or journal file (one machine).
-
-    A holder removes the file when it closes (holding the lock), so no empty lock file
-    stays in the run folder once the workers are done. A holder that finds the path no
-    longer names the file it locked (another worker removed it on closing) opens the
-    path again, so two workers never hold locks on two different files."""
-
-    def __init__(self, path: str) -> None:
-        self._path = path + ".vfgym-lock"
-        self._fd: int | None = None
-        self.held = False
-
-    def acquire(self) -> None:
-        import fcntl
-
-        while True:
-            if self._fd is None:
-                self._fd = os.open(self._path, os.O_RDWR | os.O_CREAT, 0o644)
-            fcntl.flock(self._fd, fcntl.LOCK_EX)
-            mine = os.fstat(self._fd)
-            try:
-                now = os.stat(self._path)
-            except FileNotFoundError:
-                now = None
-            if now is not None and (now.st_dev, now.st_ino) == (mine.st_dev, mine.st_ino):
-                self.held = True
-                return
-            os.close(self._fd)  # the file was removed under us: lock the path's new one
-            self._fd = None
-
-    def release(self) -> None:
-        import fcntl
-
-        if self.held and self._fd is not None:
-            fcntl.flock(self._fd, fcntl.LOCK_UN)
-        self.held = False
-
-    def close(self) -> None:
-        if self._fd is None:
-            return
-        self.acquire()  # removed only while held: a waiter then finds it gone and reopens
-        os.unlink(self._path)
-        self.release()
-        os.close(self._fd)
-        self._fd = None
-
-
-class _PgLock:
-    """A PostgreSQL session advisory lock keyed by the study name (all machines)."""
-
-    def __init__(self, url: str, study: str) -> None:
-        import sqlalchemy
-        from sqlalchemy.pool import NullPool
-
-        digest = hashlib.blake2b(f"vfgym-study:{study}".encode(), digest_size=8).digest()
-        self._key = int.from_bytes(digest, "big", signed=True)
-        self._engine = sqlalchemy.create_engine(
-            url, poolclass=NullPool, isolation_level="AUTOCOMMIT"
-        )
-        self._conn = self._engine.connect()
-        self._text = sqlalchemy.text
-        self.held = False
-
-    def acquire(self) -> None:
-        self._conn.execute(self._text("SELECT pg_advisory_lock(:k)"), {"k": self._key})
-        self.held = True
-
-    def release(self) -> None:
-        if self.held:
-            self._conn.execute(self._text("SELECT pg_advisory_unlock(:k)"), {"k": self._key})
-        self.held = False
-
-    def close(self) -> None:
-        self.release()
-        self._conn.close()
-        self._engine.dispose()
-
-
-def _claim_lock(spec: StorageSpec, study: str) -> _FileLock | _PgLock:
-    return _PgLock(spec.url, study) if spec.kind == "postgresql" else _FileLock(spec.path or "")

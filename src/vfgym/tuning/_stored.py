@@ -1,7 +1,7 @@
 """How a sweep's trial stores its result in the study, and how it is read back.
 
-Each attribute a worker writes is one transaction of Optuna's RDB storage (a few SQL
-statements), so the result goes in as few as Optuna's public API allows:
+Each attribute a worker writes is one transaction of Optuna's RDB storage, so the result
+goes in as few as Optuna's public API allows:
 
 * the result is ONE user attribute, ``result``: a mapping of ``settings`` (the settings
   scored, as :func:`vfgym.space.settings_to_dict` gives them), ``cost``, ``constraints``
@@ -9,14 +9,7 @@ statements), so the result goes in as few as Optuna's public API allows:
   ``feasible``, ``objectives`` (in :data:`vfgym.scoring.OBJECTIVES`' order) and, for a
   result copied from an earlier trial, ``cached_from``;
 * the constraints are ONE system attribute, ``constraints``: the list Optuna reads into
-  ``trial.constraints`` (keys ``"0"``, ``"1"``, … in ``CONSTRAINTS``' order; Optuna's
-  samplers use the values, not the keys).
-
-A study records its trial format (:data:`FORMAT_KEY`). Studies made before it (format 1)
-stored each part of the result as its own user attribute (the settings when the trial was
-made) and each constraint as ``constraints:NAME``; they are read as they are, and a
-resumed one goes on writing so, since Optuna's GP sampler needs the same constraint keys
-on every trial.
+  ``trial.constraints`` (in ``CONSTRAINTS``' order; Optuna's samplers use the values).
 """
 
 from __future__ import annotations
@@ -26,21 +19,14 @@ from typing import Any, NamedTuple
 
 from vfgym.scoring import CONSTRAINTS
 
-FORMAT_KEY = "vfgym_trial_format"
-"""The study user attribute giving its trials' format (absent: format 1)."""
-
-FORMAT = 2
-"""The format new studies are made with."""
-
 RESULT_ATTR = "result"
-"""The user attribute of a trial's result (format 2)."""
+"""The user attribute of a trial's result."""
 
 PARTS = ("settings", "cost", "constraints", "feasible", "objectives")
-"""A result's parts: the user attributes of format 1, the keys of ``result`` in format 2."""
+"""A result's parts: the keys of ``result``."""
 
 CONSTRAINTS_KEY = "constraints"
-"""Optuna's system attribute of a trial's constraints (the list; ``constraints:NAME``
-each, format 1)."""
+"""Optuna's system attribute of a trial's constraints (the list)."""
 
 
 class StoredResult(NamedTuple):
@@ -79,7 +65,7 @@ class StoredResult(NamedTuple):
 
 
 def stored_result(trial: Any) -> StoredResult | None:
-    """A trial's stored result, in either format.
+    """A trial's stored result.
 
     Parameters
     ----------
@@ -91,13 +77,11 @@ def stored_result(trial: Any) -> StoredResult | None:
     StoredResult or None
         Its result; None if it holds no cost (not scored by a sweep, or not yet).
     """
-    ua = trial.user_attrs
-    res = ua.get(RESULT_ATTR)
-    parts = res if isinstance(res, Mapping) else ua
-    if "cost" not in parts:
+    parts = trial.user_attrs.get(RESULT_ATTR)
+    if not isinstance(parts, Mapping) or "cost" not in parts:
         return None
-    cached = parts.get("cached_from", ua.get("cached_from"))
-    settings = parts.get("settings", ua.get("settings"))
+    cached = parts.get("cached_from")
+    settings = parts.get("settings")
     return StoredResult(
         settings=dict(settings) if isinstance(settings, Mapping) else None,
         cost=float(parts["cost"]),
@@ -127,24 +111,8 @@ def result_attr(attrs: Mapping[str, Any]) -> dict[str, Any]:
     return {k: attrs[k] for k in keys if k in attrs}
 
 
-def study_format(study: Any) -> int:
-    """The trial format of a study (:data:`FORMAT_KEY`; 1 for a study without it).
-
-    Parameters
-    ----------
-    study : optuna.Study
-        The study.
-
-    Returns
-    -------
-    int
-        1 or 2.
-    """
-    return int(study.user_attrs.get(FORMAT_KEY, 1))
-
-
 def named_constraints(trial: Any) -> dict[str, float]:
-    """A trial's constraints by name (``CONSTRAINTS``), from either stored form.
+    """A trial's constraints by name (``CONSTRAINTS``).
 
     Parameters
     ----------
@@ -162,24 +130,3 @@ def named_constraints(trial: Any) -> dict[str, float]:
         name = CONSTRAINTS[int(key)] if key.isdigit() and int(key) < len(CONSTRAINTS) else key
         out[name] = float(value)
     return out
-
-
-def constraint_writes(values: Mapping[str, float], fmt: int) -> list[tuple[str, Any]]:
-    """The system attributes that store a trial's constraints in a format.
-
-    Parameters
-    ----------
-    values : mapping of str to float
-        The constraints by name (none NaN).
-    fmt : int
-        The study's trial format.
-
-    Returns
-    -------
-    list of (str, object)
-        The (key, value) pairs to write: one list when the format is 2 or later and the
-        names are ``CONSTRAINTS``, in its order; else one a constraint, ``constraints:NAME``.
-    """
-    if fmt >= 2 and tuple(values) == CONSTRAINTS:
-        return [(CONSTRAINTS_KEY, [float(v) for v in values.values()])]
-    return [(f"{CONSTRAINTS_KEY}:{n}", float(v)) for n, v in values.items()]

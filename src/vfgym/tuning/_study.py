@@ -19,7 +19,6 @@ from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings, usable_k
 from vfgym.scoring import OBJECTIVES
 from vfgym.tuning._aggregate import describe
 from vfgym.tuning._config import SweepConfig
-from vfgym.tuning._stored import FORMAT, FORMAT_KEY
 
 if TYPE_CHECKING:
     from optuna import Study
@@ -120,10 +119,9 @@ def _base_plant(cfg: SweepConfig) -> Plant:
 
 
 def _grid_sampler(search_space: dict[str, list[Any]], seed: int | None) -> BaseSampler:
-    """Optuna's grid sampler without its ``after_trial`` stop: the worker's trial budget
-    (:func:`trial_budget`) ends the grid, and a batch told out of order would otherwise stop
-    the study outside ``optimize``, or look up the grid point of the enqueued baseline,
-    which has none."""
+    """Optuna's grid sampler without its ``after_trial`` stop: the study's trial budget
+    (:func:`trial_budget`) ends the grid, for every worker sharing it (Optuna's stop ends
+    only the worker that drew the last point)."""
     import optuna
 
     class GridSampler(optuna.samplers.GridSampler):
@@ -152,40 +150,6 @@ def relative_space(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> spac
     """
     ks = [usable_k(sc.plant(base)) for sc in scenarios] or [usable_k(base)]
     return space.Relative(float(np.exp(np.mean(np.log(ks)))))
-
-
-BATCH = {"tpe": 1, "gp": 8, "cmaes": 8, "nsga2": 8, "grid": 16, "random": 16}
-"""Trials a worker claims and simulates at once, by sampler: one for TPE, which learns from
-every trial (a batch would be asked blind); 8 for GP, whose sampler conditions each ask on
-the running trials (a batch is chosen point by point, as the compass's model batch is);
-CMA-ES's population (4 + 3 ln 4 = 8 in four dimensions), a share of NSGA-II's
-generation, and more for the grid and random sampling, which never look at results."""
-
-
-def batch_size(cfg: SweepConfig, sampler: object = None, study: Study | None = None) -> int:
-    """Trials a worker claims next.
-
-    Parameters
-    ----------
-    cfg : SweepConfig
-        The sweep's configuration.
-    sampler : optuna.samplers.BaseSampler or None
-        The worker's sampler; one with a ``batch_hint(study)`` method (the compass
-        sampler: the rest of its generation) says its own.
-    study : optuna.Study or None
-        The study.
-
-    Returns
-    -------
-    int
-        ``cfg.batch``, else the sampler's hint, else :data:`BATCH`'s.
-    """
-    if cfg.batch:
-        return cfg.batch
-    hint = getattr(sampler, "batch_hint", None)
-    if hint is not None and study is not None:
-        return int(hint(study))
-    return BATCH.get(cfg.sampler, 1)
 
 
 def grid_space(cfg: SweepConfig) -> dict[str, list[Any]]:
@@ -363,21 +327,18 @@ def create_or_load(
         study = optuna.create_study(
             storage=storage, study_name=name, directions=directions, sampler=sampler
         )
-        created = True
     except optuna.exceptions.DuplicatedStudyError:
         study = optuna.load_study(study_name=name, storage=storage, sampler=sampler)
-        created = False
-    if created:
-        study.set_user_attr(META_KEY, asdict(meta))
-        study.set_user_attr(FORMAT_KEY, FORMAT)
+    else:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             study.set_metric_names(["cost"] if cfg.objective == "cost" else list(OBJECTIVES))
         starts = warm_starts(scenarios, _base_plant(cfg))
         for label, settings in starts[:1] if cfg.sampler == "grid" else starts:  # grid: exhaustive
             study.enqueue_trial(baseline_params(cfg.laws, settings), user_attrs={"baseline": label})
+        study.set_user_attr(META_KEY, asdict(meta))  # last: the study is ready
         return study, True
-    old = study.user_attrs.get(META_KEY)
+    old = _ready(study, META_KEY)
     if old is not None:
         old = {"aggregate": "mean"} | old  # a study made before the aggregate was recorded
         for key, want in asdict(meta).items():
@@ -392,3 +353,15 @@ def create_or_load(
             f"{len(directions)}: give another --study"
         )
     return study, False
+
+
+def _ready(study: Study, key: str, wait_s: float = 30.0) -> Any:
+    """The study's ``key`` user attribute, waiting while another process that has just
+    created the study enqueues its warm starts (it records the attribute last); None
+    for a study without it (after ``wait_s``)."""
+    import time
+
+    deadline = time.monotonic() + wait_s
+    while key not in study.user_attrs and time.monotonic() < deadline:
+        time.sleep(0.1)
+    return study.user_attrs.get(key)
