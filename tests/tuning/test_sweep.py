@@ -66,7 +66,7 @@ def test_run_folder_holds_everything_and_best_scores_on_the_one_path(tmp_path, c
     assert best["scenarios"] == ["short-move", "paper-step"]
     assert list(best) == [  # best.yaml's keys in their order (no reference found: none)
         "settings", "cost", "feasible", "constraints", "objectives", "study", "storage",
-        "trial", "sampler", "objective", "scenarios", "laws", "axis", "paper_cost",
+        "trial", "sampler", "objective", "scenarios", "laws", "axis", "paper_cost", "machine",
     ]  # fmt: skip
     summary = yaml.safe_load((run / "summary.yaml").read_text())
     assert summary["best"] == best and [r["settings"] for r in summary["comparison"]["set"]] == [
