@@ -69,7 +69,8 @@ def main() -> None:
     ap.add_argument("--out", default="runs/bench-fit", help="folder of the fits' run folders")
     args = ap.parse_args()
     d = FitConfig()
-    cfg = replace(d, moves=args.moves, library=min(d.library, args.moves))
+    library = min(d.library, args.moves)
+    cfg = replace(d, moves=args.moves, library=library, check=min(d.check, library))
     ref_search = OptimumSearch(points=args.reference_points, rounds=args.reference_rounds)
     print("| axis | test moves | fitted mean cost | / per-move optima | beats best fixed "
           "| beats paper | beats S-curve (optima) | feasible | fit wall time |")  # fmt: skip

@@ -92,6 +92,10 @@ CASES = [
     (["simulate", "--settings", "good.yaml", "--baseline", "paper"], "not allowed with"),
     (["simulate", "--storage", "x"], "unrecognized arguments: --storage x"),
     (["nosuch"], "invalid choice: 'nosuch'"),
+    (
+        ["identify", "--axis", "missing.yaml", "--capture", "c.vcd", "--out", "o.yaml"],
+        "missing.yaml: no such file",
+    ),
     # sweep
     ([*SWEEP, "--runs-dir", "afile/runs"], "afile is a file"),
     ([*SWEEP, "--sampler", "grid", "--grid-points", "1"], "grid_points=1 is out of range"),
