@@ -90,6 +90,25 @@ def test_evaluate_runs_a_servo_agent_as_a_scheduler(servo_run, tmp_path, capsys)
     assert len(rows) == 2
 
 
+def test_load_tuner_gives_a_servo_agent_as_a_scheduler_that_evaluate_judges(servo_run):
+    from vfgym import evaluate
+    from vfgym.agents import load_tuner
+    from vfgym.plant.uncertainty import NOMINAL, PlantVariant
+    from vfgym.scoring import Scheduler
+
+    run, _ = servo_run
+    sched = load_tuner(run / "best_model.zip")
+    assert isinstance(sched, Scheduler) and sched.source.endswith("best_model.zip")
+    heavy = PlantVariant(inertia=1.2)
+    ev = evaluate(sched, ["short-move", "paper-step"], plants=[heavy])
+    agent = load_agent(run / "best_model.zip")
+    env = make_env("vfgym/VFServo-v0", agent.env_kwargs())
+    for si, name in enumerate(["short-move", "paper-step"]):
+        assert ev.cost[0, si] == rollout_info(agent, env, name, NOMINAL)["cost"]
+        assert ev.across.cost[0, 0, si] == rollout_info(agent, env, name, heavy)["cost"]
+    assert ev.across.cost[0, 0, 0] != ev.cost[0, 0]
+
+
 def test_predict_prints_a_servo_agents_schedule(servo_run, tmp_path, capsys):
     run, _ = servo_run
     out = tmp_path / "s.yaml"

@@ -132,7 +132,7 @@ def test_policy_is_scored_per_scenario():
     for si, name in enumerate(scens):
         assert r.column("agent").cost[si] == evaluate(picks[name], [name]).cost[0, 0]
         assert r.column("agent").controllers[si] == picks[name]
-    with pytest.raises(ValueError, match=r"expected vfgym\.Settings"):
+    with pytest.raises(ValueError, match=r"a tuner gives vfgym\.Settings"):
         compare([Candidate("bad", policy=lambda sc: "paper")], [], ["short-move"])
 
 

@@ -70,8 +70,8 @@ def policy_settings(
 
 def agent_policy(model_path: str | Path, axis: str | None = None) -> Callable[[Any], Any]:
     """Any trained agent as a policy :func:`vfgym.report.compare` scores: a VFTune-v0
-    agent's settings per move (:func:`policy_settings`), or a VFServo-v0 agent's move,
-    scheduled interval by interval and scored (a :class:`vfgym.report.ScheduledMove`)."""
+    agent's settings per move (:func:`policy_settings`), or a VFServo-v0 agent that
+    schedules each move interval by interval (a :class:`vfgym.scoring.Scheduler`)."""
     from vfgym.agents.loaded import load_agent, scheduler_policy, settings_policy
 
     agent = load_agent(model_path)
@@ -92,12 +92,12 @@ def servo_agent(model_path: str | Path) -> Any:
     return agent if agent.env_id == "vfgym/VFServo-v0" else None
 
 
-def scheduler_policy(agent: Any, axis: str | None = None) -> Callable[[Any], Any]:
+def scheduler_policy(agent: Any, axis: Any = None, source: str = "agent") -> Any:
     """A VFServo-v0 agent (:func:`servo_agent`) as a policy :func:`vfgym.report.compare`
-    scores: each move scheduled interval by interval (:class:`vfgym.report.ScheduledMove`)."""
+    scores: each move scheduled interval by interval (a :class:`vfgym.scoring.Scheduler`)."""
     from vfgym.agents import loaded
 
-    return loaded.scheduler_policy(agent, axis)
+    return loaded.scheduler_policy(agent, axis, source)
 
 
 __all__ = [

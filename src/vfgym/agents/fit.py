@@ -373,7 +373,8 @@ def fit_axis(
     from tqdm.auto import tqdm
 
     from vfgym.agents.tuners import Tuner, trained_on
-    from vfgym.report import Candidate, across_plants, baseline_candidates, compare, verdict
+    from vfgym.plant.uncertainty import VERDICT_PLANTS
+    from vfgym.report import Candidate, baseline_candidates, compare, verdict
 
     run = Path(run_dir)
     seconds: dict[str, float] = {}
@@ -412,11 +413,10 @@ def fit_axis(
             [Candidate("best-fixed", fixed, source="sweep", role="baseline"),
              *baseline_candidates(("paper", "scurve"))],
             test,
-            plant=axis.plant,
-            measures=axis.measures,
+            axis=axis,
+            plants=VERDICT_PLANTS,  # the verdict across plants, in the same call
         )  # fmt: skip
         v = verdict(report, "fitted", train, f"the {len(test)} test moves of axis {axis.name}")
-        v = across_plants(v, axis.plant, axis.measures, axis.uncertainty)
         bar.update(1)
         seconds["verdict"] = time.perf_counter() - t0 - sum(seconds.values())
     return FitResult(model, tuple(optima), fixed, v, seconds)

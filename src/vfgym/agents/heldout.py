@@ -128,7 +128,8 @@ def axis_verdict(model_path: str | Path, axis_file: str | Path, sweep_trials: in
     from vfgym.agents import agent_policy
     from vfgym.agents.fit import FitConfig, best_fixed
     from vfgym.moves.axis import load_axis
-    from vfgym.report import Candidate, across_plants, baseline_candidates, compare, verdict
+    from vfgym.plant.uncertainty import VERDICT_PLANTS
+    from vfgym.report import Candidate, baseline_candidates, compare, verdict
 
     axis = load_axis(axis_file)
     trials = FitConfig().sweep_trials if sweep_trials is None else sweep_trials
@@ -146,8 +147,8 @@ def axis_verdict(model_path: str | Path, axis_file: str | Path, sweep_trials: in
             *baseline_candidates(("paper", "scurve")),
         ],
         test,
-        plant=axis.plant,
-        measures=axis.measures,
+        axis=axis,
+        plants=VERDICT_PLANTS,  # the verdict across plants, in the same call
     )
     v = verdict(report, "agent", train, f"the {len(test)} test moves of axis {axis.name}")
-    return across_plants(v, axis.plant, axis.measures, axis.uncertainty), fixed
+    return v, fixed

@@ -16,7 +16,8 @@ import numpy as np
 from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
-from vfgym.report import ScheduledMove
+from vfgym.plant.measures import NAMES as METRIC_NAMES
+from vfgym.plant.uncertainty import PlantVariant
 
 VECNORMALIZE_FILE = "vecnormalize.pkl"
 """The normalisation statistics saved beside ``best_model.zip`` (rl-baselines3-zoo's name)."""
@@ -183,27 +184,43 @@ def settings_policy(agent: Agent, axis: str | Axis | None = None) -> Callable[[A
     return settings_for
 
 
-def scheduler_policy(agent: Agent, axis: str | None = None) -> Callable[[Any], ScheduledMove]:
-    """A VFServo-v0 agent as a function: scenario → the move it schedules, scored.
+@dataclass(frozen=True)
+class AgentScheduler:
+    """A VFServo-v0 agent as a :class:`vfgym.scoring.Scheduler`: each move is one episode
+    of VFServo-v0 with the agent's env arguments, on the true plant asked for, the settings
+    changing every control interval; :func:`vfgym.evaluate` scores the measures it returns
+    as it scores every controller.
 
-    The whole move is one episode of VFServo-v0 with the agent's env arguments, the
-    settings changing every control interval; the result holds the scoring path's cost,
-    constraints and measures of the move (the same numbers :func:`vfgym.evaluate` gives
-    a fixed setting); the settings change during the move, so none is reported.
+    Parameters
+    ----------
+    agent : Agent
+        The VFServo-v0 agent.
+    env : gymnasium.Env
+        Its environment, on the axis it is judged on.
+    source : str
+        Where it came from (its label in tables).
     """
+
+    agent: Agent
+    env: Any
+    source: str = "agent"
+
+    def run_move(self, scenario: Scenario, plant: PlantVariant) -> dict[str, Any]:
+        """The measures of the move the agent schedules on ``plant``
+        (:class:`vfgym.scoring.Scheduler`)."""
+        info = rollout_info(self.agent, self.env, scenario, plant)
+        return {k: info[k] for k in METRIC_NAMES}
+
+
+def scheduler_policy(
+    agent: Agent, axis: str | Axis | None = None, source: str = "agent"
+) -> AgentScheduler:
+    """A VFServo-v0 agent as a :class:`vfgym.scoring.Scheduler` (:class:`AgentScheduler`),
+    which :func:`vfgym.evaluate` and :func:`vfgym.report.compare` run on every (move,
+    plant) pair and score as every controller."""
     from vfgym.agents.bases import make_env
-    from vfgym.scoring import CONSTRAINTS
 
-    env = make_env(agent.env_id, agent.env_kwargs(axis))
-
-    def schedule(scenario: Scenario | str) -> ScheduledMove:
-        info = rollout_info(agent, env, scenario)
-        cons = np.array([info[f"constraint_{c}"] for c in CONSTRAINTS], dtype=float)
-        skip = {"scenario", "cost", "feasible", *(f"constraint_{c}" for c in CONSTRAINTS)}
-        metrics = {k: v for k, v in info.items() if k not in skip}
-        return ScheduledMove(float(info["cost"]), cons, metrics)
-
-    return schedule
+    return AgentScheduler(agent, make_env(agent.env_id, agent.env_kwargs(axis)), source)
 
 
 def schedule_of(agent: Agent, scenario: Scenario | str, axis: str | None = None) -> dict[str, Any]:

@@ -154,8 +154,11 @@ def load_tuner(
     path: str | Path | None = None,
     axis: str | Path | Axis | None = None,
     warn: Callable[[str], None] | None = None,
-) -> Tuner:
-    """The tuner in a file: a settings model (JSON) or a VFTune-v0 agent (``.zip``).
+) -> Any:
+    """The tuner in a file: a settings model (JSON) or a VFTune-v0 agent (``.zip``), each
+    a :class:`Tuner`; or a VFServo-v0 agent (``.zip``), a :class:`vfgym.scoring.Scheduler`
+    (:class:`vfgym.agents.loaded.AgentScheduler`) that changes the settings during the move.
+    :func:`vfgym.evaluate` takes any of them.
 
     Parameters
     ----------
@@ -170,8 +173,8 @@ def load_tuner(
 
     Returns
     -------
-    Tuner
-        The tuner, callable on moves.
+    Tuner or AgentScheduler
+        The tuner: callable on moves, or a scheduler.
 
     Raises
     ------
@@ -204,8 +207,8 @@ def load_tuner(
     )
 
 
-def _agent_tuner(path: Path, ax: Axis | None, warn: Callable[[str], None]) -> Tuner:
-    from vfgym.agents import _config, policy_settings
+def _agent_tuner(path: Path, ax: Axis | None, warn: Callable[[str], None]) -> Any:
+    from vfgym.agents import _config, policy_settings, scheduler_policy, servo_agent
 
     if not path.is_file():
         raise ValueError(f"--model {path}: no such file")
@@ -218,8 +221,11 @@ def _agent_tuner(path: Path, ax: Axis | None, warn: Callable[[str], None]) -> Tu
             f"{source}: trained on axis {own.name!r}, used on axis {ax.name!r} with another "
             "plant or measures; its observations describe moves it never saw"
         )
-    policy = policy_settings(path, ax)
     axis = ax or own
+    agent = servo_agent(path)
+    if agent is not None:  # a VFServo-v0 agent schedules each move itself
+        return scheduler_policy(agent, axis, source)
+    policy = policy_settings(path, ax)
     ranges = _agent_ranges(env_kwargs, None if own is PAPER_AXIS else own)
     return Tuner(source, axis, own.name, policy, _outside_ranges(ranges, axis), warn)
 

@@ -137,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
     from vfgym._validate import check_name, check_output_path
     from vfgym.commands._common import axis_from_args, load_settings
     from vfgym.io.runs import new_run_dir, record_command, write_yaml
-    from vfgym.moves.axis import AXIS_FILE, PAPER_AXIS, axis_kwargs, write_axis
+    from vfgym.moves.axis import AXIS_FILE, PAPER_AXIS, write_axis
     from vfgym.moves.baselines import BASELINE_NAMES
     from vfgym.moves.distribution import scenario_set
     from vfgym.plant.uncertainty import VERDICT_PLANTS, draw_plants
@@ -149,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
         format_table,
         write_report,
     )
-    from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS, score_across
+    from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS
     from vfgym.space import settings_to_dict
 
     if not args.settings and not args.model:
@@ -203,13 +203,17 @@ def run(args: argparse.Namespace) -> int:
         Candidate(lab, policy=pol, source=m)
         for lab, pol, m in zip(m_labels, policies, args.model, strict=True)
     ]
+    plants = VERDICT_PLANTS if args.plants is None else args.plants
     report = compare(
         cands,
         base,
         scenarios,
         resamples=args.bootstrap,
         seed=args.seed,
-        **axis_kwargs(axis),
+        plant=on.plant,
+        measures=on.measures,
+        plants=draw_plants(on.uncertainty, on.plant.motor, plants, args.plant_seed),
+        plant_seed=None if on.uncertainty.exact else args.plant_seed,
     )
     report.scenario_spec = args.scenarios
     run_dir = new_run_dir(args.runs_dir, "evaluate", args.name)
@@ -230,7 +234,7 @@ def run(args: argparse.Namespace) -> int:
             "first_seed": first_seed if axis is None else None,
             "scenario_names": [s.name for s in scenarios],
             "bootstrap": {"resamples": args.bootstrap, "seed": args.seed, "level": 0.95},
-            "plants": {"count": args.plants or VERDICT_PLANTS, "seed": args.plant_seed},
+            "plants": {"count": plants, "seed": args.plant_seed},
             "plant": "PAPER_PLANT (each scenario applies its load)"
             if axis is None
             else f"the axis's ({AXIS_FILE}; each scenario adds its load)",
@@ -244,17 +248,8 @@ def run(args: argparse.Namespace) -> int:
         write_axis(axis, run_dir / AXIS_FILE)
     paths = write_report(report, run_dir)
     print(format_table(report), end="")
-    plants = VERDICT_PLANTS if args.plants is None else args.plants
-    variants = draw_plants(on.uncertainty, on.plant.motor, plants, args.plant_seed)
-    across = score_across(
-        [c.controllers for c in report.columns],
-        report.scenarios,
-        variants,
-        plant=on.plant,
-        measures=on.measures,
-        seed=None if on.uncertainty.exact else args.plant_seed,
-    )
-    print("\n" + "\n".join(format_across([c.label for c in report.columns], across)))
+    assert report.across is not None  # (compare was given the plants)
+    print("\n" + "\n".join(format_across([c.label for c in report.columns], report.across)))
     extra = f", {AXIS_FILE}" if axis is not None else ""
     print(f"\nwrote {run_dir}/ ({', '.join(paths)}, config.yaml{extra}, command.txt)")
     return 0

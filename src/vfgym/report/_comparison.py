@@ -2,9 +2,9 @@
 on a scenario set, gathered into a :class:`Report`.
 
 Candidates are V-F :class:`~vfgym.Settings`, a baseline name, or a *policy*: a callable
-``scenario -> Settings`` (an agent that picks settings per scenario); a policy's settings
-are evaluated scenario by scenario, grouped so that identical settings share one batched
-call.
+``scenario -> Settings`` (a tuner: a settings model or an agent that picks settings per
+move) or a :class:`~vfgym.scoring.Scheduler` (an agent that changes them during the
+move). All of them are scored in one :func:`vfgym.evaluate` call.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -21,18 +21,24 @@ from vfgym.moves.baselines import BASELINE_NAMES, Baseline, Controller, resolve
 from vfgym.moves.distribution import scenario_set
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.plant.uncertainty import PlantVariant
 from vfgym.report._stats import DEFAULT_RESAMPLES, Spread, WinLoss, outcome, spread
 from vfgym.scoring import (
     CONSTRAINTS,
     DEFAULT_BOUNDS,
     DEFAULT_WEIGHTS,
+    AcrossPlants,
     Bounds,
     CostWeights,
+    Scheduler,
     evaluate,
 )
 
-Policy = Callable[[Scenario], "Settings | ScheduledMove"]
-"""A per-scenario controller: the settings an agent picks for a scenario."""
+if TYPE_CHECKING:
+    from vfgym.moves.axis import Axis
+
+Policy = Callable[[Scenario], Settings] | Scheduler
+"""A per-scenario controller: a tuner (the settings it picks for a move) or a scheduler."""
 EXTRA_METRICS = ("ideal_time_s", "time_ratio", "window_rad", "arrived")
 """Measures :func:`vfgym.evaluate` adds to :data:`vfgym.plant.measures.NAMES`."""
 
@@ -190,6 +196,9 @@ class Report:
         Seed of the bootstrap, so that a report is reproducible.
     scenario_spec : str
         The scenario set as given on the command line (empty for a list).
+    across : AcrossPlants or None
+        The columns' candidates on true plants, in their order, when :func:`compare` was
+        given ``plants``.
     """
 
     scenarios: list[Scenario]
@@ -197,6 +206,7 @@ class Report:
     resamples: int = DEFAULT_RESAMPLES
     seed: int = 0
     scenario_spec: str = ""
+    across: AcrossPlants | None = None
 
     @property
     def tuned(self) -> list[Column]:
@@ -268,6 +278,25 @@ class Report:
         diff = spread(a - b, resamples=self.resamples, seed=self.seed)
         return WinLoss(tuned, baseline, outs, diff)
 
+    def across_of(self, labels: Sequence[str]) -> AcrossPlants | None:
+        """:attr:`across` for the candidates ``labels``, in that order (``None`` without).
+
+        Parameters
+        ----------
+        labels : sequence of str
+            Candidates' labels.
+
+        Returns
+        -------
+        AcrossPlants or None
+            Their rows of :attr:`across`.
+        """
+        if self.across is None:
+            return None
+        at = [self.columns.index(self.column(lab)) for lab in labels]
+        a = self.across
+        return AcrossPlants(a.plants, a.seed, a.cost[at], a.constraints[at])
+
     def win_losses(self) -> list[WinLoss]:
         """Every tuned candidate against every baseline.
 
@@ -302,126 +331,6 @@ def _column_from_rows(
     )
 
 
-class ScheduledMove(NamedTuple):
-    """A move a scheduler ran itself (the settings changing during the move), scored by
-    the scoring path: what a policy may return instead of :class:`~vfgym.Settings`.
-
-    Attributes
-    ----------
-    cost : float
-        The move's cost.
-    constraints : numpy.ndarray
-        Its constraint values, (len(CONSTRAINTS),).
-    metrics : dict
-        Its measures, as :func:`vfgym.evaluate` reports them.
-    """
-
-    cost: float
-    constraints: np.ndarray
-    metrics: dict[str, Any]
-
-
-class PolicyRun(NamedTuple):
-    """A policy's settings and scores on each scenario (arrays indexed by scenario).
-
-    What :func:`evaluate_policy` returns.
-
-    Attributes
-    ----------
-    settings : list of Settings or None
-        The settings the policy picked, per scenario (None for a scheduled move).
-    cost : numpy.ndarray
-        Cost per scenario, (S,).
-    constraints : numpy.ndarray
-        Constraint values per scenario, (S, 3).
-    metrics : list of dict
-        The measures :func:`vfgym.evaluate` returned, per scenario.
-    """
-
-    settings: list[Settings | None]
-    cost: np.ndarray
-    constraints: np.ndarray
-    metrics: list[dict[str, Any]]
-
-
-def evaluate_policy(
-    policy: Policy,
-    scenarios: str | Scenario | Sequence[str | Scenario],
-    *,
-    plant: Plant = PAPER_PLANT,
-    measures: Measures = DEFAULT_MEASURES,
-    weights: CostWeights = DEFAULT_WEIGHTS,
-    bounds: Bounds = DEFAULT_BOUNDS,
-) -> PolicyRun:
-    """Each scenario scored with the settings ``policy`` picks for it.
-
-    Through :func:`vfgym.evaluate`; scenarios that get identical settings share one call.
-
-    Parameters
-    ----------
-    policy : Policy
-        A callable ``scenario -> Settings``, or ``scenario -> ScheduledMove`` for a
-        scheduler that runs and scores the move itself.
-    scenarios : str, Scenario, or a sequence of these
-        The scenario set (see :func:`vfgym.scenario_set`).
-    plant : Plant
-        The base plant; each scenario applies its load to it.
-    measures : Measures
-        Windows and bands of the measures.
-    weights : CostWeights
-        Weights of the cost.
-    bounds : Bounds
-        Bounds of the constraints.
-
-    Returns
-    -------
-    PolicyRun
-        The settings picked per scenario, the costs (S,), the constraints
-        (S, len(CONSTRAINTS)) and the measures per scenario.
-
-    Raises
-    ------
-    ValueError
-        If the policy returns something other than :class:`~vfgym.Settings` or
-        :class:`ScheduledMove`.
-    """
-    scens = scenario_set(scenarios)
-    chosen: list[Settings | None] = []
-    cost = np.full(len(scens), np.nan)
-    cons = np.full((len(scens), len(CONSTRAINTS)), np.nan)
-    metrics: list[dict[str, Any]] = [{} for _ in scens]
-    for i, sc in enumerate(scens):
-        out = policy(sc)
-        if isinstance(out, ScheduledMove):
-            cost[i], cons[i], metrics[i] = out.cost, out.constraints, out.metrics
-            chosen.append(None)
-        elif isinstance(out, Settings):
-            chosen.append(out)
-        else:
-            raise ValueError(
-                f"policy returned {out!r} for scenario {sc.name!r}: expected vfgym.Settings "
-                "or a ScheduledMove"
-            )
-    groups: dict[Settings, list[int]] = {}
-    for i, picked in enumerate(chosen):
-        if picked is not None:
-            groups.setdefault(picked, []).append(i)
-    for s, idx in groups.items():
-        ev = evaluate(
-            s,
-            [scens[i] for i in idx],
-            plant=plant,
-            measures=measures,
-            weights=weights,
-            bounds=bounds,
-        )
-        for j, i in enumerate(idx):
-            cost[i] = ev.cost[0, j]
-            cons[i] = ev.constraints[0, j]
-            metrics[i] = ev.metrics[0][j]
-    return PolicyRun(chosen, cost, cons, metrics)
-
-
 def compare(
     candidates: Sequence[Candidate],
     baselines: str | Sequence[str] | Sequence[Candidate] = BASELINE_NAMES,
@@ -435,11 +344,14 @@ def compare(
     bounds: Bounds = DEFAULT_BOUNDS,
     resamples: int = DEFAULT_RESAMPLES,
     seed: int = 0,
+    axis: Axis | None = None,
+    plants: Sequence[PlantVariant] | int = (),
+    plant_seed: int | None = None,
 ) -> Report:
     """Score tuned candidates and baselines on the same scenarios.
 
-    One batched :func:`vfgym.evaluate` call for every fixed controller, one per settings
-    group for each policy.
+    One :func:`vfgym.evaluate` call for every candidate: fixed controllers, tuners and
+    schedulers on the same moves and, with ``plants``, on the same true plants.
 
     Parameters
     ----------
@@ -465,6 +377,14 @@ def compare(
         Bootstrap draws for the spreads, 1 to 1 000 000.
     seed : int
         Seed of the bootstrap, ≥ 0.
+    axis : Axis or None
+        The problem (its plant, measures and moves, instead of ``plant`` and ``measures``;
+        ``scenarios`` resolved on it), as :func:`vfgym.evaluate` takes it.
+    plants : sequence of PlantVariant, or int
+        True plants to judge every candidate on too (:attr:`Report.across`), or how many
+        to draw within the axis's uncertainty, as :func:`vfgym.evaluate` takes them.
+    plant_seed : int or None
+        Their seed, as :func:`vfgym.evaluate` takes it.
 
     Returns
     -------
@@ -492,36 +412,39 @@ def compare(
     if dup:
         raise ValueError(f"controller labels must differ: {', '.join(dup)} given twice")
     spec = scenarios if isinstance(scenarios, str) else ""
-    scens = scenario_set(scenarios, count, first_seed)
-    fixed = [c for c in cands if c.controller is not None]
-    columns: dict[str, Column] = {}
-    if fixed:
-        ev = evaluate(
-            [c.controller for c in fixed],  # type: ignore[misc]
+    if axis is not None:
+        scens = axis.scenario_set(scenarios if isinstance(scenarios, str) else list(scenarios))
+        plant, measures = axis.plant, axis.measures
+    else:
+        scens = scenario_set(scenarios, count, first_seed)
+    ev = evaluate(
+        [c.controller if c.controller is not None else c.policy for c in cands],
+        scens,
+        axis=axis,
+        plant=plant,
+        measures=measures,
+        weights=weights,
+        bounds=bounds,
+        plants=plants,
+        plant_seed=plant_seed,
+    )
+    columns = [
+        _column_from_rows(
+            cand,
             scens,
-            plant=plant,
-            measures=measures,
-            weights=weights,
-            bounds=bounds,
-        )
-        for ci, cand in enumerate(fixed):
-            rows = [
-                (cand.controller, ev.cost[ci, si], ev.constraints[ci, si], ev.metrics[ci][si])
+            plant,
+            [
+                (ev.chosen[ci][si], ev.cost[ci, si], ev.constraints[ci, si], ev.metrics[ci][si])
                 for si in range(len(scens))
-            ]
-            columns[cand.label] = _column_from_rows(cand, scens, plant, rows)  # type: ignore[arg-type]
-    for cand in cands:
-        if cand.policy is None:
-            continue
-        chosen, cost, cons, mets = evaluate_policy(
-            cand.policy, scens, plant=plant, measures=measures, weights=weights, bounds=bounds
+            ],
         )
-        rows = [(chosen[i], cost[i], cons[i], mets[i]) for i in range(len(scens))]
-        columns[cand.label] = _column_from_rows(cand, scens, plant, rows)  # type: ignore[arg-type]
+        for ci, cand in enumerate(cands)
+    ]
     return Report(
         scenarios=scens,
-        columns=[columns[c.label] for c in cands],
+        columns=columns,
         resamples=resamples,
         seed=seed,
         scenario_spec=spec,
+        across=ev.across,
     )

@@ -32,7 +32,7 @@ from vfgym.plant.uncertainty import (
 from vfgym.report._comparison import Candidate, Report, baseline_candidates, compare
 from vfgym.report._stats import Spread, WinLoss
 from vfgym.report._tables import _grid
-from vfgym.scoring import AcrossPlants, score_across
+from vfgym.scoring import AcrossPlants
 
 VERDICT_BASELINES = ("paper", "rule-of-thumb", "scurve")
 """What a tuned setting is judged against: the paper's settings, the rule of thumb (the
@@ -234,57 +234,13 @@ def verdict(
         )
     known = {_content(sc) for sc in tuned_on}
     seen = tuple(sc.name for sc in report.scenarios if _content(sc) in known)
-    return Verdict(report, tuned, tuple(rows), seen, title)
+    across = report.across_of([r.label for r in rows])
+    return Verdict(report, tuned, tuple(rows), seen, title, across)
 
 
 def _content(sc: Scenario) -> Scenario:
     """The move without its name: two names for one move are the same move."""
     return replace(sc, name="move", description="")
-
-
-def across_plants(
-    v: Verdict,
-    plant: Plant = PAPER_PLANT,
-    measures: Measures = DEFAULT_MEASURES,
-    uncertainty: Uncertainty = EXACT,
-    plants: int = VERDICT_PLANTS,
-    plant_seed: int = VERDICT_PLANT_SEED,
-) -> Verdict:
-    """The verdict with every row judged on true plants too.
-
-    Each row's controller, as it ran on each move (per-move choices included), is run
-    on ``plants`` true plants drawn within the uncertainty from ``plant_seed``; where the
-    axis states none, on the ±5 % inertia plants of the sensitivity line.
-
-    Parameters
-    ----------
-    v : Verdict
-        The verdict on the modelled plant.
-    plant, measures : Plant, Measures
-        The axis's modelled plant and measures.
-    uncertainty : Uncertainty
-        The axis's uncertainty.
-    plants : int
-        How many held-out plants to draw (ignored when exact).
-    plant_seed : int
-        Their seed (printed with the verdict).
-
-    Returns
-    -------
-    Verdict
-        ``v`` with :attr:`Verdict.across` set.
-    """
-    variants = draw_plants(uncertainty, plant.motor, plants, plant_seed)
-    cols = [v.report.column(r.label) for r in v.rows]
-    across = score_across(
-        [c.controllers for c in cols],
-        v.report.scenarios,
-        variants,
-        plant=plant,
-        measures=measures,
-        seed=None if uncertainty.exact else plant_seed,
-    )
-    return replace(v, across=across)
 
 
 def held_out_verdict(
@@ -321,26 +277,27 @@ def held_out_verdict(
         Which moves these are, for the printed verdict.
     uncertainty : Uncertainty or None
         The axis's uncertainty: the verdict is then also judged across plants
-        (:func:`across_plants`); ``None``: on the modelled plant only.
+        (:attr:`Verdict.across`); ``None``: on the modelled plant only.
     plants, plant_seed : int, int
-        How many held-out plants, drawn from which seed (:func:`across_plants`).
+        How many held-out plants, drawn within it from which seed (where it states none,
+        the ±5 % inertia plants of the sensitivity line).
 
     Returns
     -------
     Verdict
         The verdict.
     """
+    unc = EXACT if uncertainty is None else uncertainty
     report = compare(
         [Candidate(label, settings, source="sweep")],
         baseline_candidates(baselines),
         list(scenarios),
         plant=plant,
         measures=measures,
+        plants=() if uncertainty is None else draw_plants(unc, plant.motor, plants, plant_seed),
+        plant_seed=None if unc.exact else plant_seed,
     )
-    v = verdict(report, label, tuned_on, title)
-    if uncertainty is None:
-        return v
-    return across_plants(v, plant, measures, uncertainty, plants, plant_seed)
+    return verdict(report, label, tuned_on, title)
 
 
 def axis_verdict(

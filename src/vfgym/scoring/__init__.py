@@ -32,6 +32,7 @@ from vfgym.scoring._plants import (
     score_robust,
     worst_on,
 )
+from vfgym.scoring._scheduled import Scheduler
 
 __all__ = [
     "CONSTRAINTS",
@@ -45,6 +46,7 @@ __all__ = [
     "Evaluation",
     "Move",
     "PlantSummary",
+    "Scheduler",
     "Score",
     "Yardsticks",
     "arrival_constraint",

@@ -57,6 +57,7 @@ from vfgym.scoring._cost import (
     Score,
     score,
 )
+from vfgym.scoring._scheduled import Scheduler, score_scheduled
 
 
 @dataclass
@@ -88,6 +89,10 @@ class Evaluation:
     across : AcrossPlants or None
         The same pairs on true plants within an axis's uncertainty, when asked for
         (``plants``); the arrays above are the modelled plant's.
+    chosen : list of list
+        ``chosen[c][s]``: the controller as it ran on scenario ``s`` (a tuner's choice
+        for it; ``None`` for a :class:`~vfgym.scoring.Scheduler`, whose settings change
+        during the move).
     """
 
     controllers: list[Controller]
@@ -98,6 +103,7 @@ class Evaluation:
     objectives: np.ndarray
     traces: list[list[Trace | None]] | None = field(default=None, repr=False)
     across: AcrossPlants | None = field(default=None, repr=False)
+    chosen: list[list[Any]] = field(default_factory=list, repr=False)
 
     @property
     def mean_cost(self) -> np.ndarray:
@@ -148,13 +154,13 @@ def _choose(c: Any, sc: Scenario) -> Controller | Baseline:
     if not isinstance(out, Settings):
         raise ValueError(
             f"the tuner {c!r} gave {out!r} for move {sc.name!r}: a tuner gives vfgym.Settings "
-            "(a VFServo-v0 agent schedules its own move: vfgym.report.compare runs it)"
+            "(a controller that schedules its own move is a vfgym.scoring.Scheduler)"
         )
     return out
 
 
 def _check_controllers(controllers: Any) -> list[Any]:
-    kinds = (Settings, FixedFrequency, SCurveSource, Baseline)
+    kinds = (Settings, FixedFrequency, SCurveSource, Baseline, Scheduler)
     if isinstance(controllers, (*kinds, str)) or callable(controllers):
         controllers = [controllers]
     out = [Baseline(c) if isinstance(c, str) else c for c in controllers]
@@ -162,8 +168,8 @@ def _check_controllers(controllers: Any) -> list[Any]:
         if not isinstance(c, kinds) and not callable(c):
             raise ValueError(
                 f"settings[{i}]={c!r} is not allowed: give vfgym.Settings, a baseline "
-                "pulse source (FixedFrequency, SCurveSource) or a tuner (move -> Settings, "
-                "e.g. vfgym.agents.load_tuner's)"
+                "pulse source (FixedFrequency, SCurveSource), a tuner (move -> Settings, "
+                "e.g. vfgym.agents.load_tuner's) or a vfgym.scoring.Scheduler"
             )
     if not out:
         raise ValueError("settings=[] is not allowed: give at least one")
@@ -418,7 +424,9 @@ def evaluate(
         V-F :class:`~vfgym.Settings`, a baseline pulse source, a baseline name or
         :class:`~vfgym.moves.baselines.Baseline` (derived per scenario plant), or a tuner:
         a callable from a move to its settings (:func:`vfgym.agents.load_tuner`'s
-        settings models and VFTune-v0 agents), asked once per move.
+        settings models and VFTune-v0 agents), asked once per move, or a
+        :class:`~vfgym.scoring.Scheduler` that changes its settings during the move
+        (``load_tuner``'s VFServo-v0 agents), run on every (move, plant) pair.
     scenarios : str, Scenario, or a sequence of these
         Names, :class:`~vfgym.Scenario` objects, or a set spec (``named``, ``train`` …;
         see :func:`vfgym.scenario_set`; on an ``axis``, its move sets and moves).
@@ -488,23 +496,31 @@ def evaluate(
     nc, ns = len(ctrls), len(scens)
     true_moves = [Move.of(sc, plant, v) for v in variants for sc in scens]
     all_moves = moves + true_moves
-    chosen = [[_choose(c, sc) for sc in scens] for c in ctrls]  # a tuner asked once a move
-    scored = score_pairs(
-        [chosen[ci][k % ns] for ci in range(nc) for k in range(len(all_moves))],
-        [mv for _ in ctrls for mv in all_moves],
+    on = [NOMINAL] * ns + [v for v in variants for _ in scens]
+    # a tuner is asked once a move; a scheduler runs each move itself (None: no settings)
+    chosen = [[None if isinstance(c, Scheduler) else _choose(c, sc) for sc in scens] for c in ctrls]
+    batched = [ci for ci, c in enumerate(ctrls) if not isinstance(c, Scheduler)]
+    flat = score_pairs(
+        [chosen[ci][k % ns] for ci in batched for k in range(len(all_moves))],
+        [mv for _ in batched for mv in all_moves],
         measures=measures,
         weights=weights,
         bounds=bounds,
         while_running=while_running,
     )
     per = len(all_moves)
-    results = [r for ci in range(nc) for r in scored[ci * per : ci * per + ns]]
+    rows: list[list[Any]] = [[] for _ in ctrls]
+    for j, ci in enumerate(batched):
+        rows[ci] = flat[j * per : (j + 1) * per]
+    for ci, c in enumerate(ctrls):
+        if isinstance(c, Scheduler):
+            rows[ci] = score_scheduled(c, all_moves, on, measures, weights, bounds)
+    results = [r for row in rows for r in row[:ns]]
     across = None
     if variants:
         from vfgym.scoring._plants import across_arrays
 
-        rest = [scored[ci * per + ns : (ci + 1) * per] for ci in range(nc)]
-        across = across_arrays(rest, variants, plant_seed, ns)
+        across = across_arrays([row[ns:] for row in rows], variants, plant_seed, ns)
     nan_m = dict.fromkeys(METRIC_NAMES, math.nan)
     metrics = [[dict(nan_m) for _ in range(ns)] for _ in range(nc)]
     cost = np.full((nc, ns), np.nan)
@@ -519,7 +535,7 @@ def evaluate(
             continue
         cost[ci, si], cons[ci, si], objs[ci, si] = res.cost, res.constraints, res.objectives
         metrics[ci][si] = res.metrics
-        if traces is not None:
+        if traces is not None and chosen[ci][si] is not None:  # (a scheduler's: none)
             run = _as_run(chosen[ci][si], moves[si])
             assert run is not None  # (it was scored)
             s, ext = run
@@ -531,4 +547,4 @@ def evaluate(
                 measures=measures,
                 decimation=decimation,
             )
-    return Evaluation(ctrls, scens, metrics, cost, cons, objs, traces, across)
+    return Evaluation(ctrls, scens, metrics, cost, cons, objs, traces, across, chosen)
