@@ -51,3 +51,21 @@ def test_fit_best_fixed_is_the_sweep_with_as_many_trials(tmp_path):
                      "--trials", "12", "--study", "s", "--runs-dir", str(tmp_path),
                      "--no-progress"]) == 0  # fmt: skip
     assert got == load_settings(str(tmp_path / "sweep" / "s" / "best.yaml"))
+
+
+def test_an_oracles_optima_are_each_true_plants_own():
+    """``true_plants``: each move optimised as it runs on its true plant, so the optimum's
+    cost is its cost there, and no more than the modelled plant's optimum costs there."""
+    from vfgym.plant.uncertainty import PlantVariant
+
+    axis = load_axis(AXES / "paper.yaml")
+    moves = axis.scenarios("test")[:3]
+    heavy = [PlantVariant(inertia=1.25)] * len(moves)
+    oracle = move_optima(moves, SEARCH, true_plants=heavy)
+    nominal = move_optima(moves, SEARCH)
+    for o, n, sc in zip(oracle, nominal, moves, strict=True):
+        ev = evaluate([o.settings, n.settings], [sc], plants=heavy[:1])
+        assert ev.across.cost[0, 0, 0] == o.cost and o.feasible == ev.across.feasible[0, 0, 0]
+        if ev.across.feasible[1, 0, 0]:
+            assert o.cost <= ev.across.cost[1, 0, 0] + 1e-12
+    assert any(o.settings != n.settings for o, n in zip(oracle, nominal, strict=True))

@@ -32,7 +32,7 @@ from vfgym._validate import check_int
 from vfgym.io.runs import write_text
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
-from vfgym.plant.uncertainty import PlantVariant
+from vfgym.plant.uncertainty import NOMINAL, PlantVariant
 from vfgym.scoring import (
     DEFAULT_BOUNDS,
     DEFAULT_WEIGHTS,
@@ -122,6 +122,7 @@ def move_optima(
     bounds: Bounds = DEFAULT_BOUNDS,
     progress: Callable[[str], None] | None = None,
     plants: Sequence[PlantVariant] = (),
+    true_plants: Sequence[PlantVariant] | None = None,
 ) -> list[MoveOptimum]:
     """The best settings of each move (coarse grid, then local refinement; module doc).
 
@@ -139,13 +140,19 @@ def move_optima(
         True plants a setting must also be feasible on to count as feasible (an axis's
         :meth:`~vfgym.moves.axis.Axis.design_plants`): robust optima. Only the
         contenders are checked on them, best first (the module doc).
+    true_plants : sequence of PlantVariant or None
+        Each move's true plant, relative to the modelled one: the optimum of the move as
+        it runs there (an oracle that knows the plant); ``None``: the modelled plant.
 
     Returns
     -------
     list of MoveOptimum
         One per scenario, in order.
     """
-    moves = [Move.of(sc, plant) for sc in scenarios]
+    on = [NOMINAL] * len(scenarios) if true_plants is None else list(true_plants)
+    if len(on) != len(scenarios):
+        raise ValueError(f"true_plants: {len(on)} given for {len(scenarios)} moves")
+    moves = [Move.of(sc, plant, v) for sc, v in zip(scenarios, on, strict=True)]
     design = tuple(plants)
     # per move: unit point (rounded) -> [rank, u, feasible, cost, checked on the design]
     seen: list[dict[tuple, list]] = [{} for _ in moves]
