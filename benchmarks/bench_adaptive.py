@@ -1,0 +1,218 @@
+"""Adaptive agents on an uncertain axis, as rl-baselines3-zoo's ``benchmark.md``: VFServo-v0
+agents that schedule the settings during the move, judged on held-out (move, plant) pairs
+against the robust per-move base they started from and against an oracle.
+
+    python benchmarks/bench_adaptive.py --runs RUN [RUN ...]
+        [--axis experiments/axes/loads-uncertain.yaml] [--plants 16] [--plant-seed S]
+        [--moves 32] [--out runs/bench-adaptive]
+    python benchmarks/bench_adaptive.py --train --algos ppo --seeds 1,2,3 --steps 200000 ...
+
+Held-out pairs: the axis's test moves (the first ``--moves``) × ``--plants`` true plants
+drawn within its uncertainty from ``--plant-seed`` (default
+:data:`vfgym.plant.uncertainty.VERDICT_PLANT_SEED`); agents are trained on the train split
+and select their best model on validation pairs of other seeds
+(:func:`vfgym.agents.training.validation_plants`), so none of these pairs was seen.
+
+Every tuner is judged in one :func:`vfgym.evaluate` call on those pairs:
+
+* **base**: the axis's robust per-move settings model (``vfgym fit``'s, the agents'
+  residual base: ``RUNS/fit/AXIS/settings_model.json``, or ``--base FILE``);
+* **oracle**: each (move, true plant)'s own optimum, found knowing the true plant
+  (:func:`vfgym.agents.optima.move_optima` with ``true_plants``); cached in ``--out``;
+* each run's ``best_model.zip`` (a :class:`vfgym.scoring.Scheduler`).
+
+Per seed: the held-out mean cost, the pairs feasible, the ratio to the base and the
+pairs where the agent is cheaper / dearer than the base. Per algorithm: mean ± std over
+seeds, the worst seed's feasibility, and the ratios of the mean to the base and to the
+oracle. Writes ``benchmark.md`` (the tables and each run's command) and
+``benchmark.json`` into ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import sys
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+
+@dataclass(frozen=True)
+class Judged:
+    """One tuner on the held-out pairs."""
+
+    label: str
+    cost: list[float]  # per pair, plant-major
+    feasible: list[bool]
+    command: str
+    wall_s: float = float("nan")
+
+    @property
+    def mean(self) -> float:
+        return float(np.mean(self.cost))
+
+
+def pairs(axis, moves: int, plants: int, seed: int):
+    """(held-out moves, true plants)."""
+    from vfgym.plant.uncertainty import draw_plants
+
+    if axis.uncertainty.exact:
+        raise SystemExit(f"--axis {axis.name}: states no uncertainty; adaptive agents need one")
+    test = axis.scenarios("test")[:moves]
+    return test, draw_plants(axis.uncertainty, axis.plant.motor, plants, seed)
+
+
+def judge(tuners, axis, test, variants) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Each tuner's (cost, feasible) on the pairs, plant-major, in one evaluate call."""
+    from vfgym import evaluate
+
+    ev = evaluate(list(tuners), test, axis=axis, plants=list(variants))
+    a = ev.across
+    return [(a.cost[i].ravel(), a.feasible[i].ravel()) for i in range(len(tuners))]
+
+
+def oracle(axis, test, variants, out: Path) -> Judged:
+    """Each pair's own optimum on its true plant (cached in ``out``)."""
+    from vfgym.agents.optima import move_optima
+
+    cache = out / "oracle.json"
+    key = {"axis": axis.name, "moves": [s.name for s in test],
+           "plants": [asdict(v) for v in variants]}  # fmt: skip
+    if cache.is_file():
+        data = json.loads(cache.read_text())
+        if data["key"] == key:
+            return Judged("oracle", data["cost"], data["feasible"], data["command"])
+    scens = [sc for _ in variants for sc in test]
+    on = [v for v in variants for _ in test]
+    opt = move_optima(scens, plant=axis.plant, measures=axis.measures, true_plants=on)
+    how = "each pair's optimum on its true plant (vfgym.agents.optima.move_optima)"
+    j = Judged("oracle", [o.cost for o in opt], [bool(o.feasible) for o in opt], how)
+    cache.write_text(json.dumps({"key": key, **asdict(j)}))
+    return j
+
+
+def run_label(folder: Path) -> tuple[str, int, int, str]:
+    """(algo, seed, steps, command) of a run folder."""
+    from vfgym.io.runs import read_yaml
+
+    cfg = read_yaml(folder / "config.yaml")
+    steps = int((cfg.get("hyperparams") or {}).get("n_timesteps", 0))
+    cmd = (folder / "command.txt").read_text().strip() if (folder / "command.txt").is_file() else ""
+    return str(cfg.get("algo")), int(cfg.get("seed", 0)), steps, cmd
+
+
+def fmt(x: float, d: int = 3) -> str:
+    return "nan" if not np.isfinite(x) else f"{x:.{d}f}"
+
+
+def report(base: Judged, orc: Judged, runs: list[tuple[Path, Judged]], n_pairs: int) -> str:
+    """The markdown tables."""
+    bc = np.array(base.cost)
+    lines = [
+        f"Held-out (move, plant) pairs: {n_pairs}.",
+        "",
+        "| tuner | seed | steps | held-out mean cost | feasible pairs | / base | "
+        "cheaper / dearer than base |",
+        "| --- | --- | --- | --- | --- | --- | --- |",
+        f"| base | | | {fmt(base.mean)} | {sum(base.feasible)}/{n_pairs} | 1.000 | |",
+        f"| oracle | | | {fmt(orc.mean)} | {sum(orc.feasible)}/{n_pairs} | "
+        f"{fmt(orc.mean / base.mean)} | |",
+    ]
+    groups: dict[tuple[str, int], list[tuple[int, Judged, float]]] = {}
+    for folder, j in runs:
+        algo, seed, steps, _ = run_label(folder)
+        c = np.array(j.cost)
+        lines.append(
+            f"| {algo} | {seed} | {steps} | {fmt(j.mean)} | {sum(j.feasible)}/{n_pairs} | "
+            f"{fmt(j.mean / base.mean)} | {int(np.sum(c < bc - 1e-9))} / "
+            f"{int(np.sum(c > bc + 1e-9))} |"
+        )
+        groups.setdefault((algo, steps), []).append((seed, j, j.wall_s))
+    lines += [
+        "",
+        "| algorithm | env | steps | wall time / run (s) | mean cost ± std over seeds | "
+        "worst seed feasible | / base | / oracle | seeds |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for (algo, steps), rows in groups.items():
+        means = np.array([j.mean for _, j, _ in rows])
+        feas = min(sum(j.feasible) for _, j, _ in rows)
+        wall = float(np.mean([w for *_, w in rows]))
+        lines.append(
+            f"| {algo} | VFServo-v0 | {steps} | {fmt(wall, 0)} | {fmt(means.mean())} ± "
+            f"{fmt(means.std())} | {feas}/{n_pairs} | {fmt(means.mean() / base.mean)} | "
+            f"{fmt(means.mean() / orc.mean)} | {len(rows)} |"
+        )
+    lines += ["", "Commands:", "", "```"]
+    lines += [run_label(f)[3] for f, _ in runs] + ["```"]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    from bench_agents import run_training, train_command
+
+    from vfgym import load_axis
+    from vfgym.agents import load_tuner
+    from vfgym.plant.uncertainty import VERDICT_PLANT_SEED
+
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--axis", default="experiments/axes/loads-uncertain.yaml")
+    p.add_argument("--runs", nargs="*", default=[], help="trained run folders")
+    p.add_argument("--train", action="store_true", help="train --algos x --seeds first")
+    p.add_argument("--algos", default="ppo")
+    p.add_argument("--seeds", default="1,2,3")
+    p.add_argument("--steps", type=int, default=200_000)
+    p.add_argument("--base", default=None, help="the base settings model (default: the fit's)")
+    p.add_argument("--fit-runs", default="runs", help="runs dir holding fit/AXIS (default runs)")
+    p.add_argument("--plants", type=int, default=16)
+    p.add_argument("--plant-seed", type=int, default=VERDICT_PLANT_SEED)
+    p.add_argument("--moves", type=int, default=32)
+    p.add_argument("--out", default="runs/bench-adaptive")
+    args = p.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    axis = load_axis(args.axis)
+    base_file = Path(args.base or Path(args.fit_runs) / "fit" / axis.name / "settings_model.json")
+    if not base_file.is_file():
+        raise SystemExit(f"--base {base_file}: no such file; make it: vfgym fit --axis {args.axis}")
+    folders = [Path(r) for r in args.runs]
+    walls: dict[Path, float] = {}
+    if args.train:
+        for algo in args.algos.split(","):
+            for seed in map(int, args.seeds.split(",")):
+                cmd, folder = train_command(algo, "VFServo-v0", seed, args.steps, out,
+                                            ["--axis", args.axis])  # fmt: skip
+                print(shlex.join(cmd), flush=True)
+                walls[folder] = run_training(cmd)
+                folders.append(folder)
+    test, variants = pairs(axis, args.moves, args.plants, args.plant_seed)
+    n = len(test) * len(variants)
+    tuners = [load_tuner(base_file, axis, warn=print)]
+    tuners += [load_tuner(f / "best_model.zip", axis, warn=print) for f in folders]
+    scored = judge(tuners, axis, test, variants)
+    c0, f0 = scored[0]
+    base = Judged("base", c0.tolist(), f0.tolist(), f"vfgym fit --axis {args.axis}")
+    runs = [
+        (f, Judged(f.name, c.tolist(), ok.tolist(), run_label(f)[3], walls.get(f, float("nan"))))
+        for f, (c, ok) in zip(folders, scored[1:], strict=True)
+    ]
+    orc = oracle(axis, test, variants, out)
+    text = report(base, orc, runs, n)
+    head = (f"Axis {axis.name} ({args.axis}); {len(test)} test moves x {len(variants)} plants "
+            f"(plant seed {args.plant_seed}).\n\n")  # fmt: skip
+    print(head + text)
+    (out / "benchmark.md").write_text(head + text)
+    data = {"base": asdict(base), "oracle": asdict(orc),
+            "runs": [{"folder": str(f), **asdict(j)} for f, j in runs]}  # fmt: skip
+    (out / "benchmark.json").write_text(json.dumps(data))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
