@@ -189,7 +189,7 @@ class PickModel(TargetModel):
         Settings
             Inside the search space.
         """
-        from vfgym.scoring import Move, score_robust
+        from vfgym.scoring import Move, best_robust
 
         loaded = scenario.plant(plant)
         order = self.ranked(scenario_features(scenario, plant, loaded))
@@ -197,15 +197,7 @@ class PickModel(TargetModel):
                  for j in order[: max(self.check, 1)]]  # fmt: skip
         if len(cands) == 1:
             return cands[0]
-        move = Move.of(scenario, plant)
-        scores = score_robust(cands, [move] * len(cands), plants, measures=measures)
-
-        def key(i: int) -> tuple[bool, float, int]:
-            r = scores[i]
-            assert r is not None  # V-F settings run every move
-            return (not r.feasible, float(r.cost), i)
-
-        return cands[min(range(len(cands)), key=key)]
+        return cands[best_robust(cands, Move.of(scenario, plant), plants, measures=measures)]
 
     def targets_of(self, features: np.ndarray) -> np.ndarray:
         """The picked candidate's targets for one move's features.

@@ -28,6 +28,7 @@ from vfgym.scoring._evaluate import Evaluation, Move, evaluate, on_plant, score_
 from vfgym.scoring._plants import (
     AcrossPlants,
     PlantSummary,
+    best_robust,
     score_across,
     score_robust,
     worst_on,
@@ -51,6 +52,7 @@ __all__ = [
     "Yardsticks",
     "arrival_constraint",
     "arrival_term",
+    "best_robust",
     "evaluate",
     "on_plant",
     "score",
