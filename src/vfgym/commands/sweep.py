@@ -381,7 +381,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     and summary.yaml. Returns the exit status."""
     from vfgym import tuning
     from vfgym.io.runs import write_text, write_yaml
-    from vfgym.moves.axis import axis_kwargs
+    from vfgym.moves.axis import PAPER_AXIS, axis_kwargs
     from vfgym.params import PAPER_SETTINGS
     from vfgym.report import axis_verdict, compact_rows, format_compact, format_verdict
 
@@ -459,7 +459,9 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         )
         code = 1
     if best is not None and not interrupted:  # the report ends with the held-out verdict
-        v = axis_verdict(tuning.trial_settings(best), cfg.load_axis(), tuned_on=scenarios)
+        v = axis_verdict(
+            tuning.trial_settings(best), cfg.load_axis() or PAPER_AXIS, tuned_on=scenarios
+        )
         summary["verdict"] = v.to_dict()
         lines += ["", format_verdict(v, axis_file=cfg.axis)]
     text = "\n".join(lines)

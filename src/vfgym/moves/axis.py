@@ -422,6 +422,41 @@ def axis_to_dict(axis: Axis) -> dict[str, Any]:
     }
 
 
+def plant_on(
+    axis: Axis, plant: Plant | None = None, measures: Measures | None = None
+) -> tuple[Plant, Measures]:
+    """The plant and measures a call scores with on ``axis``: the axis's own, or, on the
+    paper's axis (the default problem), another plant or measures given beside it (the
+    paper's moves on another machine).
+
+    Parameters
+    ----------
+    axis : Axis
+        The problem.
+    plant, measures : Plant, Measures or None
+        Given beside the axis (``None``: the axis's).
+
+    Returns
+    -------
+    tuple of (Plant, Measures)
+        What to score with.
+
+    Raises
+    ------
+    ValueError
+        If a plant or measures other than the axis's are given beside an axis other than
+        the paper's, which states its own.
+    """
+    given = {"plant": plant, "measures": measures}
+    if axis != PAPER_AXIS:
+        for name, value in given.items():
+            if value is not None and value != getattr(axis, name):
+                raise ValueError(f"{name}= is not allowed with axis={axis.name!r}: the axis "
+                                 f"gives its own {name}; give one or the other")  # fmt: skip
+    return (axis.plant if plant is None else plant,
+            axis.measures if measures is None else measures)  # fmt: skip
+
+
 def axis_kwargs(axis: Axis | None) -> dict[str, Any]:
     """``plant=`` and ``measures=`` for :func:`vfgym.evaluate`, the reports and the
     objective.
@@ -583,5 +618,6 @@ __all__ = [
     "axis_to_dict",
     "load_axis",
     "machine_digest",
+    "plant_on",
     "write_axis",
 ]

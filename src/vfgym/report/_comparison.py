@@ -12,15 +12,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from vfgym._validate import check_int
+from vfgym.moves.axis import PAPER_AXIS, Axis, plant_on
 from vfgym.moves.baselines import BASELINE_NAMES, Baseline, Controller, resolve
 from vfgym.moves.distribution import scenario_set
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.params import Measures, Plant, Settings
 from vfgym.plant.uncertainty import PlantVariant
 from vfgym.report._stats import DEFAULT_RESAMPLES, Spread, WinLoss, outcome, spread
 from vfgym.scoring import (
@@ -33,9 +34,6 @@ from vfgym.scoring import (
     Scheduler,
     evaluate,
 )
-
-if TYPE_CHECKING:
-    from vfgym.moves.axis import Axis
 
 Policy = Callable[[Scenario], Settings] | Scheduler
 """A per-scenario controller: a tuner (the settings it picks for a move) or a scheduler."""
@@ -336,15 +334,15 @@ def compare(
     baselines: str | Sequence[str] | Sequence[Candidate] = BASELINE_NAMES,
     scenarios: str | Scenario | Sequence[str | Scenario] = "test",
     *,
-    count: int = 16,
-    first_seed: int = 0,
-    plant: Plant = PAPER_PLANT,
-    measures: Measures = DEFAULT_MEASURES,
+    axis: Axis = PAPER_AXIS,
+    count: int | None = None,
+    first_seed: int | None = None,
+    plant: Plant | None = None,
+    measures: Measures | None = None,
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
     resamples: int = DEFAULT_RESAMPLES,
     seed: int = 0,
-    axis: Axis | None = None,
     plants: Sequence[PlantVariant] | int = (),
     plant_seed: int | None = None,
 ) -> Report:
@@ -360,15 +358,17 @@ def compare(
     baselines : str, sequence of str, or sequence of Candidate
         Baseline names (a comma-separated string or a list) or candidates.
     scenarios : str, Scenario, or a sequence of these
-        The scenario set (see :func:`vfgym.scenario_set`).
-    count : int
-        Random draws for ``train`` / ``test``.
-    first_seed : int
-        Seed of the first random draw.
-    plant : Plant
-        The base plant; each scenario applies its load to it.
-    measures : Measures
-        Windows and bands of the measures.
+        The scenario set, resolved on the axis (:meth:`vfgym.Axis.scenario_set`).
+    axis : Axis
+        The problem: its plant, measures, moves and uncertainty, as :func:`vfgym.evaluate`
+        takes it (default: the paper's axis).
+    count : int or None
+        ``train`` / ``test`` as that many random draws of the default distribution
+        (:func:`vfgym.scenario_set`) instead of the axis's move sets.
+    first_seed : int or None
+        Seed of the first of those draws (default 0).
+    plant, measures : Plant, Measures or None
+        On the paper's axis, another plant or measures (as :func:`vfgym.evaluate`).
     weights : CostWeights
         Weights of the cost.
     bounds : Bounds
@@ -377,9 +377,6 @@ def compare(
         Bootstrap draws for the spreads, 1 to 1 000 000.
     seed : int
         Seed of the bootstrap, ≥ 0.
-    axis : Axis or None
-        The problem (its plant, measures and moves, instead of ``plant`` and ``measures``;
-        ``scenarios`` resolved on it), as :func:`vfgym.evaluate` takes it.
     plants : sequence of PlantVariant, or int
         True plants to judge every candidate on too (:attr:`Report.across`), or how many
         to draw within the axis's uncertainty, as :func:`vfgym.evaluate` takes them.
@@ -412,11 +409,11 @@ def compare(
     if dup:
         raise ValueError(f"controller labels must differ: {', '.join(dup)} given twice")
     spec = scenarios if isinstance(scenarios, str) else ""
-    if axis is not None:
+    if count is None and first_seed is None:
         scens = axis.scenario_set(scenarios if isinstance(scenarios, str) else list(scenarios))
-        plant, measures = axis.plant, axis.measures
-    else:
-        scens = scenario_set(scenarios, count, first_seed)
+    else:  # random draws of the default distribution, as many as asked
+        scens = scenario_set(scenarios, 16 if count is None else count, first_seed or 0)
+    plant, measures = plant_on(axis, plant, measures)
     ev = evaluate(
         [c.controller if c.controller is not None else c.policy for c in cands],
         scens,

@@ -19,15 +19,12 @@ from typing import Any
 
 import numpy as np
 
-from vfgym.moves.axis import PAPER_AXIS, Axis, axis_kwargs
+from vfgym.moves.axis import PAPER_AXIS, Axis
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.params import Settings
 from vfgym.plant.uncertainty import (
-    EXACT,
     VERDICT_PLANT_SEED,
     VERDICT_PLANTS,
-    Uncertainty,
-    draw_plants,
 )
 from vfgym.report._comparison import Candidate, Report, baseline_candidates, compare
 from vfgym.report._stats import Spread, WinLoss
@@ -247,17 +244,17 @@ def held_out_verdict(
     settings: Settings,
     scenarios: Sequence[Scenario],
     *,
-    plant: Plant = PAPER_PLANT,
-    measures: Measures = DEFAULT_MEASURES,
+    axis: Axis = PAPER_AXIS,
     baselines: str | Sequence[str] = VERDICT_BASELINES,
     label: str = "tuned",
     tuned_on: Sequence[Scenario] = (),
     title: str = "",
-    uncertainty: Uncertainty | None = None,
+    across: bool = True,
     plants: int = VERDICT_PLANTS,
     plant_seed: int = VERDICT_PLANT_SEED,
 ) -> Verdict:
-    """A tuned setting against the baselines on test moves (:func:`vfgym.report.compare`).
+    """A tuned setting against the baselines on test moves (:func:`vfgym.report.compare`),
+    on the modelled plant and across plants, in one call.
 
     Parameters
     ----------
@@ -265,8 +262,8 @@ def held_out_verdict(
         The tuned setting.
     scenarios : sequence of Scenario
         The test moves.
-    plant, measures : Plant, Measures
-        The axis's plant and measures (default: the paper's).
+    axis : Axis
+        The axis (its plant, measures and uncertainty; default: the paper's).
     baselines : str or sequence of str
         Baseline names (default :data:`VERDICT_BASELINES`).
     label : str
@@ -275,34 +272,32 @@ def held_out_verdict(
         The moves tuned on (to note any test move among them).
     title : str
         Which moves these are, for the printed verdict.
-    uncertainty : Uncertainty or None
-        The axis's uncertainty: the verdict is then also judged across plants
-        (:attr:`Verdict.across`); ``None``: on the modelled plant only.
+    across : bool
+        Also judge every row across plants (:attr:`Verdict.across`): ``plants`` drawn
+        within the axis's uncertainty from ``plant_seed``, or where it states none, the
+        ±5 % inertia plants of the sensitivity line.
     plants, plant_seed : int, int
-        How many held-out plants, drawn within it from which seed (where it states none,
-        the ±5 % inertia plants of the sensitivity line).
+        How many held-out plants, drawn from which seed.
 
     Returns
     -------
     Verdict
         The verdict.
     """
-    unc = EXACT if uncertainty is None else uncertainty
     report = compare(
         [Candidate(label, settings, source="sweep")],
         baseline_candidates(baselines),
         list(scenarios),
-        plant=plant,
-        measures=measures,
-        plants=() if uncertainty is None else draw_plants(unc, plant.motor, plants, plant_seed),
-        plant_seed=None if unc.exact else plant_seed,
+        axis=axis,
+        plants=plants if across else (),
+        plant_seed=plant_seed,
     )
     return verdict(report, label, tuned_on, title)
 
 
 def axis_verdict(
     settings: Settings,
-    axis: Axis | None = None,
+    axis: Axis = PAPER_AXIS,
     tuned_on: Sequence[Scenario] = (),
     label: str = "tuned",
 ) -> Verdict:
@@ -313,8 +308,8 @@ def axis_verdict(
     ----------
     settings : Settings
         The tuned setting.
-    axis : Axis or None
-        The axis tuned on; ``None`` is the paper's axis (:data:`vfgym.moves.axis.PAPER_AXIS`,
+    axis : Axis
+        The axis tuned on (default: the paper's, :data:`vfgym.moves.axis.PAPER_AXIS`,
         whose test moves are the 32 draws ``test-0`` … ``test-31`` of the default random
         distribution).
     tuned_on : sequence of Scenario
@@ -325,21 +320,12 @@ def axis_verdict(
     Returns
     -------
     Verdict
-        The verdict on the axis's plant and measures.
+        The verdict on the axis's plant and measures, and across plants.
     """
-    ax = PAPER_AXIS if axis is None else axis
-    test = ax.scenarios("test")
-    title = f"the {len(test)} test moves of axis {ax.name}"
-    kw = axis_kwargs(ax)
-    return held_out_verdict(
-        settings,
-        test,
-        **kw,
-        label=label,
-        tuned_on=tuned_on,
-        title=title,
-        uncertainty=ax.uncertainty,
-    )
+    test = axis.scenarios("test")
+    title = f"the {len(test)} test moves of axis {axis.name}"
+    return held_out_verdict(settings, test, axis=axis, label=label, tuned_on=tuned_on,
+                            title=title)  # fmt: skip
 
 
 def _num(x: float) -> str:

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numba
 import numpy as np
 
-from vfgym.moves.axis import Axis
+from vfgym.moves.axis import PAPER_AXIS, Axis, plant_on
 from vfgym.moves.baselines import (
     Baseline,
     Controller,
@@ -21,7 +21,6 @@ from vfgym.moves.baselines import (
     controller_label,
     resolve,
 )
-from vfgym.moves.distribution import scenario_set
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import (
     DEFAULT_MEASURES,
@@ -37,7 +36,6 @@ from vfgym.plant._threads import keeps_torch_threads
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.plant.measures import from_acc
 from vfgym.plant.uncertainty import (
-    EXACT,
     NOMINAL,
     VERDICT_PLANT_SEED,
     PlantVariant,
@@ -402,9 +400,9 @@ def evaluate(
     settings: Any,
     scenarios: str | Scenario | Sequence[str | Scenario] = "paper-step",
     *,
-    axis: Axis | None = None,
-    plant: Plant = PAPER_PLANT,
-    measures: Measures = DEFAULT_MEASURES,
+    axis: Axis = PAPER_AXIS,
+    plant: Plant | None = None,
+    measures: Measures | None = None,
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
     keep_traces: bool = False,
@@ -428,15 +426,18 @@ def evaluate(
         :class:`~vfgym.scoring.Scheduler` that changes its settings during the move
         (``load_tuner``'s VFServo-v0 agents), run on every (move, plant) pair.
     scenarios : str, Scenario, or a sequence of these
-        Names, :class:`~vfgym.Scenario` objects, or a set spec (``named``, ``train`` …;
-        see :func:`vfgym.scenario_set`; on an ``axis``, its move sets and moves).
-    axis : Axis or None
-        The problem: its plant, measures, moves and uncertainty (instead of ``plant`` and
-        ``measures``); ``plants`` as a count draws within its uncertainty.
-    plant : Plant
-        The base plant; each scenario applies its load to it.
-    measures : Measures
-        Windows and bands of the measures.
+        Names, :class:`~vfgym.Scenario` objects, or a set spec resolved on the axis
+        (:meth:`vfgym.Axis.scenario_set`: ``train`` / ``test``, its move sets; ``named``;
+        a move's name; a list).
+    axis : Axis
+        The problem: its plant, measures, moves and uncertainty; ``plants`` as a count
+        draws within its uncertainty. Default: the paper's axis
+        (:data:`vfgym.PAPER_AXIS`: 16 train and 32 test moves).
+    plant : Plant or None
+        On the paper's axis, another base plant (each scenario applies its load to it);
+        ``None``: the axis's.
+    measures : Measures or None
+        On the paper's axis, other windows and bands; ``None``: the axis's.
     weights : CostWeights
         Weights of the cost.
     bounds : Bounds
@@ -470,24 +471,14 @@ def evaluate(
         If a controller or a scenario is not known or not allowed.
     """
     ctrls = _check_controllers(settings)
-    if axis is not None:
-        for name, value, default in (
-            ("plant", plant, PAPER_PLANT),
-            ("measures", measures, DEFAULT_MEASURES),
-        ):
-            if value != default and value != getattr(axis, name):
-                raise ValueError(f"{name}= is not allowed with axis={axis.name!r}: the axis "
-                                 f"gives its own {name}")  # fmt: skip
-        plant, measures = axis.plant, axis.measures
-        spec: Any = scenarios if isinstance(scenarios, (str, Scenario)) else list(scenarios)
-        scens = axis.scenario_set(spec)
-    else:
-        scens = scenario_set(scenarios)  # type: ignore[arg-type]
+    plant, measures = plant_on(axis, plant, measures)
+    spec: Any = scenarios if isinstance(scenarios, (str, Scenario)) else list(scenarios)
+    scens = axis.scenario_set(spec)
     variants: tuple[PlantVariant, ...]
     if isinstance(plants, int):
         if plant_seed is None:
             plant_seed = VERDICT_PLANT_SEED
-        unc = EXACT if axis is None else axis.uncertainty
+        unc = axis.uncertainty
         variants = draw_plants(unc, plant.motor, plants, plant_seed)
         plant_seed = None if unc.exact else plant_seed
     else:
