@@ -18,7 +18,7 @@ Every tuner is judged in one :func:`vfgym.evaluate` call on those pairs:
 * **base**: the axis's robust per-move settings model (``vfgym fit``'s, the agents'
   residual base: ``RUNS/fit/AXIS/settings_model.json``, or ``--base FILE``);
 * **oracle**: each (move, true plant)'s own optimum, found knowing the true plant
-  (:func:`vfgym.agents.optima.move_optima` with ``true_plants``); cached in ``--out``;
+  (:func:`vfgym.permove.optima.move_optima` with ``true_plants``); cached in ``--out``;
 * each run's ``best_model.zip`` (a :class:`vfgym.scoring.Scheduler`).
 
 Per seed: the held-out mean cost, the pairs feasible, the ratio to the base and the
@@ -79,7 +79,7 @@ def judge(tuners, axis, test, variants) -> list[tuple[np.ndarray, np.ndarray]]:
 
 def oracle(axis, test, variants, out: Path) -> Judged:
     """Each pair's own optimum on its true plant (cached in ``out``)."""
-    from vfgym.agents.optima import move_optima
+    from vfgym.permove.optima import move_optima
 
     cache = out / "oracle.json"
     key = {"axis": axis.name, "moves": [s.name for s in test],
@@ -91,7 +91,7 @@ def oracle(axis, test, variants, out: Path) -> Judged:
     scens = [sc for _ in variants for sc in test]
     on = [v for v in variants for _ in test]
     opt = move_optima(scens, plant=axis.plant, measures=axis.measures, true_plants=on)
-    how = "each pair's optimum on its true plant (vfgym.agents.optima.move_optima)"
+    how = "each pair's optimum on its true plant (vfgym.permove.optima.move_optima)"
     j = Judged("oracle", [o.cost for o in opt], [bool(o.feasible) for o in opt], how)
     cache.write_text(json.dumps({"key": key, **asdict(j)}))
     return j

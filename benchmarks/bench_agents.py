@@ -98,7 +98,7 @@ def run_training(args: list[str]) -> float:
 def baselines(n: int):
     """(held-out scenarios, each move's optimum cost, the best fixed setting's costs)."""
     from vfgym import PAPER_SETTINGS, evaluate, random_scenario
-    from vfgym.agents.optima import read_optima
+    from vfgym.permove.optima import read_optima
 
     optima = {o.scenario: o.settings for o in read_optima(OPTIMA)}
     names = [f"test-{i}" for i in range(n)]
@@ -135,7 +135,7 @@ def base_cost(base: str, scenarios) -> float:
     """Mean cost of a residual base on the held-out moves (NaN without a base)."""
     if not base:
         return float("nan")
-    from vfgym.agents.training import env_options
+    from vfgym.agents import env_options
     from vfgym.params import PAPER_PLANT
     from vfgym.report import Candidate, compare
 

@@ -1,6 +1,6 @@
 """``vfgym fit`` on each shipped axis file: on the axis's held-out test moves, the fitted
 model's mean cost against the per-move optima (the full search,
-:class:`vfgym.agents.optima.OptimumSearch`'s defaults, checked against ``vfgym grid``),
+:class:`vfgym.permove.optima.OptimumSearch`'s defaults, checked against ``vfgym grid``),
 its wins against the best fixed setting, the paper's settings and the S-curve source
 (and in brackets the optima's own wins against it: the most any per-move setting got),
 its feasible moves, and the fit's wall time (the goal: within 5 min on 2 cores). A test
@@ -28,10 +28,10 @@ from pathlib import Path
 
 import numpy as np
 
-from vfgym.agents.fit import FitConfig, checkpointed_optima, fit_axis
-from vfgym.agents.optima import MoveOptimum, OptimumSearch
 from vfgym.moves.axis import Axis, load_axis
 from vfgym.moves.scenarios import Scenario
+from vfgym.permove.fit import FitConfig, checkpointed_optima, fit_axis
+from vfgym.permove.optima import MoveOptimum, OptimumSearch
 from vfgym.scoring import Move, score_pairs
 
 ROOT = Path(__file__).resolve().parents[1]

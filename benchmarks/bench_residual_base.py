@@ -5,7 +5,7 @@ costs against ``model-lookup`` (its look-up alone): prints figures, asserts noth
         [--envs VFServo-v0,VFTune-v0] [--batched]
 
 1. The base alone: ms per new move (train-split moves never seen before, so nothing is
-   remembered), each spelling through :func:`vfgym.agents.training.env_options`.
+   remembered), each spelling through :func:`vfgym.agents.env_options`.
 2. PPO with the shipped VFServo-v0 and VFTune-v0 hyperparameters, their ``residual_base``
    set to each spelling: steps/s over ``--steps`` steps after one rollout and update
    outside the timing (compiles), one thread; the two bases alternate ``--repeat`` times
@@ -29,7 +29,7 @@ SPELLINGS = ("model-lookup", "model")
 def per_move_ms(spec: str, moves: int) -> float:
     """ms per new move of the base ``spec``."""
     from vfgym import random_scenario
-    from vfgym.agents.training import env_options
+    from vfgym.agents import env_options
     from vfgym.params import PAPER_PLANT
 
     base = env_options({"residual_base": spec})["residual_base"]
@@ -45,10 +45,10 @@ def batched_ms(moves: int = 64) -> dict[int, float]:
     """ms per move of the check done ``size`` moves to a compiled call (0: the model's own
     call, one move at a time), on ``moves`` new moves."""
     from vfgym import random_scenario
-    from vfgym.agents.supervised import load_settings_model
-    from vfgym.agents.targets import target_settings
     from vfgym.moves.features import scenario_features
     from vfgym.params import PAPER_PLANT
+    from vfgym.permove.supervised import load_settings_model
+    from vfgym.permove.targets import target_settings
     from vfgym.scoring import Move, score_pairs
 
     model = load_settings_model()
@@ -84,8 +84,8 @@ def ppo_steps_per_s(env_id: str, spec: str, steps: int, seed: int) -> float:
     import torch
     from stable_baselines3 import PPO
 
+    from vfgym.agents import env_options
     from vfgym.agents import hyperparams as hp
-    from vfgym.agents.training import env_options
     from vfgym.envs.sb3 import make_sb3_vec_env
 
     torch.set_num_threads(1)

@@ -7,7 +7,7 @@ Four measurements, each selectable:
   ``--plants`` plants drawn within the uncertainty (seed ``--plant-seed``): the share of
   feasible (move, plant) pairs, its mean cost on the modelled plant against the robust
   per-move optima of the same moves (feasible on the axis's design plants, found by the
-  per-move search of :func:`vfgym.agents.optima.move_optima` with its default, finer
+  per-move search of :func:`vfgym.permove.optima.move_optima` with its default, finer
   grid), its wins against the paper's settings, and the same for 8 to 64 candidates
   checked by the model on each move;
 - ``sweep``: the main job's budget (``experiments/quick.yaml``) on the same axis, and on
@@ -33,11 +33,11 @@ from pathlib import Path
 import numpy as np
 
 from vfgym import PAPER_AXIS, Settings, cli, evaluate, load_axis
-from vfgym.agents.optima import OptimumSearch, move_optima
-from vfgym.agents.supervised import load_settings_model
 from vfgym.commands._common import load_settings
 from vfgym.moves.axis import write_axis
 from vfgym.moves.baselines import Baseline
+from vfgym.permove.optima import OptimumSearch, move_optima
+from vfgym.permove.supervised import load_settings_model
 from vfgym.plant.uncertainty import EXACT, VERDICT_PLANT_SEED, VERDICT_PLANTS, draw_plants
 from vfgym.scoring import Move, score_across, score_robust
 

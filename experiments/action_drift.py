@@ -21,8 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from vfgym import random_scenario
-from vfgym.agents.loaded import load_agent
-from vfgym.agents.training import make_env
+from vfgym.agents import load_agent, make_env
 
 
 def drift(model: Path, moves: int) -> tuple[np.ndarray, np.ndarray, float]:

@@ -25,11 +25,11 @@ from pathlib import Path
 import numpy as np
 
 from vfgym import PAPER_SETTINGS, evaluate, get_scenario
-from vfgym.agents.optima import read_optima
-from vfgym.agents.refine import refine
-from vfgym.agents.supervised import PRETRAINED, load_settings_model
 from vfgym.io.runs import write_yaml
 from vfgym.moves import LOAD_DISTRIBUTION
+from vfgym.permove.optima import read_optima
+from vfgym.permove.refine import refine
+from vfgym.permove.supervised import PRETRAINED, load_settings_model
 
 
 def optuna_best(scenario, trials: int, seed: int) -> float:

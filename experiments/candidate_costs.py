@@ -1,13 +1,13 @@
 """The cost of every train move's optimal settings on every train move: the table the
-settings model picks from (:mod:`vfgym.agents.supervised`).
+settings model picks from (:mod:`vfgym.permove.supervised`).
 
     python experiments/candidate_costs.py --optima experiments/optima/train.csv \
         --out experiments/optima/train_costs.npz
 
 Candidate j = the optimum of train move j in the model's coordinates (its k relative to
-the move's k_a, :func:`vfgym.agents.supervised.settings_targets`); entry [i, j] = the cost
+the move's k_a, :func:`vfgym.permove.supervised.settings_targets`); entry [i, j] = the cost
 on train move i of those coordinates made settings on move i's plant, all
-pairs through the batched kernel (:func:`vfgym.agents.fit.candidate_costs`, what
+pairs through the batched kernel (:func:`vfgym.permove.fit.candidate_costs`, what
 ``vfgym fit`` uses), with the feasibility of each pair.
 """
 
@@ -19,9 +19,9 @@ import time
 import numpy as np
 
 from vfgym import get_scenario
-from vfgym.agents.fit import candidate_costs
-from vfgym.agents.optima import read_optima
 from vfgym.moves import LOAD_DISTRIBUTION
+from vfgym.permove.fit import candidate_costs
+from vfgym.permove.optima import read_optima
 
 
 def main() -> None:

@@ -5,7 +5,7 @@ and the supervised model's training data):
     python experiments/move_optima.py --split train --count 320 --out experiments/optima/train.csv
 
 Moves ``<split>-<first_seed>`` ... of the default distribution (``vfgym.random_scenario``,
-the envs' default), each searched by :func:`vfgym.agents.optima.move_optima` (a 6⁴ grid
+the envs' default), each searched by :func:`vfgym.permove.optima.move_optima` (a 6⁴ grid
 over the search space, then 8 rounds of local refinement around the 3 best points), all
 through the batched kernel. About 1.7 s a move on the 2-core machine.
 """
@@ -16,8 +16,8 @@ import argparse
 import time
 
 from vfgym import scenario_set
-from vfgym.agents.optima import OptimumSearch, move_optima, write_optima
 from vfgym.moves import LOAD_DISTRIBUTION
+from vfgym.permove.optima import OptimumSearch, move_optima, write_optima
 
 
 def main() -> None:

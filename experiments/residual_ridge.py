@@ -16,7 +16,7 @@ import argparse
 
 import numpy as np
 
-from vfgym.agents.training import make_env, validation_scenarios
+from vfgym.agents import make_env, validation_scenarios
 
 BASE = {"residual": True, "residual_base": "model-lookup", "interval_s": 0.005}
 VARIANTS = {

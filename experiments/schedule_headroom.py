@@ -40,9 +40,9 @@ import numpy as np
 from cmaes import CMA
 
 from vfgym import evaluate, random_scenario
-from vfgym.agents.optima import read_optima
 from vfgym.envs.servo import VFServoEnv
 from vfgym.envs.tune import VFTuneEnv
+from vfgym.permove.optima import read_optima
 
 OPTIMA = Path(__file__).resolve().parent / "optima" / "test.csv"
 INFEASIBLE = 10.0

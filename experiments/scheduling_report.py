@@ -21,8 +21,7 @@ import numpy as np
 from amortised_report import optuna_best
 
 from vfgym import PAPER_SETTINGS, SCENARIOS, evaluate, random_scenario
-from vfgym.agents.loaded import load_agent, rollout_info
-from vfgym.agents.training import make_env
+from vfgym.agents import load_agent, make_env, rollout_info
 
 
 def main() -> None:

@@ -1,27 +1,27 @@
 """Train a settings model on per-move optima and write it with its config and the
-command that made it. The model vfgym ships (``src/vfgym/agents/pretrained/``) is rebuilt
+command that made it. The model vfgym ships (``src/vfgym/permove/pretrained/``) is rebuilt
 from nothing by one command:
 
     python experiments/train_settings_model.py --build 320 --check 8
 
 ``--build N`` first makes the inputs: the per-move optima of ``train-0 ... train-<N-1>`` of
 the environments' distribution (varied loads on the paper's plant), the full search
-(:class:`vfgym.agents.optima.OptimumSearch`), checkpointed into ``--optima`` 16 moves at a
-time (:func:`vfgym.agents.fit.checkpointed_optima`: an interrupted build loses nothing, the
+(:class:`vfgym.permove.optima.OptimumSearch`), checkpointed into ``--optima`` 16 moves at a
+time (:func:`vfgym.permove.fit.checkpointed_optima`: an interrupted build loses nothing, the
 same command continues it, and optima already there for the same moves and search are
 kept; about 30 min from scratch on 2 cores), then their cost table ``--costs``
-(:func:`vfgym.agents.fit.candidate_costs`, about a minute). For any axis file the whole
+(:func:`vfgym.permove.fit.candidate_costs`, about a minute). For any axis file the whole
 pipeline with a held-out verdict is ``vfgym fit --axis FILE``
-(:func:`vfgym.agents.fit.fit_axis`, the same code). Without ``--build`` the model is
+(:func:`vfgym.permove.fit.fit_axis`, the same code). Without ``--build`` the model is
 trained on the files as they are:
 
     python experiments/train_settings_model.py --kind ridge --degree 2 --ridge 1.0 \
         --out runs/ridge-model
 
-``pick`` (:class:`vfgym.agents.supervised.PickModel`): the library candidate with the
+``pick`` (:class:`vfgym.permove.supervised.PickModel`): the library candidate with the
 least mean cost ratio over the move's nearest training moves, with ``--check K`` the best
 on the move itself of the K best-ranked; ``ridge``
-(:class:`~vfgym.agents.supervised.SettingsModel`): a ridge regression from the features
+(:class:`~vfgym.permove.supervised.SettingsModel`): a ridge regression from the features
 to the optimal settings. Both fit in seconds, deterministically. ``--cv K`` first prints,
 for the pick model, K-fold cross-validated figures on the training moves (costs looked
 up in the table, no simulation): the mean cost over the optima's, the median gap and the
@@ -40,18 +40,18 @@ from pathlib import Path
 import numpy as np
 
 from vfgym import PAPER_PLANT, get_scenario, scenario_set
-from vfgym.agents.fit import candidate_costs, checkpointed_optima
-from vfgym.agents.optima import OptimumSearch, read_optima
-from vfgym.agents.supervised import (
+from vfgym.io.runs import write_text, write_yaml
+from vfgym.moves import LOAD_DISTRIBUTION
+from vfgym.moves.features import scenario_features
+from vfgym.permove.fit import candidate_costs, checkpointed_optima
+from vfgym.permove.optima import OptimumSearch, read_optima
+from vfgym.permove.supervised import (
     TrainConfig,
     fit_pick_model,
     greedy_library,
     ratio_table,
     train_settings_model,
 )
-from vfgym.io.runs import write_text, write_yaml
-from vfgym.moves import LOAD_DISTRIBUTION
-from vfgym.moves.features import scenario_features
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -121,7 +121,7 @@ def main() -> None:
     ap.add_argument("--cv", type=int, default=0)
     ap.add_argument("--build", type=int, default=0, metavar="N",
                     help="first build the optima of N train moves and their costs")  # fmt: skip
-    ap.add_argument("--out", default="src/vfgym/agents/pretrained")
+    ap.add_argument("--out", default="src/vfgym/permove/pretrained")
     args = ap.parse_args()
     ignore = tuple(x for x in args.ignore.split(",") if x)
     cfg = TrainConfig(args.kind, args.optima, args.costs, args.neighbours, args.library,

@@ -1,5 +1,5 @@
 """Shared test set-up. The tests mirror the packages of ``src/vfgym`` (``plant/``,
-``moves/``, ``scoring/``, ``tuning/``, ``report/``, ``io/``, ``envs/``, ``agents/``,
+``moves/``, ``scoring/``, ``tuning/``, ``report/``, ``io/``, ``envs/``, ``permove/``, ``agents/``,
 ``commands/``); ``helpers.py`` holds shared plants and ``oracles.py`` the independent
 oracles (both importable from any test, see ``pythonpath`` in ``pyproject.toml``)."""
 

@@ -8,7 +8,9 @@ in (``plant``, ``moves`` …) or, for a top-level module, its own name (``params
 the package's ``__init__`` (the public API, re-exports only) is the part ``vfgym``.
 
 A part may import its own modules, the parts of its own layer (siblings) and those of lower
-layers, never a higher layer; and the parts import one another without a circle.
+layers, never a higher layer; and the parts import one another without a circle. Within the
+tuners' two packages (``permove``, ``agents``) the modules, too, import one another without
+a circle.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("moves",),  # what the plant is asked to do
     ("scoring",),  # measures -> constraints -> cost
     ("tuning", "report", "envs", "identify"),  # built on the scoring path (identify: plant, moves)
+    ("permove",),  # per-move settings models, torch-free
     ("vfgym",),  # the public API (vfgym/__init__.py): re-exports of the layers below
     ("agents",),  # stable-baselines3 on the envs
     ("commands", "cli"),  # the command line
@@ -153,7 +156,43 @@ def part_cycles(graph: Mapping[str, Iterable[str]]) -> list[list[str]]:
     return cycles
 
 
+def module_cycles(graph: Mapping[str, Iterable[str]]) -> list[list[str]]:
+    """Circles between modules (strongly connected groups of two or more), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    groups: list[list[str]] = []
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        on_stack.add(node)
+        for nxt in sorted(graph.get(node, ())):
+            if nxt not in index:
+                visit(nxt)
+                low[node] = min(low[node], low[nxt])
+            elif nxt in on_stack:
+                low[node] = min(low[node], index[nxt])
+        if low[node] == index[node]:
+            group = []
+            while True:
+                top = stack.pop()
+                on_stack.discard(top)
+                group.append(top)
+                if top == node:
+                    break
+            if len(group) > 1:
+                groups.append(sorted(group))
+
+    for node in sorted(graph):
+        if node not in index:
+            visit(node)
+    return groups
+
+
 GRAPH = import_graph()
+TUNER_PACKAGES = ("permove", "agents")
 
 
 def test_every_module_has_a_layer() -> None:
@@ -170,6 +209,62 @@ def test_imports_run_downward() -> None:
 def test_no_circle_between_parts() -> None:
     cycles = part_cycles(GRAPH)
     assert not cycles, "import circles: " + "; ".join(" -> ".join(c) for c in cycles)
+
+
+def test_no_circle_between_the_tuners_modules() -> None:
+    """No module of ``permove`` or ``agents`` imports, even lazily, a module that imports
+    it back (as ``agents/loaded.py`` and ``agents/training.py`` once did)."""
+    ours = {m: t for m, t in GRAPH.items() if part_of(m) in TUNER_PACKAGES}
+    cycles = module_cycles(ours)
+    assert not cycles, "module circles: " + "; ".join(" <-> ".join(c) for c in cycles)
+
+
+def private_reaches(module: str, source: str) -> list[str]:
+    """What ``module`` imports that is private to another subpackage: one of its
+    ``_modules``, or a ``_name`` of one of its modules (the root's own shared modules,
+    ``vfgym._validate`` and ``vfgym._limits``, are the whole package's vocabulary)."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if not isinstance(node, ast.ImportFrom) or node.level or not node.module:
+            continue
+        if not node.module.startswith("vfgym.") or part_of(node.module) == part_of(module):
+            continue
+        pieces = node.module.split(".")[2:]
+        names = [a.name for a in node.names if a.name.startswith("_")]
+        if any(p.startswith("_") for p in pieces) or names:
+            found.append(
+                f"{module}: from {node.module} import {', '.join(a.name for a in node.names)}"
+            )
+    return found
+
+
+def test_the_tuners_packages_use_only_public_modules_of_others() -> None:
+    """``permove`` and ``agents`` reach other subpackages through their public modules and
+    names only."""
+    bad = [
+        line
+        for m, p in MODULES.items()
+        if part_of(m) in TUNER_PACKAGES
+        for line in private_reaches(m, p.read_text(encoding="utf-8"))
+    ]
+    assert not bad, "private imports:\n" + "\n".join(bad)
+
+
+def test_a_private_reach_is_caught() -> None:
+    src = (
+        "from vfgym.permove._x import a\n"
+        "from vfgym.permove import _b, c\n"
+        "from vfgym._validate import d"
+    )
+    assert private_reaches("vfgym.agents.loaded", src) == [
+        "vfgym.agents.loaded: from vfgym.permove._x import a",
+        "vfgym.agents.loaded: from vfgym.permove import _b, c",
+    ]
+
+
+def test_a_module_circle_is_caught() -> None:
+    graph = {"vfgym.agents.a": {"vfgym.agents.b"}, "vfgym.agents.b": {"vfgym.agents.a"}}
+    assert module_cycles(graph) == [["vfgym.agents.a", "vfgym.agents.b"]]
 
 
 def documented_files(text: str) -> set[str]:
@@ -205,7 +300,7 @@ def test_the_graph_is_read_from_the_source() -> None:
     assert "vfgym.plant._layout" in GRAPH["vfgym.plant._kernel"]
     assert "vfgym.moves.scenarios" in GRAPH["vfgym.scoring._cost"]
     # a lazy import inside a function, and an entry-point string
-    assert "vfgym.agents.loaded" in GRAPH["vfgym.agents"]
+    assert "vfgym.agents.heldout" in GRAPH["vfgym.agents.training"]
     assert "vfgym.envs.tune" in GRAPH["vfgym.envs"]
     # f"vfgym.commands.{name}" imports the commands package
     assert "vfgym.commands" in GRAPH["vfgym.cli"]

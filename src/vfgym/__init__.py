@@ -7,7 +7,11 @@ The package reads like its block diagram, ``params → simulate → trace → me
 :mod:`vfgym.params` and :mod:`vfgym.space` (the vocabulary), :mod:`vfgym.plant` (the
 simulator), :mod:`vfgym.moves` (what the plant is asked to do), :mod:`vfgym.scoring` (the
 one scoring path), then :mod:`vfgym.tuning`, :mod:`vfgym.report` and :mod:`vfgym.envs`
-on top, and :mod:`vfgym.agents` and :mod:`vfgym.commands` above those.
+on top, :mod:`vfgym.permove` (per-move settings models, torch-free) above those, and
+:mod:`vfgym.agents` (stable-baselines3) and :mod:`vfgym.commands` above the public API.
+
+:func:`load_tuner` reads a per-move settings model (the shipped one by default) as a
+callable from a move to its settings, without torch.
 """
 
 from vfgym import envs  # importing envs registers vfgym/VFTune-v0, VFServo-v0
@@ -33,6 +37,7 @@ from vfgym.params import (
     Settings,
     paper_k,
 )
+from vfgym.permove import load_tuner
 from vfgym.plant import Trace, simulate, step_command, vf_pulses
 from vfgym.scoring import Bounds, CostWeights, Evaluation, evaluate
 
@@ -67,6 +72,7 @@ __all__ = [
     "fixed_frequency_pulses",
     "get_scenario",
     "load_axis",
+    "load_tuner",
     "paper_k",
     "random_scenario",
     "scenario_set",

@@ -13,9 +13,8 @@ import yaml
 
 pytest.importorskip("stable_baselines3")
 
+from vfgym.agents import Agent, load_agent, make_env, rollout_info, train, vecnormalize_path
 from vfgym.agents import hyperparams as hp
-from vfgym.agents.loaded import Agent, load_agent, rollout_info, vecnormalize_path
-from vfgym.agents.training import make_env, train
 from vfgym.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
@@ -150,10 +149,10 @@ def test_a_residual_vftune_agent_starts_as_the_shipped_model(algo):
     from dataclasses import replace
 
     from vfgym import PAPER_PLANT
+    from vfgym.agents import settings_policy
     from vfgym.agents.hyperparams import algo_class
-    from vfgym.agents.loaded import settings_policy
-    from vfgym.agents.supervised import load_settings_model
     from vfgym.agents.training import start_at_base
+    from vfgym.permove.supervised import load_settings_model
 
     kw = {"residual": True, "residual_base": "model-lookup", "residual_ratio": True}
     env = make_env("vfgym/VFTune-v0", kw)
@@ -177,9 +176,9 @@ def test_the_model_base_is_the_shipped_model_checked_on_the_move(env_id):
     from dataclasses import replace
 
     from vfgym import PAPER_PLANT, evaluate
-    from vfgym.agents.supervised import load_settings_model
-    from vfgym.agents.training import env_options
+    from vfgym.agents import env_options
     from vfgym.moves.distribution import get_scenario
+    from vfgym.permove.supervised import load_settings_model
 
     shipped = load_settings_model()
     assert shipped.check > 1
@@ -210,8 +209,7 @@ def test_a_vftune_agent_is_a_residual_base_for_vfservo(tmp_path):
     """``residual_base: RUN/best_model.zip``: each move's base is the settings the VFTune-v0
     agent picks for it, so VFServo-v0's zero action costs what those settings cost."""
     from vfgym import evaluate
-    from vfgym.agents import policy_settings
-    from vfgym.agents.training import env_options
+    from vfgym.agents import env_options, policy_settings
 
     params = hp.load("ppo", "vfgym/VFTune-v0", hp.HYPERPARAMS_DIR / "ppo.yml", TINY)
     train("ppo", "vfgym/VFTune-v0", params, tmp_path, seed=0, progress=False, log=lambda m: None)

@@ -13,11 +13,11 @@ pytest.importorskip("stable_baselines3")
 
 from vfgym.agents import load_tuner, policy_settings
 from vfgym.agents.hyperparams import HYPERPARAMS_DIR
-from vfgym.agents.supervised import PRETRAINED
 from vfgym.agents.training import VALIDATION_SEED0, validation_scenarios
 from vfgym.cli import main
 from vfgym.commands._common import load_settings
 from vfgym.moves.axis import load_axis
+from vfgym.permove.supervised import PRETRAINED
 
 REPO = Path(__file__).resolve().parents[2]
 SMALL = {
@@ -126,7 +126,7 @@ def test_train_on_an_axis_ends_with_fits_verdict(tmp_path, capsys):
 
 
 def test_residual_base_takes_a_settings_models_path(tmp_path):
-    from vfgym.agents.bases import CheckedBase, env_options
+    from vfgym.agents import CheckedBase, env_options
     from vfgym.moves.distribution import get_scenario
     from vfgym.params import PAPER_PLANT
 

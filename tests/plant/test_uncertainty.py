@@ -216,7 +216,7 @@ def test_evaluate_takes_plants_and_a_seed(tmp_path, capsys):
 
 
 def test_evaluate_takes_an_axis_a_plant_count_and_any_tuner():
-    from vfgym.agents import load_tuner
+    from vfgym import load_tuner
 
     axis = load_axis(AXES / "loads-uncertain.yaml")
     test = axis.scenarios("test")[:5]

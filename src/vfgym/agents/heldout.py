@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from .loaded import agent_policy
+
 HELDOUT_COUNT = 16
 """Held-out moves a run is judged on when its hyperparameters set no ``n_eval_scenarios``."""
 
@@ -72,11 +74,10 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
     HeldOutResult
         The mean costs and win counts.
     """
-    from vfgym.agents import agent_policy
-    from vfgym.agents.supervised import load_settings_model
     from vfgym.moves.axis import axis_kwargs, load_axis
     from vfgym.moves.distribution import scenario_set
     from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT
+    from vfgym.permove import load_settings_model
     from vfgym.report import Candidate, compare
 
     n = int(params.get("n_eval_scenarios", HELDOUT_COUNT))
@@ -106,8 +107,8 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
 
 def axis_verdict(model_path: str | Path, axis_file: str | Path, sweep_trials: int | None = None):
     """A trained agent's verdict on its axis's test moves, as ``vfgym fit`` judges its
-    settings model (:func:`vfgym.agents.fit.fit_axis`): against the best fixed setting a
-    short sweep finds on the axis's train moves (:func:`vfgym.agents.fit.best_fixed`), the
+    settings model (:func:`vfgym.permove.fit.fit_axis`): against the best fixed setting a
+    short sweep finds on the axis's train moves (:func:`vfgym.permove.fit.best_fixed`), the
     paper's settings and the S-curve source, through :func:`vfgym.report.compare` and
     :func:`vfgym.report.verdict`.
 
@@ -118,16 +119,16 @@ def axis_verdict(model_path: str | Path, axis_file: str | Path, sweep_trials: in
     axis_file : str or Path
         The axis file.
     sweep_trials : int or None
-        Trials of the fixed-setting sweep (default :attr:`vfgym.agents.fit.FitConfig.sweep_trials`).
+        Trials of the fixed-setting sweep (default
+        :attr:`vfgym.permove.FitConfig.sweep_trials`).
 
     Returns
     -------
     tuple of (vfgym.report.Verdict, Settings)
         The verdict, and the best fixed setting it was judged against.
     """
-    from vfgym.agents import agent_policy
-    from vfgym.agents.fit import FitConfig, best_fixed
     from vfgym.moves.axis import load_axis
+    from vfgym.permove import FitConfig, best_fixed
     from vfgym.plant.uncertainty import VERDICT_PLANTS
     from vfgym.report import Candidate, baseline_candidates, compare, verdict
 

@@ -1,7 +1,18 @@
-"""A trained agent as it was trained: its model, its run config, and the observation
-normalisation (SB3's ``VecNormalize``) saved beside it, ready to act on an environment's
-observations; and the two ways vfgym judges one: the settings a VFTune-v0 agent picks
-for a move, and the whole move a VFServo-v0 agent schedules.
+"""A trained agent as it was trained, and the environment it acts on.
+
+The environment of an agent is made of its hyperparameter file's env arguments
+(:func:`env_options`), above all the residual base its actions are offsets from (the
+paper's settings, a per-move settings model of :mod:`vfgym.permove`, a settings file or
+another VFTune-v0 agent). A saved agent is its model, its run config and the observation
+normalisation (SB3's ``VecNormalize``) saved beside it (:func:`load_agent`), ready to act
+on that environment's observations; vfgym judges one by the settings a VFTune-v0 agent
+picks for a move (:func:`policy_settings`) or the whole move a VFServo-v0 agent
+schedules (:func:`scheduler_policy`).
+
+Both the training (:mod:`vfgym.agents.training`) and the judging of a saved agent build
+their envs here; an agent as a residual base makes this module call itself (the agent is
+loaded with its own env), never another module back. stable-baselines3 is imported only
+when a model is loaded.
 """
 
 from __future__ import annotations
@@ -13,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from vfgym.io.runs import read_yaml
 from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
@@ -45,6 +57,157 @@ def vecnormalize_path(model_path: str | Path) -> Path:
     if p.stem.startswith("model_") and p.stem.endswith("_steps"):
         return p.with_name(f"model_vecnormalize_{p.stem[len('model_') :]}.pkl")
     return p.with_name(f"{p.stem}_{VECNORMALIZE_FILE}")
+
+
+def run_config(model_path: str | Path) -> dict[str, Any]:
+    """The run config (``config.yaml``: algo, env, hyperparams) of a saved model, read
+    from its folder or the one above (a checkpoint's); empty if none is found."""
+    model_path = Path(model_path)
+    for folder in (model_path.parent, model_path.parent.parent):
+        cfg = folder / "config.yaml"
+        if cfg.is_file():
+            data = read_yaml(cfg)
+            if isinstance(data, dict) and "algo" in data:
+                return data
+    return {}
+
+
+def load_model(model_path: str | Path) -> tuple[Any, dict[str, Any]]:
+    """The saved model and its run config (algo, env, hyperparams; may be empty)."""
+    from vfgym.agents.hyperparams import ALGOS, algo_class
+
+    path = Path(model_path)
+    if not path.is_file():
+        raise ValueError(f"--model {path}: no such file")
+    cfg = run_config(path)
+    algos = [cfg["algo"]] if cfg.get("algo") in ALGOS else list(ALGOS)
+    for algo in algos:
+        try:
+            return algo_class(algo).load(path, device="cpu"), cfg
+        except (KeyError, ValueError, TypeError, RuntimeError):
+            continue
+    raise ValueError(f"--model {path}: not a stable-baselines3 PPO, SAC or TD3 model")
+
+
+def env_options(env_kwargs: dict[str, Any] | None) -> dict[str, Any]:
+    """The env arguments of a hyperparameter file made objects: ``residual_base`` written
+    as ``paper`` (the paper's settings), ``model`` (the shipped per-move settings model as
+    ``vfgym predict`` uses it: its best-ranked candidates simulated on the move, the best
+    kept; :class:`CheckedBase`), ``model-lookup`` (its look-up alone, unsimulated: the
+    best-ranked candidate), ``model:FILE.json`` / ``model-lookup:FILE.json`` or a bare
+    ``FILE.json`` (the same of a settings model of ``vfgym fit``, e.g. an axis's own), a
+    settings file (a mapping of the settings, or one under ``settings:`` as ``best.yaml``)
+    or a trained VFTune-v0 agent (its ``.zip``: the settings it picks for each move). A
+    model's check keeps the settings feasible on the axis's design plants."""
+    kw = dict(env_kwargs or {})
+    base = kw.get("residual_base")
+    if isinstance(base, str):
+        kw["residual_base"] = _residual_base(base, _measures_of(kw), _design_of(kw))
+    return kw
+
+
+BASE_SPECS = ("paper", "model", "model-lookup")
+"""The named bases a hyperparameter file's ``residual_base`` may be (or a file's path; a
+settings model's as ``model:FILE.json`` or ``model-lookup:FILE.json``)."""
+
+
+class CheckedBase:
+    """A settings model's settings for each move, remembered per (move, plant): with its
+    check on (:attr:`vfgym.permove.pick.PickModel.check`) each new move simulates its
+    candidates once (a few ms), and the validation moves, scored again at every
+    evaluation, only the first time.
+
+    Parameters
+    ----------
+    model : PickModel or SettingsModel
+        The model.
+    measures : Measures
+        What the check scores with (an axis's).
+    size : int
+        Moves remembered; the oldest are forgotten beyond it.
+    plants : tuple of PlantVariant
+        True plants the check keeps the settings feasible on (an axis's design).
+    """
+
+    def __init__(self, model: Any, measures: Any, size: int = 1024, plants: Any = ()) -> None:
+        self.model, self.measures, self.size, self.plants = model, measures, size, plants
+        self._seen: dict[tuple[Scenario, Any], Any] = {}
+
+    def __call__(self, scenario: Scenario, plant: Any) -> Any:
+        """The model's settings for ``scenario`` on the base plant ``plant``."""
+        key = (scenario, plant)
+        out = self._seen.get(key)
+        if out is None:
+            if len(self._seen) >= self.size:
+                del self._seen[next(iter(self._seen))]
+            out = self._seen[key] = self.model.settings(scenario, plant, self.measures, self.plants)
+        return out
+
+
+def _measures_of(kw: dict[str, Any]) -> Any:
+    from vfgym.params import DEFAULT_MEASURES
+
+    axis = kw.get("axis")
+    if axis is None:
+        return kw.get("measures", DEFAULT_MEASURES)
+    from vfgym.moves.axis import load_axis
+
+    return (load_axis(axis) if isinstance(axis, (str, Path)) else axis).measures
+
+
+def _design_of(kw: dict[str, Any]) -> Any:
+    axis = kw.get("axis")
+    if axis is None:
+        return ()
+    from vfgym.moves.axis import load_axis
+
+    return (load_axis(axis) if isinstance(axis, (str, Path)) else axis).design_plants()
+
+
+def _residual_base(spec: str, measures: Any = None, plants: Any = ()) -> Any:
+    from vfgym.params import DEFAULT_MEASURES, PAPER_SETTINGS
+    from vfgym.permove import PRETRAINED
+    from vfgym.space import settings_from_dict
+
+    if spec == "paper":
+        return PAPER_SETTINGS
+    kind, _, path = spec.partition(":")
+    if spec.endswith(".json") and kind not in BASE_SPECS:
+        kind, path = "model", spec
+    if kind in ("model", "model-lookup"):
+        from dataclasses import replace
+
+        from vfgym.permove import PickModel, load_settings_model
+
+        try:
+            model = load_settings_model(path or PRETRAINED)
+        except ValueError as exc:  # its message names --model; here the key is residual_base
+            raise ValueError(f"residual_base={spec!r}: {exc}".replace("--model ", "")) from None
+        if kind == "model-lookup" and isinstance(model, PickModel):
+            model = replace(model, check=0)
+        on = DEFAULT_MEASURES if measures is None else measures
+        return CheckedBase(model, on, plants=tuple(plants))
+    if spec.endswith(".zip") and Path(spec).is_file():
+        pick = policy_settings(spec)
+        return lambda scenario, plant: pick(scenario)
+    if not Path(spec).is_file():
+        raise ValueError(
+            f"residual_base={spec!r} is not allowed: {', '.join(BASE_SPECS)} (the shipped "
+            "settings model, checked on the move, or its look-up alone), model:FILE.json "
+            "(a settings model of vfgym fit), a settings file or a VFTune-v0 agent's .zip"
+        )
+    data = read_yaml(spec)
+    data = data["settings"] if isinstance(data, dict) and "settings" in data else data
+    return settings_from_dict(data, source=spec)
+
+
+def make_env(env_id: str, env_kwargs: dict[str, Any] | None = None, **kw: Any) -> Any:
+    """One (non-vector) environment (``env_kwargs`` through :func:`env_options`)."""
+    import gymnasium as gym
+
+    import vfgym.envs  # noqa: F401  (registers the ids)
+
+    return gym.make(env_id, **env_options(env_kwargs), **kw)
 
 
 @dataclass(frozen=True)
@@ -116,16 +279,12 @@ def load_agent(model_path: str | Path) -> Agent:
         If the file is missing or not a PPO, SAC or TD3 model, or the run trained with
         normalisation and its statistics are missing.
     """
-    from vfgym.agents import load_model
-
     model, cfg = load_model(model_path)
     env_id = cfg.get("env", "vfgym/VFTune-v0")
     stats = vecnormalize_path(model_path)
     normalizer = None
     if stats.is_file():
         from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
-
-        from vfgym.agents.bases import make_env
 
         kw = dict((cfg.get("hyperparams") or {}).get("env_kwargs") or {})
         normalizer = VecNormalize.load(str(stats), DummyVecEnv([lambda: make_env(env_id, kw)]))
@@ -173,7 +332,6 @@ def rollout_info(
 def settings_policy(agent: Agent, axis: str | Axis | None = None) -> Callable[[Any], Settings]:
     """A VFTune-v0 agent as a function: scenario → the settings it picks (with residual
     actions, its offset from the move's base)."""
-    from vfgym.agents.bases import make_env
 
     env = make_env(agent.env_id, agent.env_kwargs(axis))
 
@@ -218,7 +376,6 @@ def scheduler_policy(
     """A VFServo-v0 agent as a :class:`vfgym.scoring.Scheduler` (:class:`AgentScheduler`),
     which :func:`vfgym.evaluate` and :func:`vfgym.report.compare` run on every (move,
     plant) pair and score as every controller."""
-    from vfgym.agents.bases import make_env
 
     return AgentScheduler(agent, make_env(agent.env_id, agent.env_kwargs(axis)), source)
 
@@ -243,7 +400,6 @@ def schedule_of(agent: Agent, scenario: Scenario | str, axis: str | None = None)
         ``{"schedule": [{"from_ms": ..., "settings": {...}}, ...], "cost": ...,
         "feasible": ...}``, a row where the settings change.
     """
-    from vfgym.agents.bases import make_env
     from vfgym.envs.servo import SERVO_FEATURES
     from vfgym.space import from_action, settings_to_dict
 
@@ -262,3 +418,59 @@ def schedule_of(agent: Agent, scenario: Scenario | str, axis: str | None = None)
         step += 1
         if terminated or truncated:
             return {"schedule": rows, "cost": float(info["cost"]), "feasible": info["feasible"]}
+
+
+def policy_settings(
+    model_path: str | Path, axis: str | Axis | None = None
+) -> Callable[[Scenario | str], Settings]:
+    """A VFTune-v0 agent as a function: scenario → the settings it picks (deterministic).
+    ``axis``: an axis file the moves belong to (default: the one the agent was trained
+    on, if any), which the observations describe and names resolve on."""
+    agent = load_agent(model_path)
+    if agent.env_id != "vfgym/VFTune-v0":
+        raise ValueError(
+            f"--model {model_path}: an agent for {agent.env_id}; settings per move "
+            "come from vfgym/VFTune-v0 agents"
+        )
+    return settings_policy(agent, axis)
+
+
+def agent_policy(model_path: str | Path, axis: str | None = None) -> Callable[[Any], Any]:
+    """Any trained agent as a policy :func:`vfgym.report.compare` scores: a VFTune-v0
+    agent's settings per move (:func:`policy_settings`), or a VFServo-v0 agent that
+    schedules each move interval by interval (a :class:`vfgym.scoring.Scheduler`)."""
+    agent = load_agent(model_path)
+    if agent.env_id == "vfgym/VFServo-v0":
+        return scheduler_policy(agent, axis)
+    return settings_policy(agent, axis)
+
+
+def servo_agent(model_path: str | Path) -> Any:
+    """The VFServo-v0 agent saved at ``model_path`` (a ``.zip``, loaded with its saved
+    normalisation, :func:`load_agent`), or None for any other model (a
+    settings model, a VFTune-v0 agent), which :func:`vfgym.agents.tuners.load_tuner` reads."""
+    if Path(model_path).suffix != ".zip":
+        return None
+    agent = load_agent(model_path)
+    return agent if agent.env_id == "vfgym/VFServo-v0" else None
+
+
+__all__ = [
+    "BASE_SPECS",
+    "VECNORMALIZE_FILE",
+    "Agent",
+    "CheckedBase",
+    "agent_policy",
+    "env_options",
+    "load_agent",
+    "load_model",
+    "make_env",
+    "policy_settings",
+    "rollout_info",
+    "run_config",
+    "schedule_of",
+    "scheduler_policy",
+    "servo_agent",
+    "settings_policy",
+    "vecnormalize_path",
+]

@@ -27,11 +27,12 @@ from typing import Any
 import numpy as np
 
 from vfgym._validate import check_int
-from vfgym.agents.bases import env_options, make_env
-from vfgym.agents.hyperparams import algo_class
 from vfgym.io.runs import read_yaml, write_text, write_yaml
 from vfgym.moves.distribution import random_scenario
 from vfgym.moves.scenarios import Scenario
+
+from .hyperparams import algo_class
+from .loaded import Agent, env_options, make_env, rollout_info, vecnormalize_path
 
 VALIDATION_SEED0 = 2**40
 """First train-split seed of the held-out validation scenarios."""
@@ -134,8 +135,6 @@ def rollout_cost(
     """Run the policy (deterministic) on one scenario (on the true ``plant``, if given),
     its observations through ``normalizer`` (a ``VecNormalize``) if given; the scoring
     path's info at the end."""
-    from vfgym.agents.loaded import Agent, rollout_info
-
     return rollout_info(Agent(model, {}, normalizer, ""), env, scenario, plant)
 
 
@@ -168,8 +167,6 @@ def _callbacks(
     normalizer: Any,
 ) -> list[Any]:
     from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback
-
-    from vfgym.agents.loaded import vecnormalize_path
 
     class HeldOutEval(BaseCallback):
         """Every ``eval_freq`` steps: mean cost on the held-out scenarios; the best model
@@ -302,7 +299,6 @@ def latest_checkpoint(run: Path) -> tuple[Path, int] | None:
 
 
 def _save_checkpoint(model: Any, run: Path, normalizer: Any) -> None:
-    from vfgym.agents.loaded import vecnormalize_path
 
     steps = model.num_timesteps
     path = run / "checkpoints" / f"model_{steps}_steps.zip"
@@ -457,7 +453,6 @@ def train(
             _save_checkpoint(model, run, normalizer)
             raise
         _save_checkpoint(model, run, normalizer)
-    from vfgym.agents.loaded import vecnormalize_path
 
     for name in ("final_model.zip", "best_model.zip"):
         if name == "best_model.zip" and (run / name).is_file():
@@ -466,7 +461,7 @@ def train(
         if normalizer is not None:
             normalizer.save(str(vecnormalize_path(run / name)))
     venv.close()
-    from vfgym.agents.heldout import heldout_result
+    from .heldout import heldout_result
 
     result = heldout_result(run / "best_model.zip", params)
     log(result.text())
@@ -479,9 +474,10 @@ def train(
 def _axis_verdict(run: Path, axis_file: str, log: Callable[[str], None]) -> None:
     """On an axis, the verdict ``vfgym fit`` gives a settings model, for the run's best
     model: printed, and written to ``verdict.txt`` and ``summary.yaml`` as fit writes them."""
-    from vfgym.agents.heldout import axis_verdict
     from vfgym.report import format_verdict
     from vfgym.space import settings_to_dict
+
+    from .heldout import axis_verdict
 
     v, fixed = axis_verdict(run / "best_model.zip", axis_file)
     text = format_verdict(v, per_move=True)
@@ -527,7 +523,6 @@ def _wrap(venv: Any, params: dict[str, Any], cls: Any, ckpt: tuple[Path, int] | 
     norm = params.get("normalize", False)
     if not norm:
         return venv, None
-    from vfgym.agents.loaded import vecnormalize_path
 
     if ckpt is not None and vecnormalize_path(ckpt[0]).is_file():
         normalizer = VecNormalize.load(str(vecnormalize_path(ckpt[0])), venv)

@@ -105,16 +105,20 @@ def _labels(paths: list[str], taken: set[str]) -> list[str]:
 
 
 def load_policy(model_path: str, axis: str | None = None, command: str = "evaluate") -> Any:
-    """A tuner that picks settings per scenario (:func:`vfgym.agents.load_tuner`): a
-    settings model (``.json``) or a trained VFTune-v0 agent (``.zip``); or a VFServo-v0
-    agent's scheduled move (:func:`vfgym.agents.loaded.scheduler_policy`); on an axis file
-    if given, its warnings one line each on stderr. Without the agents extra an agent is a
-    one-line ``ValueError``."""
+    """A tuner that picks settings per scenario: a settings model (``.json``,
+    :func:`vfgym.permove.load_tuner`, no torch needed) or a trained VFTune-v0 agent
+    (``.zip``, :func:`vfgym.agents.load_tuner`); or a VFServo-v0 agent's scheduled move
+    (:func:`vfgym.agents.scheduler_policy`); on an axis file if given, its warnings one
+    line each on stderr. Without the agents extra an agent is a one-line ``ValueError``."""
     from vfgym.commands._common import warn_line
 
     p = Path(model_path)
     if not p.is_file():
         raise ValueError(f"{model_path}: no such file")
+    if p.suffix != ".zip":
+        from vfgym.permove import load_tuner as load_settings_tuner
+
+        return load_settings_tuner(str(p), axis, warn=warn_line(command))
     try:
         from vfgym.agents import load_tuner, servo_agent
 

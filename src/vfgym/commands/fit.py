@@ -17,8 +17,8 @@ from pathlib import Path
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from vfgym.agents.fit import FitConfig
     from vfgym.commands._common import whole
+    from vfgym.permove import FitConfig
 
     d = FitConfig()
     p = sub.add_parser(
@@ -45,10 +45,10 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from vfgym._validate import check_name, check_output_path
-    from vfgym.agents.fit import FitConfig, config_dict, fit_axis
     from vfgym.commands._common import Interrupted, axis_from_args
     from vfgym.io.runs import new_run_dir, record_command, write_text, write_yaml
     from vfgym.moves.axis import AXIS_FILE, write_axis
+    from vfgym.permove.fit import FitConfig, config_dict, fit_axis
     from vfgym.report import format_verdict
     from vfgym.space import settings_to_dict
 

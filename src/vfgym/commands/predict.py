@@ -55,16 +55,16 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None:
         check_output_path("--out", args.out)
     if args.model is None:
-        from vfgym.agents.tuners import load_tuner
+        from vfgym.permove import load_tuner
 
         tuner = load_tuner(None, axis, warn=warn_line("predict"))
     else:
-        from vfgym.agents.tuners import Tuner
         from vfgym.commands.evaluate import load_policy
+        from vfgym.permove import Tuner
 
         tuner = load_policy(args.model, args.axis, "predict")
         if not isinstance(tuner, Tuner):  # a VFServo-v0 agent's scheduler
-            from vfgym.agents.loaded import load_agent, schedule_of
+            from vfgym.agents import load_agent, schedule_of
 
             agent = load_agent(args.model)
 
@@ -79,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     source = tuner.source
     doc = {"settings": settings_to_dict(settings), "source": source, "scenario": scenario.name}
     if refine_n is not None:
-        from vfgym.agents.refine import refine
+        from vfgym.permove import refine
 
         r = refine(scenario, settings, refine_n, seed=seed, **axis_kwargs(axis))
         doc = {

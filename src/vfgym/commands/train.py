@@ -131,7 +131,7 @@ def _axis_base(env_kwargs: dict, axis: object, args: argparse.Namespace) -> None
 def _check_env_kwargs(env_id: str, env_kwargs: dict) -> None:
     """Make the environment once with ``env_kwargs``, so that a value it refuses stops the
     command before a run folder is made (the env's own checks say what is allowed)."""
-    from vfgym.agents.training import make_env
+    from vfgym.agents import make_env
 
     if not env_kwargs:
         return

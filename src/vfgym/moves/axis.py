@@ -478,7 +478,7 @@ def axis_kwargs(axis: Axis | None) -> dict[str, Any]:
 def content_digest(data: Any) -> str:
     """12 hex digits of the SHA-256 of ``data`` as key-sorted JSON: the fingerprint of a
     run folder's axis (:func:`axis_digest`) and of a tuner's machine
-    (:func:`vfgym.agents.tuners.machine_digest`)."""
+    (:func:`vfgym.permove.tuners.machine_digest`)."""
     return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:12]
 
 

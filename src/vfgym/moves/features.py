@@ -1,7 +1,7 @@
 """The features of a move and its plant: what a tuner knows of a move before it runs.
 
 One public home for them: the envs' observations (:mod:`vfgym.envs`) and the per-move
-tuners (the settings models of :mod:`vfgym.agents`) describe a move with the same numbers,
+tuners (the settings models of :mod:`vfgym.permove`) describe a move with the same numbers,
 :func:`scenario_features`, in the order of :data:`SCENARIO_FEATURES`.
 """
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from vfgym import evaluate, load_axis
-from vfgym.agents.optima import OptimumSearch, move_optima
+from vfgym.permove.optima import OptimumSearch, move_optima
 from vfgym.plant.uncertainty import Uncertainty
 
 AXES = Path(__file__).resolve().parents[2] / "experiments" / "axes"
@@ -40,8 +40,8 @@ def test_fit_best_fixed_is_the_sweep_with_as_many_trials(tmp_path):
     """The fit's best fixed setting is what ``vfgym sweep`` finds with as many trials on
     the same axis: the same warm starts, sampler and feasibility (the design included)."""
     from vfgym import cli
-    from vfgym.agents.fit import best_fixed
     from vfgym.commands._common import load_settings
+    from vfgym.permove.fit import best_fixed
 
     path = tmp_path / "lu.yaml"
     path.write_text((AXES / "loads-uncertain.yaml").read_text())

@@ -1,6 +1,6 @@
 """A per-move settings model for one axis (``vfgym fit``): per-move optima of many moves
 drawn from the axis's move distribution, the cost of every optimum on every move, then
-the pick model (:func:`vfgym.agents.pick.fit_pick_model`) over them, judged on the axis's
+the pick model (:func:`vfgym.permove.pick.fit_pick_model`) over them, judged on the axis's
 held-out test moves against the best fixed setting (a short sweep on its train moves),
 the paper's settings and the S-curve source.
 
@@ -55,7 +55,7 @@ class FitConfig:
         The pick model's neighbours and library size (at most ``moves``).
     check : int
         Best-ranked candidates the model simulates on each new move, the best returned
-        (:class:`vfgym.agents.pick.PickModel`), 0 to ``library``. On an axis with
+        (:class:`vfgym.permove.pick.PickModel`), 0 to ``library``. On an axis with
         uncertainty feasibility on its design prunes more candidates, so more are checked
         (how many: docs/results/robust.md).
     sweep_trials : int
@@ -176,7 +176,7 @@ def candidate_costs(
     plants: Sequence[PlantVariant] = (),
 ) -> tuple[np.ndarray, np.ndarray]:
     """The cost on move i of move j's optimum in the model's coordinates, made settings
-    on move i's plant (:func:`vfgym.agents.targets.target_settings`), for every pair.
+    on move i's plant (:func:`vfgym.permove.targets.target_settings`), for every pair.
 
     Parameters
     ----------
@@ -271,7 +271,7 @@ def checkpointed_optima(
     search : OptimumSearch
         The per-move search.
     path : Path
-        The optima CSV (:func:`vfgym.agents.optima.write_optima`).
+        The optima CSV (:func:`vfgym.permove.optima.write_optima`).
     plant, measures : Plant, Measures
         The axis's plant and measures.
     chunk : int
@@ -372,9 +372,10 @@ def fit_axis(
     """
     from tqdm.auto import tqdm
 
-    from vfgym.agents.tuners import Tuner, trained_on
     from vfgym.plant.uncertainty import VERDICT_PLANTS
     from vfgym.report import Candidate, baseline_candidates, compare, verdict
+
+    from .tuners import Tuner, trained_on
 
     run = Path(run_dir)
     seconds: dict[str, float] = {}

@@ -8,11 +8,11 @@ from pathlib import Path
 
 import yaml
 
-from vfgym.agents import fit as F
-from vfgym.agents.optima import OptimumSearch, read_optima
-from vfgym.agents.supervised import load_settings_model
 from vfgym.cli import main
 from vfgym.moves.axis import load_axis
+from vfgym.permove import fit as F
+from vfgym.permove.optima import OptimumSearch, read_optima
+from vfgym.permove.supervised import load_settings_model
 
 REPO = Path(__file__).resolve().parents[2]
 SMALL = {

@@ -1,16 +1,16 @@
-"""The supervised settings models: learnt from per-move optima (:mod:`vfgym.agents.optima`)
+"""The supervised settings models: learnt from per-move optima (:mod:`vfgym.permove.optima`)
 of training moves, they map a move's features (the ones the envs observe,
 :func:`vfgym.moves.features.scenario_features`) to settings in one plain-numpy look-up, no
-torch needed. Both work in the coordinates of :mod:`vfgym.agents.targets`.
+torch needed. Both work in the coordinates of :mod:`vfgym.permove.targets`.
 
-- ``pick`` (:class:`vfgym.agents.pick.PickModel`, the shipped one): the library candidate
+- ``pick`` (:class:`vfgym.permove.pick.PickModel`, the shipped one): the library candidate
   of least mean cost ratio over the move's nearest training moves.
 - ``ridge`` (:class:`SettingsModel`, the baseline it beats): a ridge regression straight to
   the optimal settings; inputs the features, their squares and pairwise products
   (``degree`` 2), standardised.
 
 A model is a JSON file (``save``, :func:`load_settings_model`); the pretrained one ships in
-``vfgym/agents/pretrained/`` with the config and the command that made it
+``vfgym/permove/pretrained/`` with the config and the command that made it
 (:data:`PRETRAINED`), and :func:`train_settings_model` remakes it from its config.
 """
 
@@ -257,7 +257,7 @@ class TrainConfig:
     kind : str
         ``pick`` (:func:`fit_pick_model`) or ``ridge`` (:func:`fit_settings_model`).
     optima : str
-        The optima CSV of the training moves (:func:`vfgym.agents.optima.read_optima`),
+        The optima CSV of the training moves (:func:`vfgym.permove.optima.read_optima`),
         relative to the repository's root.
     costs : str
         The candidates' cost table (``experiments/candidate_costs.py``; ``pick`` only).
@@ -308,8 +308,9 @@ def train_settings_model(cfg: TrainConfig, root: str | Path = ".") -> PickModel 
     PickModel or SettingsModel
         The fitted model.
     """
-    from vfgym.agents.optima import read_optima
     from vfgym.moves import LOAD_DISTRIBUTION, get_scenario
+
+    from .optima import read_optima
 
     optima = read_optima(Path(root) / cfg.optima)
     scenarios = [get_scenario(o.scenario, LOAD_DISTRIBUTION) for o in optima]

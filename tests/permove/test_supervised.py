@@ -16,10 +16,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, evaluate, get_scenario, scenario_set
-from vfgym.agents.fit import optima_key
-from vfgym.agents.optima import MoveOptimum, OptimumSearch, move_optima, read_optima, write_optima
-from vfgym.agents.refine import refine
-from vfgym.agents.supervised import (
+from vfgym.cli import main
+from vfgym.moves import LOAD_DISTRIBUTION as LOAD
+from vfgym.moves.features import scenario_features
+from vfgym.params import DEFAULT_MEASURES
+from vfgym.permove.fit import optima_key
+from vfgym.permove.optima import MoveOptimum, OptimumSearch, move_optima, read_optima, write_optima
+from vfgym.permove.refine import refine
+from vfgym.permove.supervised import (
     PRETRAINED,
     TrainConfig,
     fit_pick_model,
@@ -29,10 +33,6 @@ from vfgym.agents.supervised import (
     target_settings,
     train_settings_model,
 )
-from vfgym.cli import main
-from vfgym.moves import LOAD_DISTRIBUTION as LOAD
-from vfgym.moves.features import scenario_features
-from vfgym.params import DEFAULT_MEASURES
 from vfgym.space import SPACE, from_action
 
 REPO = Path(__file__).resolve().parents[2]

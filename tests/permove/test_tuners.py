@@ -1,4 +1,4 @@
-"""``vfgym.agents.load_tuner``: every tuner as one callable, and its one-line warnings on
+"""``vfgym.permove.load_tuner``: a settings model as one callable, and its one-line warnings on
 another axis or on moves unlike its training moves."""
 
 from __future__ import annotations
@@ -9,11 +9,16 @@ from pathlib import Path
 
 import pytest
 
-from vfgym.agents import Tuner, TunerWarning, load_tuner
-from vfgym.agents.supervised import PRETRAINED, load_settings_model
-from vfgym.agents.tuners import machine_digest, trained_on
 from vfgym.cli import main
-from vfgym.moves.axis import PAPER_AXIS, load_axis
+from vfgym.moves.axis import PAPER_AXIS, load_axis, machine_digest
+from vfgym.permove import (
+    PRETRAINED,
+    Tuner,
+    TunerWarning,
+    load_settings_model,
+    load_tuner,
+    trained_on,
+)
 
 REPO = Path(__file__).resolve().parents[2]
 BELT = str(REPO / "experiments/axes/belt.yaml")

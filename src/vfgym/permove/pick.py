@@ -106,7 +106,7 @@ class PickModel(TargetModel):
     accel_law : str
         The law of the picked settings.
     trained_on : dict or None
-        The axis it was fitted on (:func:`vfgym.agents.tuners.trained_on`); ``None``: the
+        The axis it was fitted on (:func:`vfgym.permove.tuners.trained_on`); ``None``: the
         paper's plant and measures.
     check : int
         Best-ranked candidates simulated on the move itself, the best of them returned
