@@ -126,17 +126,15 @@ def add_axis_option(p: argparse.ArgumentParser) -> None:
 
 def axis_from_args(args: argparse.Namespace) -> Any:
     """The :class:`~vfgym.moves.axis.Axis` of ``--axis FILE`` (a bad file: one-line
-    ``ValueError`` naming it), or ``None`` without the option (the paper's axis, as
-    before axes existed)."""
-    from vfgym.moves.axis import load_axis
+    ``ValueError`` naming it), or the paper's axis without the option (the default
+    problem, :data:`vfgym.PAPER_AXIS`)."""
+    from vfgym.moves.axis import PAPER_AXIS, load_axis
 
     path = getattr(args, "axis", None)
-    return load_axis(path) if path else None
+    return load_axis(path) if path else PAPER_AXIS
 
 
 def scenario_from_args(args: argparse.Namespace, axis: Any) -> Any:
     """``--scenario NAME`` on the axis (its listed moves, the named scenarios, or
-    ``<split>-<seed>`` of its random moves), or as :func:`vfgym.get_scenario` without one."""
-    from vfgym.moves.distribution import get_scenario
-
-    return get_scenario(args.scenario) if axis is None else axis.scenario(args.scenario)
+    ``<split>-<seed>`` of its random moves)."""
+    return axis.scenario(args.scenario)

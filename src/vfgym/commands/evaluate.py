@@ -59,7 +59,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--count",
         type=positive_int,
-        help="random scenarios drawn for train/test (default: 32; an axis sets its own)",
+        help="train/test as this many random draws instead of the axis's move sets "
+        "(default: the paper axis's 16 train and 32 test moves, or 32 draws with "
+        "--first-seed; an axis file sets its own)",
     )
     p.add_argument(
         "--first-seed",
@@ -141,10 +143,9 @@ def run(args: argparse.Namespace) -> int:
     from vfgym._validate import check_name, check_output_path
     from vfgym.commands._common import axis_from_args, load_settings
     from vfgym.io.runs import new_run_dir, record_command, write_yaml
-    from vfgym.moves.axis import AXIS_FILE, PAPER_AXIS, write_axis
+    from vfgym.moves.axis import AXIS_FILE, write_axis
     from vfgym.moves.baselines import BASELINE_NAMES
-    from vfgym.moves.distribution import scenario_set
-    from vfgym.plant.uncertainty import VERDICT_PLANTS, draw_plants
+    from vfgym.plant.uncertainty import VERDICT_PLANTS
     from vfgym.report import (
         Candidate,
         baseline_candidates,
@@ -158,15 +159,13 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.settings and not args.model:
         raise ValueError("nothing to evaluate: give --settings FILE.yaml and/or --model MODEL")
-    axis = axis_from_args(args)
+    on = axis_from_args(args)  # the problem: the paper's axis without --axis
     for opt, v in (("--count", args.count), ("--first-seed", args.first_seed)):
-        if axis is not None and v is not None:
+        if args.axis and v is not None:
             raise ValueError(
                 f"{opt}={v} is not allowed with --axis {args.axis}: the axis file sets its "
                 "move sets (moves.train, moves.test)"
             )
-    count = 32 if args.count is None else args.count
-    first_seed = 0 if args.first_seed is None else args.first_seed
     if args.name is not None:
         check_name("--name", args.name)
     check_output_path(
@@ -180,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
     if against in ("all", ""):
         against = ",".join(BASELINE_NAMES)
     base = [] if against == "none" else baseline_candidates(against)
-    settings = [load_settings(f, axis) for f in args.settings]
+    settings = [load_settings(f, on) for f in args.settings]
     taken = {b.label for b in base}
     s_labels = _labels(args.settings, taken)
     m_labels = [
@@ -188,17 +187,12 @@ def run(args: argparse.Namespace) -> int:
         for m, lab in zip(args.model, _labels(args.model, taken), strict=True)
     ]
     policies = [load_policy(m, args.axis) for m in args.model]
-    on = PAPER_AXIS if axis is None else axis
     if on.uncertainty.exact and args.plants is not None:
         raise ValueError(
             f"--plants={args.plants} is ignored: axis {on.name} states no uncertainty (give "
             "an axis file with an uncertainty: block, or leave --plants out for the ±5 % "
             "inertia sensitivity line)"
         )
-    if axis is None:
-        scenarios = scenario_set(args.scenarios, count, first_seed)
-    else:
-        scenarios = axis.scenario_set(args.scenarios)
     cands = [
         Candidate(lab, s, source=f)
         for lab, s, f in zip(s_labels, settings, args.settings, strict=True)
@@ -211,14 +205,16 @@ def run(args: argparse.Namespace) -> int:
     report = compare(
         cands,
         base,
-        scenarios,
+        args.scenarios,
+        axis=on,
+        count=32 if args.count is None and args.first_seed is not None else args.count,
+        first_seed=args.first_seed,
         resamples=args.bootstrap,
         seed=args.seed,
-        plant=on.plant,
-        measures=on.measures,
-        plants=draw_plants(on.uncertainty, on.plant.motor, plants, args.plant_seed),
-        plant_seed=None if on.uncertainty.exact else args.plant_seed,
+        plants=plants,
+        plant_seed=args.plant_seed,
     )
+    scenarios = report.scenarios
     report.scenario_spec = args.scenarios
     run_dir = new_run_dir(args.runs_dir, "evaluate", args.name)
     write_yaml(
@@ -234,26 +230,22 @@ def run(args: argparse.Namespace) -> int:
             ],
             "against": [b.label for b in base],
             "scenarios": args.scenarios,
-            "count": count if axis is None else None,
-            "first_seed": first_seed if axis is None else None,
+            "count": args.count,
+            "first_seed": args.first_seed,
             "scenario_names": [s.name for s in scenarios],
             "bootstrap": {"resamples": args.bootstrap, "seed": args.seed, "level": 0.95},
             "plants": {"count": plants, "seed": args.plant_seed},
-            "plant": "PAPER_PLANT (each scenario applies its load)"
-            if axis is None
-            else f"the axis's ({AXIS_FILE}; each scenario adds its load)",
-            "axis": None if axis is None else {"file": args.axis, "name": axis.name},
+            "plant": f"the axis's ({AXIS_FILE}; each scenario adds its load)",
+            "axis": {"file": args.axis, "name": on.name},
             "weights": asdict(DEFAULT_WEIGHTS),
             "bounds": asdict(DEFAULT_BOUNDS),
         },
     )
     record_command(run_dir)
-    if axis is not None:
-        write_axis(axis, run_dir / AXIS_FILE)
+    write_axis(on, run_dir / AXIS_FILE)
     paths = write_report(report, run_dir)
     print(format_table(report), end="")
     assert report.across is not None  # (compare was given the plants)
     print("\n" + "\n".join(format_across([c.label for c in report.columns], report.across)))
-    extra = f", {AXIS_FILE}" if axis is not None else ""
-    print(f"\nwrote {run_dir}/ ({', '.join(paths)}, config.yaml{extra}, command.txt)")
+    print(f"\nwrote {run_dir}/ ({', '.join(paths)}, config.yaml, {AXIS_FILE}, command.txt)")
     return 0

@@ -51,7 +51,6 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.commands.plot import _controller, own_trace
     from vfgym.io.trace_csv import write_trace_csv
     from vfgym.io.vcd import parse_timescale, write_vcd
-    from vfgym.moves.axis import axis_kwargs
     from vfgym.scoring import evaluate
 
     axis = axis_from_args(args)
@@ -64,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     out = args.out if args.out is not None else f"{scenario.name}-{Path(label).stem}.{args.format}"
     out = check_output_path("--out", out)
     dec = args.decimation if args.format == "csv" else 1
-    ev = evaluate(ctrl, [scenario], keep_traces=True, decimation=dec, **axis_kwargs(axis))
+    ev = evaluate(ctrl, [scenario], keep_traces=True, decimation=dec, axis=axis)
     trace = own_trace(ev, scenario)
     if args.format == "vcd":
         comment = f"scenario {scenario.name}: {scenario.description}\ncontroller {ev.labels()[0]}"

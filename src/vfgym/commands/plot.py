@@ -165,8 +165,6 @@ def _against(args: argparse.Namespace, own: str) -> list[Any]:
 def build_figure(args: argparse.Namespace) -> Any:
     """The figure the arguments ask for."""
     from vfgym.commands._common import axis_from_args, scenario_from_args
-    from vfgym.moves.axis import axis_kwargs
-    from vfgym.params import PAPER_PLANT
     from vfgym.report import figures as plots
     from vfgym.scoring import evaluate
 
@@ -179,11 +177,11 @@ def build_figure(args: argparse.Namespace) -> Any:
         return plots.pareto_figure(study, x=args.x, y=args.y)
     axis = axis_from_args(args)
     scenario = scenario_from_args(args, axis)
-    plant = scenario.plant(PAPER_PLANT if axis is None else axis.plant)
+    plant = scenario.plant(axis.plant)
     if args.kind == "scurve":
         return plots.scurve_figure(plant, short_rad=args.short_rad, long_rad=args.long_rad)
     ctrl, label = _controller(args)
-    on_axis = axis_kwargs(axis)
+    on_axis = {"axis": axis}
     if args.kind == "response":
         ev = evaluate(ctrl, [scenario], keep_traces=True, **on_axis)
         trace = own_trace(ev, scenario)

@@ -31,19 +31,17 @@ def run(args: argparse.Namespace) -> int:
         controller_from_args,
         scenario_from_args,
     )
-    from vfgym.moves.axis import axis_kwargs
     from vfgym.moves.scenarios import SCENARIOS
     from vfgym.scoring import evaluate
 
     axis = axis_from_args(args)
     if args.list:
-        splits = () if axis is None else ("train", "test")
-        listed = [m for split in splits for m in axis.moves.of(split).moves]
+        listed = [m for split in ("train", "test") for m in axis.moves.of(split).moves]
         for s in [*listed, *SCENARIOS.values()]:
             print(f"{s.name:12s} {s.description}")
         return 0
     scenario = scenario_from_args(args, axis)
-    ev = evaluate(controller_from_args(args, axis), [scenario], **axis_kwargs(axis))
+    ev = evaluate(controller_from_args(args, axis), [scenario], axis=axis)
     m = ev.metrics[0][0]
     print(f"{ev.labels()[0]} on {scenario.name}: cost {ev.cost[0, 0]:.4g}")
     for key in sorted(m):

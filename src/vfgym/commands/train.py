@@ -70,8 +70,7 @@ def run(args: argparse.Namespace) -> int:
 
         axis = axis_from_args(args)  # a bad file fails before a run folder is made
         params["env_kwargs"] = {**(params.get("env_kwargs") or {}), "axis": args.axis}
-        if axis is not None:
-            _axis_base(params["env_kwargs"], axis, args)
+        _axis_base(params["env_kwargs"], axis, args)
     if args.name is not None:
         check_name("--name", args.name)
     name = args.name or f"{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}"
