@@ -74,24 +74,20 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
     HeldOutResult
         The mean costs and win counts.
     """
-    from vfgym.moves.axis import axis_kwargs, load_axis
-    from vfgym.moves.distribution import scenario_set
-    from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT
+    from vfgym.moves.axis import PAPER_AXIS, load_axis
     from vfgym.permove import load_settings_model
     from vfgym.report import Candidate, compare
 
     n = int(params.get("n_eval_scenarios", HELDOUT_COUNT))
     axis_file = (params.get("env_kwargs") or {}).get("axis")
-    axis = load_axis(axis_file) if axis_file else None
-    scenarios = scenario_set("test", n, 0) if axis is None else axis.scenario_set("test")[:n]
-    plant = PAPER_PLANT if axis is None else axis.plant
-    measures = DEFAULT_MEASURES if axis is None else axis.measures
+    axis = load_axis(axis_file) if axis_file else PAPER_AXIS
+    scenarios = axis.scenario_set("test")[:n]
     shipped = load_settings_model()
     cands = [
         Candidate("agent", policy=agent_policy(model_path, axis_file)),
-        Candidate("model", policy=lambda sc: shipped.settings(sc, plant, measures)),
+        Candidate("model", policy=lambda sc: shipped.settings(sc, axis.plant, axis.measures)),
     ]
-    rep = compare(cands, "paper", scenarios, resamples=1, **axis_kwargs(axis))
+    rep = compare(cands, "paper", scenarios, resamples=1, axis=axis)
     agent, model, paper = (rep.column(c).cost for c in ("agent", "model", "paper"))
     feasible = np.all(rep.column("agent").constraints <= 0.0, axis=1)
     return HeldOutResult(
