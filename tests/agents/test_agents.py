@@ -22,6 +22,7 @@ TINY = {
     "ppo": {"n_envs": 4, "n_steps": 16, "batch_size": 32, "n_epochs": 1},
     "sac": {"n_envs": 2, "learning_starts": 16, "batch_size": 16, "buffer_size": 1000},
     "td3": {"n_envs": 2, "learning_starts": 16, "batch_size": 16, "buffer_size": 1000},
+    "ppo_lstm": {"n_envs": 4, "n_steps": 16, "batch_size": 32, "n_epochs": 1},
 }
 
 
@@ -36,8 +37,11 @@ def tiny(algo: str, env_id: str, **extra) -> dict:
     return hp.load(algo, env_id, hp.HYPERPARAMS_DIR / f"{algo}.yml", over | extra)
 
 
-@pytest.mark.parametrize("env_id", ["vfgym/VFTune-v0", "vfgym/VFServo-v0"])
-@pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
+@pytest.mark.parametrize(
+    ("algo", "env_id"),
+    [(a, e) for a in ("ppo", "sac", "td3") for e in ("vfgym/VFTune-v0", "vfgym/VFServo-v0")]
+    + [("ppo_lstm", "vfgym/VFServo-v0")],
+)
 def test_each_algorithm_trains_saves_loads_and_predicts_the_same(algo, env_id, tmp_path):
     run = tmp_path / "run"
     run.mkdir()
@@ -169,6 +173,11 @@ def test_cli_train_then_predict_gives_a_settings_file_evaluate_reads(tmp_path, c
             "activation_fn='sine'",
         ),
         ({"vfgym/Other-v0": {}}, "unknown environment id"),
+        (
+            {"vfgym/VFTune-v0": {"policy": "MlpLstmPolicy"}},
+            "policy='MlpLstmPolicy' is not allowed for ppo: give MlpPolicy",
+        ),
+        ({"vfgym/VFTune-v0": {"policy": "CnnPolicy"}}, "policy='CnnPolicy'"),
     ],
 )
 def test_bad_hyperparameter_files_fail_before_training(tmp_path, content, match, capsys):

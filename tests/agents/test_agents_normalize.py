@@ -108,6 +108,32 @@ def test_load_tuner_gives_a_servo_agent_as_a_scheduler_that_evaluate_judges(serv
     assert ev.across.cost[0, 0, 0] != ev.cost[0, 0]
 
 
+def test_a_recurrent_agent_carries_its_memory_through_the_move():
+    """``rollout_info`` passes a recurrent policy's LSTM state from each interval to the
+    next (reset at the episode's start): the same move as a loop that does so by hand,
+    and not the one of a policy that forgets at every interval."""
+    from sb3_contrib import RecurrentPPO
+
+    env = make_env("vfgym/VFServo-v0", {"residual": True, "residual_base": "paper"})
+    model = RecurrentPPO("MlpLstmPolicy", env, seed=3, device="cpu")
+    agent = Agent(model, {}, None, "vfgym/VFServo-v0")
+
+    def by_hand(remember: bool) -> float:
+        obs, _ = env.reset(options={"scenario": "paper-step"})
+        state, start = None, True
+        while True:
+            kept = state if remember else None
+            a, state = model.predict(obs, kept, np.array([start]), deterministic=True)
+            obs, _, term, trunc, info = env.step(a)
+            start = not remember
+            if term or trunc:
+                return info["cost"]
+
+    got = rollout_info(agent, env, "paper-step")["cost"]
+    assert got == by_hand(True)
+    assert got != by_hand(False)
+
+
 def test_predict_prints_a_servo_agents_schedule(servo_run, tmp_path, capsys):
     run, _ = servo_run
     out = tmp_path / "s.yaml"
@@ -125,14 +151,15 @@ def test_predict_prints_a_servo_agents_schedule(servo_run, tmp_path, capsys):
     assert "VFServo-v0 agent" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
+@pytest.mark.parametrize("algo", ["ppo", "sac", "td3", "ppo_lstm"])
 def test_a_residual_agent_starts_as_its_base(algo):
     from vfgym import PAPER_SETTINGS, evaluate
     from vfgym.agents.hyperparams import algo_class
     from vfgym.agents.training import start_at_base
 
     env = make_env("vfgym/VFServo-v0", {"residual": True, "residual_base": "paper"})
-    model = algo_class(algo)("MlpPolicy", env, seed=0, device="cpu")
+    policy = "MlpLstmPolicy" if algo == "ppo_lstm" else "MlpPolicy"
+    model = algo_class(algo)(policy, env, seed=0, device="cpu")
     start_at_base(model)
     agent = Agent(model, {}, None, "vfgym/VFServo-v0")
     obs = np.random.default_rng(0).uniform(-3, 3, (4, *env.observation_space.shape))

@@ -2,8 +2,9 @@
 ``pip install -c constraints.txt -e ".[agents]"``; importing this package does not,
 stable-baselines3 is imported when a model is trained or loaded).
 
-- :func:`train` trains PPO, SAC or TD3 on ``vfgym/VFTune-v0`` or ``vfgym/VFServo-v0``
-  into a run folder (:mod:`vfgym.agents.training`), with the hyperparameters of
+- :func:`train` trains PPO, SAC, TD3 or RecurrentPPO (``ppo_lstm``, sb3-contrib) on
+  ``vfgym/VFTune-v0`` or ``vfgym/VFServo-v0`` into a run folder
+  (:mod:`vfgym.agents.training`), with the hyperparameters of
   :mod:`vfgym.agents.hyperparams` (:func:`load_hyperparams`).
 - :func:`load_agent` reads a saved agent with its run config and observation
   normalisation; :func:`load_model` the bare model (:mod:`vfgym.agents.loaded`).

@@ -20,7 +20,8 @@ from typing import Any
 from vfgym._validate import check_choice, check_int, check_real
 from vfgym.io.runs import parse_yaml, read_yaml
 
-ALGOS = ("ppo", "sac", "td3")
+ALGOS = ("ppo", "sac", "td3", "ppo_lstm")
+"""Algorithm names (rl-baselines3-zoo's): ``ppo_lstm`` is sb3-contrib's RecurrentPPO."""
 ENV_IDS = ("vfgym/VFTune-v0", "vfgym/VFServo-v0")
 
 # keys that are not constructor arguments of the algorithm
@@ -58,13 +59,18 @@ POLICY_KWARGS = {
     "ortho_init": (bool,),
     "squash_output": (bool,),
     "n_critics": (int,),
+    # RecurrentPPO's (sb3-contrib's MlpLstmPolicy)
+    "lstm_hidden_size": (int,),
+    "n_lstm_layers": (int,),
+    "shared_lstm": (bool,),
+    "enable_critic_lstm": (bool,),
 }
 ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu")
 MIXED_TYPES = {"ent_coef", "target_entropy", "train_freq"}
 """Keys that take a number or a string/list (SAC's ``ent_coef='auto'``, ``train_freq=[4,
 'episode']``); their check in :data:`RANGES` decides, not the type of the default."""
-POLICIES = ("MlpPolicy",)
-"""Policies for the vfgym environments (flat Box observations)."""
+POLICIES = {"ppo": "MlpPolicy", "sac": "MlpPolicy", "td3": "MlpPolicy", "ppo_lstm": "MlpLstmPolicy"}
+"""Each algorithm's policy for the vfgym environments (flat Box observations)."""
 
 
 def _count(lo: int, hi: int | None = None) -> Callable[[str, Any], int]:
@@ -141,7 +147,7 @@ RANGES: dict[str, Callable[[str, Any], Any]] = {
     "n_eval_scenarios": _count(1),
     "checkpoint_freq": _count(1),
     "action_noise_std": _real(0.0),
-    "policy": lambda name, v: check_choice(name, v, POLICIES),
+    "policy": lambda name, v: check_choice(name, v, tuple(sorted(set(POLICIES.values())))),
     "normalize": lambda name, v: _normalize(name, v),
     # constructor arguments (stable-baselines3's documentation of PPO, SAC and TD3)
     "learning_rate": _real(0.0, lo_open=True),
@@ -203,9 +209,17 @@ def default_file(algo: str) -> Path:
 
 
 def algo_class(algo: str) -> Any:
-    """The stable-baselines3 class of an algorithm name."""
+    """The stable-baselines3 (or sb3-contrib) class of an algorithm name."""
     if algo not in ALGOS:
         raise ValueError(f"algo={algo!r} is not known: choose one of {', '.join(ALGOS)}")
+    if algo == "ppo_lstm":
+        try:
+            from sb3_contrib import RecurrentPPO
+        except ImportError:
+            raise ValueError(
+                "algo='ppo_lstm' needs sb3-contrib: pip install -c constraints.txt -e \".[agents]\""
+            ) from None
+        return RecurrentPPO
     import stable_baselines3 as sb3
 
     return {"ppo": sb3.PPO, "sac": sb3.SAC, "td3": sb3.TD3}[algo]
@@ -280,6 +294,10 @@ def validate(
         out["policy_kwargs"] = _policy_kwargs(where, out["policy_kwargs"] or {})
     if "env_kwargs" in out:
         _env_kwargs(where, out["env_kwargs"] or {}, env_id)
+    if out.get("policy", POLICIES[algo]) != POLICIES[algo]:
+        raise ValueError(
+            f"{where}: policy={out['policy']!r} is not allowed for {algo}: give {POLICIES[algo]}"
+        )
     if algo == "ppo" and out.get("normalize_advantage", True) and out.get("batch_size", 2) < 2:
         raise ValueError(
             f"{where}: batch_size={out['batch_size']!r} is out of range for ppo with "

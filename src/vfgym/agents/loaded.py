@@ -86,7 +86,7 @@ def load_model(model_path: str | Path) -> tuple[Any, dict[str, Any]]:
             return algo_class(algo).load(path, device="cpu"), cfg
         except (KeyError, ValueError, TypeError, RuntimeError):
             continue
-    raise ValueError(f"--model {path}: not a stable-baselines3 PPO, SAC or TD3 model")
+    raise ValueError(f"--model {path}: not a PPO, SAC, TD3 or RecurrentPPO model")
 
 
 def env_options(env_kwargs: dict[str, Any] | None) -> dict[str, Any]:
@@ -245,10 +245,32 @@ class Agent:
         numpy.ndarray
             The action.
         """
+        return self.step(obs)[0]
+
+    def step(
+        self, obs: np.ndarray, state: Any = None, episode_start: bool = True
+    ) -> tuple[np.ndarray, Any]:
+        """The deterministic action for an observation, and the policy's memory after it
+        (a recurrent policy's LSTM state; ``None`` for the others).
+
+        Parameters
+        ----------
+        obs : numpy.ndarray
+            An observation of the environment (normalised here as in training).
+        state : Any
+            The memory :meth:`step` returned for the episode's previous observation.
+        episode_start : bool
+            The first observation of an episode (the memory starts anew).
+
+        Returns
+        -------
+        tuple of (numpy.ndarray, Any)
+            The action and the memory to pass with the next observation.
+        """
         if self.normalizer is not None:
             obs = self.normalizer.normalize_obs(obs)
-        action, _ = self.model.predict(obs, deterministic=True)
-        return action
+        start = np.full(len(obs) if np.ndim(obs) > 1 else 1, episode_start)  # per env of a batch
+        return self.model.predict(obs, state=state, episode_start=start, deterministic=True)
 
     def env_kwargs(self, axis: str | Axis | None = None) -> dict[str, Any]:
         """The env arguments it was trained with (``axis`` replacing the trained one)."""
@@ -276,7 +298,7 @@ def load_agent(model_path: str | Path) -> Agent:
     Raises
     ------
     ValueError
-        If the file is missing or not a PPO, SAC or TD3 model, or the run trained with
+        If the file is missing or not a PPO, SAC, TD3 or RecurrentPPO model, or the run trained with
         normalisation and its statistics are missing.
     """
     model, cfg = load_model(model_path)
@@ -323,8 +345,11 @@ def rollout_info(
     if plant is not None:
         opts["plant"] = plant
     obs, _ = env.reset(options=opts)
+    state, start = None, True
     while True:
-        obs, _, terminated, truncated, info = env.step(agent.act(obs))
+        action, state = agent.step(obs, state, start)
+        obs, _, terminated, truncated, info = env.step(action)
+        start = False
         if terminated or truncated:
             return info
 

@@ -31,7 +31,7 @@ from vfgym.io.runs import read_yaml, write_text, write_yaml
 from vfgym.moves.distribution import random_scenario
 from vfgym.moves.scenarios import Scenario
 
-from .hyperparams import algo_class
+from .hyperparams import POLICIES, algo_class
 from .loaded import Agent, env_options, make_env, rollout_info, vecnormalize_path
 
 VALIDATION_SEED0 = 2**40
@@ -431,7 +431,7 @@ def train(
             model.load_replay_buffer(buf)
     else:
         model = cls(
-            params.get("policy", "MlpPolicy"),
+            params.get("policy", POLICIES[algo]),
             venv,
             policy_kwargs=pk or None,
             tensorboard_log=str(run / "tb"),
@@ -496,7 +496,7 @@ def start_at_base(model: Any) -> None:
 
     Parameters
     ----------
-    model : PPO, SAC or TD3
+    model : PPO, SAC, TD3 or RecurrentPPO
         A freshly made model.
     """
     import torch

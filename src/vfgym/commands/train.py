@@ -15,14 +15,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser(
         "train",
-        help="train a PPO, SAC or TD3 agent (agents extra)",
+        help="train a PPO, SAC, TD3 or recurrent PPO agent (agents extra)",
         description=__doc__ + " Hyperparameters come from the "
         "<algo>.yml file shipped with vfgym (one section per env; "
         "agents/hyperparams/<algo>.yml in the working folder instead, if there is one), "
         "overridable with --hyperparams key=value. Starting a run again continues it "
         "from its last checkpoint.",
     )
-    p.add_argument("--algo", required=True, help="ppo, sac or td3")
+    p.add_argument("--algo", required=True, help="ppo, sac, td3 or ppo_lstm (RecurrentPPO)")
     p.add_argument(
         "--env", default="vfgym/VFTune-v0", help="vfgym/VFTune-v0 (default) or vfgym/VFServo-v0"
     )
