@@ -129,7 +129,7 @@ class CheckedBase:
         True plants the check keeps the settings feasible on (an axis's design).
     """
 
-    def __init__(self, model: Any, measures: Any, size: int = 1024, plants: Any = ()) -> None:
+    def __init__(self, model: Any, measures: Any, size: int = 4096, plants: Any = ()) -> None:
         self.model, self.measures, self.size, self.plants = model, measures, size, plants
         self._seen: dict[tuple[Scenario, Any], Any] = {}
 
