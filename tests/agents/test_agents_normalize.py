@@ -57,6 +57,7 @@ def test_normalized_run_saves_its_statistics_and_acts_behind_them(servo_run):
     np.testing.assert_array_equal(a1, a2)
     held = yaml.safe_load((run / "heldout.yaml").read_text())
     assert held["moves"] == 2 and held["paper_cost"] > 0
+    assert held["base"] == "its residual base (model)"  # judged against its own start
     assert any("held-out (2 test moves)" in line for line in logs)
 
 

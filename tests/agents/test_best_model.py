@@ -37,13 +37,30 @@ def test_the_first_evaluation_is_the_best_and_the_margin_is_in_standard_errors()
     assert SIGNIFICANCE > 0
 
 
+def test_a_cheaper_model_feasible_on_fewer_pairs_never_replaces_the_best():
+    """A model cheaper on the validation pairs because it breaks a limit on some true
+    plants does not replace the best (the base, feasible on the axis's design)."""
+    ok = np.ones(len(BEST), bool)
+    broke = ok.copy()
+    broke[3] = False
+    assert beats(BEST * 0.9, BEST, feasible=ok, best_feasible=ok)
+    assert not beats(BEST * 0.9, BEST, feasible=broke, best_feasible=ok)
+    assert beats(BEST * 0.9, BEST, feasible=ok, best_feasible=broke)  # more feasible: fine
+    assert beats(BEST * 0.9, BEST)  # feasibility not known: the costs decide
+
+
 def test_a_continued_run_keeps_its_best_and_its_costs(tmp_path):
-    assert _best_so_far(tmp_path) == (float("inf"), None)
+    assert _best_so_far(tmp_path) == (float("inf"), None, None)
     (tmp_path / "evaluations.csv").write_text(
         "timesteps,mean_cost,median_cost,best\n0,3.0,3.0,1\n100,2.9,2.9,0\n200,2.95,2.9,1\n"
     )
-    mean, costs = _best_so_far(tmp_path)
-    assert mean == 2.95 and costs is None  # a run from before the costs were kept
+    mean, costs, ok = _best_so_far(tmp_path)
+    assert mean == 2.95 and costs is None and ok is None  # from before the costs were kept
     (tmp_path / "best_model_costs.json").write_text("[2.9, 3.0]")
-    mean, costs = _best_so_far(tmp_path)
-    assert mean == 2.95 and costs.tolist() == [2.9, 3.0]
+    mean, costs, ok = _best_so_far(tmp_path)
+    assert mean == 2.95 and costs.tolist() == [2.9, 3.0] and ok is None
+    (tmp_path / "best_model_costs.json").write_text(
+        '{"cost": [2.9, 3.0], "feasible": [true, false]}'
+    )
+    mean, costs, ok = _best_so_far(tmp_path)
+    assert costs.tolist() == [2.9, 3.0] and ok.tolist() == [True, False]

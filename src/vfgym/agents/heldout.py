@@ -1,6 +1,7 @@
 """The result a training run ends with: its agent on held-out moves (the test split, never
 drawn in training nor in the choice of ``best_model.zip``) against the paper's settings
-and the shipped per-move settings model, through the one scoring path; on an axis also
+and the base it started from (its residual base, else the shipped per-move settings
+model), through the one scoring path; on an axis also
 the verdict ``vfgym fit`` gives its settings model (:func:`axis_verdict`)."""
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .loaded import agent_policy
+from .loaded import agent_policy, env_options
 
 HELDOUT_COUNT = 16
 """Held-out moves a run is judged on when its hyperparameters set no ``n_eval_scenarios``."""
@@ -26,7 +27,8 @@ class HeldOutResult:
     moves : int
         Held-out moves scored.
     agent_cost, paper_cost, model_cost : float
-        Mean cost of the agent, of the paper's settings and of the shipped per-move model.
+        Mean cost of the agent, of the paper's settings and of its base (its residual base,
+        else the shipped per-move model).
     agent_feasible : int
         Moves on which the agent met every constraint.
     beats_paper, beats_model : int
@@ -40,6 +42,7 @@ class HeldOutResult:
     agent_feasible: int
     beats_paper: int
     beats_model: int
+    base: str = "shipped per-move model"
 
     def text(self) -> str:
         """One paragraph, as a training run prints it."""
@@ -48,13 +51,16 @@ class HeldOutResult:
             f"held-out ({n} test moves): agent mean cost {self.agent_cost:.4g} "
             f"(feasible {self.agent_feasible}/{n}); paper's settings {self.paper_cost:.4g} "
             f"(agent {self.agent_cost / self.paper_cost:.3f}x, lower on {self.beats_paper}/{n}); "
-            f"shipped per-move model {self.model_cost:.4g} "
+            f"{self.base} {self.model_cost:.4g} "
             f"(agent {self.agent_cost / self.model_cost:.3f}x, lower on {self.beats_model}/{n})"
         )
 
     def as_dict(self) -> dict[str, Any]:
         """The fields, as plain numbers (for ``heldout.yaml``)."""
-        return {k: (float(v) if isinstance(v, float) else int(v)) for k, v in vars(self).items()}
+        return {
+            k: v if isinstance(v, str) else float(v) if isinstance(v, float) else int(v)
+            for k, v in vars(self).items()
+        }
 
 
 def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutResult:
@@ -75,6 +81,7 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
         The mean costs and win counts.
     """
     from vfgym.moves.axis import PAPER_AXIS, load_axis
+    from vfgym.params import Settings
     from vfgym.permove import load_settings_model
     from vfgym.report import Candidate, compare
 
@@ -82,11 +89,20 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
     axis_file = (params.get("env_kwargs") or {}).get("axis")
     axis = load_axis(axis_file) if axis_file else PAPER_AXIS
     scenarios = axis.scenario_set("test")[:n]
-    shipped = load_settings_model()
-    cands = [
-        Candidate("agent", policy=agent_policy(model_path, axis_file)),
-        Candidate("model", policy=lambda sc: shipped.settings(sc, axis.plant, axis.measures)),
-    ]
+    kw = params.get("env_kwargs") or {}
+    if kw.get("residual"):  # the agent's own start: its residual base, as its env makes it
+        label = f"its residual base ({kw.get('residual_base', 'paper')})"
+        base = env_options(kw)["residual_base"]
+        if isinstance(base, Settings):
+            model = Candidate("model", base)
+        else:  # a per-move base: (move, the base plant) -> settings
+            model = Candidate("model", policy=lambda sc: base(sc, axis.plant))
+    else:
+        label, shipped = "shipped per-move model", load_settings_model()
+        model = Candidate(
+            "model", policy=lambda sc: shipped.settings(sc, axis.plant, axis.measures)
+        )
+    cands = [Candidate("agent", policy=agent_policy(model_path, axis_file)), model]
     rep = compare(cands, "paper", scenarios, resamples=1, axis=axis)
     agent, model, paper = (rep.column(c).cost for c in ("agent", "model", "paper"))
     feasible = np.all(rep.column("agent").constraints <= 0.0, axis=1)
@@ -98,6 +114,7 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
         agent_feasible=int(feasible.sum()),
         beats_paper=int(np.sum(agent < paper)),
         beats_model=int(np.sum(agent < model)),
+        base=label,
     )
 
 

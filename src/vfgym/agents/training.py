@@ -42,13 +42,21 @@ SIGNIFICANCE = 2.0
 than this many standard errors of the per-scenario differences (:func:`beats`)."""
 
 
-def beats(costs: np.ndarray, best: np.ndarray | None, z: float = SIGNIFICANCE) -> bool:
+def beats(
+    costs: np.ndarray,
+    best: np.ndarray | None,
+    z: float = SIGNIFICANCE,
+    feasible: np.ndarray | None = None,
+    best_feasible: np.ndarray | None = None,
+) -> bool:
     """Whether a model with validation ``costs`` replaces the best so far, whose costs on
     the same scenarios are ``best``: its mean cost is lower by more than ``z`` standard
     errors of the paired differences (the scenarios' spread), so that a model a hair
     better on these scenarios, and as likely worse on others, does not replace one that
     is known (a residual agent's start is its base setting; a noise-level pick of a later
-    model was worse on held-out moves more often than not).
+    model was worse on held-out moves more often than not); and it is feasible on at least
+    as many of them, so that a model cheaper by breaking a limit on some true plants never
+    replaces one that holds (the base, feasible on the axis's design).
 
     Parameters
     ----------
@@ -58,6 +66,8 @@ def beats(costs: np.ndarray, best: np.ndarray | None, z: float = SIGNIFICANCE) -
         The best model's, on the same scenarios (None: no best yet, the candidate wins).
     z : float
         Standard errors required.
+    feasible, best_feasible : numpy.ndarray or None
+        Each one's feasibility on the same scenarios (None: not known, not compared).
 
     Returns
     -------
@@ -67,6 +77,9 @@ def beats(costs: np.ndarray, best: np.ndarray | None, z: float = SIGNIFICANCE) -
     costs = np.asarray(costs, dtype=np.float64)
     if best is None:
         return True
+    known = feasible is not None and best_feasible is not None
+    if known and int(np.sum(feasible)) < int(np.sum(best_feasible)):  # type: ignore[arg-type]
+        return False
     diff = np.asarray(best, dtype=np.float64) - costs
     gain = float(diff.mean())
     if len(diff) < 2:
@@ -146,14 +159,12 @@ def evaluate_policy_costs(
     plants: list[Any] | None = None,
 ) -> np.ndarray:
     """The scoring path's cost of the policy on each scenario (each on its true plant of
-    ``plants``, if given)."""
+    ``plants``, if given), and whether the move was feasible: a (2, scenarios) array."""
     on = plants or [None] * len(scenarios)
-    return np.array(
-        [
-            float(rollout_cost(model, env, sc, normalizer, p)["cost"])
-            for sc, p in zip(scenarios, on, strict=True)
-        ]
-    )
+    infos = [
+        rollout_cost(model, env, sc, normalizer, p) for sc, p in zip(scenarios, on, strict=True)
+    ]
+    return np.array([[float(i["cost"]) for i in infos], [float(i["feasible"]) for i in infos]])
 
 
 def _callbacks(
@@ -176,13 +187,13 @@ def _callbacks(
             super().__init__()
             self.freq, self.scenarios, self.plants = freq, scenarios, plants
             self.env = make_env(env_id, env_kwargs)
-            self.best, self.best_costs = _best_so_far(run)
+            self.best, self.best_costs, self.best_ok = _best_so_far(run)
             self.next_at = 0
 
         def _on_step(self) -> bool:
             if self.num_timesteps >= self.next_at:
                 self.next_at = self.num_timesteps + self.freq
-                costs = evaluate_policy_costs(
+                costs, feasible = evaluate_policy_costs(
                     self.model, self.env, self.scenarios, normalizer, self.plants
                 )
                 mean = float(np.mean(costs))
@@ -193,11 +204,12 @@ def _callbacks(
                 if self.best_costs is None and np.isfinite(self.best):
                     new = mean < self.best  # (a run continued from before the costs were kept)
                 else:
-                    new = beats(costs, self.best_costs)
+                    new = beats(costs, self.best_costs, SIGNIFICANCE, feasible, self.best_ok)
                 if new:
-                    self.best, self.best_costs = mean, costs
+                    self.best, self.best_costs, self.best_ok = mean, costs, feasible
                     self.model.save(run / "best_model.zip")
-                    write_text(run / BEST_COSTS, json.dumps([float(c) for c in costs]))
+                    doc = {"cost": costs.tolist(), "feasible": [bool(f) for f in feasible]}
+                    write_text(run / BEST_COSTS, json.dumps(doc))
                     if normalizer is not None:
                         normalizer.save(str(vecnormalize_path(run / "best_model.zip")))
                 _append_eval(run, self.num_timesteps, mean, float(np.median(costs)), new)
@@ -267,19 +279,24 @@ BEST_COSTS = "best_model_costs.json"
 """The best model's cost on each validation scenario, beside ``best_model.zip``."""
 
 
-def _best_so_far(run: Path) -> tuple[float, np.ndarray | None]:
-    """The best model's mean validation cost and its costs by scenario, of a run being
-    continued (``inf`` and None: none yet; the costs None for a run from before they were
-    kept, whose best is then judged by its mean)."""
+def _best_so_far(run: Path) -> tuple[float, np.ndarray | None, np.ndarray | None]:
+    """The best model's mean validation cost, its costs and feasibility by scenario, of a
+    run being continued (``inf`` and None: none yet; the costs None for a run from before
+    they were kept, whose best is then judged by its mean; the feasibility None for one
+    from before it was)."""
     path, costs_path = run / "evaluations.csv", run / BEST_COSTS
     if not path.is_file():
-        return float("inf"), None
+        return float("inf"), None, None
     with path.open() as fh:
         rows = [r for r in csv.DictReader(fh) if r.get("best") == "1"]
     if not rows:
-        return float("inf"), None
-    costs = json.loads(costs_path.read_text()) if costs_path.is_file() else None
-    return float(rows[-1]["mean_cost"]), None if costs is None else np.array(costs, float)
+        return float("inf"), None, None
+    doc = json.loads(costs_path.read_text()) if costs_path.is_file() else None
+    if isinstance(doc, list):  # costs only, as first kept
+        doc = {"cost": doc}
+    costs = None if doc is None else np.array(doc["cost"], float)
+    ok = None if doc is None or "feasible" not in doc else np.array(doc["feasible"], bool)
+    return float(rows[-1]["mean_cost"]), costs, ok
 
 
 def _append_eval(run: Path, steps: int, mean: float, median: float, best: bool) -> None:
