@@ -16,10 +16,14 @@ Four measurements, each selectable:
   call against one plant (the ratio should be at most P);
 - ``nominal``: the ±5 % inertia line of the main job's setting on the paper axis;
 - ``grid``: the per-move search the optima come from, against ``vfgym grid`` on three
-  test moves (the modelled plant).
+  test moves (the modelled plant);
+- ``pick``: a settings model's robust pick (:func:`vfgym.scoring.best_robust`, the design
+  checked lazily) against ranking every candidate's :func:`vfgym.scoring.score_robust`
+  score, on 24 train-distribution moves: the time of each and whether the picks agree
+  (the model: ``--model FILE``, default the ``fit`` part's).
 
-    python benchmarks/bench_robust.py [--parts fit,sweep,evaluate,nominal,grid]
-        [--axis FILE] [--plants 16] [--plant-seed 20261204] [--runs-dir DIR]
+    python benchmarks/bench_robust.py [--parts fit,sweep,evaluate,nominal,grid,pick]
+        [--axis FILE] [--plants 16] [--plant-seed 20261204] [--runs-dir DIR] [--model FILE]
 """
 
 from __future__ import annotations
@@ -182,6 +186,35 @@ def part_grid(axis_file: str, axis, args) -> None:
               f"{g.best.cost:.4f} ({gok}): {o.cost / g.best.cost:.4f}x ({took:.0f} s)")  # fmt: skip
 
 
+def part_pick(axis, args) -> None:
+    from vfgym.moves.features import scenario_features
+    from vfgym.permove.targets import target_settings
+
+    path = args.model or Path(args.runs_dir) / "fit" / "bench" / "settings_model.json"
+    model = load_settings_model(path)
+    design = axis.design_plants()
+    moves = [axis.moves.train.pick(1000 + i, "train", axis.plant) for i in range(24)]
+
+    def rank_all(sc):  # every candidate scored on the design, then ranked
+        loaded = sc.plant(axis.plant)
+        order = model.ranked(scenario_features(sc, axis.plant, loaded))
+        cands = [target_settings(model.library[j], loaded, model.accel_law)
+                 for j in order[: model.check]]  # fmt: skip
+        r = score_robust(cands, [Move.of(sc, axis.plant)] * len(cands), design,
+                         measures=axis.measures)  # fmt: skip
+        return cands[min(range(len(cands)), key=lambda i: (not r[i].feasible, r[i].cost, i))]
+
+    rank_all(moves[0]), model.settings(moves[0], axis.plant, axis.measures, design)  # compiled
+    for rep in range(2):
+        t0 = time.perf_counter()
+        a = [rank_all(sc) for sc in moves]
+        t1 = time.perf_counter()
+        b = [model.settings(sc, axis.plant, axis.measures, design) for sc in moves]
+        t2 = time.perf_counter()
+        print(f"pick, repeat {rep + 1}: rank every candidate {t1 - t0:.2f} s, lazy check "
+              f"{t2 - t1:.2f} s ({(t1 - t0) / (t2 - t1):.1f}x), same picks: {a == b}")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--parts", default="fit,sweep,evaluate,nominal,grid")
@@ -189,6 +222,7 @@ def main() -> None:
     ap.add_argument("--plants", type=int, default=VERDICT_PLANTS)
     ap.add_argument("--plant-seed", type=int, default=VERDICT_PLANT_SEED)
     ap.add_argument("--runs-dir", default=tempfile.mkdtemp(prefix="bench-robust-"))
+    ap.add_argument("--model", default=None, help="settings model of the pick part")
     args = ap.parse_args()
     axis_file = str(ROOT / args.axis)
     axis = load_axis(axis_file)
@@ -205,6 +239,8 @@ def main() -> None:
         part_fit(axis_file, axis, args)
     if "grid" in parts:
         part_grid(axis_file, axis, args)
+    if "pick" in parts:
+        part_pick(axis, args)
 
 
 if __name__ == "__main__":
