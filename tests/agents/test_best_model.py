@@ -64,3 +64,20 @@ def test_a_continued_run_keeps_its_best_and_its_costs(tmp_path):
     )
     mean, costs, ok = _best_so_far(tmp_path)
     assert costs.tolist() == [2.9, 3.0] and ok.tolist() == [True, False]
+
+
+def test_a_run_folder_is_continued_only_on_the_same_problem(tmp_path):
+    """A run folder holding a run with other env arguments (another axis, base or
+    interval) is refused in one line naming the keys, never continued as this one."""
+    import yaml
+
+    from vfgym.agents.training import check_same_run
+
+    kw = {"axis": "experiments/axes/loads-uncertain.yaml", "residual": True}
+    doc = {"algo": "ppo", "env": "vfgym/VFServo-v0", "seed": 0, "hyperparams": {"env_kwargs": kw}}
+    (tmp_path / "config.yaml").write_text(yaml.safe_dump(doc))
+    check_same_run(tmp_path, "ppo", "vfgym/VFServo-v0", 0, dict(kw))  # the same: continued
+    with pytest.raises(ValueError, match=r"other env_kwargs \(axis: axis='experiments/axes/"):
+        check_same_run(tmp_path, "ppo", "vfgym/VFServo-v0", 0, kw | {"axis": "b.yaml"})
+    with pytest.raises(ValueError, match="seed=0, not 1"):
+        check_same_run(tmp_path, "ppo", "vfgym/VFServo-v0", 1, kw)

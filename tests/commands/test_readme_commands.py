@@ -527,6 +527,38 @@ README_RUNS: dict[str, list[Run]] = {
             agents=True,
         ),
     ],
+    # docs/guide/train.md: an adaptive agent on an uncertain axis, its base fitted first
+    "vfgym fit --axis experiments/axes/loads-uncertain.yaml": [
+        Run(
+            "fit-lu",
+            ["fit", "--axis", "experiments/axes/loads-uncertain.yaml", *FIT_TRIM],
+            writes=("runs/fit/loads-uncertain/settings_model.json",),
+            trim="fit",
+        ),
+    ],
+    "vfgym train --algo ppo --env vfgym/VFServo-v0 --axis experiments/axes/loads-uncertain.yaml "
+    "--name adaptive": [
+        Run(
+            "servo-lu",
+            train_trim(
+                [
+                    "train",
+                    "--algo",
+                    "ppo",
+                    "--env",
+                    "vfgym/VFServo-v0",
+                    "--axis",
+                    "experiments/axes/loads-uncertain.yaml",
+                    "--name",
+                    "adaptive",
+                ]
+            ),
+            needs=("fit-lu",),
+            writes=("runs/train/adaptive/best_model.zip",),
+            trim="train",
+            agents=True,
+        ),
+    ],
     # run as the shell line it is (the variable must reach libgomp at start-up)
     "GOMP_SPINCOUNT=300000 vfgym train --algo ppo --env vfgym/VFServo-v0": [
         Run(

@@ -327,9 +327,12 @@ def _save_checkpoint(model: Any, run: Path, normalizer: Any) -> None:
         model.save_replay_buffer(run / "checkpoints" / f"model_replay_buffer_{steps}_steps.pkl")
 
 
-def check_same_run(run: Path, algo: str, env_id: str, seed: int) -> None:
-    """A run folder that already holds a run must hold one of the same algorithm, env and
-    seed (it is continued); otherwise ``ValueError``."""
+def check_same_run(
+    run: Path, algo: str, env_id: str, seed: int, env_kwargs: dict[str, Any] | None = None
+) -> None:
+    """A run folder that already holds a run must hold one of the same algorithm, env,
+    seed and env arguments (the problem: axis, base, intervals), which is then continued;
+    otherwise ``ValueError`` (a run on another problem is never continued as this one)."""
     old = Path(run) / "config.yaml"
     if not old.is_file():
         return
@@ -341,6 +344,15 @@ def check_same_run(run: Path, algo: str, env_id: str, seed: int) -> None:
                 f"{run}: holds a run with {key}={prev.get(key)!r}, not {value!r}; "
                 "choose another --name"
             )
+    old_kw = (prev.get("hyperparams") or {}).get("env_kwargs") or {}
+    if env_kwargs is not None and "hyperparams" in prev and old_kw != env_kwargs:
+        keys = sorted(
+            k for k in set(old_kw) | set(env_kwargs) if old_kw.get(k) != env_kwargs.get(k)
+        )
+        raise ValueError(
+            f"{run}: holds a run with other env_kwargs ({', '.join(keys)}: "
+            f"{', '.join(f'{k}={old_kw.get(k)!r}' for k in keys)}); choose another --name"
+        )
 
 
 def use_threads(n: int) -> None:
@@ -399,7 +411,7 @@ def train(
         "threads": torch.get_num_threads(),
         "hyperparams": params,
     }
-    check_same_run(run, algo, env_id, seed)
+    check_same_run(run, algo, env_id, seed, params.get("env_kwargs") or {})
     write_yaml(run / "config.yaml", config)
 
     n_envs = int(params.get("n_envs", 1))

@@ -84,7 +84,8 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.agents.training import check_same_run, train
     from vfgym.io.runs import new_run_dir, record_command
 
-    check_same_run(Path(args.runs_dir) / "train" / name, args.algo, args.env, args.seed)
+    check_same_run(Path(args.runs_dir) / "train" / name, args.algo, args.env, args.seed,
+                   params.get("env_kwargs") or {})  # fmt: skip
     _check_env_kwargs(args.env, params.get("env_kwargs") or {})
     run_dir = new_run_dir(args.runs_dir, "train", name)
     record_command(run_dir)
