@@ -18,7 +18,7 @@ PLANTS = (PlantVariant(inertia=1.1), PlantVariant(inertia=0.9, coulomb_offset_nm
 MOVES = ["paper-step", "short-move", "test-3"]
 
 
-class Hold:
+class Hold(Scheduler):
     """A scheduler that holds one setting through the move: its scores must be the
     setting's own, on the modelled plant and on each true plant."""
 
@@ -66,7 +66,7 @@ def test_traces_are_kept_for_settings_not_for_a_scheduler():
     assert ev.traces[0][0] is not None and ev.traces[1][0] is None
 
 
-class Broken:
+class Broken(Scheduler):
     def run_move(self, scenario, plant):
         return {"cost": 1.0}
 

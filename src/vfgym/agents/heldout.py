@@ -94,15 +94,15 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
         label = f"its residual base ({kw.get('residual_base', 'paper')})"
         base = env_options(kw)["residual_base"]
         if isinstance(base, Settings):
-            model = Candidate("model", base)
+            start = Candidate("model", base)
         else:  # a per-move base: (move, the base plant) -> settings
-            model = Candidate("model", policy=lambda sc: base(sc, axis.plant))
+            start = Candidate("model", policy=lambda sc: base(sc, axis.plant))
     else:
         label, shipped = "shipped per-move model", load_settings_model()
-        model = Candidate(
+        start = Candidate(
             "model", policy=lambda sc: shipped.settings(sc, axis.plant, axis.measures)
         )
-    cands = [Candidate("agent", policy=agent_policy(model_path, axis_file)), model]
+    cands = [Candidate("agent", policy=agent_policy(model_path, axis_file)), start]
     rep = compare(cands, "paper", scenarios, resamples=1, axis=axis)
     agent, model, paper = (rep.column(c).cost for c in ("agent", "model", "paper"))
     feasible = np.all(rep.column("agent").constraints <= 0.0, axis=1)

@@ -30,6 +30,7 @@ from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.plant.uncertainty import PlantVariant
+from vfgym.scoring import Scheduler
 
 VECNORMALIZE_FILE = "vecnormalize.pkl"
 """The normalisation statistics saved beside ``best_model.zip`` (rl-baselines3-zoo's name)."""
@@ -368,7 +369,7 @@ def settings_policy(agent: Agent, axis: str | Axis | None = None) -> Callable[[A
 
 
 @dataclass(frozen=True)
-class AgentScheduler:
+class AgentScheduler(Scheduler):
     """A VFServo-v0 agent as a :class:`vfgym.scoring.Scheduler`: each move is one episode
     of VFServo-v0 with the agent's env arguments, on the true plant asked for, the settings
     changing every control interval; :func:`vfgym.evaluate` scores the measures it returns
@@ -460,7 +461,7 @@ def policy_settings(
     return settings_policy(agent, axis)
 
 
-def agent_policy(model_path: str | Path, axis: str | None = None) -> Callable[[Any], Any]:
+def agent_policy(model_path: str | Path, axis: str | None = None) -> Any:
     """Any trained agent as a policy :func:`vfgym.report.compare` scores: a VFTune-v0
     agent's settings per move (:func:`policy_settings`), or a VFServo-v0 agent that
     schedules each move interval by interval (a :class:`vfgym.scoring.Scheduler`)."""

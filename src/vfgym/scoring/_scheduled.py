@@ -5,8 +5,9 @@ per-move tuners."""
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Sequence
-from typing import Any, Protocol, runtime_checkable
+from typing import Any
 
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Measures
@@ -15,15 +16,16 @@ from vfgym.plant.uncertainty import PlantVariant
 from vfgym.scoring._cost import Bounds, CostWeights, Score, score
 
 
-@runtime_checkable
-class Scheduler(Protocol):
-    """A controller that schedules its settings during the move and runs it itself.
+class Scheduler(ABC):
+    """A controller that schedules its settings during the move and runs it itself: a
+    subclass implements :meth:`run_move`.
 
     :func:`vfgym.evaluate` calls :meth:`run_move` once per (move, plant) pair and scores
     the measures it returns with :func:`vfgym.scoring.score` on the move's true plant, so a
     scheduler's cost is computed as every other controller's.
     """
 
+    @abstractmethod
     def run_move(self, scenario: Scenario, plant: PlantVariant) -> dict[str, Any]:
         """Run one move on a true plant and return its measures.
 
@@ -41,7 +43,6 @@ class Scheduler(Protocol):
             At least the measures :mod:`vfgym.plant.measures` names, as
             :func:`vfgym.plant.measures.from_acc` gives them on the true plant.
         """
-        ...
 
 
 def score_scheduled(
