@@ -3,11 +3,13 @@ own process, on one machine or on many sharing one RDB storage.
 
 Optuna does the rest: the heartbeat of a running trial, failing the trials of dead
 workers and enqueueing them again with their settings (RDB storages, :mod:`._storage`),
-the timeout, the trials' bookkeeping. What is kept here, each for what Optuna does not do:
-the trial budget of the whole study (``MaxTrialsCallback`` counts after a trial, so
-several workers would overshoot it), the dead workers of a journal (its storage has no
-heartbeat) and of a trial killed before its first heartbeat (Optuna never takes it as
-stale), and a Ctrl-C that only lands inside a simulation (:class:`DeferredInterrupt`).
+the timeout, the trials' bookkeeping. Kept here, each for what Optuna does not do: the
+trial budget of the whole study (``MaxTrialsCallback`` counts after a trial, so several
+workers would overshoot it), the dead workers of a journal (no heartbeat) and a trial
+killed before its first heartbeat (Optuna never takes it as stale), and a Ctrl-C that
+lands only inside a simulation (:class:`DeferredInterrupt`). ``optimize`` gets no
+callback: Optuna reads each finished trial back for its callbacks, so what follows a
+trial is done at the end of the objective and at the start of the next trial.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from vfgym.moves.axis import axis_kwargs
+from vfgym.moves.axis import AxisNote, axis_kwargs
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
@@ -42,19 +44,16 @@ if TYPE_CHECKING:
 
 RETRY = "failed_trial"
 """System attribute of a retried trial (Optuna's ``RetryHeartbeatStaleTrialCallback``)."""
-
 WORKER_ATTR = "worker"
 """User attribute of a trial: ``host/pid/start-time`` of the process that ran it."""
 
 
 class DeferredInterrupt:
     """SIGINT raises KeyboardInterrupt only inside :meth:`allowed` blocks (a trial's
-    simulation, a wait); anywhere else it is held until the next such block, a trial's
-    end or the end of the ``with``: kept because Optuna's ``optimize`` lets a Ctrl-C land
-    anywhere, inside a storage write too.
-
-    The decision is taken by the Python-level handler, which runs in the main thread
-    between bytecodes; off the main thread the process's handler is left as it is.
+    simulation, a wait); anywhere else it is held until the next such block or
+    :meth:`check`, or the end of the ``with``: Optuna's ``optimize`` lets a Ctrl-C land
+    anywhere, inside a storage write too. Off the main thread the process's handler is
+    left as it is.
 
     Raises
     ------
@@ -78,9 +77,8 @@ class DeferredInterrupt:
         if self._installed:
             signal.signal(signal.SIGINT, self._old)
             self._installed = False
-        if self.pending and kind is None:
-            self.pending = False
-            raise KeyboardInterrupt
+        if kind is None:
+            self.check()
 
     def _handle(self, signum: int, frame: Any) -> None:
         if self.open:
@@ -152,9 +150,8 @@ def run_worker(
     A worker starts a trial only while the completed and running trials number fewer than
     asked, and waits while the others run the last ones, so a study ends with exactly the
     trials asked for however many workers share it (two workers that start one at the same
-    moment: the later-numbered trial waits, and is pruned if the budget fills). SIGINT is
-    held back (:class:`DeferredInterrupt`) except inside a simulation and while waiting;
-    an interrupted trial is failed (by Optuna) and enqueued again with its settings.
+    moment: the later-numbered trial waits, and is pruned if the budget fills). An
+    interrupted trial is failed (by Optuna) and enqueued again with its settings.
 
     Parameters
     ----------
@@ -184,29 +181,26 @@ def run_worker(
     rep = WorkerReport()
     scenarios = cfg.scenario_list()
     seed = None if cfg.seed is None else cfg.seed + index
+    axis = cfg.axis_or_paper()
+    me = worker_id()
     with DeferredInterrupt() as interrupts:
         storage = open_storage(spec, cfg.heartbeat, cfg.grace)
         sampler = make_sampler(cfg, seed, scenarios, storage)
         study = optuna.load_study(study_name=study_name, storage=storage, sampler=sampler)
-        axis = cfg.load_axis()
-        on_axis = axis_kwargs(axis)
         objective = Objective(
-            scenarios,
-            cfg.laws,
-            str(cfg.objective),
-            **on_axis,  # type: ignore[arg-type]
-            aggregate=cfg.aggregate,
-            cvar_alpha=cfg.cvar_alpha,
-            plants=() if axis is None else axis.design_plants(),
-        )
+            scenarios, cfg.laws, str(cfg.objective), plant=axis.plant, measures=axis.measures,
+            aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha, plants=axis.design_plants(),
+        )  # fmt: skip
         objective.guard = interrupts.allowed
-        # First call compiles/loads the kernel before any trial is started.
-        evaluate(PAPER_SETTINGS, scenarios[:1], **on_axis)
+        evaluate(PAPER_SETTINGS, scenarios[:1], **axis_kwargs(axis))  # the kernel compiled first
         gate = _Budget(study, cfg, spec, interrupts)
-        current: list[int] = []
+        current: list[int] = []  # the trial in a simulation here
+        ran: list[int] = []
 
         def run_trial(trial: Trial) -> float | list[float]:
-            trial.set_user_attr(WORKER_ATTR, worker_id())
+            if ran and on_trial is not None:
+                on_trial(study)  # (the last trial has completed)
+            trial.set_user_attr(WORKER_ATTR, me)
             go = gate.wait(trial.number)
             if go is None:
                 raise optuna.TrialPruned("a retried trial takes the last place")
@@ -214,37 +208,42 @@ def run_worker(
                 study.stop()
                 raise optuna.TrialPruned("the study already holds the trials asked for")
             current[:] = [trial.number]
-            return objective(trial)
-
-        def after(st: Study, trial: FrozenTrial) -> None:
+            values = objective(trial)
             current.clear()
-            if trial.state == optuna.trial.TrialState.COMPLETE:
-                rep.trials.append(trial.number)
-            if on_trial is not None:
-                on_trial(st)
-            if not gate.wait(made=trial.number + 1):
-                st.stop()
-            interrupts.check()
+            ran.append(trial.number)
+            if interrupts.pending or gate.full(trial.number):
+                study.stop()  # optimize returns once the trial is told
+            return values
 
         try:
             while gate.wait():
                 try:
-                    study.optimize(run_trial, timeout=cfg.timeout, callbacks=[after])
+                    study.optimize(run_trial, timeout=cfg.timeout)
                     break
                 except optuna.exceptions.UpdateFinishedTrialError:
                     # Another worker took this one's trial as dead (its heartbeat late past
                     # the grace period) and retried it: go on with the next.
                     current.clear()
+            interrupts.check()
             rep.stopped = "done" if gate.done() else "timeout"
         except KeyboardInterrupt:
             rep.stopped = "interrupted"
-            _retry_interrupted(study, current, spec.path)
+            for n in current:
+                _fail_and_retry(
+                    study, copy.deepcopy(study.get_trials(deepcopy=False)[n]), spec.path
+                )
             raise
         finally:
             rep.simulated = objective.simulated
             cb = getattr(storage, "get_heartbeat_stale_trial_callback", lambda: None)()
             noted = cb.failed if isinstance(cb, RetryStale) else []
             rep.recovered = sorted(set(gate.recovered) | set(noted))
+            if ran:
+                trials = study.get_trials(deepcopy=False)
+                complete = optuna.trial.TrialState.COMPLETE
+                rep.trials = [n for n in ran if trials[n].state == complete]
+                if on_trial is not None:
+                    on_trial(study)
     return rep
 
 
@@ -252,8 +251,8 @@ class _Budget:
     """The study's trial budget across workers: :meth:`wait` says whether a trial may run
     (waiting, interrupts allowed, while the running ones could fill the budget), looking
     for dead workers' trials meanwhile (Optuna's ``fail_stale_trials`` on RDB storages,
-    which ``optimize`` only runs when a trial starts; on a journal, by process; and a
-    trial whose worker died before writing its name, which has no heartbeat either)."""
+    which ``optimize`` runs only when a trial starts; on a journal, by process; and a
+    trial whose worker died before its first heartbeat, which has no worker's name)."""
 
     def __init__(self, study: Study, cfg: SweepConfig, spec: StorageSpec, interrupts: Any) -> None:
         self.study, self.budget, self.every = study, trial_budget(cfg), cfg.heartbeat
@@ -263,8 +262,17 @@ class _Budget:
         self.recovered: list[int] = []
         self.orphan_s = max(30.0, 6.0 * self.every)
         self._due = 0.0
-        # trials made, and those completed, running or waiting, at the last read
+        # The trials made, and those completed, running or waiting, at the last read: no
+        # read is needed while they leave room for every trial made since.
         self._last = (0, self.budget)
+
+    def _trials(self) -> list[FrozenTrial]:
+        import optuna
+
+        trials = self.study.get_trials(deepcopy=False)
+        fail, pruned = optuna.trial.TrialState.FAIL, optuna.trial.TrialState.PRUNED
+        self._last = (len(trials), sum(t.state not in (fail, pruned) for t in trials))
+        return trials
 
     def done(self) -> bool:
         """Whether the study holds the trials asked for."""
@@ -273,29 +281,33 @@ class _Budget:
         complete = (optuna.trial.TrialState.COMPLETE,)
         return len(self.study.get_trials(deepcopy=False, states=complete)) >= self.budget
 
-    def wait(self, number: int | None = None, made: int = 0, poll_s: float = 0.2) -> bool | None:
+    def full(self, number: int) -> bool:
+        """Whether the study holds the trials asked for once trial ``number`` (scored here,
+        not yet told) completes."""
+        import optuna
+
+        made_then, busy = self._last
+        if busy + (number + 1 - made_then) + (self.workers - 1) < self.budget:
+            return False
+        complete = optuna.trial.TrialState.COMPLETE
+        return sum(t.state == complete for t in self._trials()) + 1 >= self.budget
+
+    def wait(self, number: int | None = None, poll_s: float = 0.2) -> bool | None:
         """Wait until a trial may run: False once the study holds its trials, else True
         when the completed and running trials (those numbered below ``number``: the
         trial's own is running) are fewer than asked; None when trial ``number`` must give
-        its place to a dead worker's retried trial (waiting, it runs next). No read is
-        needed while the last one left room for every trial made since (``number``, else
-        ``made``, trials known to exist), each of which may be running, as may every
-        trial then waiting."""
+        its place to a dead worker's retried trial (waiting, it runs next)."""
         import optuna
 
         state = optuna.trial.TrialState
         self._recover()
         made_then, busy = self._last
-        # Between trials, room also for a trial each other worker may have made since.
-        known = number if number is not None else made + self.workers
+        known = number if number is not None else made_then + self.workers
         if busy + (known - made_then) < self.budget:
             return True
         while True:
-            trials = self.study.get_trials(deepcopy=False)
+            trials = self._trials()
             n = sum(t.state == state.COMPLETE for t in trials)
-            waiting = sum(t.state == state.WAITING for t in trials)
-            running = sum(t.state == state.RUNNING for t in trials)
-            self._last = (len(trials), n + running + waiting)
             if n >= self.budget:
                 return False
             lower = trials if number is None else trials[:number]
@@ -335,25 +347,18 @@ class _Budget:
                 self.recovered.append(t.number)
 
 
-def _retry_interrupted(study: Study, current: list[int], lock: str | None) -> None:
-    """Enqueue again the trial an interrupt failed (its settings kept)."""
-    import optuna
-
-    for number in current:
-        t = copy.deepcopy(study.get_trials(deepcopy=False)[number])
-        if t.state == optuna.trial.TrialState.FAIL:
-            retry_once(study, t, lock)
-        elif t.state == optuna.trial.TrialState.RUNNING:
-            _fail_and_retry(study, t, lock)
-
-
 def _fail_and_retry(study: Study, trial: FrozenTrial, lock: str | None) -> bool:
-    """Mark a running trial failed and enqueue its settings again; False if it had ended."""
+    """Mark a running trial failed (an interrupted one is already) and enqueue its
+    settings again once; False if it had completed or was retried already."""
     import optuna
 
-    try:
-        study.tell(trial.number, state=optuna.trial.TrialState.FAIL)
-    except (RuntimeError, ValueError, optuna.exceptions.UpdateFinishedTrialError):
+    state = optuna.trial.TrialState
+    if trial.state == state.RUNNING:
+        try:
+            study.tell(trial.number, state=state.FAIL)
+        except (RuntimeError, ValueError, optuna.exceptions.UpdateFinishedTrialError):
+            return False
+    elif trial.state != state.FAIL:
         return False
     return retry_once(study, trial, lock)
 
@@ -401,9 +406,8 @@ def _worker_alive(worker: str) -> bool | None:
 def spawn_workers(
     cfg: SweepConfig, spec: StorageSpec, study: str, n: int
 ) -> list[subprocess.Popen[str]]:
-    """Start worker processes on the study (``python -m vfgym.tuning``).
-
-    Their job goes through stdin, so the storage password never shows on a command line.
+    """Start worker processes on the study (``python -m vfgym.tuning``), their job on
+    stdin, so the storage password never shows on a command line.
 
     Parameters
     ----------
@@ -435,3 +439,18 @@ def spawn_workers(
         p.stdin.close()
         procs.append(p)
     return procs
+
+
+def worker_main() -> int:
+    """A worker process (``python -m vfgym.tuning``): its job as JSON on stdin, its
+    :class:`WorkerReport` as JSON on stdout; 130 if interrupted."""
+    warnings.simplefilter("ignore", AxisNote)  # the parent process says it once
+    job = json.loads(sys.stdin.read())
+    cfg = SweepConfig(**job["config"])
+    try:
+        rep = run_worker(cfg, StorageSpec(**job["storage"]), job["study"], job["index"])
+    except KeyboardInterrupt:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        return 130
+    print(json.dumps(asdict(rep)), flush=True)
+    return 0
