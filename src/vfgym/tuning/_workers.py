@@ -35,7 +35,7 @@ from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
 from vfgym.tuning._objective import Objective
-from vfgym.tuning._storage import RetryStale, StorageSpec, open_storage, retry_once
+from vfgym.tuning._storage import MAX_RETRY, RetryStale, StorageSpec, open_storage, retry_once
 from vfgym.tuning._study import make_sampler, trial_budget
 
 if TYPE_CHECKING:
@@ -196,6 +196,7 @@ def run_worker(
         gate = _Budget(study, cfg, spec, interrupts)
         current: list[int] = []  # the trial in a simulation here
         ran: list[int] = []
+        paused: list[int] = []  # optimize stopped here, to wait outside it (or an interrupt)
 
         def run_trial(trial: Trial) -> float | list[float]:
             if ran and on_trial is not None:
@@ -212,19 +213,27 @@ def run_worker(
             current.clear()
             ran.append(trial.number)
             if interrupts.pending or gate.full(trial.number):
+                paused.append(trial.number)
                 study.stop()  # optimize returns once the trial is told
             return values
 
+        deadline = None if cfg.timeout is None else time.monotonic() + cfg.timeout
         try:
             while gate.wait():
-                try:
-                    study.optimize(run_trial, timeout=cfg.timeout)
+                left = None if deadline is None else deadline - time.monotonic()
+                if left is not None and left <= 0:
                     break
+                paused.clear()
+                try:
+                    study.optimize(run_trial, timeout=left)
                 except optuna.exceptions.UpdateFinishedTrialError:
                     # Another worker took this one's trial as dead (its heartbeat late past
                     # the grace period) and retried it: go on with the next.
                     current.clear()
-            interrupts.check()
+                    continue
+                interrupts.check()
+                if not paused:  # the timeout
+                    break
             rep.stopped = "done" if gate.done() else "timeout"
         except KeyboardInterrupt:
             rep.stopped = "interrupted"
@@ -261,6 +270,7 @@ class _Budget:
         self.interrupts = interrupts
         self.recovered: list[int] = []
         self.orphan_s = max(30.0, 6.0 * self.every)
+        self.retry_s = max(5.0, 2.0 * self.every)  # a failed trial's retry is awaited this long
         self._due = 0.0
         # The trials made, and those completed, running or waiting, at the last read: no
         # read is needed while they leave room for every trial made since.
@@ -282,15 +292,17 @@ class _Budget:
         return len(self.study.get_trials(deepcopy=False, states=complete)) >= self.budget
 
     def full(self, number: int) -> bool:
-        """Whether the study holds the trials asked for once trial ``number`` (scored here,
-        not yet told) completes."""
+        """Whether, once trial ``number`` (scored here, not yet told) completes, the
+        completed and running trials reach the budget: another trial of this worker could
+        only wait, so it waits before asking for one (:meth:`wait`, outside ``optimize``)."""
         import optuna
 
         made_then, busy = self._last
         if busy + (number + 1 - made_then) + (self.workers - 1) < self.budget:
             return False
-        complete = optuna.trial.TrialState.COMPLETE
-        return sum(t.state == complete for t in self._trials()) + 1 >= self.budget
+        state = optuna.trial.TrialState
+        taken = [t.state == state.COMPLETE or t.state == state.RUNNING for t in self._trials()]
+        return sum(taken) >= self.budget  # (this trial, running, counted once)
 
     def wait(self, number: int | None = None, poll_s: float = 0.2) -> bool | None:
         """Wait until a trial may run: False once the study holds its trials, else True
@@ -312,17 +324,40 @@ class _Budget:
                 return False
             lower = trials if number is None else trials[:number]
             taken = n + sum(t.state == state.RUNNING for t in lower)
-            if number is not None and taken < self.budget:
-                retries = [
-                    t for t in trials if t.state == state.WAITING and RETRY in t.system_attrs
-                ]
-                if taken + len(retries) >= self.budget:
+            due = self._retries_due(trials)
+            if number is None:
+                taken += due  # a retry about to be enqueued: asked for next, it will run
+            elif RETRY not in trials[number].system_attrs:
+                waiting = sum(t.state == state.WAITING and RETRY in t.system_attrs for t in trials)
+                if taken < self.budget <= taken + waiting + due:
                     return None  # a dead worker's retried trial takes the place first
             if taken < self.budget:
                 return True
             with self.interrupts.allowed():
                 time.sleep(poll_s)
             self._recover()
+
+    def _retries_due(self, trials: list[FrozenTrial]) -> int:
+        """Trials failed in the last moments whose retry is not enqueued yet: Optuna fails
+        a dead worker's trial and enqueues its retry in two writes, and a worker that
+        reads between them must not take the retry's place."""
+        import optuna
+
+        fail = optuna.trial.TrialState.FAIL
+        retried = {
+            t.system_attrs["retry_history"][-1]
+            for t in trials
+            if t.system_attrs.get("retry_history")
+        }
+        now = datetime.datetime.now()
+        return sum(
+            t.state == fail
+            and t.number not in retried
+            and len(t.system_attrs.get("retry_history", [])) < MAX_RETRY
+            and t.datetime_complete is not None
+            and (now - t.datetime_complete).total_seconds() < self.retry_s
+            for t in trials
+        )
 
     def _recover(self) -> None:
         import optuna
