@@ -58,8 +58,8 @@ class StorageSpec:
 
 
 def mask_url(url: str) -> str:
-    """``url`` with any password replaced by ``***`` (anything between ``user:`` and
-    ``@`` in a text SQLAlchemy cannot read as a URL)."""
+    """``url`` with any password replaced by ``***`` (in a text SQLAlchemy cannot read as
+    a URL, anything between ``user:`` and ``@``)."""
     from sqlalchemy.engine import make_url
 
     try:
@@ -276,24 +276,10 @@ MAX_RETRY = 3
 def retry_once(study: Study, trial: FrozenTrial, lock: str | None = None) -> bool:
     """Enqueue a failed trial again with its settings (Optuna's
     ``RetryHeartbeatStaleTrialCallback``, at most :data:`MAX_RETRY` times) unless a worker
-    already has: Optuna fails a stale trial in a read and a write, which two workers on
-    SQLite (no row locks) or a journal may both pass, and both would retry it.
-
-    Parameters
-    ----------
-    study : optuna.Study
-        The trial's study.
-    trial : optuna.trial.FrozenTrial
-        The failed trial.
-    lock : str or None
-        The storage's file, whose ``.retry`` is locked (``flock``) around the check and
-        the retry (SQLite, journal); None on PostgreSQL, whose rows are locked.
-
-    Returns
-    -------
-    bool
-        Whether this call enqueued it.
-    """
+    already has, and say whether this call did: Optuna fails a stale trial in a read and a
+    write, which two workers on SQLite (no row locks) or a journal may both pass. ``lock``:
+    the storage's file, whose ``.retry`` is locked (``flock``) around the check and the
+    retry; None on PostgreSQL, whose rows are locked."""
     import optuna
 
     history = [*trial.system_attrs.get("retry_history", []), trial.number]
@@ -309,14 +295,8 @@ def retry_once(study: Study, trial: FrozenTrial, lock: str | None = None) -> boo
 
 
 class RetryStale:
-    """The heartbeat-stale trial callback: :func:`retry_once`, noting the trials it
-    retried (a sweep reports them; Optuna's callback does not record them).
-
-    Parameters
-    ----------
-    lock : str or None
-        :func:`retry_once`'s lock.
-    """
+    """The heartbeat-stale trial callback: :func:`retry_once` with ``lock``, noting the
+    trials it retried (a sweep reports them; Optuna's callback does not record them)."""
 
     def __init__(self, lock: str | None = None) -> None:
         self.lock = lock

@@ -50,16 +50,9 @@ WORKER_ATTR = "worker"
 
 class DeferredInterrupt:
     """SIGINT raises KeyboardInterrupt only inside :meth:`allowed` blocks (a trial's
-    simulation, a wait); anywhere else it is held until the next such block or
-    :meth:`check`, or the end of the ``with``: Optuna's ``optimize`` lets a Ctrl-C land
-    anywhere, inside a storage write too. Off the main thread the process's handler is
-    left as it is.
-
-    Raises
-    ------
-    KeyboardInterrupt
-        On leaving the ``with`` normally while an interrupt is held back.
-    """
+    simulation, a wait); anywhere else it is held until the next such block, :meth:`check`
+    or the end of the ``with``: Optuna's ``optimize`` lets a Ctrl-C land anywhere, inside a
+    storage write too. Off the main thread the process's handler is left as it is."""
 
     def __init__(self) -> None:
         self.open = False
@@ -87,26 +80,14 @@ class DeferredInterrupt:
         self.pending = True
 
     def check(self) -> None:
-        """Raise an interrupt that was held back.
-
-        Raises
-        ------
-        KeyboardInterrupt
-            If one was held back.
-        """
+        """Raise KeyboardInterrupt if one was held back."""
         if self.pending:
             self.pending = False
             raise KeyboardInterrupt
 
     @contextmanager
     def allowed(self) -> Iterator[None]:
-        """Let an interrupt through here (raising at once one that was held back).
-
-        Yields
-        ------
-        None
-            Inside the block, SIGINT raises KeyboardInterrupt.
-        """
+        """Let an interrupt through in the block (one held back is raised at once)."""
         self.check()
         self.open = True
         try:
@@ -399,13 +380,7 @@ def _fail_and_retry(study: Study, trial: FrozenTrial, lock: str | None) -> bool:
 
 
 def worker_id() -> str:
-    """``host/pid/start-time`` of this process (the start time guards against pid reuse).
-
-    Returns
-    -------
-    str
-        What :data:`WORKER_ATTR` records.
-    """
+    """``host/pid/start-time`` of this process (the start time guards against pid reuse)."""
     pid = os.getpid()
     return f"{socket.gethostname()}/{pid}/{_proc_start(pid)}"
 
