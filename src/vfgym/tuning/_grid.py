@@ -40,7 +40,7 @@ class GridRow:
     cost : float
         Mean cost over the scenarios.
     constraints : numpy.ndarray
-        Worst of each constraint over the scenarios, (3,).
+        Worst of each constraint over the scenarios, (4,).
     feasible : bool
         Every constraint ≤ 0 on every scenario.
     """
@@ -51,11 +51,6 @@ class GridRow:
     cost: float
     constraints: np.ndarray
     feasible: bool
-
-    @property
-    def accel_law(self) -> str:
-        """The setting's acceleration law."""
-        return self.settings.accel_law
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,17 +72,11 @@ class GridResult:
     scenarios: list[Scenario]
 
 
-def _unit_axes(center: np.ndarray, step: float, points: int) -> list[np.ndarray]:
-    return [np.linspace(max(-1.0, c - step), min(1.0, c + step), points) for c in center]
-
-
 def run_grid(
     cfg: GridConfig, progress: Callable[[int, int, float], None] | None = None
 ) -> GridResult:
-    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`.
-
-    One compiled call per batch, on the config's axis (its plant and measures) if it
-    names one.
+    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`, one
+    compiled call per batch, on the config's axis.
 
     Parameters
     ----------
@@ -120,17 +109,21 @@ def run_grid(
             centers: list[GridRow] = []
             for r in pool:
                 if all(
-                    r.accel_law != c.accel_law or np.max(np.abs(r.u - c.u)) > step for c in centers
+                    r.settings.accel_law != c.settings.accel_law or np.max(np.abs(r.u - c.u)) > step
+                    for c in centers
                 ):
                     centers.append(r)
                 if len(centers) == cfg.keep:
                     break
             step = step * 2.0 / (cfg.points - 1)
             pts = []
+            half = step * (cfg.points - 1) / 2.0
             for c in centers:
-                axes = _unit_axes(c.u, step * (cfg.points - 1) / 2.0, cfg.points)
+                axes = [
+                    np.linspace(max(-1.0, x - half), min(1.0, x + half), cfg.points) for x in c.u
+                ]
                 pts += [
-                    space.from_action(np.array(u), c.accel_law)
+                    space.from_action(np.array(u), c.settings.accel_law)
                     for u in np.array(np.meshgrid(*axes, indexing="ij")).reshape(4, -1).T
                 ]
             levels.append((level, pts))
