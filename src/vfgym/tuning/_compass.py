@@ -88,19 +88,11 @@ class CompassOptions:
 
 
 class CompassSampler(optuna.samplers.BaseSampler):
-    """An Optuna sampler (:class:`optuna.samplers.BaseSampler`) running the search above.
-
-    Parameters
-    ----------
-    relative : the search coordinates (``k`` relative to the acceleration limit's).
-    laws : acceleration laws searched (several: the law is one more coordinate).
-    seed : seed of the Sobol points and the model's candidates.
-    options : :class:`CompassOptions`.
-    storage : the storage of the studies it samples (an Optuna storage), where a trial
-        drawn by ``study.ask()`` gets its generation; without one (a study whose storage
-        the caller does not hold), the generations are kept in this sampler, so a study
-        resumed by another sampler starts its search again.
-    """
+    """An Optuna sampler running the search above, in the coordinates ``relative`` (with
+    the law one more coordinate if several ``laws`` are searched), seeded by ``seed``.
+    ``storage`` is the storage of the studies it samples, where each trial it draws gets
+    its generation; without one, the generations are kept in this sampler (a study resumed
+    by another sampler then starts its search again)."""
 
     def __init__(
         self,
@@ -410,9 +402,8 @@ class CompassSampler(optuna.samplers.BaseSampler):
         return all(d.name in trial.params for d in space.SPACE)
 
     def _observations(self, study: Any, done: list[Any]) -> list[Observation]:
-        """The completed trials as observations; each read once (per study): a completed
-        trial never changes, and reading them all for each generation made a long
-        sweep's cost per trial grow with its size."""
+        """The completed trials as observations, each read once per study (a completed
+        trial never changes: a long sweep's cost per trial does not grow with it)."""
         key = (id(study), study.study_name)
         if self._seen_in != key:
             self._seen, self._seen_in = {}, key
