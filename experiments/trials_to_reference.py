@@ -11,7 +11,7 @@ learn them; CMA-ES and random ignore them). CMA-ES starts at the better warm sta
 for :data:`BATCHES` ``["gp"]`` trials at once and conditions on the running ones, as
 Optuna's GPSampler does. :data:`BATCHES` gives every sampler's batch (trials asked before
 the first is told). The compass runs as ``vfgym sweep`` runs it with one worker
-(:func:`vfgym.tuning.run_worker`: its own generations as batches); the others through
+(:func:`vfgym.tuning.run_worker`: Optuna's `study.optimize`); the others through
 :func:`run_relative`, the same objective on the same storage kind.
 
 Each (problem, sampler, seed) runs on a fresh study on a file in a temporary folder
@@ -249,7 +249,7 @@ def run_relative(
 
 
 SEARCHES = {
-    "compass": "Relative; the warm starts enqueued; its generations as batches (the worker)",
+    "compass": "Relative; the warm starts enqueued; a trial at a time (the worker)",
     **{
         k: f"Relative (u0-u3); the warm starts enqueued; told the log cost; batch {v}"
         + (f"; x0 the better warm start, sigma0 {CMA_SIGMA0}" if k == "cmaes" else "")

@@ -16,7 +16,8 @@ from vfgym import cli, tuning
 from vfgym.moves.axis import load_axis
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
-from vfgym.tuning import AGGREGATES, aggregate, aggregate_costs, check_aggregate, cvar
+from vfgym.tuning import AGGREGATES, aggregate, aggregate_costs
+from vfgym.tuning._aggregate import check_aggregate, cvar
 
 AXES = Path(__file__).resolve().parents[2] / "experiments" / "axes"
 
@@ -128,12 +129,13 @@ def test_the_objective_minimises_the_aggregate_and_needs_every_train_move():
         ("cvar", float(np.mean(np.sort(ev.cost[0])[::-1][: len(train) // 4]))),
     ):
         obj = tuning.Objective(train, ("rise",), "cost", **on, aggregate=how, cvar_alpha=0.25)
-        value, attrs = obj.score(PAPER_SETTINGS)
+        (value, attrs) = obj.score_many([PAPER_SETTINGS])[0]
         assert value == pytest.approx(want, rel=1e-12) and attrs["cost"] == value
         assert attrs["feasible"] is False
-    assert tuning.Objective(ok, ("rise",), "cost", **on).score(PAPER_SETTINGS)[1]["feasible"]
+    (ok_res,) = tuning.Objective(ok, ("rise",), "cost", **on).score_many([PAPER_SETTINGS])
+    assert ok_res.attrs["feasible"]
     mixed = tuning.Objective([ok[0], bad[0]], ("rise",), "cost", **on)
-    assert mixed.score(PAPER_SETTINGS)[1]["feasible"] is False
+    assert mixed.score_many([PAPER_SETTINGS])[0].attrs["feasible"] is False
 
 
 def sweep(tmp_path: Path, *extra: str, study: str = "s") -> int:

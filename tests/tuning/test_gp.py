@@ -10,17 +10,48 @@ import pytest
 from scipy.stats import norm
 
 from vfgym.tuning._gp import (
+    SQRT5,
     Believer,
     GaussianProcess,
-    expected_improvement,
     log_expected_improvement,
     log_norm_cdf,
     matern52,
+    norm_cdf,
+    norm_pdf,
 )
 from vfgym.tuning._model import _Fit
 
 sklearn_gp = pytest.importorskip("sklearn.gaussian_process")
 kernels = pytest.importorskip("sklearn.gaussian_process.kernels")
+
+
+def numpy_matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """The Matérn-5/2 correlation in numpy, one axis at a time, in place: the operations
+    (and bits) the compiled :func:`matern52` must reproduce, as the trials were first drawn
+    with them."""
+    r = np.zeros((len(a), len(b)))
+    for i in range(a.shape[1]):
+        d = np.subtract.outer(a[:, i], b[:, i])
+        d /= lengths[i]
+        d *= d
+        r += d
+    np.sqrt(r, out=r)
+    e = np.multiply(r, -SQRT5)
+    np.exp(e, out=e)
+    q = np.multiply(r, 5.0 / 3.0)
+    q *= r
+    r *= SQRT5
+    r += 1.0
+    r += q
+    r *= e
+    return r
+
+
+def expected_improvement(best: float, mu: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """E[max(best − f, 0)] for f ~ N(mu, sd²), directly (underflows far from ``best``)."""
+    z = (best - mu) / sd
+    return (best - mu) * norm_cdf(z) + sd * norm_pdf(z)
+
 
 LENGTHS = np.array([0.2, 0.5, 0.35, 1.3])
 VAR, NOISE = 1.7, 1e-3
@@ -49,6 +80,7 @@ def test_the_kernel_is_scikit_learns_matern_five_halves():
     x, _ = _data()
     b = np.random.default_rng(1).random((7, 4))
     ref = kernels.Matern(LENGTHS, nu=2.5)(x, b)
+    np.testing.assert_allclose(numpy_matern52(x, b, LENGTHS), ref, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(matern52(x, b, LENGTHS), ref, rtol=1e-12, atol=1e-14)
 
 
@@ -178,29 +210,29 @@ def test_a_batch_on_threads_gives_the_bits_of_a_batch_in_turn(monkeypatch):
 
 @pytest.mark.parametrize("seed", range(6))
 def test_the_compiled_correlation_is_the_numpy_one_bit_for_bit(seed):
-    """:func:`_gp_compiled.matern52` against the numpy formula :func:`_gp.matern52`, on
-    random points and length scales across their bounds (one point pair coinciding)."""
-    from vfgym.tuning import _gp_compiled
-    from vfgym.tuning._gp import LENGTH_BOUNDS, matern52
+    """The compiled :func:`_gp.matern52` against the numpy formula, on random points and
+    length scales across their bounds (one point pair coinciding)."""
+    from vfgym.tuning._gp import LENGTH_BOUNDS
 
     rng = np.random.default_rng(seed)
     a, b = rng.random((rng.integers(1, 300), 4)), rng.random((rng.integers(1, 200), 4))
     b[0] = a[0]
     lengths = np.exp(rng.uniform(*np.log(LENGTH_BOUNDS), 4))
-    expected = matern52(a, b, lengths)
-    got = _gp_compiled.matern52(a, b, lengths)
+    expected = numpy_matern52(a, b, lengths)
+    got = matern52(a, b, lengths)
     assert got.shape == expected.shape and np.array_equal(got, expected)
     assert got[0, 0] == 1.0
 
 
 def test_the_compiled_erfc_is_pythons_bit_for_bit():
-    """:func:`_gp_compiled.erfc` against ``math.erfc``, element by element, over the normal
-    range, the tails where it underflows or saturates, and signed zeros and infinities."""
-    from vfgym.tuning import _gp_compiled
+    """The compiled :func:`_gp.erfc` against ``math.erfc``, element by element, over the
+    normal range, the tails where it underflows or saturates, and signed zeros and
+    infinities."""
+    from vfgym.tuning._gp import erfc
 
     rng = np.random.default_rng(0)
     x = np.concatenate([rng.normal(0.0, 4.0, 20_000), rng.uniform(-40.0, 40.0, 20_000),
                         [0.0, -0.0, np.inf, -np.inf, 26.5, -6.0]]).reshape(-1, 2)  # fmt: skip
-    got = _gp_compiled.erfc(x)
+    got = erfc(x)
     assert got.shape == x.shape
     assert np.array_equal(got.ravel(), [math.erfc(v) for v in x.ravel()])

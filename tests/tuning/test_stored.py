@@ -1,4 +1,4 @@
-"""How a sweep's trials store their results (vfgym.tuning._stored): one user attribute
+"""How a sweep's trials store their results (vfgym.tuning._objective): one user attribute
 and one constraints attribute a trial, the one format of a study."""
 
 from __future__ import annotations
@@ -8,7 +8,8 @@ import optuna
 from vfgym import space, tuning
 from vfgym.report._sweep_figures import objective_points
 from vfgym.scoring import CONSTRAINTS, OBJECTIVES
-from vfgym.tuning._stored import RESULT_ATTR, named_constraints
+from vfgym.tuning._compass import _constraint_name
+from vfgym.tuning._objective import RESULT_ATTR
 from vfgym.tuning._workers import WORKER_ATTR
 
 RESULT = {
@@ -41,10 +42,11 @@ def test_a_stored_result_reads_back():
     assert tuning.stored_result(_trial({**RESULT, "settings": {}})) is None
 
 
-def test_named_constraints_reads_the_list():
+def test_the_constraints_list_reads_back_by_name():
     values = [-0.1, 0.2, -0.3, -0.4]
     as_list = _trial({}, {"constraints": values})
-    assert named_constraints(as_list) == dict(zip(CONSTRAINTS, values, strict=True))
+    named = {_constraint_name(k): v for k, v in as_list.constraints.items()}
+    assert named == dict(zip(CONSTRAINTS, values, strict=True))
 
 
 def _config(tmp_path, trials: int) -> tuning.SweepConfig:

@@ -1,61 +1,36 @@
 """Optuna sweeps over the tuned settings, and the exhaustive grid they are judged against.
 
-A sweep is a study over :data:`vfgym.space.SPACE` (and the acceleration law, if several
-are searched) on a scenario set. Its objective is the one scoring path,
-``vfgym.evaluate(settings, scenarios).cost`` aggregated over the scenarios (the mean by
-default); its constraints are
-:attr:`vfgym.Evaluation.constraints`, the worst (max) over the scenarios per constraint,
-set on each trial with ``trial.set_constraint`` (Optuna 5's replacement for a
-``constraints_func``; TPE, GP and NSGA-II use them, CMA-ES and grid ignore them);
-the multi-objective (Pareto) form minimises :attr:`vfgym.Evaluation.objectives` averaged
-over the scenarios. The paper's settings are enqueued as the study's first trial, and a
-setting already scored in the study is not simulated again (its trial copies the result).
+A sweep is an Optuna study over :data:`vfgym.space.SPACE` (and the acceleration law, if
+several are searched) on a scenario set. Its objective is the one scoring path,
+``vfgym.evaluate(settings, scenarios)``, its cost aggregated over the scenarios (the mean,
+CVaR or worst), its constraints the worst over the scenarios, set on each trial for the
+samplers that learn them; the Pareto form minimises the three objectives' means. The
+warm starts (the paper's settings, the rule of thumb) are the study's first trials, and a
+setting already scored in the study is not simulated again.
 
-Storage and workers: Optuna's own. The default storage is a SQLite file in the run folder;
-``journal`` is Optuna's JournalStorage on a file (processes on one machine, no server); a
-``postgresql://`` URL is Optuna's RDB storage on a server that workers on many machines
-share. Each worker is ``study.optimize`` in its own process; on RDB storages Optuna's
-heartbeat fails the trial of a worker that died (``heartbeat_interval``/``grace_period``,
-``fail_stale_trials``) and ``RetryHeartbeatStaleTrialCallback`` enqueues it again with its
-settings. vfgym adds only what Optuna lacks (:mod:`vfgym.tuning._workers`): a study-wide
-trial budget, dead workers on a journal, and Ctrl-C acted on only inside a simulation, so
-an interrupt never leaves a half-written trial; running the same command with the same
-``--study`` continues where it stopped (docs/guide/distributed.md).
-
-Over several scenarios the cost form minimises an aggregate of the per-scenario costs:
-the mean (default), the CVaR (mean of the costliest share) or the worst
-(``_aggregate``); a setting is feasible only if it is feasible on every scenario.
-
-Modules: ``_config`` (sweep and grid configurations), ``_storage`` (storages),
-``_objective`` (a trial scored by the one path), ``_stored`` (how a trial stores its
-result), ``_study`` (samplers, search space, budget), ``_workers`` (workers sharing a
-study), ``_results`` (best trial,
-CSV, figures, the tuned settings against the paper's as a :class:`vfgym.report.Report`,
-gap to a reference), ``_grid`` (the exhaustive grid).
+Storage and workers are Optuna's: a SQLite file in the run folder (default), a journal
+file (processes on one machine), or PostgreSQL shared by machines; each worker is
+``study.optimize``, and on RDB storages Optuna's heartbeat fails and retries the trial of
+a worker that died. vfgym adds only what Optuna lacks (:mod:`vfgym.tuning._workers`):
+the study's trial budget across workers, dead workers on a journal, and Ctrl-C acted on
+only inside a simulation; the same command with the same ``--study`` continues a stopped
+study (docs/guide/distributed.md).
 
 The grid (:func:`run_grid`) evaluates :func:`vfgym.space.grid` through the batched kernel,
-then refines around its best points; its best is the near-true optimum a sweep's best is
-reported against (as a gap in %).
+refined around its best points: the near-true optimum a sweep's best is reported against.
 """
 
 from vfgym.tuning._aggregate import (
     AGGREGATES,
+    Aggregate,
+    aggregate,
     aggregate_costs,
-    check_aggregate,
-    cvar,
     describe,
     set_cost,
 )
-from vfgym.tuning._config import FORMS, SAMPLERS, SweepConfig
-from vfgym.tuning._grid import (
-    GridConfig,
-    GridResult,
-    GridRow,
-    grid_reference,
-    run_grid,
-    write_grid_csv,
-)
-from vfgym.tuning._objective import Aggregate, Objective, aggregate, settings_key
+from vfgym.tuning._config import SAMPLERS, GridConfig, SweepConfig
+from vfgym.tuning._grid import GridResult, GridRow, grid_reference, run_grid, write_grid_csv
+from vfgym.tuning._objective import Objective, StoredResult, stored_result
 from vfgym.tuning._results import (
     BestRecord,
     FoundReference,
@@ -70,7 +45,6 @@ from vfgym.tuning._results import (
     write_trials_csv,
 )
 from vfgym.tuning._storage import StorageSpec, find_storage, open_storage, resolve_storage
-from vfgym.tuning._stored import StoredResult, stored_result
 from vfgym.tuning._study import (
     baseline_params,
     check_sampler,
@@ -84,7 +58,6 @@ from vfgym.tuning._workers import WorkerReport, run_worker, spawn_workers
 
 __all__ = [
     "AGGREGATES",
-    "FORMS",
     "SAMPLERS",
     "Aggregate",
     "BestRecord",
@@ -103,11 +76,9 @@ __all__ = [
     "baseline_params",
     "best_record",
     "best_trial",
-    "check_aggregate",
     "check_sampler",
     "compare",
     "create_or_load",
-    "cvar",
     "describe",
     "find_reference",
     "find_storage",
@@ -120,7 +91,6 @@ __all__ = [
     "run_grid",
     "run_worker",
     "set_cost",
-    "settings_key",
     "spawn_workers",
     "stored_result",
     "trial_budget",

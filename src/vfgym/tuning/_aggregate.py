@@ -1,31 +1,21 @@
 """How a sweep scores one setting over a move set: one number from its cost on each move.
 
-A sweep over several moves minimises an *aggregate* of the per-move costs
-(``SweepConfig.aggregate``, ``vfgym sweep --aggregate``):
-
-mean
-    the mean cost over the moves (the default): good on the typical move.
-cvar
-    the conditional value at risk: the mean of the worst ``cvar_alpha`` share of the
-    moves (``cvar_alpha`` = 0.25: the worst quarter). With ``n`` moves sorted from the
-    most costly, each move weighs ``1/n`` and the worst ones are taken until their weights
-    sum to ``α``, the last one in part: ``CVaR = Σ wᵢ·cᵢ / α`` with
-    ``wᵢ = min(1/n, max(0, α − (i−1)/n))``. So α = 1 is the mean, α ≤ 1/n the worst
-    move, and in between it lies between the two and never decreases as α shrinks.
-worst
-    the highest cost over the moves: good on every move, at the typical move's expense.
-
-Costs that are not defined (NaN: a pulse source on a moving reference) are left out. The
-feasibility of a setting does not depend on the aggregate: it is feasible only if every
-constraint holds on every move (:func:`vfgym.tuning.aggregate`, the worst constraint over
-the moves).
+A sweep minimises an aggregate of the per-move costs (``vfgym sweep --aggregate``): the
+``mean`` (the default: good on the typical move), the ``worst`` (good on every move, at
+the typical move's expense), or the ``cvar``, the mean of the costliest ``cvar_alpha``
+share of the moves. For CVaR, with ``n`` moves sorted from the most costly, each weighs
+``1/n`` and the worst are taken until their weights sum to ``α``, the last in part:
+``CVaR = Σ wᵢ·cᵢ / α``, ``wᵢ = min(1/n, max(0, α − (i−1)/n))``; α = 1 is the mean, α ≤ 1/n
+the worst move. Undefined costs (NaN: a pulse source on a moving reference) are left out.
+Feasibility does not depend on the aggregate: a setting is feasible only if every
+constraint holds on every move (:func:`aggregate`).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -33,7 +23,7 @@ from vfgym._validate import check_choice, check_real
 from vfgym.moves.axis import axis_kwargs
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
-from vfgym.scoring import evaluate
+from vfgym.scoring import Evaluation, evaluate
 
 if TYPE_CHECKING:
     from vfgym.tuning._config import SweepConfig
@@ -41,50 +31,18 @@ if TYPE_CHECKING:
 AGGREGATES = ("mean", "cvar", "worst")
 """Aggregates of a setting's per-move costs a sweep may minimise (see the module docstring)."""
 DEFAULT_AGGREGATE = "mean"
-"""The aggregate a sweep minimises unless told otherwise."""
 DEFAULT_CVAR_ALPHA = 0.25
 """The share of the costliest moves whose mean ``cvar`` takes: the worst quarter."""
 
 
 def check_aggregate(how: Any, cvar_alpha: Any) -> tuple[str, float]:
-    """Check an aggregate and its CVaR share.
-
-    Parameters
-    ----------
-    how : str
-        One of :data:`AGGREGATES`.
-    cvar_alpha : float
-        The share of the costliest moves ``cvar`` averages, in (0, 1].
-
-    Returns
-    -------
-    tuple of (str, float)
-        ``(how, cvar_alpha)``, validated.
-
-    Raises
-    ------
-    ValueError
-        One line naming the parameter, the value and what is allowed.
-    """
+    """``(how, cvar_alpha)`` validated: one of :data:`AGGREGATES`, a share in (0, 1]."""
     how = check_choice("aggregate", how, AGGREGATES)
     return how, check_real("cvar_alpha", cvar_alpha, 0.0, 1.0, lo_open=True)
 
 
 def cvar(costs: Any, alpha: float = DEFAULT_CVAR_ALPHA) -> float:
-    """The mean of the costliest ``alpha`` share of the costs (see the module docstring).
-
-    Parameters
-    ----------
-    costs : array_like of float
-        One cost per move; NaN entries are left out.
-    alpha : float
-        The share, in (0, 1]: 1 gives the mean, ``1/n`` or less the highest cost.
-
-    Returns
-    -------
-    float
-        The conditional value at risk; NaN without a finite cost.
-    """
+    """The mean of the costliest ``alpha`` share of the finite costs (NaN if none)."""
     x = np.asarray(costs, dtype=float).ravel()
     x = np.sort(x[np.isfinite(x)])[::-1]
     n = x.size
@@ -132,8 +90,61 @@ def aggregate_costs(
     return out.reshape(()) if c.ndim == 1 else out
 
 
+class Aggregate(NamedTuple):
+    """Each controller's scores over a scenario set (arrays indexed by controller).
+
+    Attributes
+    ----------
+    cost : numpy.ndarray
+        The cost's aggregate over the scenarios (the mean by default), (C,).
+    constraints : numpy.ndarray
+        Worst (max) of each constraint over the scenarios, (C, 4).
+    feasible : numpy.ndarray
+        Every constraint ≤ 0 on every scenario, (C,) bool.
+    objectives : numpy.ndarray
+        The objectives' means over the scenarios, (C, 3).
+    """
+
+    cost: np.ndarray
+    constraints: np.ndarray
+    feasible: np.ndarray
+    objectives: np.ndarray
+
+
+def aggregate(
+    ev: Evaluation, how: str = DEFAULT_AGGREGATE, cvar_alpha: float = DEFAULT_CVAR_ALPHA
+) -> Aggregate:
+    """Each controller's results over the scenarios, as a sweep scores a setting.
+
+    Parameters
+    ----------
+    ev : Evaluation
+        What :func:`vfgym.evaluate` returned.
+    how : str
+        The cost's aggregate over the scenarios: ``mean``, ``cvar`` or ``worst``.
+    cvar_alpha : float
+        The share of the costliest scenarios ``cvar`` averages.
+
+    Returns
+    -------
+    Aggregate
+        Per controller: the cost's aggregate (on the modelled plant), the worst of each
+        constraint over the scenarios and any true plants the evaluation holds
+        (:attr:`vfgym.Evaluation.across`), feasibility, the objectives' means.
+    """
+    cons = np.nanmax(ev.constraints, axis=1)
+    if ev.across is not None:  # robust: the worst over the true plants of the design too
+        cons = np.fmax(cons, np.nanmax(ev.across.constraints, axis=(1, 2)))
+    return Aggregate(
+        cost=aggregate_costs(ev.cost, how, cvar_alpha),
+        constraints=cons,
+        feasible=np.all(cons <= 0.0, axis=1),
+        objectives=np.nanmean(ev.objectives, axis=1),
+    )
+
+
 def describe(cfg: SweepConfig) -> str:
-    """The sweep's aggregate as reports name it: ``mean``, ``worst`` or ``cvar 0.25``.
+    """The sweep's aggregate as reports name it.
 
     Parameters
     ----------
@@ -143,7 +154,7 @@ def describe(cfg: SweepConfig) -> str:
     Returns
     -------
     str
-        A short name.
+        ``mean``, ``worst`` or ``cvar 0.25``.
     """
     return f"cvar {cfg.cvar_alpha:g}" if cfg.aggregate == "cvar" else cfg.aggregate
 
@@ -165,5 +176,5 @@ def set_cost(settings: Settings, scenarios: Sequence[Scenario], cfg: SweepConfig
     float
         :func:`aggregate_costs` of :func:`vfgym.evaluate`'s costs on the axis's plant.
     """
-    ev = evaluate(settings, list(scenarios), **axis_kwargs(cfg.load_axis()))
+    ev = evaluate(settings, list(scenarios), **axis_kwargs(cfg.axis_or_paper()))
     return float(aggregate_costs(ev.cost[0], cfg.aggregate, cfg.cvar_alpha))

@@ -2,47 +2,30 @@
 starts, with Gaussian-process checks for a better basin; one generation at a time.
 
 The sweep's optimum sits on constraint edges (the acceleration limit, L = value), where a
-model of the cost is poor and a compass (pattern) search is good: it moves one axis at a
-time and halves its steps at an edge. But the cost has several basins (a short move is
-fastest with L ≈ value/3 and a near-instant jump, a long one with L = value and k on the
-acceleration limit), and a compass stays in the first it finds. So the search alternates:
+model of the cost is poor and a compass (pattern) search is good; but the cost has several
+basins, and a compass stays in the first it finds. So the search alternates:
 
-1. ``init``: the warm starts (enqueued by the study: the paper's settings, the rule of
-   thumb) and ``n_init`` scrambled Sobol points, as one batch.
-2. ``compass``: from the best warm start (feasible first, then by cost; an infeasible one
-   by its total violation), poll each of the four axes of :class:`vfgym.space.Relative`
-   both ways, and a fifth direction (the diagonal): value and L/value moved together by
-   the same step, L/value² held. That is the tail's deceleration at top speed,
-   Kv·v_max = δ²f²·L/value², which the acceleration limit bounds: on a loaded axis the
-   feasible edge, where the optimum lies, runs along it, and one-axis polls can only
-   zigzag up it. Plus the pattern move (the last move again) when the last generation
-   moved; move to the best poll if it beats the centre; per direction, widen the step
-   ×1.5 where a poll beat the centre, else halve it. After ``compass_trials`` trials of
-   this compass (and a generation that did not move, so that a
-   compass still descending is not cut short), or when every step is below
-   ``min_step``, with a feasible centre:
-3. ``model``: a batch of points over the whole space maximising the expected improvement
-   of at least ``xi`` over the best feasible cost, times the probability of feasibility
-   (Gaussian processes on log cost and on each constraint some trial broke,
-   :mod:`vfgym.tuning._gp`); a batch is chosen one point at a time, each conditioned on
-   the previous ones at their predicted values. Repeated until a feasible point beats the
-   centre; the compass then starts again there with fresh steps. Between batches, a
-   compass with a step still at or above ``resume_floor`` (finer than
-   ``min_step``) goes on from the centre with its steps, a generation at a time: on a
-   loaded axis the compass still descends along the acceleration edge at its budget, or
-   stops on it a few percent of value from the optimum, and the model's batches, over
-   the whole space, rarely beat it there. A batch's best point that does not beat the
-   centre but comes within ``explore_gap`` of its cost, more than two first steps from
-   it along some axis (another basin, unexplored), gets a compass too (multi-level
-   single-linkage's idea: a local search from each good point not already in a searched
-   basin); the model after it aims at the best of all again.
+1. ``init``: the warm starts (enqueued by the study) and ``n_init`` Latin-hypercube points.
+2. ``compass``: from the best point (feasible first, then by cost; an infeasible one by
+   its total violation), poll each axis of :class:`vfgym.space.Relative` both ways and a
+   fifth direction, value and L/value moved together (L/value² held: the tail's
+   deceleration at top speed, which the acceleration limit bounds, so on a loaded axis the
+   feasible edge runs along it), plus the last move again if the last generation moved;
+   move to the best poll that beats the centre; per direction widen the step ×1.5 where a
+   poll beat the centre, else halve it.
+3. ``model``: once the compass has spent ``compass_trials`` trials without moving, or its
+   steps are below ``min_step``, a batch over the whole space maximising the expected
+   improvement (by at least ``xi``) times the probability of feasibility
+   (:mod:`vfgym.tuning._model`); until a feasible point beats the centre, where the
+   compass starts again. Between batches a compass cut short with a step still at or above
+   ``resume_floor`` goes on; a batch's best point of another basin within ``explore_gap``
+   of the centre's cost gets a compass of its own.
 
 Every choice is a deterministic function of the seed and the study's completed trials,
-and each sampled trial records its generation (system attribute ``vfgym:compass``), so a
+and each drawn trial records its generation (system attribute ``vfgym:compass``), so a
 study resumed in a new process, or shared by several workers, continues the same search;
-a worker that asks while another's generation is still running gets model points that
-take the running trials into account. A model batch's tag keeps its models' fitted
-hyperparameters (``theta``), where the next batch's fits start (:func:`last_thetas`).
+a worker that asks while another's generation runs gets model points that take the
+running trials into account. What was tried and not kept: docs/design/sampler.md.
 """
 
 from __future__ import annotations
@@ -55,8 +38,8 @@ import numpy as np
 import optuna
 
 from vfgym import space
+from vfgym.scoring import CONSTRAINTS
 from vfgym.tuning._model import Observation, propose, rank
-from vfgym.tuning._stored import named_constraints
 
 ATTR = "vfgym:compass"
 """System attribute of each trial the sampler draws: its generation's state and role."""
@@ -64,7 +47,7 @@ ATTR = "vfgym:compass"
 
 @dataclass(frozen=True)
 class CompassOptions:
-    """Settings of :class:`CompassSampler` (the search above, as it runs by default).
+    """Settings of :class:`CompassSampler`, as it runs by default.
 
     Attributes
     ----------
@@ -86,11 +69,10 @@ class CompassOptions:
         compass.
     refit_growth : float
         A model batch fits its Gaussian processes' hyperparameters again (from the last
-        fit's) once the completed trials number this many times those of the last fit,
-        else keeps them (docs/speed.md).
+        fit's) once the completed trials number this many times those of the last fit.
     resume_floor : float
         After a model batch that did not beat the centre, a compass with a step still at
-        or above this (0: ``min_step``) goes on from the centre with its steps.
+        or above this goes on from the centre with its steps.
     """
 
     n_init: int = 6
@@ -106,19 +88,11 @@ class CompassOptions:
 
 
 class CompassSampler(optuna.samplers.BaseSampler):
-    """An Optuna sampler (:class:`optuna.samplers.BaseSampler`) running the search above.
-
-    Parameters
-    ----------
-    relative : the search coordinates (``k`` relative to the acceleration limit's).
-    laws : acceleration laws searched (several: the law is one more coordinate).
-    seed : seed of the Sobol points and the model's candidates.
-    options : :class:`CompassOptions`.
-    storage : the storage of the studies it samples (an Optuna storage), where a trial
-        drawn by ``study.ask()`` gets its generation; without one (a study whose storage
-        the caller does not hold), the generations are kept in this sampler, so a study
-        resumed by another sampler starts its search again.
-    """
+    """An Optuna sampler running the search above, in the coordinates ``relative`` (with
+    the law one more coordinate if several ``laws`` are searched), seeded by ``seed``.
+    ``storage`` is the storage of the studies it samples, where each trial it draws gets
+    its generation; without one, the generations are kept in this sampler (a study resumed
+    by another sampler then starts its search again)."""
 
     def __init__(
         self,
@@ -196,15 +170,6 @@ class CompassSampler(optuna.samplers.BaseSampler):
         return optuna.samplers.RandomSampler(seed=int(rng.integers(2**31))).sample_independent(
             study, trial, name, dist
         )
-
-    def before_trial(self, study: Any, trial: Any) -> None:
-        return None
-
-    def after_trial(self, study: Any, trial: Any, state: Any, values: Any) -> None:
-        return None
-
-    def reseed_rng(self) -> None:
-        return None
 
     def _next(self, study: Any, number: int) -> dict[str, Any]:
         # No trial made since the queue was checked but this one (numbers count the
@@ -355,7 +320,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
                  since: int) -> list[dict[str, Any]]:  # fmt: skip
         lo, hi = self._lo, self._lo + self._span
         out: list[dict[str, Any]] = []
-        seen = {tuple(centre.x)}
+        seen = {(tuple(centre.x), centre.law)}
 
         def add(x: np.ndarray, role: str, law: str = centre.law) -> None:
             x = np.clip(x, lo, hi)
@@ -365,7 +330,6 @@ class CompassSampler(optuna.samplers.BaseSampler):
             out.append({"x": x, "law": law,
                         "tag": self._tag(gen, "compass", role, centre, steps, since)})  # fmt: skip
 
-        seen = {(tuple(centre.x), centre.law)}
         if prev is not None:
             add(centre.x + (centre.x - prev.x), "pattern")
         for d in range(len(steps)):
@@ -438,9 +402,8 @@ class CompassSampler(optuna.samplers.BaseSampler):
         return all(d.name in trial.params for d in space.SPACE)
 
     def _observations(self, study: Any, done: list[Any]) -> list[Observation]:
-        """The completed trials as observations; each read once (per study): a completed
-        trial never changes, and reading them all for each generation made a long
-        sweep's cost per trial grow with its size."""
+        """The completed trials as observations, each read once per study (a completed
+        trial never changes: a long sweep's cost per trial does not grow with it)."""
         key = (id(study), study.study_name)
         if self._seen_in != key:
             self._seen, self._seen_in = {}, key
@@ -454,9 +417,15 @@ class CompassSampler(optuna.samplers.BaseSampler):
         if trial.value is None or not self._has_params(trial):
             return None
         x, law = self._x_of(trial)
-        cons = np.array([v for _, v in sorted(named_constraints(trial).items())])
+        named = {_constraint_name(k): v for k, v in trial.constraints.items()}
+        cons = np.array([v for _, v in sorted(named.items())])
         viol = float(np.maximum(cons, 0.0).sum()) if cons.size else 0.0
         return Observation(trial.number, x, law, float(trial.value), viol, viol <= 0.0, cons)
+
+
+def _constraint_name(key: str) -> str:
+    """A constraint's name: ``CONSTRAINTS``' for the index Optuna's list gives it."""
+    return CONSTRAINTS[int(key)] if key.isdigit() and int(key) < len(CONSTRAINTS) else key
 
 
 def last_thetas(tagged: list[Any]) -> tuple[dict[str, list[float]], int]:

@@ -1,6 +1,5 @@
 """Sweep and grid configurations: frozen, validated, merged from defaults, a YAML file and
-the command line (in that order).
-"""
+the command line (in that order)."""
 
 from __future__ import annotations
 
@@ -16,7 +15,7 @@ from vfgym._validate import (
     check_real,
     number_from_text,
 )
-from vfgym.moves.axis import Axis, load_axis
+from vfgym.moves.axis import PAPER_AXIS, Axis, load_axis
 from vfgym.moves.distribution import scenario_set
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import ACCEL_LAWS
@@ -28,11 +27,7 @@ problem's own coordinates (default; :mod:`vfgym.tuning._compass`), TPE, CMA-ES, 
 Gaussian process for the deterministic objective, NSGA-II (the Pareto form by default), a
 grid over :func:`vfgym.space.grid`, and uniform random sampling (a control)."""
 FORMS = ("cost", "pareto")
-"""``cost``: minimise the mean cost; ``pareto``: minimise the three objectives."""
-
-
-def _opt_float(name: str, v: Any, lo: float) -> float | None:
-    return None if v is None else check_real(name, v, lo, lo_open=True)
+"""``cost``: minimise the aggregate cost; ``pareto``: minimise the three objectives."""
 
 
 def _laws(v: Any) -> tuple[str, ...]:
@@ -45,30 +40,29 @@ def _laws(v: Any) -> tuple[str, ...]:
     return laws
 
 
-def _check_scenario_fields(cfg: Any) -> None:
-    """Normalise and check the scenario-set and law fields a sweep and a grid share."""
-    s = object.__setattr__
-    if cfg.axis is not None:
-        s(cfg, "axis", str(cfg.axis))
-        load_axis(cfg.axis)  # a bad axis file fails here, naming itself
-    if cfg.scenarios is None:  # an axis is tuned on its train moves
-        s(cfg, "scenarios", "paper-step" if cfg.axis is None else "train")
-    if isinstance(cfg.scenarios, (list, tuple)):
-        s(cfg, "scenarios", ",".join(str(x) for x in cfg.scenarios))
-    s(cfg, "scenarios", str(cfg.scenarios))
-    s(cfg, "scenario_count", check_int("scenario_count", cfg.scenario_count, 1))
-    s(cfg, "first_seed", check_int("first_seed", cfg.first_seed, 0))
-    s(cfg, "laws", _laws(cfg.laws))
-
-
 class _Options:
-    """Shared by the sweep and grid configurations: merging sources, plain dicts, scenarios."""
+    """What the sweep and grid configurations share: the scenario set, laws and axis, and
+    how a configuration is merged from its sources."""
 
     scenarios: str | None  # None only as given: construction fills in the default
     scenario_count: int
     first_seed: int
     laws: tuple[str, ...]
     axis: str | None
+
+    def _check_scenarios(self) -> None:
+        s = object.__setattr__
+        if self.axis is not None:
+            s(self, "axis", str(self.axis))
+            load_axis(self.axis)  # a bad axis file fails here, naming itself
+        if self.scenarios is None:  # an axis is tuned on its train moves
+            s(self, "scenarios", "paper-step" if self.axis is None else "train")
+        if isinstance(self.scenarios, (list, tuple)):
+            s(self, "scenarios", ",".join(str(x) for x in self.scenarios))
+        s(self, "scenarios", str(self.scenarios))
+        s(self, "scenario_count", check_int("scenario_count", self.scenario_count, 1))
+        s(self, "first_seed", check_int("first_seed", self.first_seed, 0))
+        s(self, "laws", _laws(self.laws))
 
     @classmethod
     def resolve(cls, file_data: Any = None, cli: dict[str, Any] | None = None, source: str = ""):
@@ -80,9 +74,8 @@ class _Options:
         file_data : dict or None
             A config file's mapping (``-`` in keys read as ``_``); unknown keys raise.
         cli : dict or None
-            Command-line options; those that are ``None`` (not given) are skipped. Their
-            text is read as a number for a number field (:func:`number_from_text`); a
-            config file's values are taken as YAML typed them (``"70"`` is not a number).
+            Command-line options (``None``: not given); their text is read as a number
+            for a number field (a config file's values are taken as YAML typed them).
         source : str
             Names the file in error messages.
 
@@ -96,19 +89,22 @@ class _Options:
         ValueError
             If the file is not a mapping, has an unknown key, or a value is out of range.
         """
+        known = {f.name for f in fields(cls)}  # type: ignore[arg-type]
         data: dict[str, Any] = {}
         if file_data is not None:
             if not isinstance(file_data, dict):
                 raise ValueError(f"{source}: expected a mapping of options")
-            data.update(_keys(file_data, cls, source))
-        numeric = _number_fields(cls)
-        data.update(
-            {
-                k: number_from_text(v) if k in numeric else v
-                for k, v in (cli or {}).items()
-                if v is not None
-            }
-        )
+            data = {str(k).replace("-", "_"): v for k, v in file_data.items()}
+            unknown = sorted(set(data) - known)
+            if unknown:
+                raise ValueError(
+                    f"{source}: unknown key(s) {', '.join(unknown)}; allowed: "
+                    f"{', '.join(sorted(known))}"
+                )
+        numeric = {f.name for f in fields(cls) if re.search(r"\b(int|float)\b", str(f.type))}  # type: ignore[arg-type]
+        for k, v in (cli or {}).items():
+            if v is not None:
+                data[k] = number_from_text(v) if k in numeric else v
         return cls(**data)
 
     def to_dict(self) -> dict[str, Any]:
@@ -119,13 +115,27 @@ class _Options:
         dict
             Field name to value, ``laws`` as a list.
         """
-        d = asdict(self)  # type: ignore[call-overload]
-        d["laws"] = list(self.laws)
-        return d
+        return asdict(self) | {"laws": list(self.laws)}  # type: ignore[call-overload]
 
     def load_axis(self) -> Axis | None:
-        """The axis file's :class:`~vfgym.moves.axis.Axis`, or ``None`` (the paper's)."""
+        """The axis file's :class:`~vfgym.moves.axis.Axis`, or ``None`` (none given).
+
+        Returns
+        -------
+        Axis or None
+            The axis file loaded, or ``None``.
+        """
         return None if self.axis is None else load_axis(self.axis)
+
+    def axis_or_paper(self) -> Axis:
+        """The axis tuned on: the axis file's, else the paper's.
+
+        Returns
+        -------
+        Axis
+            :meth:`load_axis`, or :data:`~vfgym.moves.axis.PAPER_AXIS` without a file.
+        """
+        return self.load_axis() or PAPER_AXIS
 
     def scenario_list(self) -> list[Scenario]:
         """The scenarios the configuration names.
@@ -137,11 +147,10 @@ class _Options:
             ``first_seed`` do not apply); else :func:`vfgym.scenario_set` of
             ``scenarios``, ``scenario_count``, ``first_seed``.
         """
-        spec = str(self.scenarios)
         axis = self.load_axis()
         if axis is not None:
-            return axis.scenario_set(spec)
-        return scenario_set(spec, self.scenario_count, self.first_seed)
+            return axis.scenario_set(str(self.scenarios))
+        return scenario_set(str(self.scenarios), self.scenario_count, self.first_seed)
 
 
 @dataclass(frozen=True)
@@ -151,28 +160,20 @@ class SweepConfig(_Options):
     Parameters
     ----------
     scenarios : str
-        A scenario set spec (:func:`vfgym.scenario_set`; a list is joined with commas);
-        default ``train`` on an axis, else ``paper-step``.
-    scenario_count : int
-        Random draws of a ``train`` / ``test`` set, ≥ 1.
-    first_seed : int
-        Seed of the first draw, ≥ 0.
-    axis : str or None
-        An axis file (:mod:`vfgym.moves.axis`): its plant and measures, and ``train`` /
-        ``test`` its move sets.
+        A scenario set (:func:`vfgym.scenario_set`; a list is joined with commas); default
+        ``train`` on an axis, else ``paper-step``.
+    scenario_count, first_seed : int
+        Random draws of a ``train`` / ``test`` set (≥ 1), and the first one's seed (≥ 0).
     laws : tuple of str
-        The acceleration laws searched (one law: fixed), from
-        :data:`vfgym.params.ACCEL_LAWS`; a comma-separated string is split.
+        The acceleration laws searched (:data:`vfgym.params.ACCEL_LAWS`; one: fixed).
+    axis : str or None
+        An axis file (:mod:`vfgym.moves.axis`): its plant, measures and move sets.
     sampler : str
         One of :data:`SAMPLERS`.
     objective : str or None
-        ``cost`` or ``pareto`` (:data:`FORMS`); default: pareto for nsga2, else cost.
-    aggregate : str
-        What the cost form minimises over the scenarios: ``mean`` (default), ``cvar``
-        (the mean of the costliest ``cvar_alpha`` share) or ``worst``
-        (:mod:`vfgym.tuning._aggregate`); feasible means feasible on every scenario.
-    cvar_alpha : float
-        The share of the costliest scenarios ``cvar`` averages, in (0, 1]; default 0.25.
+        ``cost`` or ``pareto``; default: pareto for nsga2, else cost.
+    aggregate, cvar_alpha : str, float
+        What the cost form minimises over the scenarios (:mod:`vfgym.tuning._aggregate`).
     trials : int
         Completed trials the study ends with (all workers together), ≥ 1.
     timeout : float or None
@@ -180,9 +181,9 @@ class SweepConfig(_Options):
     workers : int
         Worker processes sharing the study, 1 to 256.
     seed : int or None
-        The sampler's seed (``None``: unseeded).
+        The sampler's seed (worker i: seed + i; ``None``: unseeded).
     storage : str
-        ``sqlite``, ``journal`` or a ``postgresql://`` URL (see :func:`resolve_storage`).
+        ``sqlite``, ``journal`` or a PostgreSQL URL (:func:`resolve_storage`).
     study : str or None
         The study's name, also the run folder's (default: config name + time).
     runs_dir : str
@@ -190,11 +191,9 @@ class SweepConfig(_Options):
     reference : str or None
         A grid run (or its ``reference.yaml``) to report the gap to.
     grid_points : int
-        Values per dimension for the grid sampler, 1 to 64.
-    plots : bool
-        Draw the history and Pareto plots.
-    progress : bool
-        Show a progress bar.
+        Values per dimension for the grid sampler, 2 to 64.
+    plots, progress : bool
+        Draw the figures; show a progress bar.
     heartbeat : int
         Seconds between a running trial's heartbeats (Optuna's ``heartbeat_interval``, RDB
         storages; a journal worker's death is seen this often), ≥ 1.
@@ -233,7 +232,7 @@ class SweepConfig(_Options):
 
     def __post_init__(self) -> None:
         s = object.__setattr__
-        _check_scenario_fields(self)
+        self._check_scenarios()
         check_choice("sampler", self.sampler, SAMPLERS)
         form = self.objective or ("pareto" if self.sampler == "nsga2" else "cost")
         check_choice("objective", form, FORMS)
@@ -246,7 +245,8 @@ class SweepConfig(_Options):
         s(self, "aggregate", how)
         s(self, "cvar_alpha", alpha)
         s(self, "trials", check_int("trials", self.trials, 1))
-        s(self, "timeout", _opt_float("timeout", self.timeout, 0.0))
+        if self.timeout is not None:
+            s(self, "timeout", check_real("timeout", self.timeout, 0.0, lo_open=True))
         s(self, "workers", check_int("workers", self.workers, 1, 256))
         if self.seed is not None:
             s(self, "seed", check_int("seed", self.seed, 0, 2**31 - 1))
@@ -264,19 +264,57 @@ class SweepConfig(_Options):
             s(self, "grace", check_int("grace", self.grace, 1))
 
 
-def _number_fields(cls: type) -> set[str]:
-    """The fields of a configuration that hold a number (``int``, ``float``, or either or
-    ``None``): the command line's text is read as a number for these."""
-    return {f.name for f in fields(cls) if re.search(r"\b(int|float)\b", str(f.type))}
+@dataclass(frozen=True)
+class GridConfig(_Options):
+    """What ``vfgym grid`` does; every field is a command-line option and a config key.
 
+    ``points`` values per dimension over the whole space, then ``refine`` rounds that
+    re-grid (``points`` per dimension) the neighbourhood of the ``keep`` best distinct
+    points, one grid step either side.
 
-def _keys(data: dict, cls: type, source: str) -> dict[str, Any]:
-    """A config mapping with ``-`` in keys read as ``_``; unknown keys raise."""
-    known = {f.name for f in fields(cls)}
-    out = {str(k).replace("-", "_"): v for k, v in data.items()}
-    unknown = sorted(set(out) - known)
-    if unknown:
-        raise ValueError(
-            f"{source}: unknown key(s) {', '.join(unknown)}; allowed: {', '.join(sorted(known))}"
-        )
-    return out
+    Parameters
+    ----------
+    scenarios, scenario_count, first_seed, laws, axis
+        As in :class:`SweepConfig`.
+    points, refine, keep : int
+        Values per dimension (2 to 64), refinement rounds (0 to 10), best distinct points
+        refined around each round (1 to 64).
+    batch : int
+        Settings per compiled call.
+    name : str or None
+        The run's name (default: config name + time).
+    runs_dir : str
+        Folder under which the run folder is made.
+    progress : bool
+        Show a progress bar.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range.
+    """
+
+    scenarios: str | None = None
+    scenario_count: int = 16
+    first_seed: int = 0
+    laws: tuple[str, ...] = ("rise",)
+    axis: str | None = None
+    points: int = 12
+    refine: int = 2
+    keep: int = 4
+    batch: int = 4096
+    name: str | None = None
+    runs_dir: str = "runs"
+    progress: bool = True
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        self._check_scenarios()
+        s(self, "points", check_int("points", self.points, 2, 64))
+        s(self, "refine", check_int("refine", self.refine, 0, 10))
+        s(self, "keep", check_int("keep", self.keep, 1, 64))
+        s(self, "batch", check_int("batch", self.batch, 1, 1 << 20))
+        if self.name is not None:
+            s(self, "name", check_name("name", self.name))
+        s(self, "runs_dir", str(self.runs_dir))
+        s(self, "progress", check_bool("progress", self.progress))

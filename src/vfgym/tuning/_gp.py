@@ -3,9 +3,11 @@ length scale per axis, constant mean, hyperparameters fitted by maximum marginal
 likelihood (Adam on their logarithms, within bounds), and the normal distribution's
 functions the expected improvement needs.
 
-numpy (scipy is not a dependency of vfgym), the correlation of many candidates with the
-points compiled (:mod:`vfgym.tuning._gp_compiled`, the same bits), sized for a sweep's
-few hundred points in four dimensions.
+numpy (scipy is not a dependency of vfgym), sized for a sweep's few hundred points in four
+dimensions. The correlation of thousands of candidates with the points and the normal
+distribution function are compiled (:func:`matern52`, :func:`erfc`), with the bits of the
+numpy formula and of ``math.erfc`` the trials were first drawn with (tested), so a seed
+gives the same trials.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from vfgym.tuning import _gp_compiled as _compiled
+from vfgym.plant._jit import jit
 
 SQRT5 = math.sqrt(5.0)
 COLD_STEPS, WARM_STEPS = 60, 20
@@ -29,31 +31,61 @@ NOISE_BOUNDS = (1e-6, 0.2)
 (a constraint crossed) are better taken as noise than as wild wiggles."""
 
 
-def matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-    """The Matérn-5/2 correlation between the rows of ``a`` and of ``b``.
+@jit(simd=True)
+def _distances(a: np.ndarray, b: np.ndarray, lengths: np.ndarray, out: np.ndarray) -> None:
+    """``out[i, j] = sqrt(sum over k of ((a[i, k] - b[j, k]) / lengths[k])²)``, summed in
+    axis order from 0."""
+    n, m = out.shape
+    dim = a.shape[1]
+    for i in range(n):
+        for j in range(m):
+            r = 0.0
+            for k in range(dim):
+                d = (a[i, k] - b[j, k]) / lengths[k]
+                r += d * d
+            out[i, j] = math.sqrt(r)
 
-    One axis at a time, in place: the same operations, in the same order, as
-    ``r = sqrt(sum(((a - b) / lengths)²))``, ``(1 + √5 r + 5/3 r²) exp(-√5 r)`` on the
-    (rows of a, rows of b, axes) array, so the same bits, without that array (a model
-    batch predicts thousands of candidates against hundreds of points). The models call
-    its compiled copy, :func:`vfgym.tuning._gp_compiled.matern52` (the same bits).
-    """
-    r = np.zeros((len(a), len(b)))
-    for i in range(a.shape[1]):
-        d = np.subtract.outer(a[:, i], b[:, i])
-        d /= lengths[i]
-        d *= d
-        r += d
-    np.sqrt(r, out=r)
+
+@jit(simd=True)
+def _polynomial(r: np.ndarray, e: np.ndarray) -> None:
+    """``r ← ((√5 r + 1) + (5/3 r) r) · e`` in place, element by element."""
+    flat_r = r.reshape(-1)
+    flat_e = e.reshape(-1)
+    for i in range(flat_r.size):
+        x = flat_r[i]
+        q = x * (5.0 / 3.0)
+        q *= x
+        flat_r[i] = ((x * SQRT5 + 1.0) + q) * flat_e[i]
+
+
+def matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """The Matérn-5/2 correlation between the rows of ``a`` and of ``b``: the numpy
+    formula's operations in its order (``r = sqrt(sum(((a - b) / lengths)²))``,
+    ``(1 + √5 r + 5/3 r²) exp(-√5 r)``) in two compiled loops, numpy's own ``exp``
+    between them (libm's differs in the last bit), in one pass each."""
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    b = np.ascontiguousarray(b, dtype=np.float64)
+    lengths = np.ascontiguousarray(lengths, dtype=np.float64)
+    r = np.empty((len(a), len(b)))
+    _distances(a, b, lengths, r)
     e = np.multiply(r, -SQRT5)
     np.exp(e, out=e)
-    q = np.multiply(r, 5.0 / 3.0)
-    q *= r
-    r *= SQRT5
-    r += 1.0
-    r += q
-    r *= e
+    _polynomial(r, e)
     return r
+
+
+@jit(simd=True)
+def _erfc_into(x: np.ndarray, out: np.ndarray) -> None:
+    for i in range(x.size):
+        out[i] = math.erfc(x[i])
+
+
+def erfc(x: np.ndarray) -> np.ndarray:
+    """``math.erfc`` of each element (libm's, as Python's), without a Python call each."""
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    out = np.empty_like(x)
+    _erfc_into(x.reshape(-1), out.reshape(-1))
+    return out
 
 
 class GaussianProcess:
@@ -145,7 +177,7 @@ class GaussianProcess:
     def _factor(self) -> None:
         lengths, var, noise = self._unpack(self.theta)
         self.lengths, self.var, self.noise = lengths, var, noise
-        k = var * _compiled.matern52(self.x, self.x, lengths)
+        k = var * matern52(self.x, self.x, lengths)
         k += (noise + 1e-10) * np.eye(len(self.x))
         self.chol = np.linalg.cholesky(k)
         self.linv = np.linalg.inv(self.chol)  # L⁻¹: predictions multiply, not solve
@@ -159,7 +191,7 @@ class GaussianProcess:
 
     def predict(self, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Posterior mean and standard deviation at the rows of ``xs``, in ``y``'s units."""
-        ks = self.var * _compiled.matern52(xs, self.x, self.lengths)
+        ks = self.var * matern52(xs, self.x, self.lengths)
         mu = ks @ self.alpha
         v = self.linv @ ks.T
         sd = np.sqrt(np.maximum(self.var - (v * v).sum(0), 1e-18))
@@ -184,7 +216,7 @@ class Believer:
     def __init__(self, gp: GaussianProcess, xs: np.ndarray) -> None:
         self.gp = gp
         self.xs = np.asarray(xs, dtype=np.float64)
-        ks = gp.var * _compiled.matern52(self.xs, gp.x, gp.lengths)
+        ks = gp.var * matern52(self.xs, gp.x, gp.lengths)
         self.mean = (ks @ gp.alpha) * gp.scale + gp.mean
         self._v = gp.linv @ ks.T  # (n, m): L⁻¹ k(x, candidate)
         self._var = gp.var - (self._v * self._v).sum(0)  # standardised, unclipped
@@ -197,7 +229,7 @@ class Believer:
     def believe(self, j: int) -> None:
         """Add candidate ``j`` to the observations at its predicted mean."""
         gp = self.gp
-        k = gp.var * _compiled.matern52(self.xs, self.xs[j : j + 1], gp.lengths)[:, 0]
+        k = gp.var * matern52(self.xs, self.xs[j : j + 1], gp.lengths)[:, 0]
         cov = k - self._v.T @ self._v[:, j]
         for u in self._u:
             cov -= u * u[j]
@@ -207,21 +239,15 @@ class Believer:
 
 
 def norm_cdf(z: np.ndarray) -> np.ndarray:
-    """The standard normal distribution function (``math.erfc`` element-wise, compiled)."""
+    """The standard normal distribution function."""
     z = np.asarray(z, dtype=np.float64)
-    return 0.5 * _compiled.erfc(-z / math.sqrt(2.0))
+    return 0.5 * erfc(-z / math.sqrt(2.0))
 
 
 def norm_pdf(z: np.ndarray) -> np.ndarray:
     """The standard normal density."""
     z = np.asarray(z, dtype=np.float64)
     return np.exp(-0.5 * z * z) / math.sqrt(2.0 * math.pi)
-
-
-def expected_improvement(best: float, mu: np.ndarray, sd: np.ndarray) -> np.ndarray:
-    """E[max(best − f, 0)] for f ~ N(mu, sd²) (minimisation)."""
-    z = (best - mu) / sd
-    return (best - mu) * norm_cdf(z) + sd * norm_pdf(z)
 
 
 TAIL_Z = -20.0

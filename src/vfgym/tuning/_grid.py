@@ -15,74 +15,14 @@ from typing import Any
 import numpy as np
 
 from vfgym import space
-from vfgym._validate import check_bool, check_int, check_name
 from vfgym.io.runs import write_text
 from vfgym.moves.axis import axis_digest, axis_kwargs
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.scoring import CONSTRAINTS, evaluate
-from vfgym.tuning._config import _check_scenario_fields, _Options
-from vfgym.tuning._objective import aggregate, settings_key
-
-
-@dataclass(frozen=True)
-class GridConfig(_Options):
-    """What ``vfgym grid`` does; every field is a command-line option and a config key.
-
-    ``points`` values per dimension over the whole space, then ``refine`` rounds that
-    re-grid (``points`` per dimension) the neighbourhood of the ``keep`` best distinct
-    points, one grid step either side.
-
-    Parameters
-    ----------
-    scenarios, scenario_count, first_seed, laws, axis
-        The scenario set, the acceleration laws searched and the axis file, as in
-        :class:`SweepConfig`.
-    points : int
-        Values per dimension, 2 to 64.
-    refine : int
-        Refinement rounds, 0 to 10.
-    keep : int
-        Best distinct points refined around each round, 1 to 64.
-    batch : int
-        Settings per compiled call.
-    name : str or None
-        The run's name (default: config name + time).
-    runs_dir : str
-        Folder under which the run folder is made.
-    progress : bool
-        Show a progress bar.
-
-    Raises
-    ------
-    ValueError
-        If a value is out of its range.
-    """
-
-    scenarios: str | None = None
-    scenario_count: int = 16
-    first_seed: int = 0
-    laws: tuple[str, ...] = ("rise",)
-    axis: str | None = None
-    points: int = 12
-    refine: int = 2
-    keep: int = 4
-    batch: int = 4096
-    name: str | None = None
-    runs_dir: str = "runs"
-    progress: bool = True
-
-    def __post_init__(self) -> None:
-        s = object.__setattr__
-        _check_scenario_fields(self)
-        s(self, "points", check_int("points", self.points, 2, 64))
-        s(self, "refine", check_int("refine", self.refine, 0, 10))
-        s(self, "keep", check_int("keep", self.keep, 1, 64))
-        s(self, "batch", check_int("batch", self.batch, 1, 1 << 20))
-        if self.name is not None:
-            s(self, "name", check_name("name", self.name))
-        s(self, "runs_dir", str(self.runs_dir))
-        s(self, "progress", check_bool("progress", self.progress))
+from vfgym.tuning._aggregate import aggregate
+from vfgym.tuning._config import GridConfig
+from vfgym.tuning._objective import settings_key
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,7 +40,7 @@ class GridRow:
     cost : float
         Mean cost over the scenarios.
     constraints : numpy.ndarray
-        Worst of each constraint over the scenarios, (3,).
+        Worst of each constraint over the scenarios, (4,).
     feasible : bool
         Every constraint ≤ 0 on every scenario.
     """
@@ -111,11 +51,6 @@ class GridRow:
     cost: float
     constraints: np.ndarray
     feasible: bool
-
-    @property
-    def accel_law(self) -> str:
-        """The setting's acceleration law."""
-        return self.settings.accel_law
 
 
 @dataclass(frozen=True, eq=False)
@@ -137,17 +72,11 @@ class GridResult:
     scenarios: list[Scenario]
 
 
-def _unit_axes(center: np.ndarray, step: float, points: int) -> list[np.ndarray]:
-    return [np.linspace(max(-1.0, c - step), min(1.0, c + step), points) for c in center]
-
-
 def run_grid(
     cfg: GridConfig, progress: Callable[[int, int, float], None] | None = None
 ) -> GridResult:
-    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`.
-
-    One compiled call per batch, on the config's axis (its plant and measures) if it
-    names one.
+    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`, one
+    compiled call per batch, on the config's axis.
 
     Parameters
     ----------
@@ -164,7 +93,7 @@ def run_grid(
         least cost (or of least cost, if none is feasible); ``scenarios``.
     """
     scenarios = cfg.scenario_list()
-    on_axis = axis_kwargs(cfg.load_axis())
+    on_axis = axis_kwargs(cfg.axis_or_paper())
     evaluate(PAPER_SETTINGS, scenarios, **on_axis)  # compile/load once before timing batches
     levels: list[tuple[int, list[Settings]]] = [(0, space.grid(cfg.points, cfg.laws))]
     total = len(levels[0][1]) * (1 + cfg.refine * cfg.keep)
@@ -180,17 +109,21 @@ def run_grid(
             centers: list[GridRow] = []
             for r in pool:
                 if all(
-                    r.accel_law != c.accel_law or np.max(np.abs(r.u - c.u)) > step for c in centers
+                    r.settings.accel_law != c.settings.accel_law or np.max(np.abs(r.u - c.u)) > step
+                    for c in centers
                 ):
                     centers.append(r)
                 if len(centers) == cfg.keep:
                     break
             step = step * 2.0 / (cfg.points - 1)
             pts = []
+            half = step * (cfg.points - 1) / 2.0
             for c in centers:
-                axes = _unit_axes(c.u, step * (cfg.points - 1) / 2.0, cfg.points)
+                axes = [
+                    np.linspace(max(-1.0, x - half), min(1.0, x + half), cfg.points) for x in c.u
+                ]
                 pts += [
-                    space.from_action(np.array(u), c.accel_law)
+                    space.from_action(np.array(u), c.settings.accel_law)
                     for u in np.array(np.meshgrid(*axes, indexing="ij")).reshape(4, -1).T
                 ]
             levels.append((level, pts))

@@ -43,33 +43,29 @@ MODEL_POINTS = 160
 """At most this many observations inform the model (the best half and the latest half)."""
 
 
+class Proposal(NamedTuple):
+    """A model batch's points (unit coordinates) and each model's fitted log
+    hyperparameters (``cost``, and ``c0``, ``c1``, … per broken constraint)."""
+
+    points: list[np.ndarray]
+    thetas: dict[str, list[float]]
+
+
 def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
             xi: float, rng: np.random.Generator, n_laws: int = 1,
             starts: dict[str, list[float]] | None = None,
             refit: bool = True) -> Proposal:  # fmt: skip
-    """``n`` points (unit coordinates) of highest expected improvement (by at least
-    ``xi`` over the best feasible cost) times probability of feasibility, each conditioned
-    on the previous ones and on ``pending`` at their predicted values. Gaussian
-    processes: log cost (on the feasible points once there are three) and the
-    constraints (signed log, one model per broken constraint, :func:`_constraint_targets`);
-    ``starts``:
-    each model's fit starts from these log hyperparameters (a previous batch's
-    :attr:`Proposal.thetas`, by model) and takes fewer steps; not ``refit``: a model
-    with a start keeps it, unfitted (only factored on the points).
-    Linear algebra on one thread: OpenBLAS's threads spin on matrices this small, 30x
-    slower on a busy machine (measured, 150 points)."""
+    """``n`` points (unit coordinates) of highest expected improvement (by at least ``xi``
+    over the best feasible cost) times probability of feasibility, each conditioned on the
+    previous ones and on ``pending`` at their predicted values (:func:`_fit`'s models).
+    ``starts``: each model's fit starts from these log hyperparameters (a previous batch's
+    :attr:`Proposal.thetas`) and takes fewer steps; not ``refit``: a model with a start
+    keeps it, only factored on the points. The linear algebra runs on one thread:
+    OpenBLAS's threads spin on matrices this small, 30x slower on a busy machine."""
     from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
     with threadpool_limits(1, user_api="blas"):
         return _propose(x, obs, pending, n, xi, rng, n_laws, starts, refit)
-
-
-class Proposal(NamedTuple):
-    """A model batch's points (unit coordinates) and each model's fitted log
-    hyperparameters (``cost``, and ``c0``, ``c1``, … per constraint or ``worst``)."""
-
-    points: list[np.ndarray]
-    thetas: dict[str, list[float]]
 
 
 def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,

@@ -1,106 +1,45 @@
-"""The sweep's objective: a trial's settings scored by the one scoring path, with its
-constraints set on the trial for the samplers that learn them.
+"""The sweep's objective: a trial's settings scored by the one scoring path, and the one
+format its result is stored in.
 
-Trials are scored one at a time (:meth:`Objective.__call__`, what ``study.optimize``
-calls); :meth:`Objective.results` also scores several settings in ONE batched kernel call.
+Each attribute written is one transaction of Optuna's RDB storage, so a trial writes two:
+its result as ONE user attribute, ``result`` (the settings scored, ``cost``, the worst of
+each constraint over the scenarios in :data:`vfgym.scoring.CONSTRAINTS`' order,
+``feasible``, the objectives' means and, for a result copied from an earlier trial with
+the same settings, ``cached_from``), and its constraints as ONE system attribute, the list
+Optuna reads into ``trial.constraints`` (Optuna's ``set_constraint`` reads the whole trial
+before each of its one-key writes).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from contextlib import nullcontext
 from typing import TYPE_CHECKING, Any, NamedTuple
-
-import numpy as np
 
 from vfgym import space
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
 from vfgym.plant.uncertainty import PlantVariant
-from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
-from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, aggregate_costs
-from vfgym.tuning._stored import CONSTRAINTS_KEY, RESULT_ATTR, result_attr, stored_result
+from vfgym.scoring import CONSTRAINTS, evaluate
+from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, aggregate
 
 if TYPE_CHECKING:
-    from optuna import Study, Trial
+    from optuna import Trial
 
-
-class Aggregate(NamedTuple):
-    """Each controller's scores over a scenario set (arrays indexed by controller).
-
-    What :func:`aggregate` returns.
-
-    Attributes
-    ----------
-    cost : numpy.ndarray
-        The cost's aggregate over the scenarios (the mean by default), (C,).
-    constraints : numpy.ndarray
-        Worst (max) of each constraint over the scenarios, (C, 3).
-    feasible : numpy.ndarray
-        Every constraint ≤ 0 on every scenario, (C,) bool.
-    objectives : numpy.ndarray
-        The objectives' means over the scenarios, (C, 3).
-    """
-
-    cost: np.ndarray
-    constraints: np.ndarray
-    feasible: np.ndarray
-    objectives: np.ndarray
-
-
-def aggregate(
-    ev: Evaluation, how: str = DEFAULT_AGGREGATE, cvar_alpha: float = DEFAULT_CVAR_ALPHA
-) -> Aggregate:
-    """Each controller's results over the scenarios, as a sweep scores a setting.
-
-    Parameters
-    ----------
-    ev : Evaluation
-        What :func:`vfgym.evaluate` returned.
-    how : str
-        The cost's aggregate over the scenarios: ``mean``, ``cvar`` or ``worst``
-        (:mod:`vfgym.tuning._aggregate`).
-    cvar_alpha : float
-        The share of the costliest scenarios ``cvar`` averages.
-
-    Returns
-    -------
-    Aggregate
-        Per controller: ``cost`` (the aggregate over the scenarios, on the modelled plant),
-        ``constraints`` (worst, max, over the scenarios and any true plants the evaluation
-        holds, :attr:`vfgym.Evaluation.across`), ``feasible`` (every constraint ≤ 0 on
-        every scenario and plant) and ``objectives`` (means).
-    """
-    cons = np.nanmax(ev.constraints, axis=1)
-    if ev.across is not None:  # robust: the worst over the true plants of the design too
-        cons = np.fmax(cons, np.nanmax(ev.across.constraints, axis=(1, 2)))
-    return Aggregate(
-        cost=aggregate_costs(ev.cost, how, cvar_alpha),
-        constraints=cons,
-        feasible=np.all(cons <= 0.0, axis=1),
-        objectives=np.nanmean(ev.objectives, axis=1),
-    )
+RESULT_ATTR = "result"
+"""The user attribute of a trial's result."""
+PARTS = ("settings", "cost", "constraints", "feasible", "objectives", "cached_from")
+"""A result's parts: the keys of ``result`` (``cached_from`` only on a copied result)."""
 
 
 def settings_key(s: Settings) -> tuple:
-    """A hashable key of settings, equal for equal settings.
-
-    Parameters
-    ----------
-    s : Settings
-        The settings.
-
-    Returns
-    -------
-    tuple
-        (value_rad, error_limit_rad, k, ts_over_tf, accel_law).
-    """
+    """A hashable key of settings, equal for equal settings."""
     return (s.value_rad, s.error_limit_rad, s.k, s.ts_over_tf, s.accel_law)
 
 
 class Result(NamedTuple):
-    """A trial's objective value(s) and the user attributes it records."""
+    """A setting's objective value(s) and the parts of its stored result."""
 
     values: float | list[float]
     attrs: dict[str, Any]
@@ -108,8 +47,8 @@ class Result(NamedTuple):
 
 class Objective:
     """Settings from the trial → :func:`vfgym.evaluate` on the scenarios (on ``plant``
-    with ``measures``: an axis's) → cost (or the three objectives), with the worst
-    constraints and the settings as user attributes.
+    with ``measures``: an axis's) → cost (or the three objectives), with the result stored
+    on the trial.
 
     A setting already scored (in this process, or by a completed trial of the study) is
     not simulated again: the trial copies that result and records ``cached_from``.
@@ -126,8 +65,10 @@ class Objective:
         The plant the settings run on (an axis's, see :class:`vfgym.moves.axis.Axis`).
     measures : Measures
         Windows and bands of the measures (an axis's).
-    aggregate, cvar_alpha : str, float
-        The cost's aggregate over the scenarios (:func:`aggregate`).
+    aggregate : str
+        The cost's aggregate over the scenarios (:func:`vfgym.tuning.aggregate`).
+    cvar_alpha : float
+        The share of the costliest scenarios ``cvar`` averages.
     plants : sequence of PlantVariant
         True plants a setting must also be feasible on (an axis's
         :meth:`~vfgym.moves.axis.Axis.design_plants`); its cost is the modelled plant's.
@@ -146,110 +87,38 @@ class Objective:
         plants: Sequence[PlantVariant] = (),
     ) -> None:
         self.scenarios = scenarios
-        self.plants = tuple(plants)
-        self.how = (aggregate, cvar_alpha)
-        self.plant = plant
-        self.measures = measures
         self.laws = laws
         self.form = form
+        self.plant, self.measures, self.plants = plant, measures, tuple(plants)
+        self.how = (aggregate, cvar_alpha)
         self.cache: dict[tuple, Result] = {}
         self.simulated = 0
-        self.guard: Callable[[], Any] = nullcontext
-        self._found: dict[tuple, Result] = {}
-        self._seen: set[int] = set()
-        self._found_in: tuple | None = None
+        self.guard: Callable[[], Any] = nullcontext  # around a simulation (interrupts)
+        self._study: tuple | None = None  # the study the fields below are of
+        self._study_id = 0
+        self._found: dict[tuple, Result] = {}  # its completed trials' results, by settings
+        self._known: set[int] = set()  # its trials seen finished, or run here
+        self._below = 0  # every trial numbered below this is known
 
     def __call__(self, trial: Trial) -> float | list[float]:
         settings = space.suggest(trial, self.laws)
-        (res,) = self.results(trial.study, [trial.number], [settings])
-        self.record(trial, res)
-        return res.values
-
-    def results(
-        self, study: Study | None, numbers: Sequence[int], settings: list[Settings]
-    ) -> list[Result]:
-        """The result of each setting, simulating only those never scored.
-
-        A setting is copied from this process's cache or from a completed trial of
-        ``study``; the others are simulated together in one batched call (the only place a
-        trial may be interrupted); repeats within the batch copy the first.
-
-        Parameters
-        ----------
-        study : optuna.Study or None
-            The study whose completed trials may already hold a setting's result.
-        numbers : sequence of int
-            The trials' numbers (recorded as ``cached_from`` of the results they create).
-        settings : list of Settings
-            The settings, one per trial.
-
-        Returns
-        -------
-        list of Result
-            One per setting, in order.
-        """
-        out: list[Result | None] = [self.cache.get(settings_key(s)) for s in settings]
-        if any(r is None for r in out) and study is not None:
-            found = self._completed(study)
-            for i, s in enumerate(settings):
-                if out[i] is None:
-                    out[i] = found.get(settings_key(s))
-        todo: dict[tuple, int] = {}
-        for i, s in enumerate(settings):
-            if out[i] is None:
-                todo.setdefault(settings_key(s), i)
-        if todo:
+        key = settings_key(settings)
+        self._seen(trial)
+        res = self.cache.get(key) or self._completed(trial).get(key)
+        if res is None:
             with self.guard():
-                scored = self.score_many([settings[i] for i in todo.values()])
-            self.simulated += len(todo)
-            for (key, i), res in zip(todo.items(), scored, strict=True):
-                self.cache[key] = Result(res.values, res.attrs | {"cached_from": numbers[i]})
-                out[i] = res
-            for i, s in enumerate(settings):
-                if out[i] is None:
-                    out[i] = self.cache[settings_key(s)]
-        return [r for r in out if r is not None]
-
-    def record(self, trial: Trial, res: Result, trial_id: int | None = None) -> None:
-        """Store a result on the trial: its user attribute, unless the trial holds it
-        already (a retried trial), and its constraints (:mod:`vfgym.tuning._stored`: one
-        write each).
-
-        Parameters
-        ----------
-        trial : optuna.Trial
-            The trial.
-        res : Result
-            Its result.
-        trial_id : int or None
-            The trial's id in ``trial.storage`` (default: looked up, :func:`trial_id_of`).
-        """
-        have = trial.user_attrs  # (the trial's own copy: no read)
-        result = result_attr(res.attrs)
-        if have.get(RESULT_ATTR) != result:
+                (res,) = self.score_many([settings])
+            self.simulated += 1
+            self.cache[key] = Result(res.values, res.attrs | {"cached_from": trial.number})
+        result = {k: res.attrs[k] for k in PARTS if k in res.attrs}
+        if trial.user_attrs.get(RESULT_ATTR) != result:  # (a retry may hold it already)
             trial.set_user_attr(RESULT_ATTR, result)
         values = dict(zip(CONSTRAINTS, res.attrs["constraints"], strict=True))
-        set_constraints(trial, values, trial_id)
-
-    def score(self, settings: Settings) -> Result:
-        """Values and user attributes of one setting (one batched evaluation).
-
-        Parameters
-        ----------
-        settings : Settings
-            The setting.
-
-        Returns
-        -------
-        Result
-            ``(values, attrs)``: the aggregate cost (``cost`` form) or the three
-            objectives' means, and the trial's user attributes (settings, cost, constraints,
-            feasible, objectives).
-        """
-        return self.score_many([settings])[0]
+        set_constraints(trial, values, self._study_id)
+        return res.values
 
     def score_many(self, settings: list[Settings]) -> list[Result]:
-        """Values and user attributes of each setting, all in one batched evaluation.
+        """Values and result parts of each setting, all in one batched evaluation.
 
         Parameters
         ----------
@@ -259,18 +128,13 @@ class Objective:
         Returns
         -------
         list of Result
-            One per setting, as :meth:`score` gives it.
+            One per setting: the aggregate cost (``cost`` form) or the three objectives'
+            means, and the parts of its stored result (settings, cost, constraints,
+            feasible, objectives).
         """
-        agg = aggregate(
-            evaluate(
-                settings,
-                self.scenarios,
-                plant=self.plant,
-                measures=self.measures,
-                plants=self.plants,
-            ),
-            *self.how,
-        )
+        ev = evaluate(settings, self.scenarios, plant=self.plant, measures=self.measures,
+                      plants=self.plants)  # fmt: skip
+        agg = aggregate(ev, *self.how)
         out = []
         for i, s in enumerate(settings):
             cost = float(agg.cost[i])
@@ -285,80 +149,131 @@ class Objective:
             out.append(Result(cost if self.form == "cost" else objectives, attrs))
         return out
 
-    def _completed(self, study: Study) -> dict[tuple, Result]:
-        """Results of the study's completed trials, by settings (the lowest-numbered of each).
+    def _seen(self, trial: Trial) -> None:
+        """Note the trial as run here (a new study: forget the last one's)."""
+        study = trial.study
+        if self._study != (id(study), study.study_name):
+            self._study = (id(study), study.study_name)
+            self._study_id = trial.storage.get_study_id_from_name(study.study_name)
+            self._found, self._known, self._below = {}, set(), 0
+        self._known.add(trial.number)
 
-        A completed trial never changes: each is read once (per study), so a batch costs
-        the trials completed since the last, not the whole study."""
+    def _completed(self, trial: Trial) -> dict[tuple, Result]:
+        """Results of the study's completed trials, by settings (the lowest-numbered of
+        each), read while a trial numbered below this one finished unseen here (another
+        process's: a resumed or shared study); each read once."""
         import optuna
 
-        if self._found_in != (id(study), study.study_name):
-            self._found, self._seen, self._found_in = {}, set(), (id(study), study.study_name)
-        found, seen = self._found, self._seen
-        for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,)):
-            if t.number in seen:
+        while self._below in self._known:
+            self._below += 1
+        if self._below >= trial.number:
+            return self._found
+        found = self._found
+        for t in trial.study.get_trials(deepcopy=False):
+            if t.number in self._known or not t.state.is_finished():
                 continue
-            seen.add(t.number)
+            self._known.add(t.number)
             stored = stored_result(t)
-            if stored is None or stored.settings is None:
+            if t.state != optuna.trial.TrialState.COMPLETE or stored is None:
                 continue
-            if len(stored.constraints) != len(CONSTRAINTS):  # scored with other constraints
-                continue
+            if stored.settings is None or len(stored.constraints) != len(CONSTRAINTS):
+                continue  # (scored with other constraints)
             key = settings_key(space.settings_from_dict(stored.settings))
             if key in found and found[key].attrs["cached_from"] <= t.number:
                 continue  # (a lower-numbered one may complete later, on another worker)
-            parts = stored._asdict()
-            attrs = {k: list(v) if isinstance(v, tuple) else v for k, v in parts.items()}
+            attrs = {k: list(v) if isinstance(v, tuple) else v for k, v in stored._asdict().items()}
             attrs["cached_from"] = t.number if stored.cached_from is None else stored.cached_from
             values = float(t.value) if self.form == "cost" else [float(v) for v in t.values]
             found[key] = Result(values, attrs)
         return found
 
 
-def trial_id_of(trial: Any, study_id: int | None = None) -> int:
-    """A trial's id in its storage, by Optuna's public API (``trial.storage``, the
-    number): where the study's storage caches its trials (RDB, in memory), no read.
+def set_constraints(trial: Any, values: dict[str, float], study_id: int | None = None) -> None:
+    """Set the trial's constraints (the list Optuna reads into ``trial.constraints``) in
+    one write, without reading the trial first as ``trial.set_constraint`` does.
 
     Parameters
     ----------
     trial : optuna.Trial
         The trial.
-    study_id : int or None
-        Its study's id in ``trial.storage`` (default: looked up by the study's name).
-
-    Returns
-    -------
-    int
-        The id the storage's trial methods take.
-    """
-    storage = trial.storage
-    if study_id is None:
-        study_id = storage.get_study_id_from_name(trial.study.study_name)
-    return int(storage.get_trial_id_from_study_id_trial_number(study_id, trial.number))
-
-
-def set_constraints(trial: Any, values: dict[str, float], trial_id: int | None = None) -> None:
-    """Set the trial's constraints, as ``trial.set_constraint`` does (Optuna 5 reads them
-    from the trial; its ``constraints_func`` is deprecated), without reading the trial
-    first: on an RDB storage each read rebuilds the whole trial. A retried trial carries
-    its first run's constraints, which are written again with the same values (the same
-    settings, so the same result).
-
-    Parameters
-    ----------
-    trial : optuna.Trial
-        The trial (or what a worker made in its place: ``storage`` and ``number``).
     values : dict of str to float
-        The constraints by name (≤ 0: met).
-    trial_id : int or None
-        The trial's id in ``trial.storage`` (default: :func:`trial_id_of`).
+        The constraints by name (≤ 0: met), in order.
+    study_id : int or None
+        The trial's study's id in ``trial.storage`` (default: looked up by its name).
+
     Raises
     ------
     ValueError
         If a value is NaN.
     """
-    tid = trial_id_of(trial) if trial_id is None else trial_id
     for name, v in values.items():
         if math.isnan(float(v)):
             raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
-    trial.storage.set_trial_system_attr(tid, CONSTRAINTS_KEY, [float(v) for v in values.values()])
+    storage = trial.storage
+    if study_id is None:
+        study_id = storage.get_study_id_from_name(trial.study.study_name)
+    tid = storage.get_trial_id_from_study_id_trial_number(study_id, trial.number)
+    storage.set_trial_system_attr(tid, "constraints", [float(v) for v in values.values()])
+
+
+class StoredResult(NamedTuple):
+    """A completed trial's result as a sweep stored it.
+
+    Attributes
+    ----------
+    settings : dict or None
+        The settings scored, as :func:`vfgym.space.settings_to_dict` gives them.
+    cost : float
+        The cost's aggregate over the scenarios.
+    constraints : tuple of float
+        The worst of each constraint over the scenarios, in ``CONSTRAINTS``' order
+        (≤ 0: met); empty if the trial has none.
+    feasible : bool
+        Every constraint met on every scenario.
+    objectives : tuple of float
+        The objectives' means over the scenarios.
+    cached_from : int or None
+        The trial whose simulation it copies (None: its own).
+    """
+
+    settings: dict[str, Any] | None
+    cost: float
+    constraints: tuple[float, ...]
+    feasible: bool
+    objectives: tuple[float, ...]
+    cached_from: int | None
+
+    @property
+    def arrives(self) -> bool:
+        """Whether the move arrived on every scenario (worst ``arrival`` ≤ 0)."""
+        if len(self.constraints) != len(CONSTRAINTS):
+            return False
+        return self.constraints[CONSTRAINTS.index("arrival")] <= 0.0
+
+
+def stored_result(trial: Any) -> StoredResult | None:
+    """A trial's stored result.
+
+    Parameters
+    ----------
+    trial : optuna.trial.FrozenTrial
+        The trial (anything with ``user_attrs``).
+
+    Returns
+    -------
+    StoredResult or None
+        Its result; None if it holds no cost (not scored by a sweep, or not yet).
+    """
+    parts = trial.user_attrs.get(RESULT_ATTR)
+    if not isinstance(parts, Mapping) or "cost" not in parts:
+        return None
+    cached = parts.get("cached_from")
+    settings = parts.get("settings")
+    return StoredResult(
+        settings=dict(settings) if isinstance(settings, Mapping) else None,
+        cost=float(parts["cost"]),
+        constraints=tuple(float(c) for c in parts.get("constraints") or ()),
+        feasible=bool(parts.get("feasible", False)),
+        objectives=tuple(float(o) for o in parts.get("objectives") or ()),
+        cached_from=None if cached is None else int(cached),
+    )

@@ -1,6 +1,6 @@
-"""What a finished sweep reports: its best feasible trial, the trials as CSV, its figures,
-the tuned settings against the paper's (a :class:`vfgym.report.Report`), and the gap to a
-grid reference.
+"""What a finished sweep reports: its best trial, the trials as CSV, its figures, the tuned
+settings against the paper's (a :class:`vfgym.report.Report`), and the gap to a grid
+reference.
 """
 
 from __future__ import annotations
@@ -18,14 +18,14 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 from vfgym import report, space
 from vfgym.io.runs import read_yaml, write_text
-from vfgym.moves.axis import PAPER_AXIS, machine_digest
+from vfgym.moves.axis import machine_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, PAPER_SETTINGS, Measures, Plant, Settings
 from vfgym.report import Candidate, Report
 from vfgym.scoring import CONSTRAINTS, OBJECTIVES
 from vfgym.tuning._config import SweepConfig
+from vfgym.tuning._objective import RESULT_ATTR, stored_result
 from vfgym.tuning._storage import StorageSpec
-from vfgym.tuning._stored import RESULT_ATTR, stored_result
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -44,10 +44,9 @@ def best_trial(study: Study) -> FrozenTrial | None:
     Returns
     -------
     optuna.trial.FrozenTrial or None
-        The completed trial with the lowest cost among the feasible ones; if none is, among
-        those that arrive on every scenario (a move that never gets there is no candidate
-        while one that does exists); else among all. Ties go to the earlier trial; ``None``
-        before any completes.
+        The completed trial of least cost among the feasible ones; if none is, among those
+        that arrive on every scenario; else among all. Ties go to the earlier trial;
+        ``None`` before any completes.
     """
     import optuna
 
@@ -64,12 +63,12 @@ def best_trial(study: Study) -> FrozenTrial | None:
 
 
 def trial_settings(trial: FrozenTrial) -> Settings:
-    """The settings a trial scored.
+    """The settings a trial scored (as stored with its result).
 
     Parameters
     ----------
     trial : optuna.trial.FrozenTrial
-        A trial scored by a sweep (its settings as stored with its result).
+        A trial scored by a sweep.
 
     Returns
     -------
@@ -101,7 +100,8 @@ def write_trials_csv(study: Study, path: Path) -> Path:
     -------
     pathlib.Path
         ``path``. Its columns are those ``study.trials_dataframe()`` names (number,
-        value(s), times, params_*, user_attrs_*, state); lists and dicts as JSON.
+        value(s), times, params_*, user_attrs_* with each part of the stored result a
+        column, state); lists and dicts as JSON.
     """
     trials = study.get_trials(deepcopy=False)
     names = study.metric_names or (
@@ -109,7 +109,11 @@ def write_trials_csv(study: Study, path: Path) -> Path:
     )
     value_cols = ["value"] if len(names) == 1 else [f"values_{n}" for n in names]
     params = sorted({k for t in trials for k in t.params})
-    flat = [_flat_attrs(t) for t in trials]
+    flat = []
+    for t in trials:
+        ua = dict(t.user_attrs)
+        res = ua.pop(RESULT_ATTR, None)
+        flat.append(ua | res if isinstance(res, dict) else ua)
     attrs = sorted({k for ua in flat for k in ua})
     cols = ["number", *value_cols, "datetime_start", "datetime_complete", "duration"]
     cols += [f"params_{p}" for p in params] + [f"user_attrs_{a}" for a in attrs] + ["state"]
@@ -131,29 +135,21 @@ def write_trials_csv(study: Study, path: Path) -> Path:
     return write_text(path, buf.getvalue())
 
 
-def _flat_attrs(trial: FrozenTrial) -> dict[str, Any]:
-    """A trial's user attributes with its stored result's parts as attributes of their
-    own (the trials CSV's columns)."""
-    ua = dict(trial.user_attrs)
-    res = ua.pop(RESULT_ATTR, None)
-    return ua | res if isinstance(res, dict) else ua
-
-
 def _cell(v: object) -> object:
     return json.dumps(v) if isinstance(v, (list, dict)) else v
 
 
 def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
     """The study's figures as PNG in the run folder, drawn by :mod:`vfgym.report.figures`
-    (as ``vfgym plot history|pareto`` draws them).
+    (as ``vfgym plot history|pareto`` draws them), each written atomically.
 
     Parameters
     ----------
     study : optuna.Study
         The study.
     run_dir : Path
-        Where ``history.png``, ``importances.png`` (for the cost) and, in the Pareto
-        form, ``pareto_front.png`` are written (atomically).
+        Where ``history.png``, ``importances.png`` and, in the Pareto form,
+        ``pareto_front.png`` go.
     form : str
         The sweep's objective, ``cost`` or ``pareto``.
 
@@ -188,11 +184,10 @@ def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
                 if len(study.get_trials(deepcopy=False, states=complete)) < 2:
                     raise ValueError("fewer than 2 completed trials")
                 fig = draw()
-                path = run_dir / f"{name}.png"
                 tmp = run_dir / f".{name}.tmp.png"
                 fig.savefig(tmp, dpi=100)
-                os.replace(tmp, path)
-                out[name] = path.name
+                os.replace(tmp, run_dir / f"{name}.png")
+                out[name] = f"{name}.png"
             except Exception as exc:  # Optuna refuses some figures (e.g. no spread to rank)
                 out[name] = f"skipped: {str(exc).splitlines()[0] if str(exc) else exc!r}"
     return out
@@ -206,8 +201,7 @@ def compare(
     plant: Plant = PAPER_PLANT,
     measures: Measures = DEFAULT_MEASURES,
 ) -> Report:
-    """The paper's settings against ``best`` on each scenario, through
-    :func:`vfgym.report.compare`.
+    """The paper's settings against ``best`` on each scenario (:func:`vfgym.report.compare`).
 
     Parameters
     ----------
@@ -225,34 +219,25 @@ def compare(
     Returns
     -------
     vfgym.report.Report
-        Columns ``paper`` (role baseline) then ``label``; :func:`vfgym.report.format_compact`
-        prints it as the sweep's table (peak pulse-train acceleration against the loaded
-        motor's usable acceleration), :func:`vfgym.report.compact_rows` gives its rows.
+        Columns ``paper`` (role baseline) then ``label``, as
+        :func:`vfgym.report.format_compact` prints the sweep's table.
     """
-    return report.compare(
-        [
-            Candidate("paper", PAPER_SETTINGS, source="paper", role="baseline"),
-            Candidate(label, best, source=label),
-        ],
-        [],
-        scenarios,
-        plant=plant,
-        measures=measures,
-    )
+    candidates = [
+        Candidate("paper", PAPER_SETTINGS, source="paper", role="baseline"),
+        Candidate(label, best, source=label),
+    ]
+    return report.compare(candidates, [], scenarios, plant=plant, measures=measures)
 
 
 class FoundReference(NamedTuple):
-    """A grid reference found for a sweep: ``reference.yaml`` as read, and where.
-
-    What :func:`find_reference` returns.
+    """A grid reference found for a sweep (:func:`find_reference`).
 
     Attributes
     ----------
     record : dict
-        The file's mapping (settings, cost, scenarios, laws, axis, ...: see
-        ``grid_reference``).
+        The ``reference.yaml`` mapping (:func:`grid_reference`).
     path : pathlib.Path
-        The ``reference.yaml`` file.
+        The file.
     """
 
     record: dict[str, Any]
@@ -277,21 +262,20 @@ def find_reference(
     ----------
     cfg_reference : str or None
         ``--reference PATH``: a ``reference.yaml`` or a grid run folder; ``None`` searches
-        ``runs_dir``.
+        ``runs_dir``'s ``grid/*/reference.yaml`` for the best matching one.
     runs_dir : str
-        The runs folder whose ``grid/*/reference.yaml`` are searched.
+        The runs folder.
     scenarios : list of Scenario
-        The sweep's scenarios; a reference must be for the same.
+        The sweep's scenarios.
     laws : tuple of str
-        The sweep's laws; a reference must be for the same.
+        The sweep's laws.
     axis : str or None
-        The axis's :func:`~vfgym.moves.axis.axis_digest`; a reference must be for the same.
+        The axis's :func:`~vfgym.moves.axis.axis_digest`.
 
     Returns
     -------
     FoundReference or None
-        The reference's data and file (the best matching one when searching), or ``None``
-        when none matches.
+        The reference, or ``None`` when none matches.
 
     Raises
     ------
@@ -338,14 +322,12 @@ def find_reference(
 
 
 def gap_pct(cost: float, ref_cost: float) -> float:
-    """How far a cost is above the reference's.
+    """How far a cost is above a reference's.
 
     Parameters
     ----------
-    cost : float
-        The sweep's best cost.
-    ref_cost : float
-        The grid reference's cost.
+    cost, ref_cost : float
+        The sweep's best cost, and the grid reference's.
 
     Returns
     -------
@@ -375,56 +357,44 @@ class ReferenceGap:
 
     @classmethod
     def between(cls, cost: float, found: FoundReference) -> ReferenceGap:
-        """The gap of a cost to a reference.
+        """The gap of ``cost`` to the reference ``found``.
 
         Parameters
         ----------
         cost : float
             The sweep's best cost.
         found : FoundReference
-            The reference, as :func:`find_reference` found it.
+            The reference.
 
         Returns
         -------
         ReferenceGap
-            Its path, its cost and the gap of ``cost`` to it.
+            Its path, its cost and the gap.
         """
         return cls(str(found.path), found.record["cost"], gap_pct(cost, found.cost))
 
 
 @dataclass(frozen=True)
 class BestRecord:
-    """A sweep's best trial as ``best.yaml`` holds it: the settings (what ``vfgym evaluate
-    --settings`` reads), its scores, and where they come from.
-
-    What :func:`best_record` returns.
+    """A sweep's best trial as ``best.yaml`` holds it (:func:`best_record`): the settings
+    (what ``vfgym evaluate --settings`` reads), its scores, and where they come from.
 
     Attributes
     ----------
     settings : dict
-        As the trial stored them (:func:`vfgym.space.settings_to_dict`).
-    cost : float
-        Its mean cost over the scenarios.
-    feasible : bool
-        Every constraint ≤ 0 on every scenario.
-    constraints : dict of str to float
-        The worst value of each constraint over the scenarios.
-    objectives : dict of str to float
-        The objectives' means over the scenarios.
-    study : str
-        The study's name.
-    storage : str
-        The storage URL, password masked.
+        As :func:`vfgym.space.settings_to_dict` gives them.
+    cost, feasible : float, bool
+        The cost's aggregate over the scenarios; every constraint ≤ 0 on every scenario.
+    constraints, objectives : dict of str to float
+        The worst of each constraint, and each objective's mean, over the scenarios.
+    study, storage : str
+        The study, and its storage (password masked).
     trial : int
         The trial's number.
-    sampler : str
-        The sweep's sampler.
-    objective : str or None
-        The sweep's objective (``cost`` or ``pareto``).
-    scenarios : list of str
-        The scenarios' names.
-    laws : list of str
-        The acceleration laws searched.
+    sampler, objective : str
+        The sweep's sampler and objective.
+    scenarios, laws : list of str
+        The scenarios' names and the laws searched.
     axis : str or None
         The axis file tuned on (``None``: the paper's axis).
     paper_cost : float or None
@@ -454,7 +424,7 @@ class BestRecord:
     machine: str | None = None
 
     def with_reference(self, gap: ReferenceGap) -> BestRecord:
-        """This record with its gap to a grid reference.
+        """This record with ``reference`` set to ``gap``.
 
         Parameters
         ----------
@@ -474,8 +444,7 @@ class BestRecord:
         Returns
         -------
         dict
-            The fields in order; ``paper_cost`` and ``reference`` omitted when ``None``
-            (``axis`` is always written, ``None`` for the paper's axis).
+            The fields in order; ``paper_cost`` and ``reference`` left out when ``None``.
         """
         out = asdict(self)
         for k in ("paper_cost", "reference"):
@@ -499,11 +468,11 @@ def best_record(
     study : optuna.Study
         The study.
     trial : optuna.trial.FrozenTrial
-        The best trial (:func:`best_trial`), scored by the sweep's objective.
+        The best trial (:func:`best_trial`).
     cfg : SweepConfig
-        The sweep's configuration (its sampler, objective, laws and axis are recorded).
+        The sweep's configuration.
     spec : StorageSpec
-        Where the study lives (shown without a password).
+        Where the study lives.
     scenarios : list of Scenario
         The sweep's scenarios.
     paper_cost : float, optional
@@ -512,8 +481,7 @@ def best_record(
     Returns
     -------
     BestRecord
-        The settings, cost, feasibility, constraints, objectives, and the study, storage,
-        trial, sampler, objective, scenarios, laws and axis they come from.
+        The record.
 
     Raises
     ------
@@ -538,5 +506,5 @@ def best_record(
         laws=list(cfg.laws),
         axis=cfg.axis,
         paper_cost=paper_cost,
-        machine=machine_digest(cfg.load_axis() or PAPER_AXIS),
+        machine=machine_digest(cfg.axis_or_paper()),
     )

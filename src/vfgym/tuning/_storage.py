@@ -3,10 +3,11 @@ file, or PostgreSQL shared by workers on many machines.
 
 RDB storages (SQLite, PostgreSQL) run Optuna's heartbeat: a trial whose worker stopped
 beating for the grace period is failed by ``optuna.storages.fail_stale_trials`` (which
-``study.optimize`` calls before each trial) and enqueued again by Optuna's
-``RetryHeartbeatStaleTrialCallback``. A SQLite file is kept in write-ahead-log mode, so no
-reader waits on a worker frozen or killed mid-write; journal appends take an ``flock``
-the kernel drops when its holder dies.
+``study.optimize`` calls before each trial) and enqueued again with its settings by
+Optuna's ``RetryHeartbeatStaleTrialCallback``. What is added here, each for what Optuna
+does not do, is said where it lives: retrying the creation of a new database's tables,
+one retry of a trial two workers fail at once, a journal lock the kernel drops when its
+holder dies, and SQLite's write-ahead log.
 """
 
 from __future__ import annotations
@@ -57,19 +58,8 @@ class StorageSpec:
 
 
 def mask_url(url: str) -> str:
-    """A URL fit to show.
-
-    Parameters
-    ----------
-    url : str
-        A storage URL.
-
-    Returns
-    -------
-    str
-        ``url`` with any password replaced by ``***`` (SQLAlchemy's rendering of it; a
-        text it cannot read as a URL has anything between ``user:`` and ``@`` masked).
-    """
+    """``url`` with any password replaced by ``***`` (in a text SQLAlchemy cannot read as
+    a URL, anything between ``user:`` and ``@``)."""
     from sqlalchemy.engine import make_url
 
     try:
@@ -80,7 +70,6 @@ def mask_url(url: str) -> str:
 
 
 def _file_spec(kind: str, path: Path) -> StorageSpec:
-    """A SQLite or journal storage on the file ``path`` (made absolute)."""
     p = path.resolve()
     return StorageSpec(kind, f"sqlite:///{p}" if kind == "sqlite" else str(p), str(p))
 
@@ -88,16 +77,15 @@ def _file_spec(kind: str, path: Path) -> StorageSpec:
 def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
     """The storage named by ``--storage``.
 
-    A URL is read by SQLAlchemy (:func:`sqlalchemy.engine.make_url`): every SQLite file
-    URL and every PostgreSQL URL it takes is taken (a query such as ``?sslmode=require``,
-    an IPv6 host ``[::1]``, a Unix socket ``postgresql:///db``), with a synchronous driver.
+    A URL is read by SQLAlchemy: every SQLite file URL and PostgreSQL URL it takes is
+    taken (a query such as ``?sslmode=require``, an IPv6 host, a Unix socket
+    ``postgresql:///db``), with a synchronous driver.
 
     Parameters
     ----------
     text : str
         ``sqlite``, ``journal``, ``sqlite:///FILE``, ``journal:FILE`` or a PostgreSQL URL
-        ``postgresql[+DRIVER]://[USER[:PASS]@][HOST[:PORT]]/DB[?OPTIONS]``
-        (:data:`STORAGE_HELP`).
+        ``postgresql[+DRIVER]://[USER[:PASS]@][HOST[:PORT]]/DB[?OPTIONS]``.
     run_dir : pathlib.Path
         The run folder, where ``sqlite`` and ``journal`` put their file.
 
@@ -165,9 +153,8 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
 
 
 def find_storage(text: str, run_dir: Path) -> StorageSpec:
-    """The storage a sweep's run folder recorded, found again.
-
-    Parsed by :func:`resolve_storage` (the one parser).
+    """The storage a sweep's run folder recorded, found again (parsed by
+    :func:`resolve_storage`).
 
     Parameters
     ----------
@@ -202,10 +189,8 @@ def find_storage(text: str, run_dir: Path) -> StorageSpec:
 
 
 def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = None) -> BaseStorage:
-    """The Optuna storage for ``spec``.
-
-    RDB (with heartbeat and retry of stale trials) for SQLite and PostgreSQL, a SQLite
-    file in write-ahead-log mode; JournalStorage on a file, its appends under ``flock``.
+    """The Optuna storage for ``spec``: RDB with Optuna's heartbeat and retry of stale
+    trials for SQLite and PostgreSQL, JournalStorage on a file.
 
     Parameters
     ----------
@@ -255,16 +240,11 @@ def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = Non
             raise ValueError(f"storage={spec.display!r} cannot be opened: {first}") from None
 
 
-CREATE_TRIES = 8
-"""Times a new database's tables are tried when processes create them at once."""
-
-
-def _rdb(spec: StorageSpec, heartbeat: int, grace: int | None) -> RDBStorage:
+def _rdb(spec: StorageSpec, heartbeat: int, grace: int | None, tries: int = 8) -> RDBStorage:
     """Optuna's RDB storage with its heartbeat and retry of stale trials, tried again when
     another process creating the same new database's tables at the same moment makes it
-    fail (Optuna's ``create_all`` and version row are not safe against that: "table
-    studies already exists", or a commit error "e.g. exceeding max length"); the second
-    try finds them made."""
+    fail: Optuna's table creation is not safe against that ("table studies already
+    exists", "exceeding max length"); a later try finds them made."""
     import optuna
     import sqlalchemy
 
@@ -273,7 +253,7 @@ def _rdb(spec: StorageSpec, heartbeat: int, grace: int | None) -> RDBStorage:
         if spec.kind == "sqlite"
         else {"pool_pre_ping": True, "pool_size": 2, "max_overflow": 2}
     )
-    for attempt in range(CREATE_TRIES):
+    for attempt in range(tries):
         try:
             return optuna.storages.RDBStorage(
                 spec.url,
@@ -283,7 +263,7 @@ def _rdb(spec: StorageSpec, heartbeat: int, grace: int | None) -> RDBStorage:
                 heartbeat_stale_trial_callback=RetryStale(spec.path),
             )
         except (sqlalchemy.exc.SQLAlchemyError, optuna.exceptions.StorageInternalError):
-            if attempt == CREATE_TRIES - 1:
+            if attempt == tries - 1:
                 raise
             time.sleep(random.uniform(0.05, 0.25) * (attempt + 1))
     raise AssertionError("unreachable")
@@ -296,24 +276,10 @@ MAX_RETRY = 3
 def retry_once(study: Study, trial: FrozenTrial, lock: str | None = None) -> bool:
     """Enqueue a failed trial again with its settings (Optuna's
     ``RetryHeartbeatStaleTrialCallback``, at most :data:`MAX_RETRY` times) unless a worker
-    already has: kept because Optuna fails a stale trial in a read and a write, which two
-    workers on SQLite (no row locks) or a journal may both pass, and both would retry it.
-
-    Parameters
-    ----------
-    study : optuna.Study
-        The trial's study.
-    trial : optuna.trial.FrozenTrial
-        The failed trial.
-    lock : str or None
-        A file locked (``flock``) around the check and the retry: the storage file's
-        ``.retry`` (SQLite, journal); None on PostgreSQL, whose rows are locked.
-
-    Returns
-    -------
-    bool
-        Whether this call enqueued it.
-    """
+    already has, and say whether this call did: Optuna fails a stale trial in a read and a
+    write, which two workers on SQLite (no row locks) or a journal may both pass. ``lock``:
+    the storage's file, whose ``.retry`` is locked (``flock``) around the check and the
+    retry; None on PostgreSQL, whose rows are locked."""
     import optuna
 
     history = [*trial.system_attrs.get("retry_history", []), trial.number]
@@ -329,14 +295,8 @@ def retry_once(study: Study, trial: FrozenTrial, lock: str | None = None) -> boo
 
 
 class RetryStale:
-    """The heartbeat-stale trial callback: :func:`retry_once`, noting the trials it
-    retried (a sweep reports them; Optuna's callback does not record them).
-
-    Parameters
-    ----------
-    lock : str or None
-        :func:`retry_once`'s lock.
-    """
+    """The heartbeat-stale trial callback: :func:`retry_once` with ``lock``, noting the
+    trials it retried (a sweep reports them; Optuna's callback does not record them)."""
 
     def __init__(self, lock: str | None = None) -> None:
         self.lock = lock
@@ -348,11 +308,10 @@ class RetryStale:
 
 
 class _Flock:
-    """An ``flock`` on the file ``path``; guarding journal appends (on ``PATH.flock``:
-    Optuna's journal backend only calls ``acquire``/``release``) it is kept because, unlike
-    Optuna's own file locks, the kernel drops it when its holder dies, so a worker killed
-    while writing does not stall the others for the stale-lock grace period. Every process
-    writing the journal must use it (vfgym's workers do; readers take no lock)."""
+    """An ``flock`` on the file ``path``. Optuna's own journal file locks outlive a holder
+    killed while writing, stalling the others for their stale-lock grace period; the
+    kernel drops an ``flock`` when its holder dies. Every process writing the journal must
+    use it (vfgym's workers do; readers take no lock)."""
 
     def __init__(self, path: str) -> None:
         self._path = path
@@ -366,13 +325,6 @@ class _Flock:
         self._fd = fd
         return True
 
-    def __enter__(self) -> _Flock:
-        self.acquire()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.release()
-
     def release(self) -> None:
         import fcntl
 
@@ -381,12 +333,19 @@ class _Flock:
             os.close(self._fd)
             self._fd = None
 
+    def __enter__(self) -> _Flock:
+        self.acquire()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
+
 
 def _sqlite_wal(storage: RDBStorage) -> None:
     """Put the SQLite file in write-ahead-log mode (it stays so) with ``synchronous=NORMAL``
     on every connection: readers never wait for a writer, a worker frozen or killed
     mid-write blocks no reader, and a commit needs no fsync (a crash of the process loses
-    nothing committed; only a power cut may lose the last commits)."""
+    nothing committed; a power cut may lose the last commits)."""
     import sqlalchemy
 
     def on_connect(dbapi_conn: Any, _record: Any) -> None:

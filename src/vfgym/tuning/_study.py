@@ -5,8 +5,8 @@ enqueued first.
 
 from __future__ import annotations
 
+import time
 import warnings
-from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -61,10 +61,10 @@ def make_sampler(
     storage: BaseStorage | None = None,
     plant: Plant | None = None,
 ) -> BaseSampler:
-    """The Optuna sampler named by ``cfg.sampler``, seeded; constrained where it can be.
+    """The Optuna sampler named by ``cfg.sampler``, seeded.
 
-    The constraints reach TPE, GP and NSGA-II through the trials (``trial.set_constraint``,
-    Optuna 5's way; its ``constraints_func`` is deprecated); CMA-ES and the grid ignore them.
+    The constraints reach TPE, GP and NSGA-II through the trials (``trial.constraints``);
+    CMA-ES and the grid ignore them.
 
     Parameters
     ----------
@@ -77,10 +77,10 @@ def make_sampler(
         default: ``cfg``'s).
     storage : optuna.storages.BaseStorage or None
         The storage of the study it samples: the compass records there the generation of
-        a trial it draws through ``study.ask()`` (without it, in the sampler only).
+        each trial it draws (without it, in the sampler only).
     plant : Plant or None
-        The base plant the scenarios run on (default: ``cfg``'s axis's, else the paper's):
-        a sweep run outside a config (``vfgym fit``'s best fixed setting) gives its axis's.
+        The plant the scenarios run on (default: ``cfg``'s axis's): a sweep run outside
+        a config (``vfgym fit``'s best fixed setting) gives its axis's.
 
     Returns
     -------
@@ -95,7 +95,7 @@ def make_sampler(
         if cfg.sampler == "compass":
             from vfgym.tuning._compass import CompassSampler
 
-            base = _base_plant(cfg) if plant is None else plant
+            base = cfg.axis_or_paper().plant if plant is None else plant
             rel = relative_space(scenarios or cfg.scenario_list(), base)
             return CompassSampler(rel, cfg.laws, seed, storage=storage)
         if cfg.sampler == "tpe":
@@ -113,14 +113,9 @@ def make_sampler(
         return s.RandomSampler(seed=seed)
 
 
-def _base_plant(cfg: SweepConfig) -> Plant:
-    axis = cfg.load_axis()
-    return PAPER_PLANT if axis is None else axis.plant
-
-
 def _grid_sampler(search_space: dict[str, list[Any]], seed: int | None) -> BaseSampler:
     """Optuna's grid sampler without its ``after_trial`` stop: the study's trial budget
-    (:func:`trial_budget`) ends the grid, for every worker sharing it (Optuna's stop ends
+    (:func:`trial_budget`) ends the grid for every worker sharing it (Optuna's stop ends
     only the worker that drew the last point)."""
     import optuna
 
@@ -144,9 +139,8 @@ def relative_space(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> spac
     Returns
     -------
     vfgym.space.Relative
-        ``k`` relative to the geometric mean of the loaded motor's k
-        (:func:`vfgym.params.usable_k`: the usable acceleration's, not the stated
-        limit's) over the scenarios' plants.
+        ``k`` relative to the geometric mean over the scenarios' plants of the loaded
+        motor's k (:func:`vfgym.params.usable_k`: the usable acceleration's).
     """
     ks = [usable_k(sc.plant(base)) for sc in scenarios] or [usable_k(base)]
     return space.Relative(float(np.exp(np.mean(np.log(ks)))))
@@ -236,56 +230,6 @@ def warm_starts(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> list[tu
     return out
 
 
-@dataclass(frozen=True)
-class StudyMeta:
-    """What a study optimises, stored as its ``vfgym`` user attribute and checked when it
-    is resumed.
-
-    Attributes
-    ----------
-    scenarios : list of str
-        The scenarios' names.
-    laws : list of str
-        The acceleration laws searched.
-    objective : str or None
-        ``cost`` or ``pareto``.
-    axis : str or None
-        The axis's :func:`~vfgym.moves.axis.axis_digest` (``None``: the paper's axis).
-    aggregate : str
-        The cost's aggregate over the scenarios (``mean``, ``worst``, ``cvar 0.25``).
-    """
-
-    scenarios: list[str]
-    laws: list[str]
-    objective: str | None
-    axis: str | None
-    aggregate: str = "mean"
-
-
-def study_meta(cfg: SweepConfig, scenarios: list[Scenario]) -> StudyMeta:
-    """What a sweep optimises.
-
-    Parameters
-    ----------
-    cfg : SweepConfig
-        The sweep's configuration.
-    scenarios : list of Scenario
-        The sweep's scenarios.
-
-    Returns
-    -------
-    StudyMeta
-        Its scenarios, laws, objective, axis and aggregate.
-    """
-    return StudyMeta(
-        [s.name for s in scenarios],
-        list(cfg.laws),
-        cfg.objective,
-        axis_digest(cfg.load_axis()),
-        describe(cfg),
-    )
-
-
 def create_or_load(
     storage: BaseStorage,
     name: str,
@@ -293,7 +237,11 @@ def create_or_load(
     scenarios: list[Scenario],
     sampler: BaseSampler | None = None,
 ) -> tuple[Study, bool]:
-    """The study ``name``: created with the baseline enqueued first, or loaded.
+    """The study ``name``: created with the warm starts enqueued first, or loaded.
+
+    A new study records what it optimises (its scenarios, laws, objective, axis and
+    aggregate) as its ``vfgym`` user attribute, last; a study loaded must optimise the
+    same.
 
     Parameters
     ----------
@@ -304,7 +252,7 @@ def create_or_load(
     cfg : SweepConfig
         The sweep's configuration.
     scenarios : list of Scenario
-        The sweep's scenarios (a loaded study must optimise the same).
+        The sweep's scenarios.
     sampler : optuna.samplers.BaseSampler or None
         The sampler to attach.
 
@@ -322,7 +270,13 @@ def create_or_load(
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     directions = ["minimize"] if cfg.objective == "cost" else ["minimize"] * len(OBJECTIVES)
-    meta = study_meta(cfg, scenarios)
+    meta = {
+        "scenarios": [s.name for s in scenarios],
+        "laws": list(cfg.laws),
+        "objective": cfg.objective,
+        "axis": axis_digest(cfg.load_axis()),  # None: the paper's axis
+        "aggregate": describe(cfg),
+    }
     try:
         study = optuna.create_study(
             storage=storage, study_name=name, directions=directions, sampler=sampler
@@ -333,15 +287,19 @@ def create_or_load(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             study.set_metric_names(["cost"] if cfg.objective == "cost" else list(OBJECTIVES))
-        starts = warm_starts(scenarios, _base_plant(cfg))
+        starts = warm_starts(scenarios, cfg.axis_or_paper().plant)
         for label, settings in starts[:1] if cfg.sampler == "grid" else starts:  # grid: exhaustive
             study.enqueue_trial(baseline_params(cfg.laws, settings), user_attrs={"baseline": label})
-        study.set_user_attr(META_KEY, asdict(meta))  # last: the study is ready
+        study.set_user_attr(META_KEY, meta)  # last: the study is ready
         return study, True
-    old = _ready(study, META_KEY)
+    # Another process that has just created the study records what it optimises last.
+    deadline = time.monotonic() + 30.0
+    while META_KEY not in study.user_attrs and time.monotonic() < deadline:
+        time.sleep(0.1)
+    old = study.user_attrs.get(META_KEY)
     if old is not None:
         old = {"aggregate": "mean"} | old  # a study made before the aggregate was recorded
-        for key, want in asdict(meta).items():
+        for key, want in meta.items():
             if old.get(key) != want:
                 raise ValueError(
                     f"study={name!r} already optimises {key}={old.get(key)!r}, not "
@@ -353,15 +311,3 @@ def create_or_load(
             f"{len(directions)}: give another --study"
         )
     return study, False
-
-
-def _ready(study: Study, key: str, wait_s: float = 30.0) -> Any:
-    """The study's ``key`` user attribute, waiting while another process that has just
-    created the study enqueues its warm starts (it records the attribute last); None
-    for a study without it (after ``wait_s``)."""
-    import time
-
-    deadline = time.monotonic() + wait_s
-    while key not in study.user_attrs and time.monotonic() < deadline:
-        time.sleep(0.1)
-    return study.user_attrs.get(key)

@@ -3,11 +3,13 @@ own process, on one machine or on many sharing one RDB storage.
 
 Optuna does the rest: the heartbeat of a running trial, failing the trials of dead
 workers and enqueueing them again with their settings (RDB storages, :mod:`._storage`),
-the timeout, the trials' bookkeeping. What is kept here, each for what Optuna does not do:
-the trial budget of the whole study (``MaxTrialsCallback`` counts after a trial, so
-several workers would overshoot it), the dead workers of a journal (its storage has no
-heartbeat) and of a trial killed before its first heartbeat (Optuna never takes it as
-stale), and a Ctrl-C that only lands inside a simulation (:class:`DeferredInterrupt`).
+the timeout, the trials' bookkeeping. Kept here, each for what Optuna does not do: the
+trial budget of the whole study (``MaxTrialsCallback`` counts after a trial, so several
+workers would overshoot it), the dead workers of a journal (no heartbeat) and a trial
+killed before its first heartbeat (Optuna never takes it as stale), and a Ctrl-C that
+lands only inside a simulation (:class:`DeferredInterrupt`). ``optimize`` gets no
+callback: Optuna reads each finished trial back for its callbacks, so what follows a
+trial is done at the end of the objective and at the start of the next trial.
 """
 
 from __future__ import annotations
@@ -28,12 +30,12 @@ from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from vfgym.moves.axis import axis_kwargs
+from vfgym.moves.axis import AxisNote, axis_kwargs
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
 from vfgym.tuning._objective import Objective
-from vfgym.tuning._storage import RetryStale, StorageSpec, open_storage, retry_once
+from vfgym.tuning._storage import MAX_RETRY, RetryStale, StorageSpec, open_storage, retry_once
 from vfgym.tuning._study import make_sampler, trial_budget
 
 if TYPE_CHECKING:
@@ -42,25 +44,15 @@ if TYPE_CHECKING:
 
 RETRY = "failed_trial"
 """System attribute of a retried trial (Optuna's ``RetryHeartbeatStaleTrialCallback``)."""
-
 WORKER_ATTR = "worker"
 """User attribute of a trial: ``host/pid/start-time`` of the process that ran it."""
 
 
 class DeferredInterrupt:
     """SIGINT raises KeyboardInterrupt only inside :meth:`allowed` blocks (a trial's
-    simulation, a wait); anywhere else it is held until the next such block, a trial's
-    end or the end of the ``with``: kept because Optuna's ``optimize`` lets a Ctrl-C land
-    anywhere, inside a storage write too.
-
-    The decision is taken by the Python-level handler, which runs in the main thread
-    between bytecodes; off the main thread the process's handler is left as it is.
-
-    Raises
-    ------
-    KeyboardInterrupt
-        On leaving the ``with`` normally while an interrupt is held back.
-    """
+    simulation, a wait); anywhere else it is held until the next such block, :meth:`check`
+    or the end of the ``with``: Optuna's ``optimize`` lets a Ctrl-C land anywhere, inside a
+    storage write too. Off the main thread the process's handler is left as it is."""
 
     def __init__(self) -> None:
         self.open = False
@@ -78,9 +70,8 @@ class DeferredInterrupt:
         if self._installed:
             signal.signal(signal.SIGINT, self._old)
             self._installed = False
-        if self.pending and kind is None:
-            self.pending = False
-            raise KeyboardInterrupt
+        if kind is None:
+            self.check()
 
     def _handle(self, signum: int, frame: Any) -> None:
         if self.open:
@@ -89,26 +80,14 @@ class DeferredInterrupt:
         self.pending = True
 
     def check(self) -> None:
-        """Raise an interrupt that was held back.
-
-        Raises
-        ------
-        KeyboardInterrupt
-            If one was held back.
-        """
+        """Raise KeyboardInterrupt if one was held back."""
         if self.pending:
             self.pending = False
             raise KeyboardInterrupt
 
     @contextmanager
     def allowed(self) -> Iterator[None]:
-        """Let an interrupt through here (raising at once one that was held back).
-
-        Yields
-        ------
-        None
-            Inside the block, SIGINT raises KeyboardInterrupt.
-        """
+        """Let an interrupt through in the block (one held back is raised at once)."""
         self.check()
         self.open = True
         try:
@@ -152,9 +131,8 @@ def run_worker(
     A worker starts a trial only while the completed and running trials number fewer than
     asked, and waits while the others run the last ones, so a study ends with exactly the
     trials asked for however many workers share it (two workers that start one at the same
-    moment: the later-numbered trial waits, and is pruned if the budget fills). SIGINT is
-    held back (:class:`DeferredInterrupt`) except inside a simulation and while waiting;
-    an interrupted trial is failed (by Optuna) and enqueued again with its settings.
+    moment: the later-numbered trial waits, and is pruned if the budget fills). An
+    interrupted trial is failed (by Optuna) and enqueued again with its settings.
 
     Parameters
     ----------
@@ -184,29 +162,27 @@ def run_worker(
     rep = WorkerReport()
     scenarios = cfg.scenario_list()
     seed = None if cfg.seed is None else cfg.seed + index
+    axis = cfg.axis_or_paper()
+    me = worker_id()
     with DeferredInterrupt() as interrupts:
         storage = open_storage(spec, cfg.heartbeat, cfg.grace)
         sampler = make_sampler(cfg, seed, scenarios, storage)
         study = optuna.load_study(study_name=study_name, storage=storage, sampler=sampler)
-        axis = cfg.load_axis()
-        on_axis = axis_kwargs(axis)
         objective = Objective(
-            scenarios,
-            cfg.laws,
-            str(cfg.objective),
-            **on_axis,  # type: ignore[arg-type]
-            aggregate=cfg.aggregate,
-            cvar_alpha=cfg.cvar_alpha,
-            plants=() if axis is None else axis.design_plants(),
-        )
+            scenarios, cfg.laws, str(cfg.objective), plant=axis.plant, measures=axis.measures,
+            aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha, plants=axis.design_plants(),
+        )  # fmt: skip
         objective.guard = interrupts.allowed
-        # First call compiles/loads the kernel before any trial is started.
-        evaluate(PAPER_SETTINGS, scenarios[:1], **on_axis)
+        evaluate(PAPER_SETTINGS, scenarios[:1], **axis_kwargs(axis))  # the kernel compiled first
         gate = _Budget(study, cfg, spec, interrupts)
-        current: list[int] = []
+        current: list[int] = []  # the trial in a simulation here
+        ran: list[int] = []
+        paused: list[int] = []  # optimize stopped here, to wait outside it (or an interrupt)
 
         def run_trial(trial: Trial) -> float | list[float]:
-            trial.set_user_attr(WORKER_ATTR, worker_id())
+            if ran and on_trial is not None:
+                on_trial(study)  # (the last trial has completed)
+            trial.set_user_attr(WORKER_ATTR, me)
             go = gate.wait(trial.number)
             if go is None:
                 raise optuna.TrialPruned("a retried trial takes the last place")
@@ -214,37 +190,50 @@ def run_worker(
                 study.stop()
                 raise optuna.TrialPruned("the study already holds the trials asked for")
             current[:] = [trial.number]
-            return objective(trial)
-
-        def after(st: Study, trial: FrozenTrial) -> None:
+            values = objective(trial)
             current.clear()
-            if trial.state == optuna.trial.TrialState.COMPLETE:
-                rep.trials.append(trial.number)
-            if on_trial is not None:
-                on_trial(st)
-            if not gate.wait(made=trial.number + 1):
-                st.stop()
-            interrupts.check()
+            ran.append(trial.number)
+            if interrupts.pending or gate.full(trial.number):
+                paused.append(trial.number)
+                study.stop()  # optimize returns once the trial is told
+            return values
 
+        deadline = None if cfg.timeout is None else time.monotonic() + cfg.timeout
         try:
             while gate.wait():
-                try:
-                    study.optimize(run_trial, timeout=cfg.timeout, callbacks=[after])
+                left = None if deadline is None else deadline - time.monotonic()
+                if left is not None and left <= 0:
                     break
+                paused.clear()
+                try:
+                    study.optimize(run_trial, timeout=left)
                 except optuna.exceptions.UpdateFinishedTrialError:
                     # Another worker took this one's trial as dead (its heartbeat late past
                     # the grace period) and retried it: go on with the next.
                     current.clear()
+                    continue
+                interrupts.check()
+                if not paused:  # the timeout
+                    break
             rep.stopped = "done" if gate.done() else "timeout"
         except KeyboardInterrupt:
             rep.stopped = "interrupted"
-            _retry_interrupted(study, current, spec.path)
+            for n in current:
+                _fail_and_retry(
+                    study, copy.deepcopy(study.get_trials(deepcopy=False)[n]), spec.path
+                )
             raise
         finally:
             rep.simulated = objective.simulated
             cb = getattr(storage, "get_heartbeat_stale_trial_callback", lambda: None)()
             noted = cb.failed if isinstance(cb, RetryStale) else []
             rep.recovered = sorted(set(gate.recovered) | set(noted))
+            if ran:
+                trials = study.get_trials(deepcopy=False)
+                complete = optuna.trial.TrialState.COMPLETE
+                rep.trials = [n for n in ran if trials[n].state == complete]
+                if on_trial is not None:
+                    on_trial(study)
     return rep
 
 
@@ -252,8 +241,8 @@ class _Budget:
     """The study's trial budget across workers: :meth:`wait` says whether a trial may run
     (waiting, interrupts allowed, while the running ones could fill the budget), looking
     for dead workers' trials meanwhile (Optuna's ``fail_stale_trials`` on RDB storages,
-    which ``optimize`` only runs when a trial starts; on a journal, by process; and a
-    trial whose worker died before writing its name, which has no heartbeat either)."""
+    which ``optimize`` runs only when a trial starts; on a journal, by process; and a
+    trial whose worker died before its first heartbeat, which has no worker's name)."""
 
     def __init__(self, study: Study, cfg: SweepConfig, spec: StorageSpec, interrupts: Any) -> None:
         self.study, self.budget, self.every = study, trial_budget(cfg), cfg.heartbeat
@@ -262,9 +251,19 @@ class _Budget:
         self.interrupts = interrupts
         self.recovered: list[int] = []
         self.orphan_s = max(30.0, 6.0 * self.every)
+        self.retry_s = max(5.0, 2.0 * self.every)  # a failed trial's retry is awaited this long
         self._due = 0.0
-        # trials made, and those completed, running or waiting, at the last read
+        # The trials made, and those completed, running or waiting, at the last read: no
+        # read is needed while they leave room for every trial made since.
         self._last = (0, self.budget)
+
+    def _trials(self) -> list[FrozenTrial]:
+        import optuna
+
+        trials = self.study.get_trials(deepcopy=False)
+        fail, pruned = optuna.trial.TrialState.FAIL, optuna.trial.TrialState.PRUNED
+        self._last = (len(trials), sum(t.state not in (fail, pruned) for t in trials))
+        return trials
 
     def done(self) -> bool:
         """Whether the study holds the trials asked for."""
@@ -273,44 +272,73 @@ class _Budget:
         complete = (optuna.trial.TrialState.COMPLETE,)
         return len(self.study.get_trials(deepcopy=False, states=complete)) >= self.budget
 
-    def wait(self, number: int | None = None, made: int = 0, poll_s: float = 0.2) -> bool | None:
+    def full(self, number: int) -> bool:
+        """Whether, once trial ``number`` (scored here, not yet told) completes, the
+        completed and running trials reach the budget: another trial of this worker could
+        only wait, so it waits before asking for one (:meth:`wait`, outside ``optimize``)."""
+        import optuna
+
+        made_then, busy = self._last
+        if busy + (number + 1 - made_then) + (self.workers - 1) < self.budget:
+            return False
+        state = optuna.trial.TrialState
+        taken = [t.state == state.COMPLETE or t.state == state.RUNNING for t in self._trials()]
+        return sum(taken) >= self.budget  # (this trial, running, counted once)
+
+    def wait(self, number: int | None = None, poll_s: float = 0.2) -> bool | None:
         """Wait until a trial may run: False once the study holds its trials, else True
         when the completed and running trials (those numbered below ``number``: the
         trial's own is running) are fewer than asked; None when trial ``number`` must give
-        its place to a dead worker's retried trial (waiting, it runs next). No read is
-        needed while the last one left room for every trial made since (``number``, else
-        ``made``, trials known to exist), each of which may be running, as may every
-        trial then waiting."""
+        its place to a dead worker's retried trial (waiting, it runs next)."""
         import optuna
 
         state = optuna.trial.TrialState
         self._recover()
         made_then, busy = self._last
-        # Between trials, room also for a trial each other worker may have made since.
-        known = number if number is not None else made + self.workers
+        known = number if number is not None else made_then + self.workers
         if busy + (known - made_then) < self.budget:
             return True
         while True:
-            trials = self.study.get_trials(deepcopy=False)
+            trials = self._trials()
             n = sum(t.state == state.COMPLETE for t in trials)
-            waiting = sum(t.state == state.WAITING for t in trials)
-            running = sum(t.state == state.RUNNING for t in trials)
-            self._last = (len(trials), n + running + waiting)
             if n >= self.budget:
                 return False
             lower = trials if number is None else trials[:number]
             taken = n + sum(t.state == state.RUNNING for t in lower)
-            if number is not None and taken < self.budget:
-                retries = [
-                    t for t in trials if t.state == state.WAITING and RETRY in t.system_attrs
-                ]
-                if taken + len(retries) >= self.budget:
+            due = self._retries_due(trials)
+            if number is None:
+                taken += due  # a retry about to be enqueued: asked for next, it will run
+            elif RETRY not in trials[number].system_attrs:
+                waiting = sum(t.state == state.WAITING and RETRY in t.system_attrs for t in trials)
+                if taken < self.budget <= taken + waiting + due:
                     return None  # a dead worker's retried trial takes the place first
             if taken < self.budget:
                 return True
             with self.interrupts.allowed():
                 time.sleep(poll_s)
             self._recover()
+
+    def _retries_due(self, trials: list[FrozenTrial]) -> int:
+        """Trials failed in the last moments whose retry is not enqueued yet: Optuna fails
+        a dead worker's trial and enqueues its retry in two writes, and a worker that
+        reads between them must not take the retry's place."""
+        import optuna
+
+        fail = optuna.trial.TrialState.FAIL
+        retried = {
+            t.system_attrs["retry_history"][-1]
+            for t in trials
+            if t.system_attrs.get("retry_history")
+        }
+        now = datetime.datetime.now()
+        return sum(
+            t.state == fail
+            and t.number not in retried
+            and len(t.system_attrs.get("retry_history", [])) < MAX_RETRY
+            and t.datetime_complete is not None
+            and (now - t.datetime_complete).total_seconds() < self.retry_s
+            for t in trials
+        )
 
     def _recover(self) -> None:
         import optuna
@@ -335,37 +363,24 @@ class _Budget:
                 self.recovered.append(t.number)
 
 
-def _retry_interrupted(study: Study, current: list[int], lock: str | None) -> None:
-    """Enqueue again the trial an interrupt failed (its settings kept)."""
-    import optuna
-
-    for number in current:
-        t = copy.deepcopy(study.get_trials(deepcopy=False)[number])
-        if t.state == optuna.trial.TrialState.FAIL:
-            retry_once(study, t, lock)
-        elif t.state == optuna.trial.TrialState.RUNNING:
-            _fail_and_retry(study, t, lock)
-
-
 def _fail_and_retry(study: Study, trial: FrozenTrial, lock: str | None) -> bool:
-    """Mark a running trial failed and enqueue its settings again; False if it had ended."""
+    """Mark a running trial failed (an interrupted one is already) and enqueue its
+    settings again once; False if it had completed or was retried already."""
     import optuna
 
-    try:
-        study.tell(trial.number, state=optuna.trial.TrialState.FAIL)
-    except (RuntimeError, ValueError, optuna.exceptions.UpdateFinishedTrialError):
+    state = optuna.trial.TrialState
+    if trial.state == state.RUNNING:
+        try:
+            study.tell(trial.number, state=state.FAIL)
+        except (RuntimeError, ValueError, optuna.exceptions.UpdateFinishedTrialError):
+            return False
+    elif trial.state != state.FAIL:
         return False
     return retry_once(study, trial, lock)
 
 
 def worker_id() -> str:
-    """``host/pid/start-time`` of this process (the start time guards against pid reuse).
-
-    Returns
-    -------
-    str
-        What :data:`WORKER_ATTR` records.
-    """
+    """``host/pid/start-time`` of this process (the start time guards against pid reuse)."""
     pid = os.getpid()
     return f"{socket.gethostname()}/{pid}/{_proc_start(pid)}"
 
@@ -401,9 +416,8 @@ def _worker_alive(worker: str) -> bool | None:
 def spawn_workers(
     cfg: SweepConfig, spec: StorageSpec, study: str, n: int
 ) -> list[subprocess.Popen[str]]:
-    """Start worker processes on the study (``python -m vfgym.tuning``).
-
-    Their job goes through stdin, so the storage password never shows on a command line.
+    """Start worker processes on the study (``python -m vfgym.tuning``), their job on
+    stdin, so the storage password never shows on a command line.
 
     Parameters
     ----------
@@ -435,3 +449,18 @@ def spawn_workers(
         p.stdin.close()
         procs.append(p)
     return procs
+
+
+def worker_main() -> int:
+    """A worker process (``python -m vfgym.tuning``): its job as JSON on stdin, its
+    :class:`WorkerReport` as JSON on stdout; 130 if interrupted."""
+    warnings.simplefilter("ignore", AxisNote)  # the parent process says it once
+    job = json.loads(sys.stdin.read())
+    cfg = SweepConfig(**job["config"])
+    try:
+        rep = run_worker(cfg, StorageSpec(**job["storage"]), job["study"], job["index"])
+    except KeyboardInterrupt:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        return 130
+    print(json.dumps(asdict(rep)), flush=True)
+    return 0
