@@ -59,6 +59,7 @@ TRAIN_TRIM = {
     "ppo": [*EVERY, "n_steps=32", "batch_size=32", "n_epochs=1"],
     "sac": [*EVERY, "learning_starts=16", "batch_size=16", "buffer_size=1000"],
     "td3": [*EVERY, "learning_starts=16", "batch_size=16", "buffer_size=1000"],
+    "ppo_lstm": [*EVERY, "n_steps=32", "batch_size=32", "n_epochs=1"],
 }
 AGAINST = "paper,rule-of-thumb,fixed-frequency,scurve"
 
@@ -555,6 +556,44 @@ README_RUNS: dict[str, list[Run]] = {
             ),
             needs=("fit-lu",),
             writes=("runs/train/adaptive/best_model.zip",),
+            trim="train",
+            agents=True,
+        ),
+    ],
+    # docs/results/agents.md: the adaptive agents' benchmark runs (their base fitted first)
+    **{
+        f"vfgym train --algo {algo} --env vfgym/VFServo-v0 --seed 1 --axis "
+        "experiments/axes/loads-uncertain.yaml --hyperparams n_timesteps=500000": [
+            Run(
+                f"adaptive-{algo}",
+                train_trim(
+                    [
+                        "train",
+                        "--algo",
+                        algo,
+                        "--env",
+                        "vfgym/VFServo-v0",
+                        "--seed",
+                        "1",
+                        "--axis",
+                        "experiments/axes/loads-uncertain.yaml",
+                        "--hyperparams",
+                        "n_timesteps=500000",
+                    ]
+                ),
+                needs=("fit-lu",),
+                writes=(f"runs/train/{algo}-VFServo-v0-seed1/best_model.zip",),
+                trim="train",
+                agents=True,
+            )
+        ]
+        for algo in ("ppo", "ppo_lstm")
+    },
+    "vfgym train --algo ppo --env vfgym/VFTune-v0 --seed 3": [
+        Run(
+            "tune-seed3",
+            train_trim(["train", "--algo", "ppo", "--env", "vfgym/VFTune-v0", "--seed", "3"]),
+            writes=("runs/train/ppo-VFTune-v0-seed3/best_model.zip",),
             trim="train",
             agents=True,
         ),
