@@ -22,9 +22,10 @@ the start and at every tick once the search has converged.
 
 The intervals come from the Jacobian at the optimum: the sandwich with the covariance of
 the count's quantisation error (:mod:`vfgym.identify.covariance`), which lasts as long as
-a steady stretch of motion does, plus the spread of the Gauss–Newton steps that the
-residuals at every other servo phase (in steps of :data:`NUISANCE_PHASE_STEP` ticks)
-would take from the optimum.
+a steady stretch of motion does, and of the tick grid's phase, which a sampled capture
+fixes only to within :attr:`~vfgym.identify.model.Record.phase_width_s`; plus the spread
+of the Gauss–Newton steps that the residuals at every other servo phase (in steps of
+:data:`NUISANCE_PHASE_STEP` ticks) would take from the optimum.
 """
 
 from __future__ import annotations
@@ -259,11 +260,11 @@ class _Problem:
                 ]
         return [self._cache[key(z)] for z in zs]
 
-    def simulated(self, z: np.ndarray) -> list[np.ndarray]:
-        """Each record's simulated count at every sample (not only the used ones)."""
+    def simulated(self, z: np.ndarray) -> list[Response]:
+        """Each record's response at ``z`` (every sample, not only the used ones)."""
         jobs = [(self.scale.plant(z), self.starts(z))]
         self.evaluations += 1
-        return [s.counts for s in respond_many(self.records, jobs, self.settings)[0]]
+        return respond_many(self.records, jobs, self.settings)[0]
 
     def residuals_of(self, zs: Sequence[np.ndarray]) -> list[np.ndarray]:
         """Residual vectors for several full coordinate vectors, simulated as one batch."""
@@ -533,14 +534,21 @@ def _covariance(problem: _Problem, z: np.ndarray, jac: np.ndarray) -> np.ndarray
         Ainv = np.linalg.inv(A)
     except np.linalg.LinAlgError:
         Ainv = np.linalg.pinv(A)
-    tick_hz = problem.scale.nominal.tick_hz
-    groups, counts = [], []
+    nominal = problem.scale.nominal
+    groups, counts, shift = [], [], []
     start = 0
-    for r, sim in zip(problem.records, problem.simulated(z), strict=True):
-        groups += [piece + start for piece in pieces(r, tick_hz)]
-        counts.append(r.used(sim))
+    for r, resp in zip(problem.records, problem.simulated(z), strict=True):
+        groups += [piece + start for piece in pieces(r, nominal.tick_hz)]
+        counts.append(r.used(resp.counts))
+        # the tick grid's phase, known to within the record's phase width: the residuals'
+        # change for a shift of the grid by δ is −(ω/q)·δ, δ uniform over that width
+        g = np.zeros(jac.shape[0])
+        g[start : start + counts[-1].size] = -r.used(resp.speed_rad_s) / nominal.motor.count_rad
+        shift.append(jac.T @ g * (r.phase_width_s / math.sqrt(12.0)))
         start += counts[-1].size
-    cov = Ainv @ quantisation_meat(jac, np.concatenate(counts), groups) @ Ainv
+    meat = quantisation_meat(jac, np.concatenate(counts), groups)
+    meat = meat + sum(np.outer(v, v) for v in shift)
+    cov = Ainv @ meat @ Ainv
     # the servo's sample clock against the pulses, which no capture records: the
     # Gauss–Newton step each other phase's residuals would take from the optimum
     steps = []

@@ -1,11 +1,20 @@
 """A capture on the simulator's tick grid, and the simulations of it for candidate plants.
 
 The recorded pulse train drives the axis's servo and motor in the exact simulator (an
-external pulse train, ``pulses=`` of :func:`vfgym.plant.simulate`). The capture's pulses
-are placed on the controller's tick grid: a pulse rises half a tick after its tick
-starts (as :mod:`vfgym.io.vcd` writes it), so the grid's phase is the circular mean of
-the pulse times modulo T, and each pulse goes to the nearest tick (a rounded time stamp
-moves it by far less than half a tick at a sample clock ≥ 4× the pulse rate).
+external pulse train, :func:`vfgym.plant.simulate_train`). The capture's pulses are placed
+on the controller's tick grid: a pulse rises half a tick after its tick starts (as
+:mod:`vfgym.io.vcd` writes it), so each pulse goes to the nearest tick (a sampled time
+moves it by far less than half a tick at a sample clock ≥ 4× the pulse rate), and the
+grid's phase is the middle of the pulses' offsets from their ticks: an analyser moves
+every edge onto one of its samples, by up to half a sample either way, so the middle of
+the extreme offsets is where the grid lies, known to within the width
+(:attr:`Record.phase_width_s`) that the offsets leave free.
+
+The count a sampled capture shows at an instant is the count at the middle of the
+analyser's sample period holding that instant (an edge is stamped at the sample nearest
+to it), so each residual compares the simulated angle moved on to that time
+(:attr:`Record.read_offset_s`, within half a sample of the tick's end) at the motor's
+speed then.
 
 The simulation starts at the capture's first whole tick with the axis at rest, as it
 was on the machine, in a state no capture records (:class:`Start`): where the motor rests
@@ -81,6 +90,11 @@ class Record:
     sag_counts : int
         The encoder's move between the capture's start and its first pulse (counts): on
         an enabled capture, minus the error the servo holds at the first pulse.
+    read_offset_s : numpy.ndarray or None
+        Per sample, when the measured count holds against the tick's end (s): the middle
+        of the analyser's sample period (None: at the tick's end, a CSV).
+    phase_width_s : float
+        The width of tick-grid phases the pulses' sampled times leave possible (s).
     """
 
     source: str
@@ -91,6 +105,8 @@ class Record:
     enabled: bool = False
     first_sample: int = 0
     sag_counts: int = 0
+    read_offset_s: np.ndarray | None = None
+    phase_width_s: float = 0.0
 
     @property
     def n_ticks(self) -> int:
@@ -176,6 +192,13 @@ def record_of(capture: Capture, plant: Plant, from_enable: bool | None = None) -
     x = capture.pulse_s / T
     ang = 2.0 * math.pi * (x - 0.5)
     phase = math.atan2(float(np.sin(ang).mean()), float(np.cos(ang).mean())) / (2.0 * math.pi)
+    off = x - 0.5 - np.rint(x - 0.5 - phase)  # each pulse's offset from its tick (ticks)
+    spread = float(off.max() - off.min())
+    width = 0.0
+    if spread < 0.5:  # else a clock that is not quite the axis's: keep the circular mean
+        phase = 0.5 * float(off.max() + off.min())
+        if capture.sampled:
+            width = max(0.0, capture.resolution_s - spread * T)
     ticks = np.rint(x - 0.5 - phase).astype(np.int64)
     first = math.ceil(-phase - 1e-9)  # the first whole tick
     last = math.floor(capture.end_s / T - phase) - 1
@@ -219,6 +242,10 @@ def record_of(capture: Capture, plant: Plant, from_enable: bool | None = None) -
     pulses[idx[keep]] = capture.pulse_sign[keep]
     ends = (np.arange(SAMPLE_TICKS, n_cap + 1, SAMPLE_TICKS) + first + phase) * T
     measured = capture.count_at(ends).astype(np.float64) - float(capture.count_at(np.zeros(1))[0])
+    read = None
+    if capture.sampled:
+        res = capture.resolution_s
+        read = (np.floor(ends / res + 1e-9) + 0.5) * res - ends
     return Record(
         source=src,
         pulses=pulses,
@@ -228,6 +255,8 @@ def record_of(capture: Capture, plant: Plant, from_enable: bool | None = None) -
         enabled=enabled,
         first_sample=int(ticks[0] - first) // SAMPLE_TICKS if enabled else 0,
         sag_counts=sag,
+        read_offset_s=read,
+        phase_width_s=width,
     )
 
 
@@ -332,6 +361,8 @@ def respond(record: Record, plant: Plant, settings: Settings, start: Start) -> R
         decimation=SAMPLE_TICKS,
     )
     counts = tr.motor_rad / plant.motor.count_rad
+    if record.read_offset_s is not None:  # the count a sampled capture shows (module doc)
+        counts = counts + tr.speed_rad_s * record.read_offset_s / plant.motor.count_rad
     if record.enabled:
         counts = counts + record.sag_counts  # relative to the count before the enable
     tau = tr.torque_nm
