@@ -145,7 +145,11 @@ def _plan(axis: Any, settings: Any, out: Path) -> int:
     print(f"wrote {yaml_path} (the moves: block) and {vcd_path} (pulse/dir to replay)")
     print(
         f"wrote {dry_path}: a 1 MHz capture of the moves on the nominal plant (simulated), "
-        "for a dry run of vfgym identify"
+        "for a dry run of vfgym identify --from-enable"
+    )
+    print(
+        "to run them: start the capture with the drive disabled, enable it, start the pulse "
+        "train 0.2 s later, stop 10 ms after the last move; then vfgym identify --from-enable"
     )
     return 0
 
