@@ -3,7 +3,7 @@ coverage of the 95 % intervals, wall time, and (``--regret N``) what tuning on t
 identified axis costs against tuning on the true one.
 
     python benchmarks/bench_identify.py [--plants 20] [--seed 20261205] [--axis FILE]
-        [--after-enable] [--regret N --runs-dir DIR]
+        [--after-enable] [--regret N [--regret-plants K,K,...] --runs-dir DIR]
 
 Each plant is drawn from ``--seed`` (a stream no test uses): inertia ratio 0–8 on the
 nominal axis's motor, Coulomb friction up to 5 % of the rated torque, viscous friction up
@@ -23,10 +23,11 @@ estimated (excited) quantities among inertia, Coulomb, viscous and load torque, 
 gain where it is estimated. It asserts nothing (the machine is shared).
 
 ``--regret N`` then runs ``vfgym fit`` (:func:`vfgym.agents.fit.fit_axis`, its defaults)
-on the first N plants twice: on the identified axis (its uncertainty block included) and
-on the true axis (the true plant, exactly known). Both settings models are judged on the
-true plant's 32 held-out test moves (:func:`vfgym.evaluate` on the true axis, each model
-choosing the settings of a move from its own axis). The goals, over the plants where the
+on the first N plants (or those ``--regret-plants`` lists) twice: on the identified axis
+(its uncertainty block included) and on the true axis (the true plant, exactly known).
+Both settings models are judged on the true plant's 32 held-out test moves
+(:func:`vfgym.evaluate` on the true axis, each model choosing the settings of a move from
+its own axis). The goals, over the plants where the
 fit on the true axis is feasible on every move: the identified axis's fit feasible on
 every move for ≥ 95 % of them, and its mean cost at most 1.03× the true axis's.
 """
@@ -129,8 +130,19 @@ def main(argv: list[str] | None = None) -> int:
         help="captures started with the axis already held (not the planned procedure)",
     )
     ap.add_argument("--regret", type=int, default=0, metavar="N", help="fits on N plants")
+    ap.add_argument(
+        "--regret-plants",
+        metavar="K,K,...",
+        help="the plants --regret fits (default: the first N), e.g. the lightest, whose "
+        "true-axis fit is the likeliest to be feasible on every move",
+    )
     ap.add_argument("--runs-dir", help="where --regret's fits write (default: a temp folder)")
     args = ap.parse_args(argv)
+    chosen = (
+        [int(x) for x in args.regret_plants.split(",")]
+        if args.regret_plants
+        else list(range(args.regret))
+    )
     axis = load_axis(args.axis) if args.axis else PAPER_AXIS
     nominal = axis.plant
     rated = nominal.motor.rated_torque_nm
@@ -147,7 +159,7 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     hits = {name: 0 for name in PARAMS}
     total = {name: 0 for name in PARAMS}
-    idents: list[tuple[Drawn, Identified]] = []
+    idents: list[tuple[int, Drawn, Identified]] = []
     print(
         "plant  ratio  |dJ| %   dCoulomb %rated  dviscous %rated@top  dload %rated  gain   "
         "rms counts  sat ms  wall s  cpu s  outside 95 %"
@@ -161,8 +173,8 @@ def main(argv: list[str] | None = None) -> int:
                 axis, drawn, plan.pulses, Path(tmp) / "c.vcd", args.after_enable
             )
             result = ident.fit
-            if k < args.regret:
-                idents.append((drawn, ident))
+            if k in chosen:
+                idents.append((k, drawn, ident))
             err = {e.name: e.value - truth[e.name] for e in result.estimates}
             outside = []
             for e in result.estimates:
@@ -226,7 +238,7 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def regret(axis: Axis, idents: list[tuple[Drawn, Identified]], runs_dir: str | None) -> None:
+def regret(axis: Axis, idents: list[tuple[int, Drawn, Identified]], runs_dir: str | None) -> None:
     """``vfgym fit`` on the identified and on the true axis, judged on the true plant."""
     import vfgym
     from vfgym.agents import load_tuner
@@ -237,7 +249,7 @@ def regret(axis: Axis, idents: list[tuple[Drawn, Identified]], runs_dir: str | N
     print(f"regret: vfgym fit on the identified and on the true axis; runs in {base}")
     print("plant  ratio  feasible id/true  mean cost id  mean cost true  ratio  fit s id/true")
     ratios, feasible_id, counted = [], 0, 0
-    for k, (drawn, ident) in enumerate(idents):
+    for k, drawn, ident in idents:
         true_axis = replace(
             axis, plant=drawn.variant.apply(axis.plant), uncertainty=EXACT, name=f"true-{k}"
         )
