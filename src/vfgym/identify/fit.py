@@ -473,7 +473,7 @@ def _fit(records: Sequence[Record], nominal: Plant, settings: Settings) -> Fit:
         zf0 = _start(problem) if attempt == 0 else z[free]
         sol = _solve(problem, zf0)
         z = problem.full(sol.x)
-        # the servo phase at the tick (the start chose it in steps of 5), then once more
+        # the servo phase to the tick (the start chose it in steps of 5); solve again if moved
         before = list(problem.phases)
         z = _settle_starts(problem, z, all_phases)
         if problem.phases != before:

@@ -161,7 +161,7 @@ def uncertainty_of(fit: Fit, nominal: Plant) -> Uncertainty:
 
 
 def not_excited_notes(fit: Fit) -> list[str]:
-    """One line for each quantity the captures do not excite or bound on one side only.
+    """One line for each quantity the captures do not excite.
 
     Parameters
     ----------
