@@ -25,7 +25,8 @@ the count's quantisation error (:mod:`vfgym.identify.covariance`), which lasts a
 a steady stretch of motion does, and of the tick grid's phase, which a sampled capture
 fixes only to within :attr:`~vfgym.identify.model.Record.phase_width_s`; plus the spread
 of the Gauss–Newton steps that the residuals at every other servo phase (in steps of
-:data:`NUISANCE_PHASE_STEP` ticks) would take from the optimum.
+:data:`NUISANCE_PHASE_STEP` ticks) would take from the optimum; and, for a torque held
+at its nominal value, how far the estimates move with it over its wide range.
 """
 
 from __future__ import annotations
@@ -52,6 +53,11 @@ torque on the torques): large enough to step over the count's quantisation."""
 
 Z95 = 1.959963984540054
 """The two-sided 95 % quantile of the normal distribution."""
+
+HELD_TORQUES = ("coulomb_nm", "viscous_nm_s_rad", "load_torque_nm")
+"""Quantities held at their nominal value whose range enters the others' covariance (the
+gain's does not: without it the inertia is stated relative to K3 as set, and the
+uncertainty block widens by the gain's range instead)."""
 
 NUISANCE_PHASE_STEP = 5
 """Step (ticks) of the other servo phases whose effect on the estimate is added to the
@@ -578,6 +584,20 @@ def _covariance(problem: _Problem, z: np.ndarray, jac: np.ndarray) -> np.ndarray
         problem.phases = keep
     if steps:
         cov = cov + sum(np.outer(d, d) for d in steps) / len(steps)
+    # a torque held at its nominal value (not excited) may be anywhere in its wide range:
+    # the estimates move with it by −A⁻¹Jᵀ∂r/∂p, over its mean square offset in that range
+    scale = problem.scale
+    for i in np.flatnonzero(~problem.free[: len(PARAMS)]):
+        if PARAMS[i] not in HELD_TORQUES:
+            continue
+        lo, hi = (v / scale.jacobian_diag(z)[i] for v in wide_range(PARAMS[i], nominal))
+        zu, zd = z.copy(), z.copy()
+        zu[i] += scale.steps[i]
+        zd[i] -= scale.steps[i]
+        ru, rd = problem.residuals_of([zu, zd])
+        d = -Ainv @ (jac.T @ ((ru - rd) / (2.0 * scale.steps[i])))
+        mean_square = ((hi - z[i]) ** 3 - (lo - z[i]) ** 3) / (3.0 * (hi - lo))
+        cov = cov + np.outer(d, d) * mean_square
     return cov
 
 
