@@ -1,8 +1,9 @@
 """Captures as a logic analyser records them, simulated from plants drawn at random.
 
 A true plant (never named by a test: drawn from a seed within the benchmark's ranges)
-runs the pulse train after a long rest, as the machine did; the record starts at an
-arbitrary instant during that rest, every edge is rounded to the analyser's 1 µs samples
+runs the pulse train after a rest from the drive's enable, as the machine did; the record
+starts at an arbitrary instant during that rest (the axis already held) or, as the plan's
+procedure asks, before the enable; every edge is rounded to the analyser's 1 µs samples
 (1 MHz), and the encoder is seen only as its A/B edges.
 """
 
@@ -20,6 +21,10 @@ from vfgym.plant.uncertainty import PlantVariant
 REST_S = 0.5
 """Rest simulated before the pulse train (s): the record starts after 40–90 % of it, the
 axis long settled (a load torque sags it for tens of ms after the simulation's start)."""
+
+ENABLE_REST_S = 0.2
+"""From the drive's enable to the pulse train (s), for a record started before the
+enable (10–100 ms before it)."""
 
 
 @dataclass(frozen=True)
@@ -60,8 +65,11 @@ def capture_vcd(
     pulses: np.ndarray,
     path: Path,
     rng: np.random.Generator,
+    *,
+    from_enable: bool = False,
 ) -> Path:
     """Record ``pulses`` run on ``plant`` as a 1 MHz logic analyser would (see the module doc)."""
-    return record_capture(
-        plant, pulses, path, start_s=REST_S * rng.uniform(0.4, 0.9), rest_s=REST_S
-    )
+    u = rng.uniform(0.4, 0.9)
+    if from_enable:
+        return record_capture(plant, pulses, path, start_s=-0.01 - 0.1 * u, rest_s=ENABLE_REST_S)
+    return record_capture(plant, pulses, path, start_s=REST_S * u, rest_s=REST_S)

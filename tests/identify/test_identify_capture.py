@@ -113,3 +113,39 @@ def test_signal_map_refuses_unknown_signals():
     with pytest.raises(ValueError, match="--signals="):
         parse_signal_map("clock=D0")
     assert parse_signal_map("pulse=D0")["enc_a"] == "enc_a"
+
+
+def test_a_sampled_capture_reads_the_count_at_the_middle_of_its_sample(tmp_path):
+    """On the tick grid, a 1 MHz record's count at each sample is the true count at the
+    middle of the analyser's sample holding the tick's end (read_offset_s), and the true
+    grid phase lies within the width the pulses leave."""
+    from vfgym.identify.model import SAMPLE_TICKS, record_of
+
+    plant = PAPER_PLANT
+    T = plant.tick_s
+    rng = np.random.default_rng(4)
+    pulses = np.zeros(30000, np.int8)
+    pulses[3000:9000] = 1  # the top speed: three counts a tick
+    pulses[12000:20000:2] = -1
+    tr = simulate(np.zeros(pulses.size), PAPER_SETTINGS, plant, pulses=pulses)
+    start = 0.0031 + 1e-6 * rng.uniform()
+    cap = read_capture(write_edges_vcd(trace_edges(tr, start_s=start), tmp_path / "s.vcd",
+                                       timescale="1 us"))  # fmt: skip
+    rec = record_of(cap, plant)
+    true_phase = (-start / T) % 1.0
+    miss = ((rec.phase - true_phase + 0.5) % 1.0 - 0.5) * T
+    assert 0 < rec.phase_width_s < 0.5e-6 and abs(miss) <= rec.phase_width_s / 2 + 1e-9
+    assert np.all(np.abs(rec.read_offset_s) <= 0.5e-6 + 1e-12)
+    # the true count at the read instants, relative to the count at the record's start
+    first = int(np.ceil(-rec.phase - 1e-9))
+    ends = (np.arange(1, rec.measured.size + 1) * SAMPLE_TICKS + first + rec.phase) * T
+    t_sim = np.arange(1, tr.n_ticks + 1) * T - start  # the trace's tick ends, record time
+    q = plant.motor.count_rad
+    at = np.floor(np.interp(ends + rec.read_offset_s, t_sim, tr.motor_rad) / q)
+    c0 = np.floor(np.interp(0.0, t_sim, tr.motor_rad) / q)
+    moving = np.abs(np.interp(ends, t_sim, tr.speed_rad_s)) > 100.0
+    assert moving.sum() > 1000
+    assert np.mean(rec.measured - 0.5 == at - c0) > 0.999
+    # read at the ticks' ends instead, the count is off a count on many moving samples
+    at_end = np.floor(np.interp(ends, t_sim, tr.motor_rad) / q)
+    assert np.mean((rec.measured - 0.5 != at_end - c0)[moving]) > 0.05

@@ -38,14 +38,19 @@ def test_plan_then_identify_from_the_command_line(tmp_path, capsys):
                 level["pulse"] = tok.data.value
     assert set(ids.values()) == {"pulse", "dir"}
     assert rises == np.count_nonzero(make_plan(PAPER_AXIS).pulses)
-    # the dry run: a simulated capture of the moves on the nominal plant gives it back
+    # the dry run: a simulated capture of the moves on the nominal plant gives it back; it
+    # starts before the drive's enable, which only --from-enable can say (nothing sags)
     dry = tmp_path / "plan" / "identify-moves-nominal.vcd"
-    assert main(["identify", "--capture", str(dry), "--out", str(tmp_path / "dry.yaml")]) == 0
+    cmd = ["identify", "--capture", str(dry), "--out", str(tmp_path / "dry.yaml")]
+    assert main([*cmd, "--from-enable"]) == 0
     out = capsys.readouterr().out
+    assert "from the drive's enable (the axis moved +0 counts" in out
+    assert "note: load_torque_nm" not in out
     assert load_axis(tmp_path / "dry.yaml").plant.motor.inertia_kgm2 == pytest.approx(
         PAPER_PLANT.motor.inertia_kgm2, rel=0.005
     )
-    assert "note: load_torque_nm: seen only as a bound" in out
+    assert main(cmd) == 0  # without it: the axis may have been held since
+    assert "note: load_torque_nm: not excited" in capsys.readouterr().out
 
     rng = np.random.default_rng([27_182, 1])
     truth = draw_truth(PAPER_PLANT, rng, inertia_ratio=(0.0, 4.0))

@@ -27,9 +27,10 @@ def plan():
     return make_plan(PAPER_AXIS)
 
 
-def _identify(truth_plant, pulses, path, rng):
-    cap = read_capture(capture_vcd(truth_plant, pulses, path, rng))
-    rec = record_of(cap, NOMINAL)
+def _identify(truth_plant, pulses, path, rng, from_enable=True):
+    """The planned procedure by default: the capture started before the drive's enable."""
+    cap = read_capture(capture_vcd(truth_plant, pulses, path, rng, from_enable=from_enable))
+    rec = record_of(cap, NOMINAL, True if from_enable else None)
     result = fit([rec], NOMINAL, PAPER_SETTINGS)
     return result, identify_report(PAPER_AXIS, result, [rec])
 
@@ -78,6 +79,36 @@ def test_a_drawn_plant_is_identified_within_the_goals(plan, tmp_path, case, rati
     assert ident.axis.plant.torque_per_count_nm == pytest.approx(
         result.plant.torque_per_count_nm, rel=1e-12
     )
+
+
+def test_a_load_torque_is_not_seen_when_the_capture_starts_with_the_axis_held(plan, tmp_path):
+    """A light axis never reaches its torque limit: below it a load torque only adds to the
+    error the servo holds, so a capture started after the enable cannot show it."""
+    rng = np.random.default_rng([SEED, 5])
+    truth = draw_truth(NOMINAL, rng, inertia_ratio=(0.0, 1.0))
+    result, ident = _identify(truth.plant, plan.pulses, tmp_path / "h.vcd", rng, from_enable=False)
+    assert result.saturated_s == 0.0
+    load = result.estimate("load_torque_nm")
+    assert not load.excited and load.value == load.nominal
+    lines = [n for n in ident.notes if n.startswith("load_torque_nm: not excited")]
+    assert len(lines) == 1 and "before enabling the drive" in lines[0], ident.notes
+    # the rest is still identified, and the truth lies within the block
+    assert result.estimate("inertia").value == pytest.approx(truth.inertia, rel=0.02)
+    assert abs(result.estimate("coulomb_nm").value - truth.coulomb_nm) <= 0.01 * RATED
+    assert _within_block(ident, truth) == []
+
+
+def test_an_enable_within_the_capture_is_recognised_by_the_sag(plan, tmp_path):
+    """Without --from-enable: the axis sagging under a load before the first pulse."""
+    rng = np.random.default_rng([SEED, 10])
+    truth = draw_truth(NOMINAL, rng, inertia_ratio=(0.0, 1.0))
+    assert abs(truth.load_torque_nm) > truth.coulomb_nm + 0.005 * RATED  # it sags
+    path = capture_vcd(truth.plant, plan.pulses, tmp_path / "e.vcd", rng, from_enable=True)
+    rec = record_of(read_capture(path), NOMINAL)
+    assert rec.enabled and rec.sag_counts != 0
+    assert rec.first_sample > 0  # the sag's samples, at an unknown instant, are left out
+    with pytest.raises(ValueError, match="starts inside a move"):  # said to start held
+        record_of(read_capture(path), NOMINAL, False)
 
 
 def _subset(plan, keep):

@@ -15,7 +15,8 @@ block (the intervals widened by a stated margin).
 identification: ``DIR/identify-moves.yaml`` (the axis with those moves as its ``moves:``
 block), ``DIR/identify-moves.vcd`` (their pulse/direction train, to replay) and
 ``DIR/identify-moves-nominal.vcd`` (a simulated 1 MHz capture of them on the nominal
-plant: what a capture looks like, and a dry run). See docs/guide/identify.md.
+plant, started before the drive's enable: what a capture looks like, and a dry run with
+``--from-enable``). See docs/guide/identify.md.
 """
 
 from __future__ import annotations
@@ -52,6 +53,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--settings",
         metavar="FILE.yaml",
         help="settings file: its ts_over_tf is the drive's filter ratio (default 0.25)",
+    )
+    p.add_argument(
+        "--from-enable",
+        action="store_true",
+        help="the captures started before the drive was enabled (the planned procedure): "
+        "the servo held no error then, which shows a load torque (an enable is also "
+        "recognised by the axis sagging before the first pulse)",
     )
     p.add_argument(
         "--plan",
@@ -114,7 +122,8 @@ def _plan(axis: Any, settings: Any, out: Path) -> int:
     write_edges_vcd(
         train_edges(plan.pulses, plan.tick_hz), vcd_path, encoder=False, comment=comment
     )
-    # what a 1 MHz capture of the moves on the nominal plant looks like: a dry run
+    # what a 1 MHz capture of the moves on the nominal plant looks like, started before the
+    # drive's enable as the procedure asks: a dry run
     record_capture(axis.plant, plan.pulses, dry_path, start_s=DRY_START_S, rest_s=DRY_REST_S)
     print(f"identification moves of axis {axis.name}: {plan.duration_s:.3g} s in all")
     for sc in plan.moves:
@@ -136,16 +145,20 @@ def _plan(axis: Any, settings: Any, out: Path) -> int:
     print(f"wrote {yaml_path} (the moves: block) and {vcd_path} (pulse/dir to replay)")
     print(
         f"wrote {dry_path}: a 1 MHz capture of the moves on the nominal plant (simulated), "
-        "for a dry run of vfgym identify"
+        "for a dry run of vfgym identify --from-enable"
+    )
+    print(
+        "to run them: start the capture with the drive disabled, enable it, start the pulse "
+        "train 0.2 s later, stop 10 ms after the last move; then vfgym identify --from-enable"
     )
     return 0
 
 
-DRY_REST_S = 0.5
-"""The dry run's simulated rest before the moves (s)."""
+DRY_REST_S = 0.2
+"""The dry run's time from the drive's enable to the moves (s)."""
 
-DRY_START_S = 0.3
-"""When the dry run's capture starts, within that rest (s)."""
+DRY_START_S = -0.02
+"""When the dry run's capture starts, against the drive's enable (s): before it."""
 
 
 def _identify(axis: Any, settings: Any, args: argparse.Namespace) -> int:
@@ -162,11 +175,17 @@ def _identify(axis: Any, settings: Any, args: argparse.Namespace) -> int:
     records = []
     for path in args.capture:
         cap = read_capture(path, names)
-        rec = record_of(cap, axis.plant)
+        rec = record_of(cap, axis.plant, True if args.from_enable else None)
         records.append(rec)
         print(
             f"read {path}: {cap.pulse_s.size} pulses, {cap.count.size} encoder steps, "
             f"{cap.end_s:.4g} s"
+            + (
+                f"; from the drive's enable (the axis moved {rec.sag_counts:+d} counts "
+                "before the first pulse)"
+                if rec.enabled
+                else ""
+            )
         )
     result = fit(records, axis.plant, settings)
     ident = identify_report(axis, result, records)

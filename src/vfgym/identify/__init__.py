@@ -12,13 +12,14 @@ capture
 signals
     Writing pulse/direction and encoder edges as VCD (a plan to replay, a simulated capture).
 model
-    A capture on the simulator's tick grid, and its simulation on candidate plants.
+    A capture on the simulator's tick grid, the state it starts from, and its simulation
+    on candidate plants.
 excite
     What the moves excite: constant-speed segments, directions, torque saturation.
 fit
     The least-squares estimator and its intervals.
 covariance
-    The Newey–West covariance of the estimates.
+    The covariance of the estimates from the encoder count's quantisation.
 plan
     The moves to run for an identification.
 report

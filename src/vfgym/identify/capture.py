@@ -67,6 +67,10 @@ class Capture:
         Length of the capture (s): its last time stamp.
     resolution_s : float
         Time resolution of the stamps (s): the VCD's timescale, or a CSV's row period.
+    sampled : bool
+        True for a VCD: every edge stands at one of the analyser's samples (multiples of
+        ``resolution_s`` from the start), not at its own instant; a CSV row holds the
+        count at its own time.
     """
 
     source: str
@@ -76,6 +80,7 @@ class Capture:
     count: np.ndarray
     end_s: float
     resolution_s: float
+    sampled: bool = False
 
     def count_at(self, t_s: np.ndarray) -> np.ndarray:
         """The encoder count at each time (after every change at or before it).
@@ -328,6 +333,7 @@ def _read_vcd(p: Path, data: bytes, signals: dict[str, str] | None) -> Capture:
         count=np.asarray(count_v, dtype=np.int64),
         end_s=(time - first) * unit,
         resolution_s=unit,
+        sampled=True,
     )
 
 

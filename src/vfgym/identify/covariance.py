@@ -1,9 +1,21 @@
-"""The covariance of least-squares estimates from correlated residuals (Newey–West).
+"""The covariance of the estimates from the encoder count's quantisation.
 
-The residuals of a capture are not independent from sample to sample (the count's
-quantisation and the loop's limit cycles last many samples), so the estimates'
-covariance is the sandwich (JᵀJ)⁻¹ S (JᵀJ)⁻¹ with S the Bartlett-weighted sum of the
-score's autocovariances, computed here with FFTs.
+The residuals are the error of reading the motor's angle as whole counts: for a count
+read at angle θ (in counts), 0.5 − frac(θ + φ), where φ is where the count's edges lie
+against the simulated motion, which no capture knows. Over a uniform φ this error has
+variance 1/12 and, between two samples of one stretch of motion, the covariance
+½·B₂(frac(θₛ − θₜ)) (B₂ the second Bernoulli polynomial): samples a whole number of counts
+apart err alike, so a move at a steady speed or a rest, whose samples fall at the same
+place within a count again and again, carries an error that does not average out however
+long it lasts. Where the motion changes (a move starts or ends, a cruise begins), the
+servo settles into another pattern against the counts; each such stretch (a
+:func:`pieces` piece) takes its own φ.
+
+The covariance of the least-squares estimates is then the sandwich (JᵀJ)⁻¹ JᵀΣJ (JᵀJ)⁻¹
+with that Σ, computed from the Fourier series ½·B₂(x) = Σₖ cos(2πkx) / (2π²k²) without
+forming Σ: JᵀΣJ = Σ_pieces Σₖ (cₖcₖᵀ + sₖsₖᵀ) / (2π²k²), cₖ = Σₜ Jₜ cos(2πkθₜ) (and sₖ
+with sin), to :data:`HARMONICS` terms, the rest of the series' variance taken as
+independent from sample to sample.
 """
 
 from __future__ import annotations
@@ -12,71 +24,89 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from vfgym.identify.model import SAMPLE_TICKS, Record
 
-def newey_west(jac: np.ndarray, res: np.ndarray, lengths: Sequence[int], floor: int) -> np.ndarray:
-    """Newey–West estimate of the score's covariance, Σ_l w_l Σ_t g_t g_{t+l}ᵀ.
+HARMONICS = 64
+"""Terms of the Fourier series of the quantisation error's covariance."""
+
+WINDOW_S = 0.005
+"""Pulse rates are counted over windows of this length (s) to find the pieces."""
+
+STEADY_TOL = 0.03
+"""A window belongs to a steady stretch when its neighbours' rates are within this share
+(and one pulse) of its own."""
+
+
+def pieces(record: Record, tick_hz: float) -> list[np.ndarray]:
+    """The stretches of a record over which the count's error keeps one pattern.
+
+    Parameters
+    ----------
+    record : Record
+        The capture on the tick grid.
+    tick_hz : float
+        The controller's tick rate (Hz).
+
+    Returns
+    -------
+    list of numpy.ndarray
+        Indices into the residuals the record contributes (its samples from
+        :attr:`~vfgym.identify.model.Record.first_sample` on): each rest, each steady
+        speed, and each change of speed between them is one piece.
+    """
+    n = record.measured.size
+    w = max(SAMPLE_TICKS, round(WINDOW_S * tick_hz) // SAMPLE_TICKS * SAMPLE_TICKS)
+    nw = -(-n * SAMPLE_TICKS // w)
+    p = np.zeros(nw * w, dtype=np.int64)
+    m = min(record.pulses.size, p.size)
+    p[:m] = record.pulses[:m]
+    rate = p.reshape(nw, w).sum(axis=1)
+    labels: list[tuple[str, int]] = []
+    for i in range(nw):
+        if rate[i] == 0:
+            labels.append(("rest", 0))
+            continue
+        near = rate[max(0, i - 1) : i + 2]
+        steady = bool(np.all(np.abs(near - rate[i]) <= STEADY_TOL * abs(rate[i]) + 1))
+        labels.append(("steady", int(rate[i])) if steady else ("change", i))
+    per = w // SAMPLE_TICKS
+    cuts = [i * per for i in range(1, nw) if labels[i] != labels[i - 1]]
+    idx = np.arange(record.first_sample, n) - record.first_sample
+    edges = [c - record.first_sample for c in cuts if record.first_sample < c < n]
+    return [piece for piece in np.split(idx, edges) if piece.size]
+
+
+def quantisation_meat(
+    jac: np.ndarray, counts: np.ndarray, groups: Sequence[np.ndarray]
+) -> np.ndarray:
+    """JᵀΣJ for the count's quantisation error (see the module doc).
 
     Parameters
     ----------
     jac : numpy.ndarray
         The Jacobian of the residuals (rows: samples).
-    res : numpy.ndarray
-        The residuals.
-    lengths : sequence of int
-        Samples of each capture (the rows are split there: no lag crosses captures).
-    floor : int
-        The least bandwidth (samples).
+    counts : numpy.ndarray
+        The simulated count (motor angle in counts) at each sample.
+    groups : sequence of numpy.ndarray
+        Row indices of each piece (every row in one piece).
 
     Returns
     -------
     numpy.ndarray
-        S, with g_t = J_t·r_t and Bartlett weights up to :func:`correlation_length`.
+        The p×p matrix JᵀΣJ.
     """
+    k = np.arange(1, HARMONICS + 1)
+    weight = 1.0 / (2.0 * np.pi**2 * k**2)
     p = jac.shape[1]
-    S = np.zeros((p, p))
-    start = 0
-    for n in lengths:
-        r = res[start : start + n]
-        g = jac[start : start + n] * r[:, None]
-        start += n
-        lag = correlation_length(r, floor)
-        size = 1 << int(np.ceil(np.log2(2 * n)))
-        G = np.fft.rfft(g, size, axis=0)
-        for a in range(p):
-            for b in range(a, p):
-                cc = np.fft.irfft(np.conj(G[:, a]) * G[:, b], size)  # Σ_t g_a(t) g_b(t+l)
-                w = 1.0 - np.arange(lag + 1) / (lag + 1)
-                s = cc[0] + np.sum(w[1:] * (cc[1 : lag + 1] + cc[size - lag :][::-1]))
-                S[a, b] = S[b, a] = s
-    return S
+    meat = np.zeros((p, p))
+    for rows in groups:
+        jp = jac[rows]
+        angle = 2.0 * np.pi * np.outer(counts[rows], k)
+        c = jp.T @ np.cos(angle)
+        s = jp.T @ np.sin(angle)
+        meat += (c * weight) @ c.T + (s * weight) @ s.T
+    rest = 1.0 / 12.0 - float(weight.sum())
+    return meat + rest * (jac.T @ jac)
 
 
-def correlation_length(r: np.ndarray, floor: int) -> int:
-    """The Newey–West bandwidth.
-
-    Parameters
-    ----------
-    r : numpy.ndarray
-        One capture's residuals.
-    floor : int
-        The least bandwidth (samples).
-
-    Returns
-    -------
-    int
-        Twice the lag at which the residuals' autocorrelation first falls below 0.05, at
-        least ``floor``, at most a quarter of the record (samples).
-    """
-    x = r - r.mean()
-    n = x.size
-    size = 1 << int(np.ceil(np.log2(2 * n)))
-    f = np.fft.rfft(x, size)
-    ac = np.fft.irfft(f * np.conj(f), size)[:n]
-    first = n // 4
-    if ac[0] > 0:
-        below = np.flatnonzero(ac / ac[0] < 0.05)
-        first = int(below[0]) if below.size else n // 4
-    return int(min(max(floor, 2 * first, 1), max(1, n // 4)))
-
-
-__all__ = ["correlation_length", "newey_west"]
+__all__ = ["HARMONICS", "pieces", "quantisation_meat"]

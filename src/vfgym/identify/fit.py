@@ -9,38 +9,38 @@ torques in % of the rated torque, viscous friction as its torque at the pulse tr
 speed in % of rated) by :func:`scipy.optimize.least_squares`, residuals in encoder counts
 (:mod:`vfgym.identify.model`), with the Jacobian taken by central differences, every
 perturbed plant simulated in one batch. A parameter the captures do not excite
-(:mod:`vfgym.identify.excite`) is held at its nominal value.
+(:mod:`vfgym.identify.excite`) is held at its nominal value; so is the load torque when
+no capture holds the drive's enable and the torque never reaches its limit (below it a
+load torque only adds to the error the servo holds, which is fitted with it).
 
-The intervals come from the Jacobian at the optimum. The residuals are not independent
-from sample to sample (the count's quantisation and the loop's limit cycles last many
-samples), so the covariance is the sandwich (JᵀJ)⁻¹ S (JᵀJ)⁻¹ with S the Newey–West
-(Bartlett-weighted) sum of the score's autocovariances up to the residuals' correlation
-length, rather than s²·(JᵀJ)⁻¹, which would be far too narrow. The load torque's
-interval is also widened to where a profile along it (the others held) leaves the RMS
-residual within 10 % of its least: below the torque limit it is bounded on one side
-only, which the Jacobian at the optimum does not show.
+Two things no capture records are fitted with them, one of each per capture
+(:class:`~vfgym.identify.model.Start`): where the motor rests against the position the
+servo holds when the capture starts (a coordinate of the least squares, within one count
+on an enabled capture), and the phase of the servo's sample clock against the pulses
+(its speed counter latches every Ns ticks), tried in steps of the residuals' sample from
+the start and at every tick once the search has converged.
 
-One nuisance is fitted and then accounted for: the phase of the servo's sample clock
-against the pulses (its speed counter latches every Ns ticks), which no capture records.
-The start tries every phase in steps of the residuals' sample and keeps the best; the
-covariance adds the spread of the Gauss–Newton steps the residuals at
-:data:`NUISANCE_PHASES` other phases would take from the optimum, and likewise for where
-within its first count the motor started (:data:`NUISANCE_STARTS`).
+The intervals come from the Jacobian at the optimum: the sandwich with the covariance of
+the count's quantisation error (:mod:`vfgym.identify.covariance`), which lasts as long as
+a steady stretch of motion does, and of the tick grid's phase, which a sampled capture
+fixes only to within :attr:`~vfgym.identify.model.Record.phase_width_s`; plus the spread
+of the Gauss–Newton steps that the residuals at every other servo phase (in steps of
+:data:`NUISANCE_PHASE_STEP` ticks) would take from the optimum; and, for a torque held
+at its nominal value, how far the estimates move with it over its wide range.
 """
 
 from __future__ import annotations
 
 import math
-import struct
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from vfgym.identify.covariance import newey_west
+from vfgym.identify.covariance import pieces, quantisation_meat
 from vfgym.identify.excite import MIN_SATURATED_S, Excitation, excitation
-from vfgym.identify.model import SAMPLE_TICKS, Record, Response, respond_many
+from vfgym.identify.model import SAMPLE_TICKS, Record, Response, Start, respond_many
 from vfgym.params import Plant, Settings
 from vfgym.plant.uncertainty import FACTOR_RANGE, PlantVariant
 
@@ -54,19 +54,14 @@ torque on the torques): large enough to step over the count's quantisation."""
 Z95 = 1.959963984540054
 """The two-sided 95 % quantile of the normal distribution."""
 
-NUISANCE_PHASES = 6
-"""Other phases of the servo's sample clock whose effect on the estimate is added to the
+HELD_TORQUES = ("coulomb_nm", "viscous_nm_s_rad", "load_torque_nm")
+"""Quantities held at their nominal value whose range enters the others' covariance (the
+gain's does not: without it the inertia is stated relative to K3 as set, and the
+uncertainty block widens by the gain's range instead)."""
+
+NUISANCE_PHASE_STEP = 5
+"""Step (ticks) of the other servo phases whose effect on the estimate is added to the
 covariance."""
-
-NUISANCE_STARTS = (0.25, 0.5, 0.75)
-"""Starting positions of the motor within its first count (counts) whose effect on the
-estimate is added to the covariance."""
-
-HAC_FLOOR_S = 0.15
-"""The Newey–West bandwidth is at least this long (s), a move's length: the residuals'
-nuisances (where within a count the axis started, the tick grid's phase) shift whole
-moves at once, so the scores stay correlated over a move even where the residuals'
-own autocorrelation has died out."""
 
 QUANTISATION_FLOOR = 1.0 / math.sqrt(12.0)
 """RMS error (counts) of reading a position as whole counts: the floor of the residual."""
@@ -89,10 +84,6 @@ class Estimate:
         The nominal axis's value (factor 1 for inertia and gain).
     excited : bool
         False when the captures cannot show it: held at its nominal value.
-    one_sided : bool
-        True when the residual stays flat along it for :data:`ONE_SIDED` % of the rated
-        torque or more (the load torque below the torque limit): the interval is then
-        a bound.
     """
 
     name: str
@@ -101,7 +92,6 @@ class Estimate:
     high: float
     nominal: float
     excited: bool
-    one_sided: bool = False
 
 
 @dataclass(frozen=True)
@@ -132,6 +122,8 @@ class Fit:
         The residuals of each capture (measured − simulated, counts).
     responses : tuple of Response
         The fitted plant's response to each capture.
+    starts : tuple of Start
+        The state of rest each capture was found to start from.
     """
 
     estimates: tuple[Estimate, ...]
@@ -145,6 +137,7 @@ class Fit:
     evaluations: int
     residuals: tuple[np.ndarray, ...]
     responses: tuple[Response, ...]
+    starts: tuple[Start, ...] = ()
 
     def estimate(self, name: str) -> Estimate:
         """The estimate of one quantity.
@@ -163,13 +156,29 @@ class Fit:
 
 
 class _Scale:
-    """Scaled coordinates z ↔ the physical parameters, around a nominal plant."""
+    """Scaled coordinates z ↔ the physical parameters, around a nominal plant.
 
-    def __init__(self, nominal: Plant) -> None:
+    z holds the five parameters of :data:`PARAMS`, then one nuisance per record: where its
+    motor rests against the position the servo holds (:attr:`Start.held_counts`, counts).
+    """
+
+    def __init__(self, nominal: Plant, records: Sequence[Record]) -> None:
         m = nominal.motor
         self.nominal = nominal
         self.tau = 0.01 * m.rated_torque_nm  # 1 % of rated torque
         self.speed = nominal.pulse_top_speed_rad_s
+        held_lo, held_hi, held0 = [], [], []
+        wide = 0.95 * m.peak_torque_nm / nominal.torque_per_count_nm
+        for r in records:
+            span = r.held_range()
+            if span is None:
+                held_lo.append(-wide)
+                held_hi.append(wide)
+                held0.append(-0.5)
+            else:  # an enabled capture: the servo's error is known, not where in the count
+                held_lo.append(span[0] + HELD_EDGE)
+                held_hi.append(span[1])
+                held0.append(0.5 * (span[0] + span[1]))
         self.z0 = np.array(
             [
                 0.0,
@@ -177,13 +186,15 @@ class _Scale:
                 m.viscous_nm_s_rad * self.speed / self.tau,
                 m.load_torque_nm / self.tau,
                 0.0,
+                *held0,
             ]
         )
         lf, hf = math.log(FACTOR_RANGE[0]), math.log(FACTOR_RANGE[1])
         peak = m.peak_torque_nm / self.tau
         b_max = m.peak_torque_nm / m.knee_speed_rad_s * self.speed / self.tau
-        self.lo = np.array([lf, 0.0, 0.0, -0.45 * peak, lf])
-        self.hi = np.array([hf, 0.45 * peak, 0.95 * b_max, 0.45 * peak, hf])
+        self.lo = np.array([lf, 0.0, 0.0, -0.45 * peak, lf, *held_lo])
+        self.hi = np.array([hf, 0.45 * peak, 0.95 * b_max, 0.45 * peak, hf, *held_hi])
+        self.steps = np.concatenate([STEPS, np.full(len(records), HELD_STEP)])
 
     def physical(self, z: np.ndarray) -> np.ndarray:
         return np.array(
@@ -227,55 +238,43 @@ class _Problem:
         self.free = free
         self.base = scale.z0.copy()
         self.evaluations = 0
-        self.delay = 0  # ticks moving the servo's sample clock (model.respond)
-        self.start = 0.0  # where within its first count the motor starts (model.respond)
-        self._cache: dict[bytes, np.ndarray] = {}
+        self.phases = [0] * len(records)  # the servo's sample clock of each record
+        self._cache: dict[bytes, list[np.ndarray]] = {}
 
     def full(self, zf: np.ndarray) -> np.ndarray:
         z = self.base.copy()
         z[self.free] = zf
         return z
 
-    def residuals_of(self, zs: Sequence[np.ndarray]) -> list[np.ndarray]:
-        """Residual vectors for several full coordinate vectors, simulated as one batch."""
+    def starts(self, z: np.ndarray) -> list[Start]:
+        return [Start(float(h), ph) for h, ph in zip(z[len(PARAMS) :], self.phases, strict=True)]
+
+    def per_record(self, zs: Sequence[np.ndarray]) -> list[list[np.ndarray]]:
+        """Each record's residuals at several full coordinate vectors, one batch."""
 
         def key(z: np.ndarray) -> bytes:
-            return z.tobytes() + self.delay.to_bytes(4, "little") + struct.pack("d", self.start)
+            return z.tobytes() + np.asarray(self.phases, dtype=np.int64).tobytes()
 
-        todo = [z for z in zs if key(z) not in self._cache]
+        todo = list({key(z): z for z in zs if key(z) not in self._cache}.values())
         if todo:
-            plants = [self.scale.plant(z) for z in todo]
-            out = respond_many(self.records, plants, self.settings, self.delay, self.start)
+            jobs = [(self.scale.plant(z), self.starts(z)) for z in todo]
+            out = respond_many(self.records, jobs, self.settings)
             self.evaluations += len(todo)
             for z, resp in zip(todo, out, strict=True):
-                self._cache[key(z)] = np.concatenate(
-                    [r.measured - s.counts for r, s in zip(self.records, resp, strict=True)]
-                )
+                self._cache[key(z)] = [
+                    r.residuals(s) for r, s in zip(self.records, resp, strict=True)
+                ]
         return [self._cache[key(z)] for z in zs]
 
-    def at_delays(self, z: np.ndarray, delays: Sequence[int]) -> list[np.ndarray]:
-        """Residuals of one point with the servo's sample clock moved by each delay."""
-        keep = self.delay
-        out = []
-        try:
-            for d in delays:
-                self.delay = int(d)
-                out.append(self.residuals_of([z])[0])
-        finally:
-            self.delay = keep
-        return out
+    def simulated(self, z: np.ndarray) -> list[Response]:
+        """Each record's response at ``z`` (every sample, not only the used ones)."""
+        jobs = [(self.scale.plant(z), self.starts(z))]
+        self.evaluations += 1
+        return respond_many(self.records, jobs, self.settings)[0]
 
-    def at_starts(self, z: np.ndarray, starts: Sequence[float]) -> list[np.ndarray]:
-        """Residuals of one point with the motor starting elsewhere within its count."""
-        keep = self.start
-        out = []
-        try:
-            for f in starts:
-                self.start = float(f)
-                out.append(self.residuals_of([z])[0])
-        finally:
-            self.start = keep
-        return out
+    def residuals_of(self, zs: Sequence[np.ndarray]) -> list[np.ndarray]:
+        """Residual vectors for several full coordinate vectors, simulated as one batch."""
+        return [np.concatenate(r) for r in self.per_record(zs)]
 
     def fun(self, zf: np.ndarray) -> np.ndarray:
         return self.residuals_of([self.full(zf)])[0]
@@ -284,7 +283,7 @@ class _Problem:
         z = self.full(zf)
         pts, spans = [], []
         for i in np.flatnonzero(self.free):
-            h = STEPS[i]
+            h = self.scale.steps[i]
             up = min(z[i] + h, self.scale.hi[i])
             dn = max(z[i] - h, self.scale.lo[i])
             zu, zd = z.copy(), z.copy()
@@ -339,75 +338,76 @@ def wide_range(name: str, nominal: Plant) -> tuple[float, float]:
 def _start(problem: _Problem) -> np.ndarray:
     """A start for the local search: the best of one batch over the inertia factor on a
     log grid in steps of :data:`GRID_STEP` (the response is sharp in J where the torque
-    saturates), every other parameter nominal, friction a little inside its bound."""
+    saturates), every other parameter nominal, friction a little inside its bound; then
+    each record's held error and servo phase (:func:`_settle_starts`)."""
     base = problem.base.copy()
     for i in (1, 2):
         if problem.free[i]:
             base[i] = max(base[i], 0.5)
     lo, hi = FACTOR_GRID
     grid = np.log(np.geomspace(lo, hi, round(math.log(hi / lo) / math.log(1 + GRID_STEP)) + 1))
-    pts = []
-    for g in grid:
-        z = base.copy()
-        z[0] = g
-        pts.append(z)
-    res = problem.residuals_of(pts)
-    z = pts[int(np.argmin([float(r @ r) for r in res]))]
-    return z[problem.free]
+    # a held error off by n counts shifts every count after the first move by n: where it
+    # is free (a capture without the enable), the grid runs again once it is settled
+    rounds = 1 if all(r.enabled for r in problem.records) else 2
+    for _round in range(rounds):
+        pts = []
+        for g in grid:
+            z = base.copy()
+            z[0] = g
+            pts.append(z)
+        res = problem.residuals_of(pts)
+        base = pts[int(np.argmin([float(r @ r) for r in res]))]
+        base = _settle_starts(problem, base, range(0, problem.scale.nominal.servo.sample_ticks, 5))
+    return base[problem.free]
 
 
-def _load_profile(problem: _Problem, z: np.ndarray, rms: float) -> tuple[float, float]:
-    """How far the load torque moves (scaled units) with the others held before the RMS
-    residual rises :data:`PROFILE_TOL` above its least, down and up.
+def _settle_starts(problem: _Problem, z: np.ndarray, phases: Sequence[int]) -> np.ndarray:
+    """Each record's state of rest at ``z``: its held error moved by its residuals' median
+    after the first pulse (below the torque limit the first move forgets where the axis
+    rested, so every later count is off by the same amount), then its servo phase, the
+    best of ``phases``. Returns ``z`` with the new held errors; sets ``problem.phases``."""
+    z = z.copy()
+    k0 = len(PARAMS)
+    for _ in range(2):
+        rs = problem.per_record([z])[0]
+        for k, (r, rec) in enumerate(zip(rs, problem.records, strict=True)):
+            if rec.enabled:
+                continue
+            after = rec.used(np.arange(rec.measured.size)) >= _first_pulse_sample(rec)
+            if np.any(after):
+                z[k0 + k] = float(
+                    np.clip(
+                        z[k0 + k] + np.median(r[after]),
+                        problem.scale.lo[k0 + k],
+                        problem.scale.hi[k0 + k],
+                    )
+                )
+    keep = list(problem.phases)
+    best = [(math.inf, ph) for ph in keep]
+    for ph in phases:
+        problem.phases = [int(ph)] * len(keep)
+        for k, r in enumerate(problem.per_record([z])[0]):
+            best[k] = min(best[k], (float(r @ r), int(ph)))
+    problem.phases = [ph for _, ph in best]
+    return z
 
-    Below the torque limit a constant torque only shifts the servo's following error,
-    which a count relative to the capture's start does not see; what remains visible is
-    how it moves the Coulomb dead band's rest positions, which bounds it on one side only.
-    The Jacobian's interval, taken at the optimum, does not show such a flat side."""
-    steps = np.array(PROFILE_STEPS)
-    pts = []
-    for d in np.concatenate([-steps, steps]):
-        zz = z.copy()
-        zz[3] = min(max(z[3] + d, problem.scale.lo[3]), problem.scale.hi[3])
-        pts.append(zz)
-    res = problem.residuals_of(pts)
-    flat = [math.sqrt(float(r @ r) / r.size) <= rms * (1.0 + PROFILE_TOL) for r in res]
-    k = len(steps)
-    down = up = 0.0
-    for i in range(k):
-        if not flat[i]:
-            break
-        down = pts[i][3] - z[3]
-    for i in range(k):
-        if not flat[k + i]:
-            break
-        up = pts[k + i][3] - z[3]
-    return down, up
+
+def _first_pulse_sample(record: Record) -> int:
+    """The sample in which a record's first pulse falls."""
+    return int(np.flatnonzero(record.pulses)[0]) // SAMPLE_TICKS
 
 
 GRID_STEP = 0.05
 """Step of the starting grid over the inertia factor."""
 
-LOAD_SPAN = 8.0
-"""After the local search, the load torque is scanned within ±this % of the rated torque
-in 1 % steps (the others held); a better point restarts the search: the load torque's
-valley has side minima a local search stops in."""
-
-LOAD_SCANS = 3
-"""At most this many scans and restarts."""
-
-PROFILE_STEPS = (0.5, 1.0, 2.0, 3.0, 5.0, 8.0, 12.0, 20.0)
-"""Load torque offsets (% of rated) of the profile check (:func:`_load_profile`)."""
-
-ONE_SIDED = 2.0
-"""A profile flat for this % of the rated torque or more marks the load torque as seen
-only as a bound (:attr:`Estimate.one_sided`)."""
-
-PROFILE_TOL = 0.1
-"""The profile check's rise of the RMS residual that counts as seen (10 %)."""
-
 FACTOR_GRID = (0.25, 16.0)
 """The inertia factors the starting grid spans."""
+
+HELD_STEP = 0.5
+"""Central-difference step of a record's held error (counts)."""
+
+HELD_EDGE = 1e-6
+"""An enabled capture's held error stays this far inside its count (counts)."""
 
 
 def _solve(problem: _Problem, x0: np.ndarray) -> Any:
@@ -448,81 +448,69 @@ def fit(
     -------
     Fit
         The estimates with their 95 % intervals, and the residuals.
+
+    Notes
+    -----
+    Linear algebra runs on one thread: OpenBLAS's threads spin on vectors this short, a
+    sum of squares ~300x slower on a busy machine (measured).
     """
-    scale = _Scale(nominal)
+    from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
+
+    with threadpool_limits(1, user_api="blas"):
+        return _fit(records, nominal, settings)
+
+
+def _fit(records: Sequence[Record], nominal: Plant, settings: Settings) -> Fit:
+    """:func:`fit` itself."""
+    scale = _Scale(nominal, records)
     exc = excitation(records, nominal)
-    free = np.array([True, exc.coulomb, exc.viscous, exc.load, True])
+    enabled = any(r.enabled for r in records)
+    free = np.array(
+        [True, exc.coulomb, exc.viscous, exc.load and enabled, True] + [True] * len(records)
+    )
     z = scale.z0.copy()
     evaluations = 0
-    delays = list(range(0, nominal.servo.sample_ticks, SAMPLE_TICKS))
-    delay = 0
-    for _attempt in range(3):
+    phases = [0] * len(records)
+    all_phases = range(nominal.servo.sample_ticks)
+    for attempt in range(3):
         problem = _Problem(records, scale, settings, free)
         problem.base = z.copy()
-        problem.delay = delay
-        zf0 = _start(problem) if _attempt == 0 else z[free]
-        if _attempt == 0 and len(delays) > 1:
-            # the servo's sample clock against the pulses: the best-fitting phase
-            rs = problem.at_delays(problem.full(zf0), delays)
-            delay = problem.delay = delays[int(np.argmin([float(r @ r) for r in rs]))]
+        problem.phases = list(phases)
+        zf0 = _start(problem) if attempt == 0 else z[free]
         sol = _solve(problem, zf0)
-        for _scan in range(LOAD_SCANS if free[3] else 0):
-            # the load torque's valley has side minima: scan it, the others held
-            zs = problem.full(sol.x)
-            pts = []
-            for d in np.arange(-LOAD_SPAN, LOAD_SPAN + 0.5):
-                zz = zs.copy()
-                zz[3] = min(max(zs[3] + d, scale.lo[3]), scale.hi[3])
-                pts.append(zz)
-            res_s = problem.residuals_of(pts)
-            best = int(np.argmin([float(r @ r) for r in res_s]))
-            if float(res_s[best] @ res_s[best]) >= 2.0 * sol.cost * (1.0 - 1e-3):
-                break
-            again = _solve(problem, pts[best][free])
-            if again.cost >= sol.cost:
-                break
-            sol = again
         z = problem.full(sol.x)
-        plant = scale.plant(z)
-        resp = respond_many(records, [plant], settings, delay)[0]
+        # the servo phase to the tick (the start chose it in steps of 5); solve again if moved
+        before = list(problem.phases)
+        z = _settle_starts(problem, z, all_phases)
+        if problem.phases != before:
+            sol = _solve(problem, z[free])
+            z = problem.full(sol.x)
+        phases = list(problem.phases)
+        resp = respond_many(records, [(scale.plant(z), problem.starts(z))], settings)[0]
         evaluations += 1
         sat = _saturated_s(resp, nominal)
         gain_seen = sat >= MIN_SATURATED_S
-        if gain_seen == bool(free[4]):
+        want = free.copy()
+        want[4] = gain_seen
+        want[3] = exc.load and (enabled or gain_seen)
+        if np.array_equal(want, free):
             break
         evaluations += problem.evaluations  # the next attempt has a problem of its own
-        free = free.copy()
-        free[4] = gain_seen
-        if not gain_seen:
-            z[4] = scale.z0[4]
+        free = want
+        for i in (3, 4):
+            if not free[i]:
+                z[i] = scale.z0[i]
     jac = problem.jac(sol.x)
     res = problem.fun(sol.x)
-    lengths = [r.measured.size for r in records]
-    A = jac.T @ jac
-    try:
-        Ainv = np.linalg.inv(A)
-    except np.linalg.LinAlgError:
-        Ainv = np.linalg.pinv(A)
-    floor = round(HAC_FLOOR_S * nominal.tick_hz / SAMPLE_TICKS)
-    cov = Ainv @ newey_west(jac, res, lengths, floor) @ Ainv
-    # the estimate's spread over the servo's sample-clock phase, which no capture records:
-    # the Gauss–Newton step each other phase's residuals would take from the optimum
-    others = [d for d in delays if d != delay][:: max(1, (len(delays) - 1) // NUISANCE_PHASES)]
-    if others:
-        steps = [-Ainv @ (jac.T @ r) for r in problem.at_delays(z, others)]
-        cov = cov + sum(np.outer(d, d) for d in steps) / len(steps)
-    # and over where within its first count the motor started, which no count shows
-    steps = [-Ainv @ (jac.T @ r) for r in problem.at_starts(z, NUISANCE_STARTS)]
-    cov = cov + sum(np.outer(d, d) for d in steps) / len(steps)
+    lengths = [r.used(r.measured).size for r in records]
+    cov = _covariance(problem, z, jac)
     sd_z = np.sqrt(np.maximum(np.diag(cov), 0.0))
     rms = float(np.sqrt(np.mean(res**2)))
-    flat = _load_profile(problem, z, rms) if free[3] else (0.0, 0.0)
     phys = scale.physical(z)
     nominal_phys = scale.physical(scale.z0)
     estimates = []
     k = 0
     for i, name in enumerate(PARAMS):
-        one_sided = False
         if free[i]:
             half = Z95 * sd_z[k]
             k += 1
@@ -532,22 +520,9 @@ def fit(
             else:
                 d = scale.jacobian_diag(z)[i]
                 lo, hi = phys[i] - half * d, phys[i] + half * d
-                if name == "load_torque_nm":  # a flat side the Jacobian does not show
-                    lo, hi = min(lo, phys[i] + flat[0] * d), max(hi, phys[i] + flat[1] * d)
-                    one_sided = max(-flat[0], flat[1]) >= ONE_SIDED
                 if name in ("coulomb_nm", "viscous_nm_s_rad"):
                     lo = max(0.0, lo)
-            estimates.append(
-                Estimate(
-                    name,
-                    float(phys[i]),
-                    lo,
-                    hi,
-                    float(nominal_phys[i]),
-                    True,
-                    one_sided=i not in (0, 4) and one_sided,
-                )
-            )
+            estimates.append(Estimate(name, float(phys[i]), lo, hi, float(nominal_phys[i]), True))
         else:
             lo, hi = wide_range(name, nominal)
             v = float(nominal_phys[i])
@@ -569,7 +544,61 @@ def fit(
         evaluations=evaluations + problem.evaluations,
         residuals=tuple(residuals),
         responses=tuple(resp),
+        starts=tuple(problem.starts(z)),
     )
+
+
+def _covariance(problem: _Problem, z: np.ndarray, jac: np.ndarray) -> np.ndarray:
+    """The covariance of the free coordinates (see the module doc): the sandwich with the
+    count's quantisation error, plus the spread over the servo's sample phase."""
+    A = jac.T @ jac
+    try:
+        Ainv = np.linalg.inv(A)
+    except np.linalg.LinAlgError:
+        Ainv = np.linalg.pinv(A)
+    nominal = problem.scale.nominal
+    groups, counts, shift = [], [], []
+    start = 0
+    for r, resp in zip(problem.records, problem.simulated(z), strict=True):
+        groups += [piece + start for piece in pieces(r, nominal.tick_hz)]
+        counts.append(r.used(resp.counts))
+        # the tick grid's phase, known to within the record's phase width: the residuals'
+        # change for a shift of the grid by δ is −(ω/q)·δ, δ uniform over that width
+        g = np.zeros(jac.shape[0])
+        g[start : start + counts[-1].size] = -r.used(resp.speed_rad_s) / nominal.motor.count_rad
+        shift.append(jac.T @ g * (r.phase_width_s / math.sqrt(12.0)))
+        start += counts[-1].size
+    meat = quantisation_meat(jac, np.concatenate(counts), groups)
+    meat = meat + sum(np.outer(v, v) for v in shift)
+    cov = Ainv @ meat @ Ainv
+    # the servo's sample clock against the pulses, which no capture records: the
+    # Gauss–Newton step each other phase's residuals would take from the optimum
+    steps = []
+    keep = list(problem.phases)
+    try:
+        for ph in range(0, problem.scale.nominal.servo.sample_ticks, NUISANCE_PHASE_STEP):
+            problem.phases = [(p0 + ph) % problem.scale.nominal.servo.sample_ticks for p0 in keep]
+            if ph:
+                steps.append(-Ainv @ (jac.T @ problem.residuals_of([z])[0]))
+    finally:
+        problem.phases = keep
+    if steps:
+        cov = cov + sum(np.outer(d, d) for d in steps) / len(steps)
+    # a torque held at its nominal value (not excited) may be anywhere in its wide range:
+    # the estimates move with it by −A⁻¹Jᵀ∂r/∂p, over its mean square offset in that range
+    scale = problem.scale
+    for i in np.flatnonzero(~problem.free[: len(PARAMS)]):
+        if PARAMS[i] not in HELD_TORQUES:
+            continue
+        lo, hi = (v / scale.jacobian_diag(z)[i] for v in wide_range(PARAMS[i], nominal))
+        zu, zd = z.copy(), z.copy()
+        zu[i] += scale.steps[i]
+        zd[i] -= scale.steps[i]
+        ru, rd = problem.residuals_of([zu, zd])
+        d = -Ainv @ (jac.T @ ((ru - rd) / (2.0 * scale.steps[i])))
+        mean_square = ((hi - z[i]) ** 3 - (lo - z[i]) ** 3) / (3.0 * (hi - lo))
+        cov = cov + np.outer(d, d) * mean_square
+    return cov
 
 
 __all__ = [

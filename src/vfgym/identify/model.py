@@ -1,18 +1,38 @@
 """A capture on the simulator's tick grid, and the simulations of it for candidate plants.
 
 The recorded pulse train drives the axis's servo and motor in the exact simulator (an
-external pulse train, ``pulses=`` of :func:`vfgym.plant.simulate`). The capture's pulses
-are placed on the controller's tick grid: a pulse rises half a tick after its tick
-starts (as :mod:`vfgym.io.vcd` writes it), so the grid's phase is the circular mean of
-the pulse times modulo T, and each pulse goes to the nearest tick (a rounded time stamp
-moves it by far less than half a tick at a sample clock ≥ 4× the pulse rate).
+external pulse train, :func:`vfgym.plant.simulate_train`). The capture's pulses are placed
+on the controller's tick grid: a pulse rises half a tick after its tick starts (as
+:mod:`vfgym.io.vcd` writes it), so each pulse goes to the nearest tick (a sampled time
+moves it by far less than half a tick at a sample clock ≥ 4× the pulse rate), and the
+grid's phase is the middle of the pulses' offsets from their ticks: an analyser moves
+every edge onto one of its samples, by up to half a sample either way, so the middle of
+the extreme offsets is where the grid lies, known to within the width
+(:attr:`Record.phase_width_s`) that the offsets leave free.
 
-The simulation starts :data:`PREROLL_S` before the capture, at rest, so that a load
-torque has sagged the axis to its held position when the capture begins, as it had on
-the machine. The measured count (relative to its value at the capture's start) is
-compared with the simulated motor angle in counts (relative to the simulated count at
-the same instant), plus half a count (a count c means θ/q in [c, c + 1)), every
-:data:`SAMPLE_TICKS` ticks: these are the residuals, in encoder counts.
+The count a sampled capture shows at an instant is the count at the middle of the
+analyser's sample period holding that instant (an edge is stamped at the sample nearest
+to it), so each residual compares the simulated angle moved on to that time
+(:attr:`Record.read_offset_s`, within half a sample of the tick's end) at the motor's
+speed then.
+
+The simulation starts at the capture's first whole tick with the axis at rest, as it
+was on the machine, in a state no capture records (:class:`Start`): where the motor rests
+against the position the servo holds (the error the friction and a load torque left the
+servo with when the axis last stopped), and the phase of the servo's sample clock. The
+measured count (relative to its value at the capture's start) is compared with the
+simulated motor angle in counts (relative to the same start), plus half a count (a count
+c means θ/q in [c, c + 1)), every :data:`SAMPLE_TICKS` ticks: these are the residuals,
+in encoder counts.
+
+Below the torque limit a constant load torque only adds to the error the servo holds, at
+rest as in motion, so a capture that starts with the axis already held cannot tell it
+from that error. A capture may instead hold the drive's enable (or its brake's release):
+the encoder still at the capture's start, then moving with no pulse (the load sagging
+against a servo that starts with no error), then at rest again before the first pulse
+(:attr:`Record.enabled`). The error the servo holds is then known (minus the counts the
+axis sagged), which shows the load torque; the samples before the first pulse, while the
+real enable's instant is unknown, are left out of the residuals.
 """
 
 from __future__ import annotations
@@ -27,10 +47,7 @@ import numpy as np
 
 from vfgym.identify.capture import Capture
 from vfgym.params import Plant, Settings
-from vfgym.plant import simulate
-
-PREROLL_S = 0.2
-"""Idle time simulated before the capture's start (s): the held position settles."""
+from vfgym.plant import simulate_train
 
 SAMPLE_TICKS = 5
 """Residuals are taken every this many controller ticks."""
@@ -43,6 +60,10 @@ SETTLE_S = 0.01
 """A capture must run at least this long after its last pulse (s), so that its last move
 is seen whole."""
 
+QUIET_S = 0.01
+"""A capture holds the drive's enable when its encoder is still for this long (s) after
+the capture's start and before the first pulse, and moves in between."""
+
 
 @dataclass(frozen=True)
 class Record:
@@ -53,10 +74,7 @@ class Record:
     source : str
         The capture's file.
     pulses : numpy.ndarray
-        int8 per simulated tick (−1, 0, +1), the pre-roll's idle ticks first.
-    preroll_ticks : int
-        Idle ticks simulated before the capture's first whole tick (a multiple of
-        :data:`SAMPLE_TICKS`).
+        int8 per tick of the capture from its first whole tick (−1, 0, +1).
     measured : numpy.ndarray
         The measured count (relative to the capture's start) plus ½, at the end of every
         :data:`SAMPLE_TICKS`-th tick from the capture's start.
@@ -64,22 +82,82 @@ class Record:
         The tick grid's phase: tick i starts at (i + phase)·T in the capture's time.
     misplaced : int
         Pulses moved to the next free tick because two fell on one.
+    enabled : bool
+        The capture holds the drive's enable (see the module doc).
+    first_sample : int
+        The first sample the residuals use (the one after the first pulse when
+        ``enabled``, else 0).
+    sag_counts : int
+        The encoder's move between the capture's start and its first pulse (counts): on
+        an enabled capture, minus the error the servo holds at the first pulse.
+    read_offset_s : numpy.ndarray or None
+        Per sample, when the measured count holds against the tick's end (s): the middle
+        of the analyser's sample period (None: at the tick's end, a CSV).
+    phase_width_s : float
+        The width of tick-grid phases the pulses' sampled times leave possible (s).
     """
 
     source: str
     pulses: np.ndarray
-    preroll_ticks: int
     measured: np.ndarray
     phase: float
     misplaced: int
+    enabled: bool = False
+    first_sample: int = 0
+    sag_counts: int = 0
+    read_offset_s: np.ndarray | None = None
+    phase_width_s: float = 0.0
 
     @property
     def n_ticks(self) -> int:
         """Ticks simulated."""
         return int(self.pulses.size)
 
+    def held_range(self) -> tuple[float, float] | None:
+        """The range of :attr:`Start.held_counts` an enabled capture allows, else None.
 
-def record_of(capture: Capture, plant: Plant) -> Record:
+        Returns
+        -------
+        tuple of float or None
+            (−sag − 1, −sag]: the servo holds minus the counts the axis sagged, the motor
+            anywhere within that count.
+        """
+        if not self.enabled:
+            return None
+        return (-self.sag_counts - 1.0, float(-self.sag_counts))
+
+    def used(self, x: np.ndarray) -> np.ndarray:
+        """The part of a per-sample array that the residuals use.
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            One entry per sample (as :attr:`measured`).
+
+        Returns
+        -------
+        numpy.ndarray
+            From :attr:`first_sample` on.
+        """
+        return x[self.first_sample :]
+
+    def residuals(self, response: Response) -> np.ndarray:
+        """Measured minus simulated count at the samples used (counts).
+
+        Parameters
+        ----------
+        response : Response
+            A candidate plant's response to this record.
+
+        Returns
+        -------
+        numpy.ndarray
+            The residuals.
+        """
+        return self.used(self.measured - response.counts)
+
+
+def record_of(capture: Capture, plant: Plant, from_enable: bool | None = None) -> Record:
     """Place a capture on the tick grid of ``plant`` (see the module doc).
 
     Parameters
@@ -88,6 +166,12 @@ def record_of(capture: Capture, plant: Plant) -> Record:
         The capture.
     plant : Plant
         Gives the controller's tick T.
+    from_enable : bool or None
+        True: the capture started before the drive was enabled (so the servo held no
+        error then, even if nothing moved: a load torque within the friction does not
+        sag the axis). False: it started with the axis already held. None: an enable
+        is taken as recorded when the encoder moves before the first pulse and was
+        still for :data:`QUIET_S` at the capture's start and before that pulse.
 
     Returns
     -------
@@ -98,19 +182,41 @@ def record_of(capture: Capture, plant: Plant) -> Record:
     ------
     ValueError
         Naming the file: the capture starts inside a move (a pulse in its first tick, or
-        the encoder moving before the first pulse) or
-        ends less than :data:`SETTLE_S` after its last pulse (shorter than its moves).
+        the encoder moving before the first pulse, other than an enable's sag), the
+        axis is still moving :data:`QUIET_S` before the first pulse of a capture said
+        to hold the enable, or the capture ends less than :data:`SETTLE_S` after its
+        last pulse (shorter than its moves).
     """
     T = plant.tick_s
     src = capture.source
     x = capture.pulse_s / T
     ang = 2.0 * math.pi * (x - 0.5)
     phase = math.atan2(float(np.sin(ang).mean()), float(np.cos(ang).mean())) / (2.0 * math.pi)
+    off = x - 0.5 - np.rint(x - 0.5 - phase)  # each pulse's offset from its tick (ticks)
+    spread = float(off.max() - off.min())
+    width = 0.0
+    if spread < 0.5:  # else a clock that is not quite the axis's: keep the circular mean
+        phase = 0.5 * float(off.max() + off.min())
+        if capture.sampled:
+            width = max(0.0, capture.resolution_s - spread * T)
     ticks = np.rint(x - 0.5 - phase).astype(np.int64)
     first = math.ceil(-phase - 1e-9)  # the first whole tick
     last = math.floor(capture.end_s / T - phase) - 1
-    early = int(np.count_nonzero(capture.count_s < capture.pulse_s[0]))
-    if ticks[0] <= first or early > MOVING_STEPS:
+    before = capture.count_s < capture.pulse_s[0]
+    early = int(np.count_nonzero(before))
+    sag = int(capture.count[before][-1]) if early else 0
+    settled = not early or float(capture.pulse_s[0] - capture.count_s[before][-1]) >= QUIET_S
+    if from_enable is None:
+        enabled = sag != 0 and float(capture.count_s[0]) >= QUIET_S and settled
+    else:
+        enabled = from_enable
+    if enabled and not settled:
+        raise ValueError(
+            f"{src}: the encoder still moves {capture.pulse_s[0] - capture.count_s[before][-1]:.3g}"
+            f" s before the first pulse: expected the axis at rest at least {QUIET_S:g} s "
+            "before the moves, after the drive's enable"
+        )
+    if ticks[0] <= first or (early > MOVING_STEPS and not enabled):
         raise ValueError(
             f"{src}: the capture starts inside a move (its first pulse at "
             f"{capture.pulse_s[0]:.6g} s, {early} encoder steps before it): expected it to "
@@ -123,10 +229,9 @@ def record_of(capture: Capture, plant: Plant) -> Record:
             f"last pulse: expected it to run at least {SETTLE_S:g} s after the last move's "
             "last pulse (a capture shorter than a move)"
         )
-    pre = SAMPLE_TICKS * math.ceil(PREROLL_S / T / SAMPLE_TICKS)
     n_cap = (last - first + 1) // SAMPLE_TICKS * SAMPLE_TICKS
-    pulses = np.zeros(pre + n_cap, dtype=np.int8)
-    idx = ticks - first + pre
+    pulses = np.zeros(n_cap, dtype=np.int8)
+    idx = ticks - first
     misplaced = 0
     # two pulses on one tick (a clock that is not quite the axis's): the later one moves on
     for j in np.flatnonzero(np.diff(idx) <= 0):
@@ -137,13 +242,21 @@ def record_of(capture: Capture, plant: Plant) -> Record:
     pulses[idx[keep]] = capture.pulse_sign[keep]
     ends = (np.arange(SAMPLE_TICKS, n_cap + 1, SAMPLE_TICKS) + first + phase) * T
     measured = capture.count_at(ends).astype(np.float64) - float(capture.count_at(np.zeros(1))[0])
+    read = None
+    if capture.sampled:
+        res = capture.resolution_s
+        read = (np.floor(ends / res + 1e-9) + 0.5) * res - ends
     return Record(
         source=src,
         pulses=pulses,
-        preroll_ticks=pre,
         measured=measured + 0.5,
         phase=phase,
         misplaced=misplaced,
+        enabled=enabled,
+        first_sample=int(ticks[0] - first) // SAMPLE_TICKS if enabled else 0,
+        sag_counts=sag,
+        read_offset_s=read,
+        phase_width_s=width,
     )
 
 
@@ -154,8 +267,8 @@ class Response:
     Attributes
     ----------
     counts : numpy.ndarray
-        Simulated motor angle in counts relative to the simulated count at the capture's
-        start, at the record's sample ticks.
+        Simulated motor angle in counts relative to the count at the capture's start
+        (before the drive's enable on an enabled capture), at the record's sample ticks.
     torque_nm : numpy.ndarray
         The torque applied at the sample ticks (N·m).
     saturated : numpy.ndarray
@@ -198,36 +311,26 @@ def torque_limit(plant: Plant, speed_rad_s: np.ndarray, torque_nm: np.ndarray) -
     return np.where(torque_nm * speed_rad_s > 0.0, curve, m.peak_torque_nm)
 
 
-def _run_from(
-    pulses: np.ndarray, plant: Plant, settings: Settings, theta0_rad: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`vfgym.plant.simulate`'s run of an external train, the motor starting at
-    ``theta0_rad`` (within the first count) instead of 0: (θ, τ, ω) every
-    :data:`SAMPLE_TICKS`-th tick."""
-    from vfgym.params import DEFAULT_MEASURES
-    from vfgym.plant import _kernel as K
-    from vfgym.plant import _layout as L
-    from vfgym.plant import pack
+@dataclass(frozen=True)
+class Start:
+    """The state of rest a capture starts from, which it does not record.
 
-    n = pulses.size
-    prm = pack(settings, plant, DEFAULT_MEASURES, 0.0, n, True)
-    st = np.empty(L.N_STATE, dtype=np.float64)
-    ring = np.empty(K.ring_size.py_func(prm), dtype=np.float64)
-    K.init_state.py_func(prm, st, ring)
-    st[L.S_THETA] = theta0_rad
-    rec = np.empty((L.N_ROWS, n // SAMPLE_TICKS), dtype=np.float64)
-    ext = np.ascontiguousarray(pulses, dtype=np.int8)
-    K.run_segment(np.zeros(n), ext, prm, st, ring, n, rec, SAMPLE_TICKS)
-    return rec[L.R_THETA], rec[L.R_TORQUE], rec[L.R_OMEGA]
+    Attributes
+    ----------
+    held_counts : float
+        Where the motor rests against the position the servo holds, in counts behind it:
+        the servo's error is ⌈held_counts⌉ whole counts (its position counter) and the motor
+        rests ⌈held_counts⌉ − held_counts into its count.
+    servo_phase : int
+        How far the servo's sample clock has run at the capture's first tick, in
+        [0, sample_ticks).
+    """
+
+    held_counts: float = -0.5
+    servo_phase: int = 0
 
 
-def respond(
-    record: Record,
-    plant: Plant,
-    settings: Settings,
-    delay_ticks: int = 0,
-    start_count: float = 0.0,
-) -> Response:
+def respond(record: Record, plant: Plant, settings: Settings, start: Start) -> Response:
     """Simulate one record's pulse train on one plant.
 
     Parameters
@@ -239,82 +342,77 @@ def respond(
     settings : Settings
         The servo's filter ratio (``ts_over_tf``) is the one setting an external train
         leaves in force.
-    delay_ticks : int
-        Idle ticks added before the pre-roll, a multiple of :data:`SAMPLE_TICKS`: they
-        move the servo's sample clock against the pulses (its phase on the machine is
-        not recorded).
-    start_count : float
-        Where within its first count the motor starts, in [0, 1) counts (on the machine
-        it is not known).
+    start : Start
+        The state of rest the capture starts from.
 
     Returns
     -------
     Response
         The simulated counts and torque at the sample ticks.
     """
-    pulses = record.pulses
-    if delay_ticks:
-        pulses = np.concatenate([np.zeros(delay_ticks, dtype=np.int8), pulses])
-    q = plant.motor.count_rad
-    if start_count == 0.0:
-        tr = simulate(
-            np.zeros(pulses.size), settings, plant, pulses=pulses, decimation=SAMPLE_TICKS
-        )
-        theta_rad, tau_nm, w_rad_s = tr.motor_rad, tr.torque_nm, tr.speed_rad_s
-    else:
-        theta_rad, tau_nm, w_rad_s = _run_from(pulses, plant, settings, start_count * q)
-    j0 = (record.preroll_ticks + delay_ticks) // SAMPLE_TICKS - 1  # the capture's start
-    theta = theta_rad / q
-    counts = theta[j0 + 1 :] - math.floor(theta[j0])
-    tau = tau_nm[j0 + 1 :]
-    w = w_rad_s[j0 + 1 :]
+    held = math.ceil(start.held_counts)
+    tr = simulate_train(
+        record.pulses,
+        settings,
+        plant,
+        start_count=min(max(held - start.held_counts, 0.0), 1.0 - 1e-12),
+        servo_error_counts=held,
+        servo_phase_ticks=start.servo_phase,
+        decimation=SAMPLE_TICKS,
+    )
+    counts = tr.motor_rad / plant.motor.count_rad
+    if record.read_offset_s is not None:  # the count a sampled capture shows (module doc)
+        counts = counts + tr.speed_rad_s * record.read_offset_s / plant.motor.count_rad
+    if record.enabled:
+        counts = counts + record.sag_counts  # relative to the count before the enable
+    tau = tr.torque_nm
+    w = tr.speed_rad_s
     sat = np.abs(tau) >= torque_limit(plant, w, tau) * (1.0 - 1e-9)
     return Response(counts=counts, torque_nm=tau, saturated=sat, speed_rad_s=w)
 
 
 def respond_many(
     records: Sequence[Record],
-    plants: Sequence[Plant],
+    jobs: Sequence[tuple[Plant, Sequence[Start]]],
     settings: Settings,
-    delay_ticks: int = 0,
-    start_count: float = 0.0,
 ) -> list[list[Response]]:
-    """Every record on every plant, as one batch over threads (the kernel releases the GIL).
+    """Every record on every candidate, as one batch over threads (the kernel releases
+    the GIL).
 
     Parameters
     ----------
     records : sequence of Record
         The captures.
-    plants : sequence of Plant
-        The candidate plants.
+    jobs : sequence of (Plant, sequence of Start)
+        Each candidate plant with the state each record starts from.
     settings : Settings
-        As in :func:`respond`.
-    delay_ticks, start_count
         As in :func:`respond`.
 
     Returns
     -------
     list of list of Response
-        ``out[i][k]``: plant i, record k.
+        ``out[i][k]``: candidate i, record k.
     """
-    jobs = [(i, k) for i in range(len(plants)) for k in range(len(records))]
-    workers = max(1, min(len(jobs), os.cpu_count() or 1))
+    tasks = [(i, k) for i in range(len(jobs)) for k in range(len(records))]
+    workers = max(1, min(len(tasks), os.cpu_count() or 1))
 
     def one(ik: tuple[int, int]) -> Response:
-        return respond(records[ik[1]], plants[ik[0]], settings, delay_ticks, start_count)
+        plant, starts = jobs[ik[0]]
+        return respond(records[ik[1]], plant, settings, starts[ik[1]])
 
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        done = list(pool.map(one, jobs))
+        done = list(pool.map(one, tasks))
     it = iter(done)
-    return [[next(it) for _ in records] for _ in plants]
+    return [[next(it) for _ in records] for _ in jobs]
 
 
 __all__ = [
-    "PREROLL_S",
+    "QUIET_S",
     "SAMPLE_TICKS",
     "SETTLE_S",
     "Record",
     "Response",
+    "Start",
     "record_of",
     "respond",
     "respond_many",

@@ -161,7 +161,7 @@ def uncertainty_of(fit: Fit, nominal: Plant) -> Uncertainty:
 
 
 def not_excited_notes(fit: Fit) -> list[str]:
-    """One line for each quantity the captures do not excite or bound on one side only.
+    """One line for each quantity the captures do not excite.
 
     Parameters
     ----------
@@ -187,16 +187,15 @@ def not_excited_notes(fit: Fit) -> list[str]:
     if not exc.speeds_rad_s:
         why["coulomb_nm"] = why["load_torque_nm"]
         why["viscous_nm_s_rad"] = why["load_torque_nm"]
+    else:
+        why["load_torque_nm"] = (
+            "the captures start with the axis already held and the torque never reaches its "
+            "limit: below it a load torque only adds to the error the servo holds, at rest as "
+            "in motion; start the capture before enabling the drive, so that it records the "
+            "axis sagging under the load"
+        )
     out = []
     for e in fit.estimates:
-        if e.one_sided:
-            out.append(
-                f"{e.name}: seen only as a bound (below the torque limit a load torque larger "
-                "than the Coulomb friction only shifts the servo's following error, at rest as "
-                "in motion, which a count relative to the capture's start cannot see; a move "
-                "that saturates the torque both ways pins it): estimate "
-                f"{e.value:.4g} within [{e.low:.4g}, {e.high:.4g}]"
-            )
         if not e.excited:
             out.append(
                 f"{e.name}: not excited ({why[e.name]}): left at its nominal value "
@@ -248,7 +247,10 @@ def likely_cause(fit: Fit, records: Sequence[Record], nominal: Plant) -> str:
             )
     m = nominal.motor
     hot = np.concatenate(
-        [r.saturated | (np.abs(r.speed_rad_s) > m.knee_speed_rad_s) for r in fit.responses]
+        [
+            rec.used(r.saturated | (np.abs(r.speed_rad_s) > m.knee_speed_rad_s))
+            for rec, r in zip(records, fit.responses, strict=True)
+        ]
     )
     if 0 < hot.sum() < hot.size and np.mean(res[hot] ** 2) > HOT_RATIO * np.mean(res[~hot] ** 2):
         return (
@@ -280,8 +282,9 @@ def counts_per_pulse(records: Sequence[Record], tick_hz: float) -> float | None:
     """
     moved = pulses = 0.0
     for r in records:
-        n = np.cumsum(r.pulses[r.preroll_ticks :].astype(np.int64))
+        n = np.cumsum(r.pulses.astype(np.int64))
         rest = _rest_samples(r, tick_hz)
+        rest = rest[rest >= r.first_sample]  # an enable's sag moves the axis with no pulse
         if rest.size >= 2:
             moved += float(np.abs(np.diff(r.measured[rest])).sum())
             pulses += float(np.abs(np.diff(n[(rest + 1) * SAMPLE_TICKS - 1])).sum())
@@ -291,7 +294,7 @@ def counts_per_pulse(records: Sequence[Record], tick_hz: float) -> float | None:
 def _rest_samples(record: Record, tick_hz: float) -> np.ndarray:
     """The last sample of each idle stretch of at least 20 ms (the axis at rest)."""
     s = SAMPLE_TICKS
-    p = record.pulses[record.preroll_ticks :]
+    p = record.pulses
     n = p.size // s
     busy = np.abs(p[: n * s]).reshape(n, s).sum(axis=1) > 0
     need = max(1, round(0.02 * tick_hz / s))

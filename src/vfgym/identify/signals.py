@@ -223,9 +223,12 @@ def record_capture(
     path : str or Path
         The VCD to write.
     start_s : float
-        When the record starts, in [0, ``rest_s``) (s).
+        When the record starts (s), in [0, ``rest_s``), or before 0: the simulation
+        starts at the drive's enable (the servo holding no error, a load torque sagging
+        the axis), so a negative start records the enable as a capture started before it
+        does.
     rest_s : float
-        Rest before the pulse train (s).
+        Rest before the pulse train (s), from the enable.
     length_s : float or None
         Length of the record (s); default to 50 ms after the train.
     timescale : str

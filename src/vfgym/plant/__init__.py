@@ -20,7 +20,7 @@ _tick
 _kernel, _lanes
     The compiled loop, for one move (and a batch over threads) and for SIMD lanes of moves.
 _simulate
-    The public entry points (:func:`simulate`, :func:`vf_pulses`).
+    The public entry points (:func:`simulate`, :func:`simulate_train`, :func:`vf_pulses`).
 measures
     Each measure of a move, decoded from the kernel's streamed accumulators.
 reference
@@ -34,6 +34,7 @@ from vfgym.plant._simulate import (
     pack,
     run_move,
     simulate,
+    simulate_train,
     step_command,
     vf_pulses,
 )
@@ -47,6 +48,7 @@ __all__ = [
     "pack",
     "run_move",
     "simulate",
+    "simulate_train",
     "step_command",
     "vf_pulses",
 ]

@@ -393,6 +393,20 @@ def simulate(
     prm = pack(settings, plant, measures, float(cmd[-1]), n_ticks, pulses is not None)
     rec = np.empty((L.N_ROWS, n_ticks // dec), dtype=np.float64)
     acc = run_move(cmd, ext, prm, rec, dec)
+    return _trace(cmd, rec, acc, settings, plant, measures, dec, pulses is not None)
+
+
+def _trace(
+    cmd: np.ndarray,
+    rec: np.ndarray,
+    acc: np.ndarray,
+    settings: Settings,
+    plant: Plant,
+    measures: Measures,
+    dec: int,
+    external: bool,
+) -> Trace:
+    """The :class:`Trace` of a run from its trace rows and accumulator row."""
     time_s = np.arange(1, rec.shape[1] + 1, dtype=np.float64) * dec / plant.tick_hz
     return Trace(
         time_s=time_s,
@@ -413,8 +427,95 @@ def simulate(
         decimation=dec,
         target_rad=float(cmd[-1]),
         command_end_s=command_end_s(cmd, plant.tick_hz),
-        external=pulses is not None,
+        external=external,
     )
+
+
+def simulate_train(
+    pulses: np.ndarray,
+    settings: Settings = PAPER_SETTINGS,
+    plant: Plant = PAPER_PLANT,
+    *,
+    start_count: float = 0.0,
+    servo_error_counts: int = 0,
+    servo_phase_ticks: int = 0,
+    decimation: int = 1,
+    measures: Measures = DEFAULT_MEASURES,
+) -> Trace:
+    """Simulate an external pulse train from a chosen state of rest.
+
+    :func:`simulate` with ``pulses=`` starts the motor at rest at angle 0, exactly on an
+    encoder count's edge, the servo holding no error, its speed sample due
+    ``sample_ticks`` ticks later. On a machine none of these is known: the motor rests
+    anywhere within a count, the servo holds whatever error the friction and a load
+    torque left it with when the axis last stopped, and the servo's sample clock runs on
+    its own. This runs the same train from another such state (the command is zero, so
+    the measures are those of a train about 0).
+
+    Parameters
+    ----------
+    pulses : numpy.ndarray
+        The pulse train, −1, 0 or +1 per tick (at least one tick).
+    settings : Settings
+        The servo's filter ratio ``ts_over_tf`` is the one setting a train leaves in force.
+    plant : Plant
+        The plant.
+    start_count : float
+        Where within its first encoder count the motor rests at tick 0, in counts, in
+        [0, 1): the motor starts at ``start_count · count_rad`` (the count still 0).
+    servo_error_counts : int
+        The error the servo holds at tick 0, in counts (its position counter): it pushes
+        with ``servo_error_counts`` times K3, which the friction (and a load torque) hold
+        at rest, or else the motor moves from tick 0.
+    servo_phase_ticks : int
+        How far the servo's speed-sample clock has run at tick 0, in [0, sample_ticks):
+        its first sample comes ``sample_ticks − servo_phase_ticks`` ticks in (the state
+        :func:`simulate` reaches after that many idle ticks at rest without a load).
+    decimation : int
+        Keep every ``decimation``-th tick in the trace, from 1 to the train's length.
+    measures : Measures
+        Windows and bands of the measures.
+
+    Returns
+    -------
+    Trace
+        As :func:`simulate` returns it; with the defaults, the same trace as
+        ``simulate(np.zeros(n), settings, plant, pulses=pulses)``.
+
+    Raises
+    ------
+    ValueError
+        If the train is not −1, 0, +1 per tick, or a start or the decimation is out of
+        its range.
+    """
+    arr = np.asarray(pulses)
+    n_ticks = int(arr.shape[0]) if arr.ndim == 1 else 0
+    if n_ticks == 0:
+        raise ValueError(f"pulses must be a non-empty train, one entry per tick: got {arr.shape}")
+    ext = check_pulses(arr, n_ticks)
+    if not isinstance(settings, Settings):
+        raise ValueError(f"settings={settings!r} must be a vfgym.Settings")
+    if not isinstance(plant, Plant):
+        raise ValueError(f"plant={plant!r} must be a vfgym.Plant")
+    frac = check_real("start_count", start_count, 0.0, 1.0, hi_open=True)
+    held = check_int("servo_error_counts", servo_error_counts)
+    phase = check_int("servo_phase_ticks", servo_phase_ticks, 0, plant.servo.sample_ticks - 1)
+    dec = check_int("decimation", decimation, 1, n_ticks)
+    cmd = np.zeros(n_ticks, dtype=np.float64)
+    prm = pack(settings, plant, measures, 0.0, n_ticks, True)
+    rec = np.empty((L.N_ROWS, n_ticks // dec), dtype=np.float64)
+    announce_compile("simulate", "the simulation kernel", K.run_segment)
+    st = np.empty(L.N_STATE, dtype=np.float64)
+    ring = np.empty(K.ring_size.py_func(prm), dtype=np.float64)
+    K.init_state.py_func(prm, st, ring)
+    st[L.S_THETA] = st[L.S_THS0] = frac * plant.motor.count_rad
+    st[L.S_NSLEFT] = plant.servo.sample_ticks - phase
+    st[L.S_PC] = held
+    st[L.S_U] = held
+    K.run_segment(cmd, ext, prm, st, ring, n_ticks, rec, dec)
+    acc = K.new_acc()
+    K.finish.py_func(st, acc, n_ticks, prm)
+    return _trace(cmd, rec, acc, settings, plant, measures, dec, True)
 
 
 def step_command(distance_rad: float, n_ticks: int) -> np.ndarray:
