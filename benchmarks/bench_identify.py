@@ -22,7 +22,7 @@ intervals holding the truth, ≤ 30 s an identification on 2 cores. Coverage cou
 estimated (excited) quantities among inertia, Coulomb, viscous and load torque, and the
 gain where it is estimated. It asserts nothing (the machine is shared).
 
-``--regret N`` then runs ``vfgym fit`` (:func:`vfgym.agents.fit.fit_axis`, its defaults)
+``--regret N`` then runs ``vfgym fit`` (:func:`vfgym.permove.fit_axis`, its defaults)
 on the first N plants (or those ``--regret-plants`` lists) twice: on the identified axis
 (its uncertainty block included) and on the true axis (the true plant, exactly known).
 Both settings models are judged on the true plant's 32 held-out test moves
@@ -241,8 +241,7 @@ def main(argv: list[str] | None = None) -> int:
 def regret(axis: Axis, idents: list[tuple[int, Drawn, Identified]], runs_dir: str | None) -> None:
     """``vfgym fit`` on the identified and on the true axis, judged on the true plant."""
     import vfgym
-    from vfgym.agents import load_tuner
-    from vfgym.agents.fit import FitConfig, fit_axis
+    from vfgym.permove import FitConfig, fit_axis, load_tuner
 
     base = Path(runs_dir) if runs_dir else Path(tempfile.mkdtemp(prefix="bench-identify-"))
     print()
