@@ -165,7 +165,7 @@ README_RUNS: dict[str, list[Run]] = {
         ),
     ],
     "vfgym identify --axis experiments/axes/paper.yaml --capture "
-    "id-plan/identify-moves-nominal.vcd --out identified.yaml": [
+    "id-plan/identify-moves-nominal.vcd --from-enable --out identified.yaml": [
         Run(
             "identify-dry-run",
             [
@@ -174,6 +174,7 @@ README_RUNS: dict[str, list[Run]] = {
                 "experiments/axes/paper.yaml",
                 "--capture",
                 "id-plan/identify-moves-nominal.vcd",
+                "--from-enable",
                 "--out",
                 "identified.yaml",
             ],
