@@ -27,7 +27,7 @@ import functools
 import hashlib
 import json
 import warnings
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -39,8 +39,8 @@ from vfgym.moves._axis_checks import (
     check_measures,
     check_servo,
 )
+from vfgym.moves._axis_parts import from_mapping, read_move_set, read_plant
 from vfgym.moves._move_sets import MoveSet, MoveSets
-from vfgym.moves.distribution import MoveDistribution
 from vfgym.moves.scenarios import SCENARIOS, SPLITS, Scenario
 from vfgym.params import (
     DEFAULT_MEASURES,
@@ -48,9 +48,7 @@ from vfgym.params import (
     PAPER_PLANT,
     SGME_02A,
     Measures,
-    Motor,
     Plant,
-    Servo,
 )
 from vfgym.plant.uncertainty import EXACT, PlantVariant, Uncertainty, plant_design
 
@@ -249,93 +247,6 @@ PAPER_AXIS = Axis()
 # --- the file ----------------------------------------------------------------------------
 
 
-def _make(cls: type, data: Any, key: str, **given: Any) -> Any:
-    """``cls(**data, **given)``: the keys checked against ``cls``'s fields, string and
-    bool fields checked for their type, and every error named by its key path."""
-    prefix = f"{key}." if key else ""
-    if not isinstance(data, dict):
-        raise ValueError(
-            f"{key or 'the file'}={data!r} is not allowed: give a mapping of "
-            f"vfgym.{cls.__name__} fields"
-        )
-    names = [f.name for f in fields(cls)]  # the given ones too: they were taken out of data
-    for k, v in data.items():
-        if k not in names or k in given:
-            raise ValueError(
-                f"{prefix}{k}={v!r} is not a key of vfgym.{cls.__name__}: allowed "
-                f"{', '.join(names)}"
-            )
-    for f in fields(cls):
-        v = data.get(f.name)
-        if f.type == "str" and f.name in data and not isinstance(v, str):
-            raise ValueError(f"{prefix}{f.name}={v!r} must be a string")
-    try:
-        return cls(**data, **given)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{prefix}{exc}") from None
-
-
-def _motor(data: Any, key: str) -> Motor:
-    if not isinstance(data, dict):
-        return _make(Motor, data, key)
-    data = dict(data)
-    preset = data.pop("preset", SGME_02A.name)
-    if not isinstance(preset, str) or preset not in MOTOR_PRESETS:
-        raise ValueError(
-            f"{key}.preset={preset!r} is not a known motor: choose one of "
-            f"{', '.join(MOTOR_PRESETS)}"
-        )
-    return _make(Motor, asdict(MOTOR_PRESETS[preset]) | data, key)
-
-
-def _plant(data: Any) -> Plant:
-    if data is None:
-        return PAPER_PLANT
-    if not isinstance(data, dict):
-        return _make(Plant, data, "plant")
-    data = dict(data)
-    servo = _make(Servo, data.pop("servo", {}) or {}, "plant.servo")
-    motor = _motor(data.pop("motor", {}) or {}, "plant.motor")
-    return _make(Plant, data, "plant", servo=servo, motor=motor)
-
-
-def _scenario(item: Any, key: str) -> Scenario:
-    if isinstance(item, str):
-        if item not in SCENARIOS:
-            raise ValueError(
-                f"{key}={item!r} is not a named scenario: choose one of {', '.join(SCENARIOS)}, "
-                "or give a move's fields (name, profile, distance_rad, duration_s, ...)"
-            )
-        return SCENARIOS[item]
-    if isinstance(item, dict) and "name" not in item:
-        raise ValueError(f"{key}={item!r} is not allowed: a move needs a name")
-    return _make(Scenario, item, key)
-
-
-def _move_set(data: Any, key: str) -> MoveSet:
-    """A list of moves, or a mapping with ``random`` (a distribution) or ``moves``."""
-    if isinstance(data, dict):
-        for k, v in data.items():
-            if k not in ("moves", "random") or len(data) > 1:
-                raise ValueError(
-                    f"{key}.{k}={v!r} is not allowed: give random: {{count: ..., "
-                    "first_seed: ..., ranges}, or a list of moves"
-                )
-        if "random" in data:
-            return MoveSet(random=_make(MoveDistribution, data["random"] or {}, f"{key}.random"))
-        key, data = f"{key}.moves", data.get("moves")
-    if not isinstance(data, list) or not data:
-        raise ValueError(
-            f"{key}={data!r} is not allowed: give one or more moves (vfgym.Scenario fields "
-            "or a named scenario) or random: {count: ..., first_seed: ..., ranges}"
-        )
-    moves = tuple(_scenario(item, f"{key}[{i}]") for i, item in enumerate(data))
-    try:
-        return MoveSet(moves=moves)
-    except ValueError as exc:
-        raise ValueError(f"{key}.{exc}") from None
-
-
 def axis_from_dict(data: Any, name: str = "axis") -> Axis:
     """An :class:`Axis` from an axis file's mapping (see the module docstring).
 
@@ -365,8 +276,8 @@ def axis_from_dict(data: Any, name: str = "axis") -> Axis:
             "name, description, plant, measures, moves, uncertainty"
         )
     data = dict(data)
-    plant = _plant(data.pop("plant", None))
-    measures = _make(Measures, data.pop("measures", {}) or {}, "measures")
+    plant = read_plant(data.pop("plant", None))
+    measures = from_mapping(Measures, data.pop("measures", {}) or {}, "measures")
     moves_data = data.pop("moves", {}) or {}
     if not isinstance(moves_data, dict):
         raise ValueError(f"moves={moves_data!r} is not allowed: give a mapping with train, test")
@@ -374,11 +285,11 @@ def axis_from_dict(data: Any, name: str = "axis") -> Axis:
     if unknown:
         k = unknown[0]
         raise ValueError(f"moves.{k}={moves_data[k]!r} is not a key: allowed train, test")
-    sets = {s: _move_set(moves_data[s], f"moves.{s}") for s in SPLITS if s in moves_data}
+    sets = {s: read_move_set(moves_data[s], f"moves.{s}") for s in SPLITS if s in moves_data}
     unc_data = data.pop("uncertainty", None)
-    unc = EXACT if unc_data is None else _make(Uncertainty, unc_data, "uncertainty")
+    unc = EXACT if unc_data is None else from_mapping(Uncertainty, unc_data, "uncertainty")
     data.setdefault("name", name)
-    return _make(
+    return from_mapping(
         Axis, data, "", plant=plant, measures=measures, moves=MoveSets(**sets), uncertainty=unc
     )
 
