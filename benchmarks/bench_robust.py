@@ -20,7 +20,11 @@ Four measurements, each selectable:
 - ``pick``: a settings model's robust pick (:func:`vfgym.scoring.best_robust`, the design
   checked lazily) against ranking every candidate's :func:`vfgym.scoring.score_robust`
   score, on 24 train-distribution moves: the time of each and whether the picks agree
-  (the model: ``--model FILE``, default the ``fit`` part's).
+  (the model: ``--model FILE``, default the ``fit`` part's);
+- ``bound``: on the moves where the robust per-move optimum costs more than the paper's
+  settings (``--moves``), every setting of a 10-point grid (both laws) and 4000 draws
+  around the paper's settings, each checked on the design plants: the cheapest feasible
+  one against the paper's, a check of the bound on wins a robust tuner can reach.
 
     python benchmarks/bench_robust.py [--parts fit,sweep,evaluate,nominal,grid,pick]
         [--axis FILE] [--plants 16] [--plant-seed 20261204] [--runs-dir DIR] [--model FILE]
@@ -215,6 +219,31 @@ def part_pick(axis, args) -> None:
               f"{t2 - t1:.2f} s ({(t1 - t0) / (t2 - t1):.1f}x), same picks: {a == b}")  # fmt: skip
 
 
+def part_bound(axis, args) -> None:
+    from vfgym import space
+    from vfgym.moves.baselines import resolve
+
+    rng = np.random.default_rng(0)
+    test = {sc.name: sc for sc in axis.scenarios("test")}
+    print()
+    for name in args.moves.split(","):
+        sc, move = test[name], Move.of(test[name], axis.plant)
+        paper = resolve(Baseline("paper"), move.plant)
+        cost = evaluate(["paper"], [sc], plant=axis.plant, measures=axis.measures).cost[0, 0]
+        cands = space.grid(10, laws=("rise", "slew"))
+        for f in np.exp(rng.normal(0.0, 0.3, (4000, 4))):  # log-normal draws, 30 %
+            x = [getattr(paper, d.name) * g for d, g in zip(space.SPACE, f, strict=True)]
+            if all(d.low <= v <= d.high for d, v in zip(space.SPACE, x, strict=True)):
+                cands.append(Settings(*x, accel_law=paper.accel_law))
+        t0 = time.perf_counter()
+        r = score_robust(cands, [move] * len(cands), axis.design_plants(), measures=axis.measures)
+        ok = [(s.cost, i) for i, s in enumerate(r) if s is not None and s.feasible]
+        low, i = min(ok)
+        print(f"bound {name}: paper's settings {cost:.4f}; of {len(cands)} candidates "
+              f"{len(ok)} are feasible on the design, the cheapest {low:.4f} "
+              f"({cands[i]}; {time.perf_counter() - t0:.0f} s)")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--parts", default="fit,sweep,evaluate,nominal,grid")
@@ -223,6 +252,7 @@ def main() -> None:
     ap.add_argument("--plant-seed", type=int, default=VERDICT_PLANT_SEED)
     ap.add_argument("--runs-dir", default=tempfile.mkdtemp(prefix="bench-robust-"))
     ap.add_argument("--model", default=None, help="settings model of the pick part")
+    ap.add_argument("--moves", default="test-15,test-28", help="moves of the bound part")
     args = ap.parse_args()
     axis_file = str(ROOT / args.axis)
     axis = load_axis(axis_file)
@@ -237,6 +267,8 @@ def main() -> None:
         part_sweep(axis_file, axis, args)
     if "fit" in parts:
         part_fit(axis_file, axis, args)
+    if "bound" in parts:
+        part_bound(axis, args)
     if "grid" in parts:
         part_grid(axis_file, axis, args)
     if "pick" in parts:
