@@ -115,6 +115,23 @@ README_RUNS: dict[str, list[Run]] = {
             trim="trials",
         ),
     ],
+    "vfgym sweep --axis experiments/axes/loads-uncertain.yaml --trials 60 --study lu60": [
+        Run(
+            "lu60",
+            [
+                "sweep",
+                "--axis",
+                "experiments/axes/loads-uncertain.yaml",
+                "--trials",
+                "60",
+                "--study",
+                "lu60",
+                *SWEEP_TRIM,
+            ],
+            writes=("runs/sweep/lu60/best.yaml",),
+            trim="trials",
+        ),
+    ],
     "vfgym sweep --config experiments/quick.yaml --axis experiments/axes/loads-uncertain.yaml "
     "--study lu": [
         Run(
