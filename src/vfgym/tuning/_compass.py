@@ -181,37 +181,37 @@ class CompassSampler(optuna.samplers.BaseSampler):
         self._checked = number + 1
         return queue.pop(0)
 
+    def _read(self, study: Any) -> tuple[list[Any], list[Any], int]:
+        """The study's trials, those the sampler drew, and the last generation (-1: none);
+        the last model batch's hyperparameters taken as where the next fits start."""
+        trials = self._trials(study)
+        tagged = [t for t in trials if ATTR in t.system_attrs]
+        self._starts = last_thetas(tagged)
+        return trials, tagged, max((t.system_attrs[ATTR]["gen"] for t in tagged), default=-1)
+
     def _queue_for(self, study: Any) -> list[dict[str, Any]]:
         """The rest of the generation this sampler is handing out, else the next one
         (empty while another worker's generation is still running)."""
-        import optuna
-
-        trials = self._trials(study)
+        trials, tagged, last = self._read(study)
         self._checked = len(trials)
-        tagged = [t for t in trials if ATTR in t.system_attrs]
-        last = max((t.system_attrs[ATTR]["gen"] for t in tagged), default=-1)
         if self._queue and self._queue[0]["tag"]["gen"] in (last, last + 1):
             return self._queue
         if any(t.system_attrs[ATTR]["gen"] == last and not t.state.is_finished() for t in tagged):
             return []  # its retries wait, or another worker runs it
-        done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
-        obs = self._observations(study, done)
-        self._starts = last_thetas(tagged)
-        self._queue = self._generation(obs, tagged, last)
+        self._queue = self._generation(self._observations(study, trials), tagged, last)
         return self._queue
 
     def _extra_plan(self, study: Any) -> list[dict[str, Any]]:
-        import optuna
-
-        trials = self._trials(study)
-        last = max((t.system_attrs[ATTR]["gen"] for t in trials if ATTR in t.system_attrs),
-                   default=0)  # fmt: skip
-        done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
-        obs = self._observations(study, done)
+        """Points for a worker that asks while a generation is still running."""
+        trials, _, last = self._read(study)
         running = optuna.trial.TrialState.RUNNING
         pending = [self._x_of(t) for t in trials if t.state == running and self._has_params(t)]
-        self._starts = last_thetas([t for t in trials if ATTR in t.system_attrs])
-        return self._extra(obs, pending, last, len(trials))
+        obs = self._observations(study, trials)
+        if len(obs) < 2:
+            plan = self._sobol(max(last, 0))
+            return plan[len(trials) % len(plan) :][:1] or plan[:1]
+        return self._model(max(last, 0), obs, min(obs, key=rank), self._fresh_steps(),
+                           len(obs), pending, self.options.extra_batch, "extra")  # fmt: skip
 
     # --- the search ---------------------------------------------------------------------
     def _generation(
@@ -365,15 +365,6 @@ class CompassSampler(optuna.samplers.BaseSampler):
         }
         return [{"x": self._from_unit(p[:4]), "law": self._law_of(p), "tag": tag} for p in pts]
 
-    def _extra(self, obs: list[Observation], pending: list, last: int, k: int) -> list:
-        """Points for a worker that asks while a generation is still running."""
-        if len(obs) < 2:
-            plan = self._sobol(last)
-            return plan[k % len(plan):][:1] or plan[:1]  # fmt: skip
-        centre = min(obs, key=rank)
-        return self._model(last, obs, centre, self._fresh_steps(), len(obs),
-                           pending, self.options.extra_batch, "extra")  # fmt: skip
-
     # --- coordinates --------------------------------------------------------------------
     def _rng(self, gen: int, salt: int) -> np.random.Generator:
         return np.random.default_rng([self.seed, gen, salt])
@@ -401,13 +392,14 @@ class CompassSampler(optuna.samplers.BaseSampler):
     def _has_params(self, trial: Any) -> bool:
         return all(d.name in trial.params for d in space.SPACE)
 
-    def _observations(self, study: Any, done: list[Any]) -> list[Observation]:
+    def _observations(self, study: Any, trials: list[Any]) -> list[Observation]:
         """The completed trials as observations, each read once per study (a completed
         trial never changes: a long sweep's cost per trial does not grow with it)."""
         key = (id(study), study.study_name)
         if self._seen_in != key:
             self._seen, self._seen_in = {}, key
         seen = self._seen
+        done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
         for t in done:
             if t.number not in seen:
                 seen[t.number] = self._observe(t)

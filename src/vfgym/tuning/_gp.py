@@ -1,13 +1,12 @@
 """A small Gaussian process for the compass sampler's model: Matérn-5/2 kernel with one
 length scale per axis, constant mean, hyperparameters fitted by maximum marginal
-likelihood (Adam on their logarithms, within bounds), and the normal distribution's
-functions the expected improvement needs.
+likelihood (Adam on their logarithms, within bounds), and the log expected improvement.
 
-numpy (scipy is not a dependency of vfgym), sized for a sweep's few hundred points in four
-dimensions. The correlation of thousands of candidates with the points and the normal
-distribution function are compiled (:func:`matern52`, :func:`erfc`), with the bits of the
-numpy formula and of ``math.erfc`` the trials were first drawn with (tested), so a seed
-gives the same trials.
+Sized for a sweep's few hundred points in four dimensions; Optuna's ``GPSampler`` keeps
+its Gaussian process private (and on torch), so the compass has its own. The correlation
+of thousands of candidates with the points is compiled (:func:`matern52`) with the bits
+of the numpy formula the trials were first drawn with (tested), so a seed gives the same
+trials.
 """
 
 from __future__ import annotations
@@ -16,6 +15,7 @@ import math
 from typing import Any
 
 import numpy as np
+from scipy.special import ndtr
 
 from vfgym.plant._jit import jit
 
@@ -72,20 +72,6 @@ def matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     np.exp(e, out=e)
     _polynomial(r, e)
     return r
-
-
-@jit(simd=True)
-def _erfc_into(x: np.ndarray, out: np.ndarray) -> None:
-    for i in range(x.size):
-        out[i] = math.erfc(x[i])
-
-
-def erfc(x: np.ndarray) -> np.ndarray:
-    """``math.erfc`` of each element (libm's, as Python's), without a Python call each."""
-    x = np.ascontiguousarray(x, dtype=np.float64)
-    out = np.empty_like(x)
-    _erfc_into(x.reshape(-1), out.reshape(-1))
-    return out
 
 
 class GaussianProcess:
@@ -238,39 +224,11 @@ class Believer:
         self._var = self._var - u * u
 
 
-def norm_cdf(z: np.ndarray) -> np.ndarray:
-    """The standard normal distribution function."""
-    z = np.asarray(z, dtype=np.float64)
-    return 0.5 * erfc(-z / math.sqrt(2.0))
-
-
-def norm_pdf(z: np.ndarray) -> np.ndarray:
-    """The standard normal density."""
-    z = np.asarray(z, dtype=np.float64)
-    return np.exp(-0.5 * z * z) / math.sqrt(2.0 * math.pi)
-
-
 TAIL_Z = -20.0
-"""Below this z the logarithms take the normal tail's asymptotic series (four terms:
-relative error about 945/z¹⁰, 1e-10 here); above it the direct formulas lose at most
-z² ≈ 400 ulps to cancellation."""
+"""Below this z the log expected improvement takes the normal tail's asymptotic series
+(four terms: relative error about 945/z¹⁰, 1e-10 here); above it the direct formula loses
+at most z² ≈ 400 ulps to cancellation."""
 _LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
-
-
-def log_norm_cdf(z: np.ndarray) -> np.ndarray:
-    """log Φ(z), finite however negative z is (Φ itself underflows below z ≈ -38)."""
-    z = np.asarray(z, dtype=np.float64)
-    out = np.empty_like(z)
-    tail = z < TAIL_Z
-    mid = ~tail & (z <= 0.0)
-    out[mid] = np.log(norm_cdf(z[mid]))
-    up = z > 0.0  # Φ near 1: from the other tail, as log1p(−Φ(−z))
-    out[up] = np.log1p(-norm_cdf(-z[up]))
-    t = z[tail]
-    w = 1.0 / (t * t)
-    series = 1.0 - w * (1.0 - w * (3.0 - w * (15.0 - w * 105.0)))
-    out[tail] = -0.5 * t * t - np.log(-t) - _LOG_SQRT_2PI + np.log(series)
-    return out
 
 
 def log_expected_improvement(best: float, mu: np.ndarray, sd: np.ndarray) -> np.ndarray:
@@ -285,7 +243,7 @@ def log_expected_improvement(best: float, mu: np.ndarray, sd: np.ndarray) -> np.
     tail = z < TAIL_Z
     zt = z[~tail]
     with np.errstate(divide="ignore"):  # h = 0 only where the tail series takes over
-        logh[~tail] = np.log(zt * norm_cdf(zt) + norm_pdf(zt))
+        logh[~tail] = np.log(zt * ndtr(zt) + np.exp(-0.5 * zt * zt) / math.sqrt(2.0 * math.pi))
     t = z[tail]
     w = 1.0 / (t * t)
     logh[tail] = (

@@ -18,8 +18,9 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
+from scipy.special import log_ndtr
 
-from vfgym.tuning._gp import Believer, GaussianProcess, log_expected_improvement, log_norm_cdf
+from vfgym.tuning._gp import Believer, GaussianProcess, log_expected_improvement
 
 
 class Observation(NamedTuple):
@@ -123,7 +124,7 @@ class _Fit(NamedTuple):
             sd = cost.sd()
             log_pf = np.zeros(len(c))
             for m in cons:
-                log_pf += log_norm_cdf(-m.mean / np.maximum(m.sd(), 1e-9))
+                log_pf += log_ndtr(-m.mean / np.maximum(m.sd(), 1e-9))
             # In logs: EI × P(feasible) underflows to 0 on every candidate far from the
             # best, where argmax would silently take the first.
             acq = log_pf
