@@ -30,7 +30,6 @@ running trials into account. What was tried and not kept: docs/design/sampler.md
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
 from typing import Any
 
@@ -91,8 +90,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
     """An Optuna sampler running the search above, in the coordinates ``relative`` (with
     the law one more coordinate if several ``laws`` are searched), seeded by ``seed``.
     ``storage`` is the storage of the studies it samples, where each trial it draws gets
-    its generation; without one, the generations are kept in this sampler (a study resumed
-    by another sampler then starts its search again)."""
+    its generation."""
 
     def __init__(
         self,
@@ -105,7 +103,6 @@ class CompassSampler(optuna.samplers.BaseSampler):
         self.relative = relative
         self.storage = storage
         self._study_ids: dict[str, int] = {}
-        self._tags: dict[tuple[str, int], dict[str, Any]] = {}  # kept here without storage
         self.laws = tuple(laws)
         self.seed = 0 if seed is None else int(seed)
         self.options = options or CompassOptions()
@@ -133,30 +130,13 @@ class CompassSampler(optuna.samplers.BaseSampler):
         return self._params(item)
 
     def _record(self, study: Any, number: int, tag: dict[str, Any]) -> None:
-        """Record a drawn trial's generation: through :attr:`storage`, else here."""
-        if self.storage is None:
-            self._tags[(study.study_name, number)] = tag
-            return
+        """Record a drawn trial's generation on the trial."""
         name = study.study_name
         if name not in self._study_ids:
             self._study_ids[name] = self.storage.get_study_id_from_name(name)
         study_id = self._study_ids[name]
         trial_id = self.storage.get_trial_id_from_study_id_trial_number(study_id, number)
         self.storage.set_trial_system_attr(trial_id, ATTR, tag)
-
-    def _trials(self, study: Any) -> list[Any]:
-        """The study's trials, those drawn without :attr:`storage` with their generation."""
-        trials = study.get_trials(deepcopy=False)
-        if not self._tags:
-            return trials
-        out = []
-        for t in trials:
-            tag = self._tags.get((study.study_name, t.number))
-            if tag is not None and ATTR not in t.system_attrs:
-                t = copy.copy(t)  # (the study's own trial is left as it is)
-                t.system_attrs = {**t.system_attrs, ATTR: tag}
-            out.append(t)
-        return out
 
     def _params(self, item: dict[str, Any]) -> dict[str, Any]:
         s = self.relative.settings(self._to_unit(np.asarray(item["x"])), item["law"])
@@ -184,7 +164,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
     def _read(self, study: Any) -> tuple[list[Any], list[Any], int]:
         """The study's trials, those the sampler drew, and the last generation (-1: none);
         the last model batch's hyperparameters taken as where the next fits start."""
-        trials = self._trials(study)
+        trials = study.get_trials(deepcopy=False)
         tagged = [t for t in trials if ATTR in t.system_attrs]
         self._starts = last_thetas(tagged)
         return trials, tagged, max((t.system_attrs[ATTR]["gen"] for t in tagged), default=-1)
@@ -231,10 +211,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         steps = np.asarray(st["steps"], dtype=np.float64)
         if st["mode"] == "init":
             ours = {t.number for t in tagged}
-            warm = [ob for ob in obs if ob.number not in ours] or obs
-            if not warm:
-                return self._sobol(last + 1)
-            centre = min(warm, key=rank)
+            centre = min([ob for ob in obs if ob.number not in ours] or obs, key=rank)
             return self._compass(last + 1, obs, centre, None, self._fresh_steps(), n_done)
         # The centre's trial may be gone (failed): the best instead.
         centre = by_num.get(st["centre"]) or min(obs, key=rank)
@@ -276,7 +253,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
             and np.abs(best.x - centre.x).max() > 2.0 * o.step0
         ):
             centre = best  # another basin's point nearly as good: a compass searches it
-        elif steps.max() >= (o.resume_floor or o.min_step):
+        elif steps.max() >= o.resume_floor:
             # The compass before this batch was cut short by its budget or counted as
             # converged with steps above resume_floor; it goes on from the centre with its
             # steps (its budget still spent, its steps below min_step: a generation that

@@ -33,8 +33,7 @@ NOISE_BOUNDS = (1e-6, 0.2)
 
 @jit(simd=True)
 def _distances(a: np.ndarray, b: np.ndarray, lengths: np.ndarray, out: np.ndarray) -> None:
-    """``out[i, j] = sqrt(sum over k of ((a[i, k] - b[j, k]) / lengths[k])²)``, summed in
-    axis order from 0."""
+    """``out[i, j] = sqrt(sum over k of ((a[i, k] - b[j, k]) / lengths[k])²)``."""
     n, m = out.shape
     dim = a.shape[1]
     for i in range(n):
@@ -60,9 +59,8 @@ def _polynomial(r: np.ndarray, e: np.ndarray) -> None:
 
 def matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     """The Matérn-5/2 correlation between the rows of ``a`` and of ``b``: the numpy
-    formula's operations in its order (``r = sqrt(sum(((a - b) / lengths)²))``,
-    ``(1 + √5 r + 5/3 r²) exp(-√5 r)``) in two compiled loops, numpy's own ``exp``
-    between them (libm's differs in the last bit), in one pass each."""
+    formula's operations in its order in two compiled loops, numpy's own ``exp`` between
+    them (libm's differs in the last bit)."""
     a = np.ascontiguousarray(a, dtype=np.float64)
     b = np.ascontiguousarray(b, dtype=np.float64)
     lengths = np.ascontiguousarray(lengths, dtype=np.float64)
@@ -75,17 +73,9 @@ def matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
 
 
 class GaussianProcess:
-    """A GP regression of ``y`` on the points ``x`` (unit coordinates).
-
-    Parameters
-    ----------
-    x : (n, d) array of points.
-    y : (n,) array of targets (standardised inside).
-    start : log hyperparameters to start the fit from (a previous fit's ``theta``), which
-        then takes fewer steps.
-    fit : False: keep ``start`` as the hyperparameters (log length scales, log signal
-        variance, log noise variance), unfitted.
-    """
+    """A GP regression of ``y`` (standardised inside) on the points ``x`` (n, d), its log
+    hyperparameters (length scales, signal and noise variance) fitted from ``start`` (a
+    previous fit's ``theta``: fewer steps), or kept as ``start`` if not ``fit``."""
 
     def __init__(self, x: np.ndarray, y: np.ndarray, start: Any = None, fit: bool = True) -> None:
         self.x = np.asarray(x, dtype=np.float64)
@@ -185,19 +175,11 @@ class GaussianProcess:
 
 
 class Believer:
-    """A Gaussian process's posterior at fixed candidates while candidates are added to
-    its observations at their predicted means (a batch's "believed" points, the kriging
-    believer): the mean at every candidate stays as it was (an observation equal to the
-    prediction moves nothing), the variance takes one rank-one update per point, the
-    posterior covariance with the point over its variance plus the noise. The same, up to
-    rounding, as :meth:`GaussianProcess.condition` then :meth:`GaussianProcess.predict`,
-    at O(candidates × points) per point instead of O(candidates × points²).
-
-    Parameters
-    ----------
-    gp : the process (left as it is).
-    xs : (m, d) array of candidates.
-    """
+    """The posterior of ``gp`` (left as it is) at the candidates ``xs`` while candidates
+    are added to its observations at their predicted means (the kriging believer): the
+    mean stays, the variance takes a rank-one update per point. As
+    :meth:`GaussianProcess.condition` then :meth:`GaussianProcess.predict` up to rounding,
+    at O(candidates × points) per point instead of O(candidates × points²)."""
 
     def __init__(self, gp: GaussianProcess, xs: np.ndarray) -> None:
         self.gp = gp

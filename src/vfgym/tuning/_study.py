@@ -63,8 +63,8 @@ def make_sampler(
         The sweep's scenarios, on whose plants the compass's coordinates depend (default:
         ``cfg``'s).
     storage : optuna.storages.BaseStorage or None
-        The study's storage, where the compass records each trial's generation (without
-        it, in the sampler only: a study shared or resumed then starts its search again).
+        The study's storage, where the compass records each trial's generation (needed
+        by the compass only).
     plant : Plant or None
         The plant the scenarios run on (default: ``cfg``'s axis's).
 
@@ -72,6 +72,11 @@ def make_sampler(
     -------
     optuna.samplers.BaseSampler
         Compass, TPE (multivariate), CMA-ES, GP, NSGA-II, grid or random.
+
+    Raises
+    ------
+    ValueError
+        For the compass without a storage.
     """
     import optuna
 
@@ -80,6 +85,9 @@ def make_sampler(
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         if cfg.sampler == "compass":
             from vfgym.tuning._compass import CompassSampler
+
+            if storage is None:
+                raise ValueError("sampler='compass' records its search in the study's storage")
 
             base = cfg.axis_or_paper().plant if plant is None else plant
             rel = relative_space(scenarios or cfg.scenario_list(), base)
