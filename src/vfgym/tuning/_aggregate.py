@@ -75,9 +75,16 @@ def aggregate_costs(
     """
     how, cvar_alpha = check_aggregate(how, cvar_alpha)
     c = np.asarray(costs, dtype=float)
-    one = {"mean": np.mean, "worst": np.max, "cvar": lambda x: cvar(x, cvar_alpha)}[how]
-    rows = [r[np.isfinite(r)] for r in np.atleast_2d(c)]
-    out = np.array([one(x) if x.size else np.nan for x in rows], dtype=float)
+
+    def one(row: np.ndarray) -> float:
+        x = row[np.isfinite(row)]
+        if x.size == 0:
+            return math.nan
+        return float(
+            x.mean() if how == "mean" else x.max() if how == "worst" else cvar(x, cvar_alpha)
+        )
+
+    out = np.array([one(r) for r in np.atleast_2d(c)], dtype=np.float64)
     return out.reshape(()) if c.ndim == 1 else out
 
 

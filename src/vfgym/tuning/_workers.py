@@ -1,15 +1,12 @@
 """Workers on a study, run as Optuna runs them: each worker is ``study.optimize`` in its
 own process, on one machine or on many sharing one RDB storage.
 
-Optuna does the rest: the heartbeat of a running trial, failing the trials of dead
-workers and enqueueing them again with their settings (RDB storages, :mod:`._storage`),
-the timeout, the trials' bookkeeping. Kept here, each for what Optuna does not do: the
-trial budget of the whole study (``MaxTrialsCallback`` counts after a trial, so several
-workers would overshoot it), the dead workers of a journal (no heartbeat) and a trial
-killed before its first heartbeat (Optuna never takes it as stale), and a Ctrl-C that
-lands only inside a simulation (:class:`DeferredInterrupt`). ``optimize`` gets no
-callback: Optuna reads each finished trial back for its callbacks, so what follows a
-trial is done at the end of the objective and at the start of the next trial.
+Optuna does the heartbeat, the retry of dead workers' trials (RDB storages), the timeout
+and the bookkeeping. Kept here, each for what Optuna does not do: the whole study's trial
+budget, the dead workers of a journal and a trial killed before its first heartbeat, and
+a Ctrl-C that lands only inside a simulation. ``optimize`` gets no callback: Optuna reads
+each finished trial back for its callbacks, so what follows a trial is done at the end of
+the objective and at the start of the next trial.
 """
 
 from __future__ import annotations
