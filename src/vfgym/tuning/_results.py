@@ -198,7 +198,15 @@ def compare(
 
 
 class FoundReference(NamedTuple):
-    """A grid's ``reference.yaml`` mapping (:func:`grid_reference`) and its file."""
+    """A grid reference found for a sweep (:func:`find_reference`).
+
+    Attributes
+    ----------
+    record : dict
+        The grid's ``reference.yaml`` mapping.
+    path : pathlib.Path
+        The file.
+    """
 
     record: dict[str, Any]
     path: Path
@@ -216,10 +224,33 @@ def find_reference(
     laws: tuple[str, ...],
     axis: str | None = None,
 ) -> FoundReference | None:
-    """The grid reference for these scenarios, laws and axis digest: the one
-    ``--reference`` names (a ``reference.yaml`` or a grid's run folder), else the least
-    costly under ``runs_dir/grid/*/``, else None. A named one for other scenarios, laws
-    or axis raises ValueError naming ``reference``."""
+    """The grid reference for these scenarios, laws and axis.
+
+    Parameters
+    ----------
+    cfg_reference : str or None
+        ``--reference``: a ``reference.yaml`` or a grid's run folder; ``None``: the least
+        costly match under ``runs_dir/grid/*/``.
+    runs_dir : str
+        The runs folder.
+    scenarios : list of Scenario
+        The sweep's scenarios.
+    laws : tuple of str
+        The sweep's laws.
+    axis : str or None
+        The axis's :func:`~vfgym.moves.axis.axis_digest`.
+
+    Returns
+    -------
+    FoundReference or None
+        The reference, or ``None`` when none matches.
+
+    Raises
+    ------
+    ValueError
+        Naming ``reference``, if the one given is not a grid reference or is for other
+        scenarios, laws or axis.
+    """
     names = [s.name for s in scenarios]
     if cfg_reference:
         p = Path(cfg_reference)
@@ -259,7 +290,18 @@ def find_reference(
 
 
 def gap_pct(cost: float, ref_cost: float) -> float:
-    """100·(cost − ref_cost)/ref_cost: how far, in %, a cost is above a reference's."""
+    """How far a cost is above a reference's.
+
+    Parameters
+    ----------
+    cost, ref_cost : float
+        The cost, and the reference's.
+
+    Returns
+    -------
+    float
+        100·(cost − ref_cost)/ref_cost, in %.
+    """
     return 100.0 * (cost - ref_cost) / ref_cost
 
 
