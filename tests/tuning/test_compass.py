@@ -10,10 +10,9 @@ import pytest
 from vfgym.tuning._model import Observation
 
 
-def _run(options, seed: int, trials: int, with_storage: bool = True):
+def _run(options, seed: int, trials: int):
     """A compass study on a synthetic cost falling along u0 + u1 behind the edge
-    u1 − u0 ≤ 0.05 (unit coordinates of :class:`vfgym.space.Relative`); the sampler
-    given the study's storage, or not (it keeps its generations itself)."""
+    u1 − u0 ≤ 0.05 (unit coordinates of :class:`vfgym.space.Relative`)."""
     import optuna
 
     from vfgym import space
@@ -22,7 +21,7 @@ def _run(options, seed: int, trials: int, with_storage: bool = True):
     from vfgym.tuning._objective import set_constraints
 
     rel = space.Relative(430.0)
-    storage = optuna.storages.InMemoryStorage() if with_storage else None
+    storage = optuna.storages.InMemoryStorage()
     sampler = CompassSampler(rel, seed=seed, options=options, storage=storage)
     study = optuna.create_study(sampler=sampler, storage=storage)
     study.enqueue_trial({"value_rad": 1.0, "error_limit_rad": 1.0, "k": 430.0, "ts_over_tf": 0.25})
@@ -38,19 +37,18 @@ def _run(options, seed: int, trials: int, with_storage: bool = True):
     return study
 
 
-def test_a_compass_without_the_storage_draws_the_same_trials():
-    # Given no storage, the sampler keeps the generations of the trials it draws itself
-    # (none is written to the trials), and draws what it draws with the storage.
+def test_each_drawn_trial_records_its_generation_and_a_seed_draws_the_same_trials():
+    # The generations are on the trials (a resumed or shared study continues the search).
     from vfgym.tuning._compass import ATTR, CompassOptions
 
-    kept = _run(CompassOptions(), seed=2, trials=40, with_storage=False)
-    written = _run(CompassOptions(), seed=2, trials=40)
-    assert [(t.params, t.value) for t in kept.trials] == [
-        (t.params, t.value) for t in written.trials
+    first = _run(CompassOptions(), seed=2, trials=40)
+    again = _run(CompassOptions(), seed=2, trials=40)
+    assert [(t.params, t.value) for t in first.trials] == [
+        (t.params, t.value) for t in again.trials
     ]
-    assert not any(ATTR in t.system_attrs for t in kept.trials)
-    modes = {t.system_attrs[ATTR]["mode"] for t in written.trials if ATTR in t.system_attrs}
-    assert {"init", "compass"} <= modes
+    drawn = [t for t in first.trials if "fixed_params" not in t.system_attrs]
+    assert all(ATTR in t.system_attrs for t in drawn)
+    assert {"init", "compass"} <= {t.system_attrs[ATTR]["mode"] for t in drawn}
 
 
 def test_diagonal_polls_move_value_and_the_limit_ratio_together():

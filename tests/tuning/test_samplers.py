@@ -129,6 +129,14 @@ def test_compass_k_reference_is_the_loaded_motors_usable_k():
     assert both == pytest.approx((usable_k(plant) * paper_k(step.plant())) ** 0.5)
 
 
+def test_the_compass_needs_the_studys_storage():
+    cfg = tuning.SweepConfig(scenarios="paper-step")
+    with pytest.raises(ValueError, match="storage"):
+        tuning.make_sampler(cfg, 0)
+    storage = optuna.storages.InMemoryStorage()
+    assert tuning.make_sampler(cfg, 0, storage=storage).storage is storage
+
+
 def _feasible(trial: optuna.trial.FrozenTrial) -> bool:
     res = tuning.stored_result(trial)
     return res is not None and res.feasible

@@ -10,6 +10,7 @@ from vfgym.report._sweep_figures import objective_points
 from vfgym.scoring import CONSTRAINTS, OBJECTIVES
 from vfgym.tuning._compass import _constraint_name
 from vfgym.tuning._objective import RESULT_ATTR
+from vfgym.tuning._results import write_trials_csv
 from vfgym.tuning._workers import WORKER_ATTR
 
 RESULT = {
@@ -76,7 +77,7 @@ def test_a_new_study_stores_each_result_in_one_attribute_each(tmp_path):
         assert res.feasible == all(c <= 0.0 for c in res.constraints)
         assert list(t.constraints.values()) == list(res.constraints)
     # The trials CSV keeps a column a part, whatever the format.
-    path = tuning.write_trials_csv(study, tmp_path / "trials.csv")
+    path = write_trials_csv(study, tmp_path / "trials.csv")
     header = path.read_text().splitlines()[0].split(",")
     cols = {f"user_attrs_{k}" for k in ("cost", "feasible", "constraints", "settings")}
     assert cols <= set(header)

@@ -57,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.io.runs import read_yaml, record_command, write_text, write_yaml
     from vfgym.moves.axis import AXIS_FILE, axis_kwargs, write_axis
     from vfgym.report import format_compact
+    from vfgym.tuning._grid import grid_reference, write_grid_csv
 
     keys = [f.lstrip("-").replace("-", "_") for f, _ in OPTIONS] + ["progress"]
     file_data = read_yaml(args.config) if args.config else None
@@ -95,8 +96,8 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     elapsed = time.monotonic() - t0
-    tuning.write_grid_csv(result.rows, run_dir / "grid.csv")
-    ref = tuning.grid_reference(cfg, result)
+    write_grid_csv(result.rows, run_dir / "grid.csv")
+    ref = grid_reference(cfg, result)
     ref["elapsed_s"] = round(elapsed, 3)
     write_yaml(run_dir / "reference.yaml", ref)
     cmp = tuning.compare(result.best.settings, scenarios, label="grid", **axis_kwargs(axis))

@@ -98,12 +98,13 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.commands._common import Interrupted
     from vfgym.io.runs import read_yaml
     from vfgym.moves.axis import axis_digest
+    from vfgym.tuning._study import check_sampler, trial_budget
 
     file_data = read_yaml(args.config) if args.config else None
     _check_ignored(file_data, _cli_values(args))
     cfg = tuning.SweepConfig.resolve(file_data, _cli_values(args), source=str(args.config))
     scenarios = cfg.scenario_list()
-    tuning.check_sampler(cfg)
+    check_sampler(cfg)
     name = cfg.study or _default_name(args.config, cfg.runs_dir)
     run_dir = Path(cfg.runs_dir) / "sweep" / name
     check_output_path("runs_dir", run_dir, folder=True, shown=cfg.runs_dir, root=cfg.runs_dir)
@@ -118,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
     )  # a grid's reference is a mean cost
     study, created = _open_study(cfg, spec, name, run_dir, scenarios)
     _record(run_dir, args, cfg, name, spec)
-    budget = tuning.trial_budget(cfg)
+    budget = trial_budget(cfg)
     n0 = _counts(study)
     print(
         f"vfgym sweep: study {name} ({'new' if created else 'continued'}: "
@@ -336,7 +337,7 @@ def _run_workers(cfg, spec, name, study, bar) -> list[dict]:
     import signal
     import time
 
-    from vfgym.tuning import spawn_workers
+    from vfgym.tuning._workers import spawn_workers
 
     procs = spawn_workers(cfg, spec, name, cfg.workers)
     interrupted = False
@@ -384,10 +385,13 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     from vfgym.moves.axis import PAPER_AXIS, axis_kwargs
     from vfgym.params import PAPER_SETTINGS
     from vfgym.report import axis_verdict, compact_rows, format_compact, format_verdict
+    from vfgym.tuning._aggregate import describe, set_cost
+    from vfgym.tuning._results import best_record, write_plots, write_trials_csv
+    from vfgym.tuning._study import trial_budget
 
-    tuning.write_trials_csv(study, run_dir / "trials.csv")
+    write_trials_csv(study, run_dir / "trials.csv")
     n = _counts(study)
-    budget = tuning.trial_budget(cfg)
+    budget = trial_budget(cfg)
     stops = sorted({r.get("stopped", "") for r in reports})
     done = (
         f"{n['complete']}/{budget} completed trials"
@@ -425,19 +429,17 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     else:
         settings = tuning.trial_settings(best)
         cmp = tuning.compare(settings, scenarios, **axis_kwargs(cfg.load_axis()))
-        paper_cost = tuning.set_cost(PAPER_SETTINGS, scenarios, cfg)  # as the sweep scores
-        record = tuning.best_record(study, best, cfg, spec, scenarios, paper_cost)
+        paper_cost = set_cost(PAPER_SETTINGS, scenarios, cfg)  # as the sweep scores
+        record = best_record(study, best, cfg, spec, scenarios, paper_cost, reference)
         lines.append(
-            f"best: trial {best.number}, {tuning.describe(cfg)} cost {record.cost:.4f} "
+            f"best: trial {best.number}, {describe(cfg)} cost {record.cost:.4f} "
             f"({'feasible' if record.feasible else 'INFEASIBLE'}) against the paper's "
             f"{paper_cost:.4f} ({tuning.gap_pct(record.cost, paper_cost):+.1f} %)"
         )
-        if reference is not None:
-            gap = tuning.ReferenceGap.between(record.cost, reference)
-            record = record.with_reference(gap)
+        if record.reference is not None:
             lines.append(
-                f"gap to the grid reference {reference.path} (cost {reference.cost:.4f}): "
-                f"{gap.gap_pct:+.2f} %"
+                f"gap to the grid reference {record.reference.path} (cost "
+                f"{record.reference.cost:.4f}): {record.reference.gap_pct:+.2f} %"
             )
         s = record.settings
         lines.append(
@@ -449,7 +451,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         summary["comparison"] = compact_rows(cmp).as_dict()
         lines += ["", format_compact(cmp)]
     if cfg.plots and not interrupted and best is not None:
-        plots = tuning.write_plots(study, run_dir, cfg.objective)
+        plots = write_plots(study, run_dir, cfg.objective)
         summary["plots"] = plots
         lines.append("plots: " + ", ".join(f"{k} {v}" for k, v in plots.items()))
     if not interrupted and n["complete"] < budget and "timeout" not in stops:

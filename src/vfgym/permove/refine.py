@@ -139,8 +139,9 @@ def short_sweep(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         # coordinates from the moves on the axis's plant
-        sampler = make_sampler(cfg, cfg.seed, list(scenarios), plant=plant)
-        study = optuna.create_study(direction="minimize", sampler=sampler)
+        storage = optuna.storages.InMemoryStorage()
+        sampler = make_sampler(cfg, cfg.seed, list(scenarios), storage, plant=plant)
+        study = optuna.create_study(storage=storage, direction="minimize", sampler=sampler)
     for s in (start, *also):
         study.enqueue_trial(baseline_params(laws, s))
     objective = Objective(

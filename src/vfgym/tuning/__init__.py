@@ -20,53 +20,37 @@ The grid (:func:`run_grid`) evaluates :func:`vfgym.space.grid` through the batch
 refined around its best points: the near-true optimum a sweep's best is reported against.
 """
 
-from vfgym.tuning._aggregate import (
-    AGGREGATES,
-    Aggregate,
-    aggregate,
-    aggregate_costs,
-    describe,
-    set_cost,
-)
+from vfgym.tuning._aggregate import AGGREGATES, Aggregate, aggregate, aggregate_costs
 from vfgym.tuning._config import SAMPLERS, GridConfig, SweepConfig
-from vfgym.tuning._grid import GridResult, GridRow, grid_reference, run_grid, write_grid_csv
+from vfgym.tuning._grid import GridResult, GridRow, run_grid
 from vfgym.tuning._objective import Objective, StoredResult, stored_result
 from vfgym.tuning._results import (
-    BestRecord,
     FoundReference,
-    ReferenceGap,
-    best_record,
     best_trial,
     compare,
     find_reference,
     gap_pct,
     trial_settings,
-    write_plots,
-    write_trials_csv,
 )
 from vfgym.tuning._storage import StorageSpec, find_storage, open_storage, resolve_storage
 from vfgym.tuning._study import (
     baseline_params,
-    check_sampler,
     create_or_load,
     make_sampler,
     relative_space,
-    trial_budget,
     warm_starts,
 )
-from vfgym.tuning._workers import WorkerReport, run_worker, spawn_workers
+from vfgym.tuning._workers import WorkerReport, run_worker
 
 __all__ = [
     "AGGREGATES",
     "SAMPLERS",
     "Aggregate",
-    "BestRecord",
     "FoundReference",
     "GridConfig",
     "GridResult",
     "GridRow",
     "Objective",
-    "ReferenceGap",
     "StorageSpec",
     "StoredResult",
     "SweepConfig",
@@ -74,29 +58,19 @@ __all__ = [
     "aggregate",
     "aggregate_costs",
     "baseline_params",
-    "best_record",
     "best_trial",
-    "check_sampler",
     "compare",
     "create_or_load",
-    "describe",
     "find_reference",
     "find_storage",
     "gap_pct",
-    "grid_reference",
     "make_sampler",
     "open_storage",
     "relative_space",
     "resolve_storage",
     "run_grid",
     "run_worker",
-    "set_cost",
-    "spawn_workers",
     "stored_result",
-    "trial_budget",
     "trial_settings",
     "warm_starts",
-    "write_grid_csv",
-    "write_plots",
-    "write_trials_csv",
 ]

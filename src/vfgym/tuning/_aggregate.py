@@ -70,23 +70,21 @@ def aggregate_costs(
     Returns
     -------
     numpy.ndarray
-        One aggregate per controller, shaped (controllers,) (a 0-d array for a 1-D
-        input); NaN entries are left out, NaN where a row has no finite cost.
+        One aggregate per controller (0-d for a 1-D input), NaN entries left out; NaN
+        where a row has no finite cost.
     """
     how, cvar_alpha = check_aggregate(how, cvar_alpha)
     c = np.asarray(costs, dtype=float)
-    rows = np.atleast_2d(c)
-    out = np.full(rows.shape[0], np.nan)
-    for i, row in enumerate(rows):
+
+    def one(row: np.ndarray) -> float:
         x = row[np.isfinite(row)]
         if x.size == 0:
-            continue
-        if how == "mean":
-            out[i] = x.mean()
-        elif how == "worst":
-            out[i] = x.max()
-        else:
-            out[i] = cvar(x, cvar_alpha)
+            return math.nan
+        return float(
+            x.mean() if how == "mean" else x.max() if how == "worst" else cvar(x, cvar_alpha)
+        )
+
+    out = np.array([one(r) for r in np.atleast_2d(c)], dtype=np.float64)
     return out.reshape(()) if c.ndim == 1 else out
 
 
@@ -144,37 +142,12 @@ def aggregate(
 
 
 def describe(cfg: SweepConfig) -> str:
-    """The sweep's aggregate as reports name it.
-
-    Parameters
-    ----------
-    cfg : SweepConfig
-        The sweep's configuration (its ``aggregate`` and ``cvar_alpha``).
-
-    Returns
-    -------
-    str
-        ``mean``, ``worst`` or ``cvar 0.25``.
-    """
+    """The sweep's aggregate as reports name it: ``mean``, ``worst`` or ``cvar 0.25``."""
     return f"cvar {cfg.cvar_alpha:g}" if cfg.aggregate == "cvar" else cfg.aggregate
 
 
 def set_cost(settings: Settings, scenarios: Sequence[Scenario], cfg: SweepConfig) -> float:
-    """A setting's cost over the sweep's scenarios, as the sweep scores it.
-
-    Parameters
-    ----------
-    settings : Settings
-        The setting (e.g. the paper's, to report the tuned one against).
-    scenarios : sequence of Scenario
-        The sweep's scenarios.
-    cfg : SweepConfig
-        The sweep's configuration: its aggregate, CVaR share and axis.
-
-    Returns
-    -------
-    float
-        :func:`aggregate_costs` of :func:`vfgym.evaluate`'s costs on the axis's plant.
-    """
+    """A setting's cost over the sweep's scenarios on its axis, as the sweep scores it (the
+    paper's settings', to report the tuned ones against)."""
     ev = evaluate(settings, list(scenarios), **axis_kwargs(cfg.axis_or_paper()))
     return float(aggregate_costs(ev.cost[0], cfg.aggregate, cfg.cvar_alpha))

@@ -30,7 +30,6 @@ running trials into account. What was tried and not kept: docs/design/sampler.md
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
 from typing import Any
 
@@ -91,8 +90,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
     """An Optuna sampler running the search above, in the coordinates ``relative`` (with
     the law one more coordinate if several ``laws`` are searched), seeded by ``seed``.
     ``storage`` is the storage of the studies it samples, where each trial it draws gets
-    its generation; without one, the generations are kept in this sampler (a study resumed
-    by another sampler then starts its search again)."""
+    its generation."""
 
     def __init__(
         self,
@@ -105,7 +103,6 @@ class CompassSampler(optuna.samplers.BaseSampler):
         self.relative = relative
         self.storage = storage
         self._study_ids: dict[str, int] = {}
-        self._tags: dict[tuple[str, int], dict[str, Any]] = {}  # kept here without storage
         self.laws = tuple(laws)
         self.seed = 0 if seed is None else int(seed)
         self.options = options or CompassOptions()
@@ -133,30 +130,13 @@ class CompassSampler(optuna.samplers.BaseSampler):
         return self._params(item)
 
     def _record(self, study: Any, number: int, tag: dict[str, Any]) -> None:
-        """Record a drawn trial's generation: through :attr:`storage`, else here."""
-        if self.storage is None:
-            self._tags[(study.study_name, number)] = tag
-            return
+        """Record a drawn trial's generation on the trial."""
         name = study.study_name
         if name not in self._study_ids:
             self._study_ids[name] = self.storage.get_study_id_from_name(name)
         study_id = self._study_ids[name]
         trial_id = self.storage.get_trial_id_from_study_id_trial_number(study_id, number)
         self.storage.set_trial_system_attr(trial_id, ATTR, tag)
-
-    def _trials(self, study: Any) -> list[Any]:
-        """The study's trials, those drawn without :attr:`storage` with their generation."""
-        trials = study.get_trials(deepcopy=False)
-        if not self._tags:
-            return trials
-        out = []
-        for t in trials:
-            tag = self._tags.get((study.study_name, t.number))
-            if tag is not None and ATTR not in t.system_attrs:
-                t = copy.copy(t)  # (the study's own trial is left as it is)
-                t.system_attrs = {**t.system_attrs, ATTR: tag}
-            out.append(t)
-        return out
 
     def _params(self, item: dict[str, Any]) -> dict[str, Any]:
         s = self.relative.settings(self._to_unit(np.asarray(item["x"])), item["law"])
@@ -181,37 +161,37 @@ class CompassSampler(optuna.samplers.BaseSampler):
         self._checked = number + 1
         return queue.pop(0)
 
+    def _read(self, study: Any) -> tuple[list[Any], list[Any], int]:
+        """The study's trials, those the sampler drew, and the last generation (-1: none);
+        the last model batch's hyperparameters taken as where the next fits start."""
+        trials = study.get_trials(deepcopy=False)
+        tagged = [t for t in trials if ATTR in t.system_attrs]
+        self._starts = last_thetas(tagged)
+        return trials, tagged, max((t.system_attrs[ATTR]["gen"] for t in tagged), default=-1)
+
     def _queue_for(self, study: Any) -> list[dict[str, Any]]:
         """The rest of the generation this sampler is handing out, else the next one
         (empty while another worker's generation is still running)."""
-        import optuna
-
-        trials = self._trials(study)
+        trials, tagged, last = self._read(study)
         self._checked = len(trials)
-        tagged = [t for t in trials if ATTR in t.system_attrs]
-        last = max((t.system_attrs[ATTR]["gen"] for t in tagged), default=-1)
         if self._queue and self._queue[0]["tag"]["gen"] in (last, last + 1):
             return self._queue
         if any(t.system_attrs[ATTR]["gen"] == last and not t.state.is_finished() for t in tagged):
             return []  # its retries wait, or another worker runs it
-        done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
-        obs = self._observations(study, done)
-        self._starts = last_thetas(tagged)
-        self._queue = self._generation(obs, tagged, last)
+        self._queue = self._generation(self._observations(study, trials), tagged, last)
         return self._queue
 
     def _extra_plan(self, study: Any) -> list[dict[str, Any]]:
-        import optuna
-
-        trials = self._trials(study)
-        last = max((t.system_attrs[ATTR]["gen"] for t in trials if ATTR in t.system_attrs),
-                   default=0)  # fmt: skip
-        done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
-        obs = self._observations(study, done)
+        """Points for a worker that asks while a generation is still running."""
+        trials, _, last = self._read(study)
         running = optuna.trial.TrialState.RUNNING
         pending = [self._x_of(t) for t in trials if t.state == running and self._has_params(t)]
-        self._starts = last_thetas([t for t in trials if ATTR in t.system_attrs])
-        return self._extra(obs, pending, last, len(trials))
+        obs = self._observations(study, trials)
+        if len(obs) < 2:
+            plan = self._sobol(max(last, 0))
+            return plan[len(trials) % len(plan) :][:1] or plan[:1]
+        return self._model(max(last, 0), obs, min(obs, key=rank), self._fresh_steps(),
+                           len(obs), pending, self.options.extra_batch, "extra")  # fmt: skip
 
     # --- the search ---------------------------------------------------------------------
     def _generation(
@@ -231,10 +211,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         steps = np.asarray(st["steps"], dtype=np.float64)
         if st["mode"] == "init":
             ours = {t.number for t in tagged}
-            warm = [ob for ob in obs if ob.number not in ours] or obs
-            if not warm:
-                return self._sobol(last + 1)
-            centre = min(warm, key=rank)
+            centre = min([ob for ob in obs if ob.number not in ours] or obs, key=rank)
             return self._compass(last + 1, obs, centre, None, self._fresh_steps(), n_done)
         # The centre's trial may be gone (failed): the best instead.
         centre = by_num.get(st["centre"]) or min(obs, key=rank)
@@ -276,7 +253,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
             and np.abs(best.x - centre.x).max() > 2.0 * o.step0
         ):
             centre = best  # another basin's point nearly as good: a compass searches it
-        elif steps.max() >= (o.resume_floor or o.min_step):
+        elif steps.max() >= o.resume_floor:
             # The compass before this batch was cut short by its budget or counted as
             # converged with steps above resume_floor; it goes on from the centre with its
             # steps (its budget still spent, its steps below min_step: a generation that
@@ -365,15 +342,6 @@ class CompassSampler(optuna.samplers.BaseSampler):
         }
         return [{"x": self._from_unit(p[:4]), "law": self._law_of(p), "tag": tag} for p in pts]
 
-    def _extra(self, obs: list[Observation], pending: list, last: int, k: int) -> list:
-        """Points for a worker that asks while a generation is still running."""
-        if len(obs) < 2:
-            plan = self._sobol(last)
-            return plan[k % len(plan):][:1] or plan[:1]  # fmt: skip
-        centre = min(obs, key=rank)
-        return self._model(last, obs, centre, self._fresh_steps(), len(obs),
-                           pending, self.options.extra_batch, "extra")  # fmt: skip
-
     # --- coordinates --------------------------------------------------------------------
     def _rng(self, gen: int, salt: int) -> np.random.Generator:
         return np.random.default_rng([self.seed, gen, salt])
@@ -401,13 +369,14 @@ class CompassSampler(optuna.samplers.BaseSampler):
     def _has_params(self, trial: Any) -> bool:
         return all(d.name in trial.params for d in space.SPACE)
 
-    def _observations(self, study: Any, done: list[Any]) -> list[Observation]:
+    def _observations(self, study: Any, trials: list[Any]) -> list[Observation]:
         """The completed trials as observations, each read once per study (a completed
         trial never changes: a long sweep's cost per trial does not grow with it)."""
         key = (id(study), study.study_name)
         if self._seen_in != key:
             self._seen, self._seen_in = {}, key
         seen = self._seen
+        done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
         for t in done:
             if t.number not in seen:
                 seen[t.number] = self._observe(t)

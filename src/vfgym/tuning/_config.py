@@ -22,10 +22,9 @@ from vfgym.params import ACCEL_LAWS
 from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, check_aggregate
 
 SAMPLERS = ("compass", "tpe", "cmaes", "gp", "nsga2", "grid", "random")
-"""Samplers of ``vfgym sweep --sampler``: the compass search with model checks in the
-problem's own coordinates (default; :mod:`vfgym.tuning._compass`), TPE, CMA-ES, a
-Gaussian process for the deterministic objective, NSGA-II (the Pareto form by default), a
-grid over :func:`vfgym.space.grid`, and uniform random sampling (a control)."""
+"""Samplers of ``vfgym sweep --sampler``: the compass search (default), Optuna's TPE, CMA-ES,
+GP and NSGA-II (the Pareto form by default), a grid over :func:`vfgym.space.grid`, and
+uniform random sampling (a control)."""
 FORMS = ("cost", "pareto")
 """``cost``: minimise the aggregate cost; ``pareto``: minimise the three objectives."""
 
@@ -40,15 +39,15 @@ def _laws(v: Any) -> tuple[str, ...]:
     return laws
 
 
+@dataclass(frozen=True)
 class _Options:
-    """What the sweep and grid configurations share: the scenario set, laws and axis, and
-    how a configuration is merged from its sources."""
+    """What the sweep and grid configurations share: the scenario set, laws and axis."""
 
-    scenarios: str | None  # None only as given: construction fills in the default
-    scenario_count: int
-    first_seed: int
-    laws: tuple[str, ...]
-    axis: str | None
+    scenarios: str | None = None  # None only as given: construction fills in the default
+    scenario_count: int = 16
+    first_seed: int = 0
+    laws: tuple[str, ...] = ("rise",)
+    axis: str | None = None
 
     def _check_scenarios(self) -> None:
         s = object.__setattr__
@@ -72,10 +71,10 @@ class _Options:
         Parameters
         ----------
         file_data : dict or None
-            A config file's mapping (``-`` in keys read as ``_``); unknown keys raise.
+            A config file's mapping (``-`` in keys read as ``_``).
         cli : dict or None
-            Command-line options (``None``: not given); their text is read as a number
-            for a number field (a config file's values are taken as YAML typed them).
+            Command-line options (``None``: not given), text read as a number for a
+            number field.
         source : str
             Names the file in error messages.
 
@@ -108,32 +107,32 @@ class _Options:
         return cls(**data)
 
     def to_dict(self) -> dict[str, Any]:
-        """The configuration as plain data (for ``config.yaml``).
+        """The configuration as plain data (``config.yaml``).
 
         Returns
         -------
         dict
-            Field name to value, ``laws`` as a list.
+            Field name to value.
         """
         return asdict(self) | {"laws": list(self.laws)}  # type: ignore[call-overload]
 
     def load_axis(self) -> Axis | None:
-        """The axis file's :class:`~vfgym.moves.axis.Axis`, or ``None`` (none given).
+        """The axis file loaded.
 
         Returns
         -------
         Axis or None
-            The axis file loaded, or ``None``.
+            ``None`` without a file.
         """
         return None if self.axis is None else load_axis(self.axis)
 
     def axis_or_paper(self) -> Axis:
-        """The axis tuned on: the axis file's, else the paper's.
+        """The axis tuned on.
 
         Returns
         -------
         Axis
-            :meth:`load_axis`, or :data:`~vfgym.moves.axis.PAPER_AXIS` without a file.
+            The axis file's, or :data:`~vfgym.moves.axis.PAPER_AXIS` without one.
         """
         return self.load_axis() or PAPER_AXIS
 
@@ -143,8 +142,7 @@ class _Options:
         Returns
         -------
         list of Scenario
-            On an axis, ``train`` / ``test`` are its move sets (``scenario_count`` and
-            ``first_seed`` do not apply); else :func:`vfgym.scenario_set` of
+            An axis's ``train`` / ``test`` move set, else :func:`vfgym.scenario_set` of
             ``scenarios``, ``scenario_count``, ``first_seed``.
         """
         axis = self.load_axis()
@@ -199,7 +197,7 @@ class SweepConfig(_Options):
         storages; a journal worker's death is seen this often), ≥ 1.
     grace : int or None
         Seconds without a heartbeat before a trial is taken as dead (Optuna's
-        ``grace_period``; default twice the heartbeat).
+        ``grace_period``; default twice ``heartbeat``).
 
     Raises
     ------
@@ -207,11 +205,6 @@ class SweepConfig(_Options):
         If a value is out of its range or the objective does not suit the sampler.
     """
 
-    scenarios: str | None = None
-    scenario_count: int = 16
-    first_seed: int = 0
-    laws: tuple[str, ...] = ("rise",)
-    axis: str | None = None
     sampler: str = "compass"
     objective: str | None = None
     aggregate: str = DEFAULT_AGGREGATE
@@ -269,8 +262,7 @@ class GridConfig(_Options):
     """What ``vfgym grid`` does; every field is a command-line option and a config key.
 
     ``points`` values per dimension over the whole space, then ``refine`` rounds that
-    re-grid (``points`` per dimension) the neighbourhood of the ``keep`` best distinct
-    points, one grid step either side.
+    re-grid one grid step either side of the ``keep`` best distinct points.
 
     Parameters
     ----------
@@ -294,11 +286,6 @@ class GridConfig(_Options):
         If a value is out of its range.
     """
 
-    scenarios: str | None = None
-    scenario_count: int = 16
-    first_seed: int = 0
-    laws: tuple[str, ...] = ("rise",)
-    axis: str | None = None
     points: int = 12
     refine: int = 2
     keep: int = 4

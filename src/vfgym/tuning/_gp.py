@@ -1,13 +1,12 @@
 """A small Gaussian process for the compass sampler's model: Matérn-5/2 kernel with one
 length scale per axis, constant mean, hyperparameters fitted by maximum marginal
-likelihood (Adam on their logarithms, within bounds), and the normal distribution's
-functions the expected improvement needs.
+likelihood (Adam on their logarithms, within bounds), and the log expected improvement.
 
-numpy (scipy is not a dependency of vfgym), sized for a sweep's few hundred points in four
-dimensions. The correlation of thousands of candidates with the points and the normal
-distribution function are compiled (:func:`matern52`, :func:`erfc`), with the bits of the
-numpy formula and of ``math.erfc`` the trials were first drawn with (tested), so a seed
-gives the same trials.
+Sized for a sweep's few hundred points in four dimensions; Optuna's ``GPSampler`` keeps
+its Gaussian process private (and on torch), so the compass has its own. The correlation
+of thousands of candidates with the points is compiled (:func:`matern52`) with the bits
+of the numpy formula the trials were first drawn with (tested), so a seed gives the same
+trials.
 """
 
 from __future__ import annotations
@@ -16,6 +15,7 @@ import math
 from typing import Any
 
 import numpy as np
+from scipy.special import ndtr
 
 from vfgym.plant._jit import jit
 
@@ -33,8 +33,7 @@ NOISE_BOUNDS = (1e-6, 0.2)
 
 @jit(simd=True)
 def _distances(a: np.ndarray, b: np.ndarray, lengths: np.ndarray, out: np.ndarray) -> None:
-    """``out[i, j] = sqrt(sum over k of ((a[i, k] - b[j, k]) / lengths[k])²)``, summed in
-    axis order from 0."""
+    """``out[i, j] = sqrt(sum over k of ((a[i, k] - b[j, k]) / lengths[k])²)``."""
     n, m = out.shape
     dim = a.shape[1]
     for i in range(n):
@@ -60,9 +59,8 @@ def _polynomial(r: np.ndarray, e: np.ndarray) -> None:
 
 def matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     """The Matérn-5/2 correlation between the rows of ``a`` and of ``b``: the numpy
-    formula's operations in its order (``r = sqrt(sum(((a - b) / lengths)²))``,
-    ``(1 + √5 r + 5/3 r²) exp(-√5 r)``) in two compiled loops, numpy's own ``exp``
-    between them (libm's differs in the last bit), in one pass each."""
+    formula's operations in its order in two compiled loops, numpy's own ``exp`` between
+    them (libm's differs in the last bit)."""
     a = np.ascontiguousarray(a, dtype=np.float64)
     b = np.ascontiguousarray(b, dtype=np.float64)
     lengths = np.ascontiguousarray(lengths, dtype=np.float64)
@@ -74,32 +72,10 @@ def matern52(a: np.ndarray, b: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     return r
 
 
-@jit(simd=True)
-def _erfc_into(x: np.ndarray, out: np.ndarray) -> None:
-    for i in range(x.size):
-        out[i] = math.erfc(x[i])
-
-
-def erfc(x: np.ndarray) -> np.ndarray:
-    """``math.erfc`` of each element (libm's, as Python's), without a Python call each."""
-    x = np.ascontiguousarray(x, dtype=np.float64)
-    out = np.empty_like(x)
-    _erfc_into(x.reshape(-1), out.reshape(-1))
-    return out
-
-
 class GaussianProcess:
-    """A GP regression of ``y`` on the points ``x`` (unit coordinates).
-
-    Parameters
-    ----------
-    x : (n, d) array of points.
-    y : (n,) array of targets (standardised inside).
-    start : log hyperparameters to start the fit from (a previous fit's ``theta``), which
-        then takes fewer steps.
-    fit : False: keep ``start`` as the hyperparameters (log length scales, log signal
-        variance, log noise variance), unfitted.
-    """
+    """A GP regression of ``y`` (standardised inside) on the points ``x`` (n, d), its log
+    hyperparameters (length scales, signal and noise variance) fitted from ``start`` (a
+    previous fit's ``theta``: fewer steps), or kept as ``start`` if not ``fit``."""
 
     def __init__(self, x: np.ndarray, y: np.ndarray, start: Any = None, fit: bool = True) -> None:
         self.x = np.asarray(x, dtype=np.float64)
@@ -191,27 +167,16 @@ class GaussianProcess:
 
     def predict(self, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Posterior mean and standard deviation at the rows of ``xs``, in ``y``'s units."""
-        ks = self.var * matern52(xs, self.x, self.lengths)
-        mu = ks @ self.alpha
-        v = self.linv @ ks.T
-        sd = np.sqrt(np.maximum(self.var - (v * v).sum(0), 1e-18))
-        return mu * self.scale + self.mean, sd * self.scale
+        at = Believer(self, xs)
+        return at.mean, at.sd()
 
 
 class Believer:
-    """A Gaussian process's posterior at fixed candidates while candidates are added to
-    its observations at their predicted means (a batch's "believed" points, the kriging
-    believer): the mean at every candidate stays as it was (an observation equal to the
-    prediction moves nothing), the variance takes one rank-one update per point, the
-    posterior covariance with the point over its variance plus the noise. The same, up to
-    rounding, as :meth:`GaussianProcess.condition` then :meth:`GaussianProcess.predict`,
-    at O(candidates × points) per point instead of O(candidates × points²).
-
-    Parameters
-    ----------
-    gp : the process (left as it is).
-    xs : (m, d) array of candidates.
-    """
+    """The posterior of ``gp`` (left as it is) at the candidates ``xs`` while candidates
+    are added to its observations at their predicted means (the kriging believer): the
+    mean stays, the variance takes a rank-one update per point. As
+    :meth:`GaussianProcess.condition` then :meth:`GaussianProcess.predict` up to rounding,
+    at O(candidates × points) per point instead of O(candidates × points²)."""
 
     def __init__(self, gp: GaussianProcess, xs: np.ndarray) -> None:
         self.gp = gp
@@ -238,39 +203,11 @@ class Believer:
         self._var = self._var - u * u
 
 
-def norm_cdf(z: np.ndarray) -> np.ndarray:
-    """The standard normal distribution function."""
-    z = np.asarray(z, dtype=np.float64)
-    return 0.5 * erfc(-z / math.sqrt(2.0))
-
-
-def norm_pdf(z: np.ndarray) -> np.ndarray:
-    """The standard normal density."""
-    z = np.asarray(z, dtype=np.float64)
-    return np.exp(-0.5 * z * z) / math.sqrt(2.0 * math.pi)
-
-
 TAIL_Z = -20.0
-"""Below this z the logarithms take the normal tail's asymptotic series (four terms:
-relative error about 945/z¹⁰, 1e-10 here); above it the direct formulas lose at most
-z² ≈ 400 ulps to cancellation."""
+"""Below this z the log expected improvement takes the normal tail's asymptotic series
+(four terms: relative error about 945/z¹⁰, 1e-10 here); above it the direct formula loses
+at most z² ≈ 400 ulps to cancellation."""
 _LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
-
-
-def log_norm_cdf(z: np.ndarray) -> np.ndarray:
-    """log Φ(z), finite however negative z is (Φ itself underflows below z ≈ -38)."""
-    z = np.asarray(z, dtype=np.float64)
-    out = np.empty_like(z)
-    tail = z < TAIL_Z
-    mid = ~tail & (z <= 0.0)
-    out[mid] = np.log(norm_cdf(z[mid]))
-    up = z > 0.0  # Φ near 1: from the other tail, as log1p(−Φ(−z))
-    out[up] = np.log1p(-norm_cdf(-z[up]))
-    t = z[tail]
-    w = 1.0 / (t * t)
-    series = 1.0 - w * (1.0 - w * (3.0 - w * (15.0 - w * 105.0)))
-    out[tail] = -0.5 * t * t - np.log(-t) - _LOG_SQRT_2PI + np.log(series)
-    return out
 
 
 def log_expected_improvement(best: float, mu: np.ndarray, sd: np.ndarray) -> np.ndarray:
@@ -285,7 +222,7 @@ def log_expected_improvement(best: float, mu: np.ndarray, sd: np.ndarray) -> np.
     tail = z < TAIL_Z
     zt = z[~tail]
     with np.errstate(divide="ignore"):  # h = 0 only where the tail series takes over
-        logh[~tail] = np.log(zt * norm_cdf(zt) + norm_pdf(zt))
+        logh[~tail] = np.log(zt * ndtr(zt) + np.exp(-0.5 * zt * zt) / math.sqrt(2.0 * math.pi))
     t = z[tail]
     w = 1.0 / (t * t)
     logh[tail] = (

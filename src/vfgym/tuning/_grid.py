@@ -1,6 +1,5 @@
-"""The exhaustive grid: :func:`vfgym.space.grid` through the batched kernel, refined around
-its best points; its best is the near-true optimum a sweep's best is reported against.
-"""
+"""The exhaustive grid, refined around its best points: the near-true optimum a sweep's
+best is reported against."""
 
 from __future__ import annotations
 
@@ -22,7 +21,6 @@ from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.scoring import CONSTRAINTS, evaluate
 from vfgym.tuning._aggregate import aggregate
 from vfgym.tuning._config import GridConfig
-from vfgym.tuning._objective import settings_key
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,8 +73,8 @@ class GridResult:
 def run_grid(
     cfg: GridConfig, progress: Callable[[int, int, float], None] | None = None
 ) -> GridResult:
-    """Evaluate the dense grid and its refinements through :func:`vfgym.evaluate`, one
-    compiled call per batch, on the config's axis.
+    """Evaluate the dense grid and its refinements on the config's axis, one compiled call
+    of :func:`vfgym.evaluate` per batch.
 
     Parameters
     ----------
@@ -88,16 +86,14 @@ def run_grid(
     Returns
     -------
     GridResult
-        ``rows``: one :class:`GridRow` per setting (level, settings, unit coordinates
-        ``u``, mean cost, worst constraints, feasible); ``best``: the feasible row of
-        least cost (or of least cost, if none is feasible); ``scenarios``.
+        Every setting evaluated, and the best.
     """
     scenarios = cfg.scenario_list()
     on_axis = axis_kwargs(cfg.axis_or_paper())
     evaluate(PAPER_SETTINGS, scenarios, **on_axis)  # compile/load once before timing batches
     levels: list[tuple[int, list[Settings]]] = [(0, space.grid(cfg.points, cfg.laws))]
     total = len(levels[0][1]) * (1 + cfg.refine * cfg.keep)
-    rows: dict[tuple, GridRow] = {}
+    rows: dict[Settings, GridRow] = {}
     done = 0
     best_cost = math.inf
     step = 2.0 / (cfg.points - 1)
@@ -127,12 +123,12 @@ def run_grid(
                     for u in np.array(np.meshgrid(*axes, indexing="ij")).reshape(4, -1).T
                 ]
             levels.append((level, pts))
-        todo = [s for s in levels[-1][1] if settings_key(s) not in rows]
+        todo = [s for s in levels[-1][1] if s not in rows]
         for i in range(0, len(todo), cfg.batch):
             chunk = todo[i : i + cfg.batch]
             agg = aggregate(evaluate(chunk, scenarios, **on_axis))
             for j, s in enumerate(chunk):
-                rows[settings_key(s)] = GridRow(
+                rows[s] = GridRow(
                     level=level,
                     settings=s,
                     u=np.array([d.to_unit(getattr(s, d.name)) for d in space.SPACE]),
@@ -151,21 +147,8 @@ def run_grid(
 
 
 def write_grid_csv(rows: Sequence[GridRow], path: Path) -> Path:
-    """Write the grid's rows as CSV (``grid.csv``), floats in full precision.
-
-    Parameters
-    ----------
-    rows : sequence of GridRow
-        The rows of :func:`run_grid`.
-    path : pathlib.Path
-        The file, written atomically.
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``: one line per evaluated setting (level, settings, cost, worst
-        constraints, feasible), floats as ``repr`` so they read back exactly.
-    """
+    """Write ``grid.csv`` atomically, a line per row, floats as ``repr`` (read back
+    exactly)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(
@@ -187,23 +170,8 @@ def write_grid_csv(rows: Sequence[GridRow], path: Path) -> Path:
 
 
 def grid_reference(cfg: GridConfig, result: GridResult) -> dict[str, Any]:
-    """``reference.yaml``'s mapping: the grid's best, in the Settings-YAML format.
-
-    What :func:`vfgym.tuning.find_reference` reads back.
-
-    Parameters
-    ----------
-    cfg : GridConfig
-        The grid that ran.
-    result : GridResult
-        What :func:`run_grid` returned.
-
-    Returns
-    -------
-    dict
-        The best settings, its cost, constraints and feasibility, the scenarios, laws
-        and axis (its :func:`~vfgym.moves.axis.axis_digest`), and how the grid ran.
-    """
+    """``reference.yaml``'s mapping (what a sweep's ``find_reference`` reads back): the
+    grid's best in the Settings-YAML format, what it was scored on, how the grid ran."""
     b = result.best
     return {
         "settings": space.settings_to_dict(b.settings),

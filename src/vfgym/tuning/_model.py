@@ -1,12 +1,7 @@
 """The compass sampler's model step: Gaussian processes on the completed trials (log cost,
-and each constraint some trial broke), and batches of points chosen by the logarithm of
-expected improvement times probability of feasibility (:func:`propose`, over the whole
-space).
-
-A batch's points are chosen one at a time among one set of candidates, each believed at
-its predicted values before the next is chosen (:class:`vfgym.tuning._gp.Believer`: the
-posterior mean stays, the variance takes a rank-one update), so a batch costs one
-prediction of the candidates per model rather than one per point.
+and each constraint some trial broke), and batches of points over the whole space chosen
+by the log of expected improvement times probability of feasibility, each believed at its
+predicted values before the next (:class:`vfgym.tuning._gp.Believer`).
 """
 
 from __future__ import annotations
@@ -18,8 +13,9 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
+from scipy.special import log_ndtr
 
-from vfgym.tuning._gp import Believer, GaussianProcess, log_expected_improvement, log_norm_cdf
+from vfgym.tuning._gp import Believer, GaussianProcess, log_expected_improvement
 
 
 class Observation(NamedTuple):
@@ -44,8 +40,7 @@ MODEL_POINTS = 160
 
 
 class Proposal(NamedTuple):
-    """A model batch's points (unit coordinates) and each model's fitted log
-    hyperparameters (``cost``, and ``c0``, ``c1``, … per broken constraint)."""
+    """A model batch's points (unit coordinates) and each model's log hyperparameters."""
 
     points: list[np.ndarray]
     thetas: dict[str, list[float]]
@@ -55,13 +50,12 @@ def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n:
             xi: float, rng: np.random.Generator, n_laws: int = 1,
             starts: dict[str, list[float]] | None = None,
             refit: bool = True) -> Proposal:  # fmt: skip
-    """``n`` points (unit coordinates) of highest expected improvement (by at least ``xi``
-    over the best feasible cost) times probability of feasibility, each conditioned on the
-    previous ones and on ``pending`` at their predicted values (:func:`_fit`'s models).
-    ``starts``: each model's fit starts from these log hyperparameters (a previous batch's
-    :attr:`Proposal.thetas`) and takes fewer steps; not ``refit``: a model with a start
-    keeps it, only factored on the points. The linear algebra runs on one thread:
-    OpenBLAS's threads spin on matrices this small, 30x slower on a busy machine."""
+    """``n`` points of highest expected improvement (by at least ``xi`` over the best
+    feasible cost) times probability of feasibility, each conditioned on the previous
+    ones and on ``pending`` at their predicted values. Each model's fit starts from
+    ``starts`` (a previous batch's :attr:`Proposal.thetas`), or keeps it unless ``refit``.
+    The linear algebra runs on one thread: OpenBLAS's threads spin on matrices this
+    small, 30x slower on a busy machine."""
     from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
     with threadpool_limits(1, user_api="blas"):
@@ -97,8 +91,8 @@ def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n
 
 
 class _Fit(NamedTuple):
-    """The models a proposal is chosen by: log cost, and the constraints (if any
-    observation violates one); ``best``: the log cost to improve on (None: none feasible)."""
+    """The models a proposal is chosen by; ``best``: the log cost to improve on (None: none
+    feasible)."""
 
     gp: GaussianProcess
     cgps: list[GaussianProcess]
@@ -111,10 +105,8 @@ class _Fit(NamedTuple):
         return {k: [float(t) for t in m.theta] for k, m in models}
 
     def choose(self, n: int, candidates: Any) -> list[np.ndarray]:
-        """``n`` points of one set of ``candidates()``, each the best by the logarithm of
-        expected improvement times probability of feasibility, then believed at its
-        predicted values (:class:`vfgym.tuning._gp.Believer`) before the next is chosen;
-        a candidate is chosen once."""
+        """``n`` distinct points of one set of ``candidates()``, each believed at its
+        predicted values before the next is chosen."""
         c = candidates()
         cost, *cons = each(lambda m: Believer(m, c), [self.gp, *self.cgps])
         taken = np.zeros(len(c), dtype=bool)
@@ -123,7 +115,7 @@ class _Fit(NamedTuple):
             sd = cost.sd()
             log_pf = np.zeros(len(c))
             for m in cons:
-                log_pf += log_norm_cdf(-m.mean / np.maximum(m.sd(), 1e-9))
+                log_pf += log_ndtr(-m.mean / np.maximum(m.sd(), 1e-9))
             # In logs: EI × P(feasible) underflows to 0 on every candidate far from the
             # best, where argmax would silently take the first.
             acq = log_pf
@@ -140,10 +132,9 @@ class _Fit(NamedTuple):
 
 def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndarray],
          starts: dict[str, list[float]] | None = None, refit: bool = True) -> _Fit:  # fmt: skip
-    """Gaussian processes on log cost (on the feasible points once there are three) and
-    on the constraints (signed log, :func:`_constraint_targets`), conditioned on ``pending``
-    at their predicted values; each fit from ``starts``' hyperparameters of its name, if
-    given (:meth:`_Fit.thetas`); not ``refit``: kept as they are where given."""
+    """Gaussian processes on log cost (on the feasible points once there are three) and on
+    the broken constraints (signed log), conditioned on ``pending`` at their predicted
+    values, each from ``starts``' hyperparameters of its name (kept unless ``refit``)."""
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     feas = np.array([o.feasible for o in obs])
     cons = np.array([o.constraints for o in obs])
@@ -171,11 +162,9 @@ _POOL: tuple[int, ThreadPoolExecutor] | None = None  # (the process that made it
 
 
 def each(fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
-    """``[fn(i) for i in items]``, the items on up to as many threads as the machine has
-    cores. The models of a batch are independent and their numpy work releases the GIL,
-    so they run side by side; each one's operations are the same, in the same order, on
-    whichever thread, so the results are the same bits (the linear algebra is on one BLAS
-    thread, :func:`propose`)."""
+    """``[fn(i) for i in items]`` on up to as many threads as cores: a batch's models are
+    independent and their numpy work releases the GIL; each gives the same bits on
+    whichever thread."""
     global _POOL
     if len(items) < 2 or (os.cpu_count() or 1) < 2:
         return [fn(i) for i in items]
@@ -185,11 +174,8 @@ def each(fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
 
 
 def _constraint_models(cons: np.ndarray) -> list[tuple[str, np.ndarray]]:
-    """The constraint values the feasibility models are fitted to, each named ``c<i>``:
-    each constraint some observation violates. Each constraint alone is smoother than
-    their maximum, which jumps from one constraint's surface to another's: on
-    ``short-move`` the worst's model took the region of the better basin (lower value and
-    L/value, where the acceleration constraint gives way) as infeasible."""
+    """Each constraint some observation violates, named ``c<i>``: each alone is smoother
+    than their maximum, which jumps from one constraint's surface to another's."""
     if not cons.size:
         return []
     return [(f"c{i}", c) for i, c in enumerate(cons.T) if (c > 0).any()]

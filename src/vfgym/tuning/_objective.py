@@ -2,12 +2,9 @@
 format its result is stored in.
 
 Each attribute written is one transaction of Optuna's RDB storage, so a trial writes two:
-its result as ONE user attribute, ``result`` (the settings scored, ``cost``, the worst of
-each constraint over the scenarios in :data:`vfgym.scoring.CONSTRAINTS`' order,
-``feasible``, the objectives' means and, for a result copied from an earlier trial with
-the same settings, ``cached_from``), and its constraints as ONE system attribute, the list
-Optuna reads into ``trial.constraints`` (Optuna's ``set_constraint`` reads the whole trial
-before each of its one-key writes).
+its result as one user attribute, ``result`` (:data:`PARTS`), and its constraints as one
+system attribute, the list Optuna reads into ``trial.constraints`` (Optuna's
+``set_constraint`` reads the whole trial before each of its one-key writes).
 """
 
 from __future__ import annotations
@@ -30,12 +27,7 @@ if TYPE_CHECKING:
 RESULT_ATTR = "result"
 """The user attribute of a trial's result."""
 PARTS = ("settings", "cost", "constraints", "feasible", "objectives", "cached_from")
-"""A result's parts: the keys of ``result`` (``cached_from`` only on a copied result)."""
-
-
-def settings_key(s: Settings) -> tuple:
-    """A hashable key of settings, equal for equal settings."""
-    return (s.value_rad, s.error_limit_rad, s.k, s.ts_over_tf, s.accel_law)
+"""A result's parts (:class:`StoredResult`; ``cached_from`` only on a copied result)."""
 
 
 class Result(NamedTuple):
@@ -91,25 +83,24 @@ class Objective:
         self.form = form
         self.plant, self.measures, self.plants = plant, measures, tuple(plants)
         self.how = (aggregate, cvar_alpha)
-        self.cache: dict[tuple, Result] = {}
+        self.cache: dict[Settings, Result] = {}
         self.simulated = 0
         self.guard: Callable[[], Any] = nullcontext  # around a simulation (interrupts)
         self._study: tuple | None = None  # the study the fields below are of
         self._study_id = 0
-        self._found: dict[tuple, Result] = {}  # its completed trials' results, by settings
+        self._found: dict[Settings, Result] = {}  # its completed trials' results
         self._known: set[int] = set()  # its trials seen finished, or run here
         self._below = 0  # every trial numbered below this is known
 
     def __call__(self, trial: Trial) -> float | list[float]:
         settings = space.suggest(trial, self.laws)
-        key = settings_key(settings)
         self._seen(trial)
-        res = self.cache.get(key) or self._completed(trial).get(key)
+        res = self.cache.get(settings) or self._completed(trial).get(settings)
         if res is None:
             with self.guard():
                 (res,) = self.score_many([settings])
             self.simulated += 1
-            self.cache[key] = Result(res.values, res.attrs | {"cached_from": trial.number})
+            self.cache[settings] = Result(res.values, res.attrs | {"cached_from": trial.number})
         result = {k: res.attrs[k] for k in PARTS if k in res.attrs}
         if trial.user_attrs.get(RESULT_ATTR) != result:  # (a retry may hold it already)
             trial.set_user_attr(RESULT_ATTR, result)
@@ -128,9 +119,8 @@ class Objective:
         Returns
         -------
         list of Result
-            One per setting: the aggregate cost (``cost`` form) or the three objectives'
-            means, and the parts of its stored result (settings, cost, constraints,
-            feasible, objectives).
+            One per setting: the aggregate cost (``cost`` form) or the objectives' means,
+            and the parts of its stored result.
         """
         ev = evaluate(settings, self.scenarios, plant=self.plant, measures=self.measures,
                       plants=self.plants)  # fmt: skip
@@ -158,7 +148,7 @@ class Objective:
             self._found, self._known, self._below = {}, set(), 0
         self._known.add(trial.number)
 
-    def _completed(self, trial: Trial) -> dict[tuple, Result]:
+    def _completed(self, trial: Trial) -> dict[Settings, Result]:
         """Results of the study's completed trials, by settings (the lowest-numbered of
         each), read while a trial numbered below this one finished unseen here (another
         process's: a resumed or shared study); each read once."""
@@ -178,7 +168,7 @@ class Objective:
                 continue
             if stored.settings is None or len(stored.constraints) != len(CONSTRAINTS):
                 continue  # (scored with other constraints)
-            key = settings_key(space.settings_from_dict(stored.settings))
+            key = space.settings_from_dict(stored.settings)
             if key in found and found[key].attrs["cached_from"] <= t.number:
                 continue  # (a lower-numbered one may complete later, on another worker)
             attrs = {k: list(v) if isinstance(v, tuple) else v for k, v in stored._asdict().items()}
@@ -189,23 +179,9 @@ class Objective:
 
 
 def set_constraints(trial: Any, values: dict[str, float], study_id: int | None = None) -> None:
-    """Set the trial's constraints (the list Optuna reads into ``trial.constraints``) in
-    one write, without reading the trial first as ``trial.set_constraint`` does.
-
-    Parameters
-    ----------
-    trial : optuna.Trial
-        The trial.
-    values : dict of str to float
-        The constraints by name (≤ 0: met), in order.
-    study_id : int or None
-        The trial's study's id in ``trial.storage`` (default: looked up by its name).
-
-    Raises
-    ------
-    ValueError
-        If a value is NaN.
-    """
+    """Set the trial's constraints (by name, in order; ≤ 0: met) in one write, without
+    reading the trial first as ``trial.set_constraint`` does; ``study_id``: the trial's
+    study's in ``trial.storage`` (default: looked up). ValueError for a NaN."""
     for name, v in values.items():
         if math.isnan(float(v)):
             raise ValueError(f"constraint {name!r} of trial {trial.number} is NaN")
@@ -222,12 +198,12 @@ class StoredResult(NamedTuple):
     Attributes
     ----------
     settings : dict or None
-        The settings scored, as :func:`vfgym.space.settings_to_dict` gives them.
+        The settings scored (:func:`vfgym.space.settings_to_dict`).
     cost : float
         The cost's aggregate over the scenarios.
     constraints : tuple of float
         The worst of each constraint over the scenarios, in ``CONSTRAINTS``' order
-        (≤ 0: met); empty if the trial has none.
+        (≤ 0: met).
     feasible : bool
         Every constraint met on every scenario.
     objectives : tuple of float

@@ -1,7 +1,5 @@
 """What a finished sweep reports: its best trial, the trials as CSV, its figures, the tuned
-settings against the paper's (a :class:`vfgym.report.Report`), and the gap to a grid
-reference.
-"""
+settings against the paper's, and the gap to a grid reference."""
 
 from __future__ import annotations
 
@@ -12,7 +10,7 @@ import math
 import os
 import warnings
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -87,22 +85,9 @@ def trial_settings(trial: FrozenTrial) -> Settings:
 
 
 def write_trials_csv(study: Study, path: Path) -> Path:
-    """The trials as CSV (``trials.csv``), one row each, written atomically.
-
-    Parameters
-    ----------
-    study : optuna.Study
-        The study.
-    path : pathlib.Path
-        The file.
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``. Its columns are those ``study.trials_dataframe()`` names (number,
-        value(s), times, params_*, user_attrs_* with each part of the stored result a
-        column, state); lists and dicts as JSON.
-    """
+    """Write ``trials.csv`` atomically: the columns ``study.trials_dataframe()`` names
+    (which needs pandas, not a dependency), each part of the stored result a column of
+    its own, lists and dicts as JSON."""
     trials = study.get_trials(deepcopy=False)
     names = study.metric_names or (
         ["value"] if len(study.directions) == 1 else [str(i) for i in range(len(study.directions))]
@@ -140,25 +125,9 @@ def _cell(v: object) -> object:
 
 
 def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
-    """The study's figures as PNG in the run folder, drawn by :mod:`vfgym.report.figures`
-    (as ``vfgym plot history|pareto`` draws them), each written atomically.
-
-    Parameters
-    ----------
-    study : optuna.Study
-        The study.
-    run_dir : Path
-        Where ``history.png``, ``importances.png`` and, in the Pareto form,
-        ``pareto_front.png`` go.
-    form : str
-        The sweep's objective, ``cost`` or ``pareto``.
-
-    Returns
-    -------
-    dict of str to str
-        Each figure's file name, or ``skipped: REASON`` for one that cannot be drawn (too
-        few trials, no spread to rank, ...).
-    """
+    """Write ``history.png``, ``importances.png`` and (Pareto form) ``pareto_front.png`` as
+    ``vfgym plot`` draws them; each figure's file, or ``skipped: REASON`` for one Optuna
+    cannot draw (too few trials, no spread to rank)."""
     import optuna
 
     from vfgym.report import figures
@@ -210,17 +179,16 @@ def compare(
     scenarios : list of Scenario
         The sweep's (or grid's) scenario set.
     label : str
-        ``best``'s column label (``tuned``; the grid: ``grid``).
+        ``best``'s column label.
     plant : Plant
-        The plant the scenarios run on (an axis's; each scenario applies its load).
+        The plant the scenarios run on (an axis's).
     measures : Measures
         Windows and bands of the measures (an axis's).
 
     Returns
     -------
     vfgym.report.Report
-        Columns ``paper`` (role baseline) then ``label``, as
-        :func:`vfgym.report.format_compact` prints the sweep's table.
+        Columns ``paper`` (the baseline) then ``label``.
     """
     candidates = [
         Candidate("paper", PAPER_SETTINGS, source="paper", role="baseline"),
@@ -235,7 +203,7 @@ class FoundReference(NamedTuple):
     Attributes
     ----------
     record : dict
-        The ``reference.yaml`` mapping (:func:`grid_reference`).
+        The grid's ``reference.yaml`` mapping.
     path : pathlib.Path
         The file.
     """
@@ -256,13 +224,13 @@ def find_reference(
     laws: tuple[str, ...],
     axis: str | None = None,
 ) -> FoundReference | None:
-    """A grid reference for these scenarios, laws and axis.
+    """The grid reference for these scenarios, laws and axis.
 
     Parameters
     ----------
     cfg_reference : str or None
-        ``--reference PATH``: a ``reference.yaml`` or a grid run folder; ``None`` searches
-        ``runs_dir``'s ``grid/*/reference.yaml`` for the best matching one.
+        ``--reference``: a ``reference.yaml`` or a grid's run folder; ``None``: the least
+        costly match under ``runs_dir/grid/*/``.
     runs_dir : str
         The runs folder.
     scenarios : list of Scenario
@@ -280,8 +248,8 @@ def find_reference(
     Raises
     ------
     ValueError
-        If the given reference is not a grid reference, or is for other scenarios, laws
-        or axis.
+        Naming ``reference``, if the one given is not a grid reference or is for other
+        scenarios, laws or axis.
     """
     names = [s.name for s in scenarios]
     if cfg_reference:
@@ -327,84 +295,34 @@ def gap_pct(cost: float, ref_cost: float) -> float:
     Parameters
     ----------
     cost, ref_cost : float
-        The sweep's best cost, and the grid reference's.
+        The cost, and the reference's.
 
     Returns
     -------
     float
-        100·(cost − ref)/ref, in % (negative: below the reference).
+        100·(cost − ref_cost)/ref_cost, in %.
     """
     return 100.0 * (cost - ref_cost) / ref_cost
 
 
 @dataclass(frozen=True)
 class ReferenceGap:
-    """A sweep's best against a grid reference (``best.yaml``'s ``reference``).
-
-    Attributes
-    ----------
-    path : str
-        The reference's ``reference.yaml``.
-    cost : float
-        The reference's cost.
-    gap_pct : float
-        :func:`gap_pct` of the sweep's best cost to it.
-    """
+    """A sweep's best against a grid reference (``best.yaml``'s ``reference``): the
+    reference's file and cost, and :func:`gap_pct` to it."""
 
     path: str
     cost: float
     gap_pct: float
 
-    @classmethod
-    def between(cls, cost: float, found: FoundReference) -> ReferenceGap:
-        """The gap of ``cost`` to the reference ``found``.
-
-        Parameters
-        ----------
-        cost : float
-            The sweep's best cost.
-        found : FoundReference
-            The reference.
-
-        Returns
-        -------
-        ReferenceGap
-            Its path, its cost and the gap.
-        """
-        return cls(str(found.path), found.record["cost"], gap_pct(cost, found.cost))
-
 
 @dataclass(frozen=True)
 class BestRecord:
-    """A sweep's best trial as ``best.yaml`` holds it (:func:`best_record`): the settings
-    (what ``vfgym evaluate --settings`` reads), its scores, and where they come from.
-
-    Attributes
-    ----------
-    settings : dict
-        As :func:`vfgym.space.settings_to_dict` gives them.
-    cost, feasible : float, bool
-        The cost's aggregate over the scenarios; every constraint ≤ 0 on every scenario.
-    constraints, objectives : dict of str to float
-        The worst of each constraint, and each objective's mean, over the scenarios.
-    study, storage : str
-        The study, and its storage (password masked).
-    trial : int
-        The trial's number.
-    sampler, objective : str
-        The sweep's sampler and objective.
-    scenarios, laws : list of str
-        The scenarios' names and the laws searched.
-    axis : str or None
-        The axis file tuned on (``None``: the paper's axis).
-    paper_cost : float or None
-        The paper's settings' cost on the same scenarios.
-    reference : ReferenceGap or None
-        The gap to a grid reference, if one was found.
-    machine : str or None
-        The axis's :func:`~vfgym.moves.axis.machine_digest`: a settings file used on an
-        axis with another plant, measures or uncertainty is noted.
-    """
+    """A sweep's best trial as ``best.yaml`` holds it: the settings (what ``vfgym evaluate
+    --settings`` reads), their scores over the scenarios (aggregate cost, feasible, worst
+    of each constraint, objectives' means), and where they come from (the storage with its
+    password masked; the axis file, ``None`` for the paper's; the axis's
+    :func:`~vfgym.moves.axis.machine_digest`, so that settings used on another machine are
+    noted)."""
 
     settings: dict[str, float | str]
     cost: float
@@ -423,29 +341,9 @@ class BestRecord:
     reference: ReferenceGap | None = None
     machine: str | None = None
 
-    def with_reference(self, gap: ReferenceGap) -> BestRecord:
-        """This record with ``reference`` set to ``gap``.
-
-        Parameters
-        ----------
-        gap : ReferenceGap
-            The gap.
-
-        Returns
-        -------
-        BestRecord
-            A copy with ``reference`` set.
-        """
-        return replace(self, reference=gap)
-
     def as_dict(self) -> dict[str, Any]:
-        """The mapping written to ``best.yaml``.
-
-        Returns
-        -------
-        dict
-            The fields in order; ``paper_cost`` and ``reference`` left out when ``None``.
-        """
+        """The mapping written to ``best.yaml`` (``paper_cost`` and ``reference`` only
+        when known)."""
         out = asdict(self)
         for k in ("paper_cost", "reference"):
             if out[k] is None:
@@ -460,37 +358,16 @@ def best_record(
     spec: StorageSpec,
     scenarios: list[Scenario],
     paper_cost: float | None = None,
+    reference: FoundReference | None = None,
 ) -> BestRecord:
-    """A sweep's best trial and where it comes from, as ``best.yaml`` holds it.
-
-    Parameters
-    ----------
-    study : optuna.Study
-        The study.
-    trial : optuna.trial.FrozenTrial
-        The best trial (:func:`best_trial`).
-    cfg : SweepConfig
-        The sweep's configuration.
-    spec : StorageSpec
-        Where the study lives.
-    scenarios : list of Scenario
-        The sweep's scenarios.
-    paper_cost : float, optional
-        The paper's settings' cost on the same scenarios.
-
-    Returns
-    -------
-    BestRecord
-        The record.
-
-    Raises
-    ------
-    ValueError
-        If the trial holds no result (it did not complete in a sweep).
-    """
+    """``best.yaml``'s record of the best trial (:func:`best_trial`), with the paper's
+    cost on the same scenarios and the gap to ``reference`` when given."""
     r = stored_result(trial)
     if r is None or r.settings is None:
         raise ValueError(f"trial {trial.number} holds no result")
+    gap = None
+    if reference is not None:
+        gap = ReferenceGap(str(reference.path), reference.cost, gap_pct(r.cost, reference.cost))
     return BestRecord(
         settings=r.settings,
         cost=r.cost,
@@ -506,5 +383,6 @@ def best_record(
         laws=list(cfg.laws),
         axis=cfg.axis,
         paper_cost=paper_cost,
+        reference=gap,
         machine=machine_digest(cfg.axis_or_paper()),
     )

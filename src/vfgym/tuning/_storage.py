@@ -1,13 +1,9 @@
 """Where a study lives: SQLite in the run folder (default), Optuna's JournalStorage on a
 file, or PostgreSQL shared by workers on many machines.
 
-RDB storages (SQLite, PostgreSQL) run Optuna's heartbeat: a trial whose worker stopped
-beating for the grace period is failed by ``optuna.storages.fail_stale_trials`` (which
-``study.optimize`` calls before each trial) and enqueued again with its settings by
-Optuna's ``RetryHeartbeatStaleTrialCallback``. What is added here, each for what Optuna
-does not do, is said where it lives: retrying the creation of a new database's tables,
-one retry of a trial two workers fail at once, a journal lock the kernel drops when its
-holder dies, and SQLite's write-ahead log.
+RDB storages run Optuna's heartbeat: ``fail_stale_trials`` fails the trial of a worker
+that stopped beating and ``RetryHeartbeatStaleTrialCallback`` enqueues it again. What is
+added, each for what Optuna does not do, is said where it lives.
 """
 
 from __future__ import annotations
@@ -35,7 +31,7 @@ STORAGE_HELP = (
 
 @dataclass(frozen=True)
 class StorageSpec:
-    """Where a study lives, as :func:`resolve_storage` reads it.
+    """Where a study lives (:func:`resolve_storage`).
 
     Parameters
     ----------
@@ -58,8 +54,8 @@ class StorageSpec:
 
 
 def mask_url(url: str) -> str:
-    """``url`` with any password replaced by ``***`` (in a text SQLAlchemy cannot read as
-    a URL, anything between ``user:`` and ``@``)."""
+    """``url`` with any password as ``***`` (in a text SQLAlchemy cannot read, anything
+    between ``user:`` and ``@``)."""
     from sqlalchemy.engine import make_url
 
     try:
@@ -75,11 +71,8 @@ def _file_spec(kind: str, path: Path) -> StorageSpec:
 
 
 def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
-    """The storage named by ``--storage``.
-
-    A URL is read by SQLAlchemy: every SQLite file URL and PostgreSQL URL it takes is
-    taken (a query such as ``?sslmode=require``, an IPv6 host, a Unix socket
-    ``postgresql:///db``), with a synchronous driver.
+    """The storage named by ``--storage``: any SQLite file URL or PostgreSQL URL
+    SQLAlchemy reads, with a synchronous driver.
 
     Parameters
     ----------
@@ -97,8 +90,8 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
     Raises
     ------
     ValueError
-        If the text names no storage, a database other than SQLite and PostgreSQL, an
-        in-memory SQLite database, or a driver vfgym cannot use; the password masked.
+        If the text names no storage, another database, an in-memory SQLite one, or a
+        driver vfgym cannot use (the password masked).
     """
     from sqlalchemy.engine import make_url
 
@@ -153,17 +146,16 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
 
 
 def find_storage(text: str, run_dir: Path) -> StorageSpec:
-    """The storage a sweep's run folder recorded, found again (parsed by
-    :func:`resolve_storage`).
+    """The storage a sweep's run folder recorded, found again.
 
     Parameters
     ----------
     text : str
-        The folder's ``config.yaml`` ``storage`` (a :attr:`StorageSpec.display`: a
-        journal shows as its bare path) or what ``--storage`` names.
+        The folder's ``config.yaml`` ``storage`` (:attr:`StorageSpec.display`) or what
+        ``--storage`` names.
     run_dir : Path
-        The run folder; a SQLite or journal file no longer where it was recorded is
-        looked for in it (the folder was moved).
+        The run folder, where a file no longer where it was recorded is looked for (the
+        folder was moved).
 
     Returns
     -------
@@ -189,8 +181,8 @@ def find_storage(text: str, run_dir: Path) -> StorageSpec:
 
 
 def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = None) -> BaseStorage:
-    """The Optuna storage for ``spec``: RDB with Optuna's heartbeat and retry of stale
-    trials for SQLite and PostgreSQL, JournalStorage on a file.
+    """The Optuna storage for ``spec``: RDB with the heartbeat and retry of stale trials,
+    or JournalStorage.
 
     Parameters
     ----------
@@ -241,10 +233,9 @@ def open_storage(spec: StorageSpec, heartbeat: int = 10, grace: int | None = Non
 
 
 def _rdb(spec: StorageSpec, heartbeat: int, grace: int | None, tries: int = 8) -> RDBStorage:
-    """Optuna's RDB storage with its heartbeat and retry of stale trials, tried again when
-    another process creating the same new database's tables at the same moment makes it
-    fail: Optuna's table creation is not safe against that ("table studies already
-    exists", "exceeding max length"); a later try finds them made."""
+    """Optuna's RDB storage, tried again when another process creating the same new
+    database's tables makes it fail: Optuna's table creation is not safe against that
+    ("table studies already exists"); a later try finds them made."""
     import optuna
     import sqlalchemy
 
@@ -253,20 +244,22 @@ def _rdb(spec: StorageSpec, heartbeat: int, grace: int | None, tries: int = 8) -
         if spec.kind == "sqlite"
         else {"pool_pre_ping": True, "pool_size": 2, "max_overflow": 2}
     )
-    for attempt in range(tries):
+
+    def rdb() -> RDBStorage:
+        return optuna.storages.RDBStorage(
+            spec.url,
+            engine_kwargs=kw,
+            heartbeat_interval=heartbeat,
+            grace_period=grace or 2 * heartbeat,
+            heartbeat_stale_trial_callback=RetryStale(spec.path),
+        )
+
+    for attempt in range(tries - 1):
         try:
-            return optuna.storages.RDBStorage(
-                spec.url,
-                engine_kwargs=kw,
-                heartbeat_interval=heartbeat,
-                grace_period=grace or 2 * heartbeat,
-                heartbeat_stale_trial_callback=RetryStale(spec.path),
-            )
+            return rdb()
         except (sqlalchemy.exc.SQLAlchemyError, optuna.exceptions.StorageInternalError):
-            if attempt == tries - 1:
-                raise
             time.sleep(random.uniform(0.05, 0.25) * (attempt + 1))
-    raise AssertionError("unreachable")
+    return rdb()
 
 
 MAX_RETRY = 3
@@ -274,12 +267,11 @@ MAX_RETRY = 3
 
 
 def retry_once(study: Study, trial: FrozenTrial, lock: str | None = None) -> bool:
-    """Enqueue a failed trial again with its settings (Optuna's
-    ``RetryHeartbeatStaleTrialCallback``, at most :data:`MAX_RETRY` times) unless a worker
-    already has, and say whether this call did: Optuna fails a stale trial in a read and a
-    write, which two workers on SQLite (no row locks) or a journal may both pass. ``lock``:
-    the storage's file, whose ``.retry`` is locked (``flock``) around the check and the
-    retry; None on PostgreSQL, whose rows are locked."""
+    """Enqueue a failed trial again (Optuna's ``RetryHeartbeatStaleTrialCallback``) unless
+    a worker already has, and say whether this call did: Optuna fails a stale trial in a
+    read and a write, which two workers on SQLite (no row locks) or a journal may both
+    pass. ``lock``: the storage's file, whose ``.retry`` is ``flock``-ed around the check
+    and the retry (None on PostgreSQL, whose rows are locked)."""
     import optuna
 
     history = [*trial.system_attrs.get("retry_history", []), trial.number]
@@ -295,8 +287,8 @@ def retry_once(study: Study, trial: FrozenTrial, lock: str | None = None) -> boo
 
 
 class RetryStale:
-    """The heartbeat-stale trial callback: :func:`retry_once` with ``lock``, noting the
-    trials it retried (a sweep reports them; Optuna's callback does not record them)."""
+    """The heartbeat-stale trial callback: :func:`retry_once`, noting the trials it retried
+    (a sweep reports them)."""
 
     def __init__(self, lock: str | None = None) -> None:
         self.lock = lock
@@ -308,10 +300,9 @@ class RetryStale:
 
 
 class _Flock:
-    """An ``flock`` on the file ``path``. Optuna's own journal file locks outlive a holder
-    killed while writing, stalling the others for their stale-lock grace period; the
-    kernel drops an ``flock`` when its holder dies. Every process writing the journal must
-    use it (vfgym's workers do; readers take no lock)."""
+    """An ``flock`` on the file ``path``: Optuna's journal file locks outlive a holder
+    killed while writing, stalling the others for a grace period; the kernel drops an
+    ``flock`` when its holder dies. Every process writing the journal must use it."""
 
     def __init__(self, path: str) -> None:
         self._path = path
@@ -342,10 +333,9 @@ class _Flock:
 
 
 def _sqlite_wal(storage: RDBStorage) -> None:
-    """Put the SQLite file in write-ahead-log mode (it stays so) with ``synchronous=NORMAL``
-    on every connection: readers never wait for a writer, a worker frozen or killed
-    mid-write blocks no reader, and a commit needs no fsync (a crash of the process loses
-    nothing committed; a power cut may lose the last commits)."""
+    """Put the SQLite file in write-ahead-log mode with ``synchronous=NORMAL``: readers never
+    wait for a writer (a worker frozen mid-write blocks none), and a commit needs no fsync
+    (a process's crash loses nothing committed; a power cut may lose the last commits)."""
     import sqlalchemy
 
     def on_connect(dbapi_conn: Any, _record: Any) -> None:

@@ -1,7 +1,5 @@
-"""Samplers and studies: which sampler a sweep uses, its search space and trial budget, and
-the study created or resumed with the warm starts (the paper's settings, the rule of thumb)
-enqueued first.
-"""
+"""Samplers and studies: the sweep's sampler, search space and trial budget, and its study
+created with the warm starts enqueued first, or resumed."""
 
 from __future__ import annotations
 
@@ -33,18 +31,7 @@ SAMPLER_NEEDS = {"cmaes": ("cmaes",), "gp": ("torch", "scipy")}
 
 
 def check_sampler(cfg: SweepConfig) -> None:
-    """Check that the packages the sampler needs are installed.
-
-    Parameters
-    ----------
-    cfg : SweepConfig
-        The sweep's configuration.
-
-    Raises
-    ------
-    ValueError
-        Naming ``sampler``, when a package it needs (:data:`SAMPLER_NEEDS`) is missing.
-    """
+    """Raise ValueError naming ``sampler`` if a package it needs is not installed."""
     import importlib.util
 
     missing = [m for m in SAMPLER_NEEDS.get(cfg.sampler, ()) if not importlib.util.find_spec(m)]
@@ -63,8 +50,8 @@ def make_sampler(
 ) -> BaseSampler:
     """The Optuna sampler named by ``cfg.sampler``, seeded.
 
-    The constraints reach TPE, GP and NSGA-II through the trials (``trial.constraints``);
-    CMA-ES and the grid ignore them.
+    The constraints reach TPE, GP and NSGA-II through ``trial.constraints``; CMA-ES and
+    the grid ignore them.
 
     Parameters
     ----------
@@ -73,19 +60,23 @@ def make_sampler(
     seed : int or None
         The sampler's seed (``None``: unseeded).
     scenarios : list of Scenario or None
-        The sweep's scenarios (the compass sampler's coordinates depend on their plants;
-        default: ``cfg``'s).
+        The sweep's scenarios, on whose plants the compass's coordinates depend (default:
+        ``cfg``'s).
     storage : optuna.storages.BaseStorage or None
-        The storage of the study it samples: the compass records there the generation of
-        each trial it draws (without it, in the sampler only).
+        The study's storage, where the compass records each trial's generation (needed
+        by the compass only).
     plant : Plant or None
-        The plant the scenarios run on (default: ``cfg``'s axis's): a sweep run outside
-        a config (``vfgym fit``'s best fixed setting) gives its axis's.
+        The plant the scenarios run on (default: ``cfg``'s axis's).
 
     Returns
     -------
     optuna.samplers.BaseSampler
         Compass, TPE (multivariate), CMA-ES, GP, NSGA-II, grid or random.
+
+    Raises
+    ------
+    ValueError
+        For the compass without a storage.
     """
     import optuna
 
@@ -94,6 +85,9 @@ def make_sampler(
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         if cfg.sampler == "compass":
             from vfgym.tuning._compass import CompassSampler
+
+            if storage is None:
+                raise ValueError("sampler='compass' records its search in the study's storage")
 
             base = cfg.axis_or_paper().plant if plant is None else plant
             rel = relative_space(scenarios or cfg.scenario_list(), base)
@@ -134,20 +128,20 @@ def relative_space(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> spac
     scenarios : list of Scenario
         The sweep's scenarios.
     base : Plant
-        The plant their loads are added to (an axis's; default the paper's).
+        The plant their loads are added to (an axis's).
 
     Returns
     -------
     vfgym.space.Relative
-        ``k`` relative to the geometric mean over the scenarios' plants of the loaded
-        motor's k (:func:`vfgym.params.usable_k`: the usable acceleration's).
+        ``k`` relative to the geometric mean, over the scenarios' plants, of
+        :func:`vfgym.params.usable_k`.
     """
     ks = [usable_k(sc.plant(base)) for sc in scenarios] or [usable_k(base)]
     return space.Relative(float(np.exp(np.mean(np.log(ks)))))
 
 
 def grid_space(cfg: SweepConfig) -> dict[str, list[Any]]:
-    """The grid sampler's values per parameter, from :func:`vfgym.space.grid`."""
+    """The grid sampler's values per parameter (:func:`vfgym.space.grid`'s)."""
     pts = space.grid(cfg.grid_points, cfg.laws[:1])
     # Clipped to the distributions: exp(log(high)) may round one ulp above ``high``.
     out: dict[str, list[Any]] = {
@@ -160,26 +154,16 @@ def grid_space(cfg: SweepConfig) -> dict[str, list[Any]]:
 
 
 def trial_budget(cfg: SweepConfig) -> int:
-    """Trials the study ends with.
-
-    Parameters
-    ----------
-    cfg : SweepConfig
-        The sweep's configuration.
-
-    Returns
-    -------
-    int
-        ``cfg.trials``, but for the grid sampler at most the grid plus the baseline.
-    """
+    """Trials the study ends with: ``cfg.trials``, for the grid at most the grid and the
+    paper's settings."""
     if cfg.sampler == "grid":
         return min(cfg.trials, cfg.grid_points ** len(space.SPACE) * len(cfg.laws) + 1)
     return cfg.trials
 
 
 def baseline_params(laws: tuple[str, ...], settings: Settings = PAPER_SETTINGS) -> dict[str, Any]:
-    """Settings (the paper's by default) as trial parameters, clipped to the search space:
-    what the study's first (enqueued) trials try.
+    """Settings as trial parameters clipped to the search space, as the study's warm starts
+    are enqueued.
 
     Parameters
     ----------
@@ -211,15 +195,14 @@ def warm_starts(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> list[tu
     scenarios : list of Scenario
         The sweep's scenarios.
     base : Plant
-        The plant their loads are added to (an axis's; default the paper's).
+        The plant their loads are added to (an axis's).
 
     Returns
     -------
     list of (str, Settings)
-        The paper's settings, then the rule of thumb
-        (:func:`vfgym.moves.baselines.rule_of_thumb`) for the scenarios' most loaded plant
-        (the least usable acceleration, whose limits bind the set) if it differs; each
-        with its baseline's name.
+        ``paper``: the paper's settings; ``rule-of-thumb``
+        (:func:`vfgym.moves.baselines.rule_of_thumb`) for the most loaded plant, whose
+        limits bind the set, if it differs.
     """
     plants = [sc.plant(base) for sc in scenarios]
     loaded = min(plants, key=usable_accel) if plants else base
@@ -239,9 +222,8 @@ def create_or_load(
 ) -> tuple[Study, bool]:
     """The study ``name``: created with the warm starts enqueued first, or loaded.
 
-    A new study records what it optimises (its scenarios, laws, objective, axis and
-    aggregate) as its ``vfgym`` user attribute, last; a study loaded must optimise the
-    same.
+    A new study records what it optimises as its ``vfgym`` user attribute, last; a study
+    loaded must optimise the same.
 
     Parameters
     ----------
@@ -264,7 +246,7 @@ def create_or_load(
     Raises
     ------
     ValueError
-        If a study of that name optimises other scenarios, laws, objectives or axis.
+        If a study of that name optimises something else.
     """
     import optuna
 

@@ -1,15 +1,12 @@
 """Workers on a study, run as Optuna runs them: each worker is ``study.optimize`` in its
 own process, on one machine or on many sharing one RDB storage.
 
-Optuna does the rest: the heartbeat of a running trial, failing the trials of dead
-workers and enqueueing them again with their settings (RDB storages, :mod:`._storage`),
-the timeout, the trials' bookkeeping. Kept here, each for what Optuna does not do: the
-trial budget of the whole study (``MaxTrialsCallback`` counts after a trial, so several
-workers would overshoot it), the dead workers of a journal (no heartbeat) and a trial
-killed before its first heartbeat (Optuna never takes it as stale), and a Ctrl-C that
-lands only inside a simulation (:class:`DeferredInterrupt`). ``optimize`` gets no
-callback: Optuna reads each finished trial back for its callbacks, so what follows a
-trial is done at the end of the objective and at the start of the next trial.
+Optuna does the heartbeat, the retry of dead workers' trials (RDB storages), the timeout
+and the bookkeeping. Kept here, each for what Optuna does not do: the whole study's trial
+budget, the dead workers of a journal and a trial killed before its first heartbeat, and
+a Ctrl-C that lands only inside a simulation. ``optimize`` gets no callback: Optuna reads
+each finished trial back for its callbacks, so what follows a trial is done at the end of
+the objective and at the start of the next trial.
 """
 
 from __future__ import annotations
@@ -49,10 +46,10 @@ WORKER_ATTR = "worker"
 
 
 class DeferredInterrupt:
-    """SIGINT raises KeyboardInterrupt only inside :meth:`allowed` blocks (a trial's
-    simulation, a wait); anywhere else it is held until the next such block, :meth:`check`
-    or the end of the ``with``: Optuna's ``optimize`` lets a Ctrl-C land anywhere, inside a
-    storage write too. Off the main thread the process's handler is left as it is."""
+    """SIGINT raises KeyboardInterrupt only inside :meth:`allowed` blocks (a simulation, a
+    wait), else is held until the next one, :meth:`check` or the end of the ``with``:
+    Optuna lets a Ctrl-C land anywhere, inside a storage write too. Off the main thread
+    the process's handler is left as it is."""
 
     def __init__(self) -> None:
         self.open = False
@@ -103,13 +100,13 @@ class WorkerReport:
     Attributes
     ----------
     trials : list of int
-        Numbers of the trials it completed.
+        The trials it completed.
     simulated : int
         Settings it simulated (the others were copied from equal settings).
     recovered : list of int
-        Trials of dead workers it marked failed and enqueued again.
+        Trials of dead workers it failed and enqueued again.
     stopped : str
-        Why it stopped: ``done``, ``timeout`` or ``interrupted``.
+        ``done``, ``timeout`` or ``interrupted``.
     """
 
     trials: list[int] = field(default_factory=list)
@@ -126,13 +123,8 @@ def run_worker(
     on_trial: Callable[[Study], object] | None = None,
 ) -> WorkerReport:
     """Run trials of ``study_name`` (``study.optimize``) until it holds the trials asked
-    for, or the timeout.
-
-    A worker starts a trial only while the completed and running trials number fewer than
-    asked, and waits while the others run the last ones, so a study ends with exactly the
-    trials asked for however many workers share it (two workers that start one at the same
-    moment: the later-numbered trial waits, and is pruned if the budget fills). An
-    interrupted trial is failed (by Optuna) and enqueued again with its settings.
+    for, however many workers share it, or the timeout. An interrupted trial is failed
+    and enqueued again with its settings.
 
     Parameters
     ----------
@@ -238,11 +230,11 @@ def run_worker(
 
 
 class _Budget:
-    """The study's trial budget across workers: :meth:`wait` says whether a trial may run
-    (waiting, interrupts allowed, while the running ones could fill the budget), looking
-    for dead workers' trials meanwhile (Optuna's ``fail_stale_trials`` on RDB storages,
-    which ``optimize`` runs only when a trial starts; on a journal, by process; and a
-    trial whose worker died before its first heartbeat, which has no worker's name)."""
+    """The study's trial budget across workers (``MaxTrialsCallback`` counts after a trial,
+    so several workers overshoot it): :meth:`wait` says whether a trial may run, waiting
+    while the running ones could fill the budget, and meanwhile fails and retries dead
+    workers' trials (``fail_stale_trials``, which ``optimize`` runs only when a trial
+    starts; on a journal, by process; a trial killed before its first heartbeat)."""
 
     def __init__(self, study: Study, cfg: SweepConfig, spec: StorageSpec, interrupts: Any) -> None:
         self.study, self.budget, self.every = study, trial_budget(cfg), cfg.heartbeat
@@ -273,9 +265,9 @@ class _Budget:
         return len(self.study.get_trials(deepcopy=False, states=complete)) >= self.budget
 
     def full(self, number: int) -> bool:
-        """Whether, once trial ``number`` (scored here, not yet told) completes, the
-        completed and running trials reach the budget: another trial of this worker could
-        only wait, so it waits before asking for one (:meth:`wait`, outside ``optimize``)."""
+        """Whether, once trial ``number`` completes, the completed and running trials fill
+        the budget: this worker's next trial would only wait, so it waits outside
+        ``optimize``."""
         import optuna
 
         made_then, busy = self._last
@@ -286,10 +278,9 @@ class _Budget:
         return sum(taken) >= self.budget  # (this trial, running, counted once)
 
     def wait(self, number: int | None = None, poll_s: float = 0.2) -> bool | None:
-        """Wait until a trial may run: False once the study holds its trials, else True
-        when the completed and running trials (those numbered below ``number``: the
-        trial's own is running) are fewer than asked; None when trial ``number`` must give
-        its place to a dead worker's retried trial (waiting, it runs next)."""
+        """Wait until a trial may run: False once the study holds its trials, True when the
+        completed and running trials (numbered below ``number``) are fewer than asked,
+        None when trial ``number`` must give its place to a dead worker's retried one."""
         import optuna
 
         state = optuna.trial.TrialState
@@ -319,9 +310,9 @@ class _Budget:
             self._recover()
 
     def _retries_due(self, trials: list[FrozenTrial]) -> int:
-        """Trials failed in the last moments whose retry is not enqueued yet: Optuna fails
-        a dead worker's trial and enqueues its retry in two writes, and a worker that
-        reads between them must not take the retry's place."""
+        """Trials just failed whose retry is not enqueued yet: Optuna fails a dead worker's
+        trial and enqueues its retry in two writes; a worker reading between them must not
+        take the retry's place."""
         import optuna
 
         fail = optuna.trial.TrialState.FAIL
@@ -364,8 +355,8 @@ class _Budget:
 
 
 def _fail_and_retry(study: Study, trial: FrozenTrial, lock: str | None) -> bool:
-    """Mark a running trial failed (an interrupted one is already) and enqueue its
-    settings again once; False if it had completed or was retried already."""
+    """Fail a running trial and enqueue it again once; False if it had completed or was
+    retried already."""
     import optuna
 
     state = optuna.trial.TrialState
@@ -416,25 +407,9 @@ def _worker_alive(worker: str) -> bool | None:
 def spawn_workers(
     cfg: SweepConfig, spec: StorageSpec, study: str, n: int
 ) -> list[subprocess.Popen[str]]:
-    """Start worker processes on the study (``python -m vfgym.tuning``), their job on
-    stdin, so the storage password never shows on a command line.
-
-    Parameters
-    ----------
-    cfg : SweepConfig
-        The sweep's configuration.
-    spec : StorageSpec
-        Where the study lives.
-    study : str
-        The study's name.
-    n : int
-        Processes to start.
-
-    Returns
-    -------
-    list of subprocess.Popen
-        The processes; each prints its :class:`WorkerReport` as JSON on stdout.
-    """
+    """Start ``n`` worker processes on the study (``python -m vfgym.tuning``), each printing
+    its :class:`WorkerReport` as JSON; their job goes on stdin, so the storage password
+    never shows on a command line."""
     procs = []
     for i in range(n):
         p = subprocess.Popen(
