@@ -50,13 +50,15 @@ def beats(
     best_feasible: np.ndarray | None = None,
 ) -> bool:
     """Whether a model with validation ``costs`` replaces the best so far, whose costs on
-    the same scenarios are ``best``: its mean cost is lower by more than ``z`` standard
-    errors of the paired differences (the scenarios' spread), so that a model a hair
-    better on these scenarios, and as likely worse on others, does not replace one that
-    is known (a residual agent's start is its base setting; a noise-level pick of a later
-    model was worse on held-out moves more often than not); and it is feasible on at least
-    as many of them, so that a model cheaper by breaking a limit on some true plants never
-    replaces one that holds (the base, feasible on the axis's design).
+    the same scenarios are ``best``: it is feasible on every scenario where the best is
+    (pairwise: a model that breaks a limit on one true plant and holds on another is not
+    "as feasible" as one that holds on the first, whatever the counts), so that a model
+    cheaper by breaking a limit never replaces one that holds (the start: the base,
+    feasible on the axis's design); and its mean cost is lower by more than ``z``
+    standard errors of the paired differences (the scenarios' spread), so that a model a
+    hair better on these scenarios, and as likely worse on others, does not replace one
+    that is known (a noise-level pick of a later model was worse on held-out moves more
+    often than not).
 
     Parameters
     ----------
@@ -78,7 +80,7 @@ def beats(
     if best is None:
         return True
     known = feasible is not None and best_feasible is not None
-    if known and int(np.sum(feasible)) < int(np.sum(best_feasible)):  # type: ignore[arg-type]
+    if known and not np.all(np.asarray(feasible, bool)[np.asarray(best_feasible, bool)]):
         return False
     diff = np.asarray(best, dtype=np.float64) - costs
     gain = float(diff.mean())
@@ -244,7 +246,7 @@ def _callbacks(
         def _on_training_end(self) -> None:
             self.bar.close()
 
-    n_eval = params.get("n_eval_scenarios", 16)
+    n_eval = validation_size(params, env_kwargs.get("axis"))
     evaluator = HeldOutEval(
         params.get("eval_freq", 10_000),
         validation_scenarios(n_eval, env_kwargs.get("axis")),
@@ -261,6 +263,46 @@ def _callbacks(
     if progress:
         cbs.append(Progress(evaluator))
     return cbs
+
+
+def validation_size(params: dict[str, Any], axis: Any = None) -> int:
+    """How many validation (move, plant) pairs the best model is chosen on: on an axis
+    with uncertainty ``n_eval_scenarios_uncertain`` (default ``n_eval_scenarios``), since
+    there a model may break a limit on a few true plants only (1 % of them: missed by 32
+    pairs 72 % of the time, by 256 pairs 8 %); else ``n_eval_scenarios`` (default 16).
+
+    Parameters
+    ----------
+    params : dict
+        The run's hyperparameters.
+    axis : Axis, str or None
+        The axis (or its file) the envs draw from; ``None``: the agents' move distribution,
+        its plant exact.
+
+    Returns
+    -------
+    int
+        Validation pairs.
+    """
+    n = int(params.get("n_eval_scenarios", 16))
+    if axis is None:
+        return n
+    from vfgym.moves.axis import load_axis
+
+    ax = load_axis(axis) if isinstance(axis, (str, Path)) else axis
+    return n if ax.uncertainty.exact else int(params.get("n_eval_scenarios_uncertain", n))
+
+
+def best_is_start(run: Path) -> bool:
+    """Whether the run's best model is its first evaluation's (the untrained start; with
+    residual actions, the base itself): no later model beat it (:func:`beats`)."""
+    path = run / "evaluations.csv"
+    if not path.is_file():
+        return False
+    with path.open() as fh:
+        rows = list(csv.DictReader(fh))
+    best = [i for i, r in enumerate(rows) if r.get("best") == "1"]
+    return best == [0]
 
 
 def _final_steps(model: Any, total: int) -> int:
@@ -432,6 +474,7 @@ def train(
             "action_noise_std",
             "eval_freq",
             "n_eval_scenarios",
+            "n_eval_scenarios_uncertain",
             "checkpoint_freq",
             "normalize",
         )
@@ -490,6 +533,12 @@ def train(
         if normalizer is not None:
             normalizer.save(str(vecnormalize_path(run / name)))
     venv.close()
+    if best_is_start(run):
+        start = "its residual base itself" if env_kwargs.get("residual") else "the untrained policy"
+        log(
+            "no later model beat the start on the validation pairs (feasible wherever it is, "
+            f"cheaper by {SIGNIFICANCE:g} standard errors): best_model.zip is the start, {start}"
+        )
     from .heldout import heldout_result
 
     result = heldout_result(run / "best_model.zip", params)
