@@ -11,7 +11,7 @@ Held-out pairs: the axis's test moves (the first ``--moves``) × ``--plants`` tr
 drawn within its uncertainty from ``--plant-seed`` (default
 :data:`vfgym.plant.uncertainty.VERDICT_PLANT_SEED`); agents are trained on the train split
 and select their best model on validation pairs of other seeds
-(:func:`vfgym.agents.training.validation_plants`), so none of these pairs was seen.
+(:func:`vfgym.agents.selection.validation_plants`), so none of these pairs was seen.
 
 Every tuner is judged in one :func:`vfgym.evaluate` call on those pairs:
 
