@@ -6,6 +6,8 @@ against the robust per-move base they started from and against an oracle.
         [--axis experiments/axes/loads-uncertain.yaml] [--plants 16] [--plant-seed S]
         [--moves 32] [--out runs/bench-adaptive]
     python benchmarks/bench_adaptive.py --train --algos ppo --seeds 1,2,3 --steps 200000 ...
+    python benchmarks/bench_adaptive.py --runs RUN [RUN ...] --base own [--no-oracle]
+    python benchmarks/bench_adaptive.py --runs RUN [RUN ...] --exact --moves 256 --no-oracle
 
 Held-out pairs: the axis's test moves (the first ``--moves``) × ``--plants`` true plants
 drawn within its uncertainty from ``--plant-seed`` (default
@@ -16,13 +18,20 @@ and select their best model on validation pairs of other seeds
 Every tuner is judged in one :func:`vfgym.evaluate` call on those pairs:
 
 * **base**: the axis's robust per-move settings model (``vfgym fit``'s, the agents'
-  residual base: ``RUNS/fit/AXIS/settings_model.json``, or ``--base FILE``);
+  residual base: ``RUNS/fit/AXIS/settings_model.json``, or ``--base FILE``); with
+  ``--base own``, the runs' own residual base as their env makes it (one for all runs: a
+  VFTune-v0 agent's is the model's look-up, unchecked);
 * **oracle**: each (move, true plant)'s own optimum, found knowing the true plant
   (:func:`vfgym.permove.optima.move_optima` with ``true_plants``); cached in ``--out``;
 * each run's ``best_model.zip`` (a :class:`vfgym.scoring.Scheduler`).
 
-Per seed: the held-out mean cost, the pairs feasible, the ratio to the base and the
-pairs where the agent is cheaper / dearer than the base. Per algorithm: mean ± std over
+``--exact``: the plant known exactly (runs trained without ``--axis``, on the agents' own
+move distribution); the held-out moves are the first ``--moves`` of that distribution's
+test split (``random_scenario(i, "test")``), each on the modelled plant.
+
+Per seed: the held-out mean cost, the pairs feasible, the ratio to the base, the pairs
+where the agent is cheaper / dearer than the base, and the pairs where it breaks a limit
+the base holds (the shipping rule's pairwise feasibility, held out). Per algorithm: mean ± std over
 seeds, the worst seed's feasibility, and the ratios of the mean to the base and to the
 oracle. Writes ``benchmark.md`` (the tables and each run's command) and
 ``benchmark.json`` into ``--out``.
@@ -69,12 +78,30 @@ def pairs(axis, moves: int, plants: int, seed: int):
 
 
 def judge(tuners, axis, test, variants) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Each tuner's (cost, feasible) on the pairs, plant-major, in one evaluate call."""
+    """Each tuner's (cost, feasible) on the pairs, plant-major, in one evaluate call (no
+    ``variants``: on the modelled plant)."""
     from vfgym import evaluate
 
     ev = evaluate(list(tuners), test, axis=axis, plants=list(variants))
+    if not variants:
+        return [(ev.cost[i].ravel(), ev.feasible[i].ravel()) for i in range(len(tuners))]
     a = ev.across
     return [(a.cost[i].ravel(), a.feasible[i].ravel()) for i in range(len(tuners))]
+
+
+def own_base(folders: list[Path], axis):
+    """The runs' residual base as their env makes it (move → settings), and its label;
+    every run must have the same one."""
+    from vfgym.agents import make_env
+    from vfgym.io.runs import read_yaml
+
+    kws = [(read_yaml(f / "config.yaml").get("hyperparams") or {}) for f in folders]
+    envs = {read_yaml(f / "config.yaml").get("env") for f in folders}
+    bases = {str(k.get("env_kwargs", {}).get("residual_base")) for k in kws}
+    if len(bases) != 1 or len(envs) != 1 or not kws[0].get("env_kwargs", {}).get("residual"):
+        raise SystemExit(f"--base own: the runs have residual bases {sorted(bases)}; give one")
+    config = make_env(envs.pop(), kws[0]["env_kwargs"]).unwrapped.config
+    return (lambda sc: config.base_settings(sc)), bases.pop()
 
 
 def oracle(axis, test, variants, out: Path) -> Judged:
@@ -97,57 +124,63 @@ def oracle(axis, test, variants, out: Path) -> Judged:
     return j
 
 
-def run_label(folder: Path) -> tuple[str, int, int, str]:
-    """(algo, seed, steps, command) of a run folder."""
+def run_label(folder: Path) -> tuple[str, int, int, str, str]:
+    """(algo, seed, steps, command, env) of a run folder."""
     from vfgym.io.runs import read_yaml
 
     cfg = read_yaml(folder / "config.yaml")
     steps = int((cfg.get("hyperparams") or {}).get("n_timesteps", 0))
     cmd = (folder / "command.txt").read_text().strip() if (folder / "command.txt").is_file() else ""
-    return str(cfg.get("algo")), int(cfg.get("seed", 0)), steps, cmd
+    env = str(cfg.get("env", "")).split("/")[-1]
+    return str(cfg.get("algo")), int(cfg.get("seed", 0)), steps, cmd, env
 
 
 def fmt(x: float, d: int = 3) -> str:
     return "nan" if not np.isfinite(x) else f"{x:.{d}f}"
 
 
-def report(base: Judged, orc: Judged, runs: list[tuple[Path, Judged]], n_pairs: int) -> str:
-    """The markdown tables."""
-    bc = np.array(base.cost)
+def report(base: Judged, orc: Judged | None, runs: list[tuple[Path, Judged]], n_pairs: int) -> str:
+    """The markdown tables (``orc`` None: no oracle row or ratio)."""
+    bc, bok = np.array(base.cost), np.array(base.feasible, bool)
     lines = [
         f"Held-out (move, plant) pairs: {n_pairs}.",
         "",
         "| tuner | seed | steps | held-out mean cost | feasible pairs | / base | "
-        "cheaper / dearer than base |",
-        "| --- | --- | --- | --- | --- | --- | --- |",
-        f"| base | | | {fmt(base.mean)} | {sum(base.feasible)}/{n_pairs} | 1.000 | |",
-        f"| oracle | | | {fmt(orc.mean)} | {sum(orc.feasible)}/{n_pairs} | "
-        f"{fmt(orc.mean / base.mean)} | |",
+        "cheaper / dearer than base | limits broken where the base holds |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- |",
+        f"| base ({base.command}) | | | {fmt(base.mean)} | {sum(base.feasible)}/{n_pairs} | "
+        "1.000 | | |",
     ]
-    groups: dict[tuple[str, int], list[tuple[int, Judged, float]]] = {}
+    if orc is not None:
+        lines.append(
+            f"| oracle | | | {fmt(orc.mean)} | {sum(orc.feasible)}/{n_pairs} | "
+            f"{fmt(orc.mean / base.mean)} | | |"
+        )
+    groups: dict[tuple[str, int, str], list[tuple[int, Judged, float]]] = {}
     for folder, j in runs:
-        algo, seed, steps, _ = run_label(folder)
-        c = np.array(j.cost)
+        algo, seed, steps, _, env = run_label(folder)
+        c, ok = np.array(j.cost), np.array(j.feasible, bool)
         lines.append(
             f"| {algo} | {seed} | {steps} | {fmt(j.mean)} | {sum(j.feasible)}/{n_pairs} | "
             f"{fmt(j.mean / base.mean)} | {int(np.sum(c < bc - 1e-9))} / "
-            f"{int(np.sum(c > bc + 1e-9))} |"
+            f"{int(np.sum(c > bc + 1e-9))} | {int(np.sum(bok & ~ok))} |"
         )
-        groups.setdefault((algo, steps), []).append((seed, j, j.wall_s))
+        groups.setdefault((algo, steps, env), []).append((seed, j, j.wall_s))
     lines += [
         "",
         "| algorithm | env | steps | wall time / run (s) | mean cost ± std over seeds | "
         "worst seed feasible | / base | / oracle | seeds |",
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
-    for (algo, steps), rows in groups.items():
+    for (algo, steps, env), rows in groups.items():
         means = np.array([j.mean for _, j, _ in rows])
         feas = min(sum(j.feasible) for _, j, _ in rows)
         wall = float(np.mean([w for *_, w in rows]))
+        to_orc = "" if orc is None else fmt(means.mean() / orc.mean)
         lines.append(
-            f"| {algo} | VFServo-v0 | {steps} | {fmt(wall, 0)} | {fmt(means.mean())} ± "
+            f"| {algo} | {env} | {steps} | {fmt(wall, 0)} | {fmt(means.mean())} ± "
             f"{fmt(means.std())} | {feas}/{n_pairs} | {fmt(means.mean() / base.mean)} | "
-            f"{fmt(means.mean() / orc.mean)} | {len(rows)} |"
+            f"{to_orc} | {len(rows)} |"
         )
     lines += ["", "Commands:", "", "```"]
     lines += [run_label(f)[3] for f, _ in runs] + ["```"]
@@ -157,8 +190,9 @@ def report(base: Judged, orc: Judged, runs: list[tuple[Path, Judged]], n_pairs: 
 def main(argv: list[str] | None = None) -> int:
     from bench_agents import run_training, train_command
 
-    from vfgym import load_axis
+    from vfgym import PAPER_AXIS, load_axis
     from vfgym.agents import load_tuner
+    from vfgym.moves.distribution import random_scenario
     from vfgym.plant.uncertainty import VERDICT_PLANT_SEED
 
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -168,7 +202,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--algos", default="ppo")
     p.add_argument("--seeds", default="1,2,3")
     p.add_argument("--steps", type=int, default=200_000)
-    p.add_argument("--base", default=None, help="the base settings model (default: the fit's)")
+    p.add_argument(
+        "--base",
+        default=None,
+        help="the base settings model (default: the fit's); own: the runs' own residual base",
+    )
+    p.add_argument("--exact", action="store_true", help="the plant known exactly (no --axis)")
+    p.add_argument("--no-oracle", action="store_true", help="no oracle row")
     p.add_argument("--fit-runs", default="runs", help="runs dir holding fit/AXIS (default runs)")
     p.add_argument("--plants", type=int, default=16)
     p.add_argument("--plant-seed", type=int, default=VERDICT_PLANT_SEED)
@@ -177,9 +217,9 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    axis = load_axis(args.axis)
+    axis = PAPER_AXIS if args.exact else load_axis(args.axis)
     base_file = Path(args.base or Path(args.fit_runs) / "fit" / axis.name / "settings_model.json")
-    if not base_file.is_file():
+    if args.base != "own" and not base_file.is_file():
         raise SystemExit(f"--base {base_file}: no such file; make it: vfgym fit --axis {args.axis}")
     folders = [Path(r) for r in args.runs]
     walls: dict[Path, float] = {}
@@ -191,24 +231,34 @@ def main(argv: list[str] | None = None) -> int:
                 print(shlex.join(cmd), flush=True)
                 walls[folder] = run_training(cmd)
                 folders.append(folder)
-    test, variants = pairs(axis, args.moves, args.plants, args.plant_seed)
-    n = len(test) * len(variants)
-    tuners = [load_tuner(base_file, axis, warn=print)]
-    tuners += [load_tuner(f / "best_model.zip", axis, warn=print) for f in folders]
+    if args.exact:
+        test, variants = [random_scenario(i, "test") for i in range(args.moves)], []
+    else:
+        test, variants = pairs(axis, args.moves, args.plants, args.plant_seed)
+    n = len(test) * max(1, len(variants))
+    if args.base == "own":
+        first, how = own_base(folders, axis)
+        where = None if args.exact else args.axis
+    else:
+        first, how = load_tuner(base_file, axis, warn=print), f"vfgym fit --axis {args.axis}"
+        where = axis
+    tuners = [first] + [load_tuner(f / "best_model.zip", where, warn=print) for f in folders]
     scored = judge(tuners, axis, test, variants)
     c0, f0 = scored[0]
-    base = Judged("base", c0.tolist(), f0.tolist(), f"vfgym fit --axis {args.axis}")
+    base = Judged("base", c0.tolist(), f0.tolist(), how)
     runs = [
         (f, Judged(f.name, c.tolist(), ok.tolist(), run_label(f)[3], walls.get(f, float("nan"))))
         for f, (c, ok) in zip(folders, scored[1:], strict=True)
     ]
-    orc = oracle(axis, test, variants, out)
+    orc = None if args.no_oracle else oracle(axis, test, variants, out)
     text = report(base, orc, runs, n)
     head = (f"Axis {axis.name} ({args.axis}); {len(test)} test moves x {len(variants)} plants "
             f"(plant seed {args.plant_seed}).\n\n")  # fmt: skip
+    if args.exact:
+        head = f"The plant known exactly; the agents' first {len(test)} test moves.\n\n"
     print(head + text)
     (out / "benchmark.md").write_text(head + text)
-    data = {"base": asdict(base), "oracle": asdict(orc),
+    data = {"base": asdict(base), "oracle": None if orc is None else asdict(orc),
             "runs": [{"folder": str(f), **asdict(j)} for f, j in runs]}  # fmt: skip
     (out / "benchmark.json").write_text(json.dumps(data))
     return 0
