@@ -8,6 +8,7 @@ against the robust per-move base they started from and against an oracle.
     python benchmarks/bench_adaptive.py --train --algos ppo --seeds 1,2,3 --steps 200000 ...
     python benchmarks/bench_adaptive.py --runs RUN [RUN ...] --base own [--no-oracle]
     python benchmarks/bench_adaptive.py --runs RUN [RUN ...] --exact --moves 256 --no-oracle
+    python benchmarks/bench_adaptive.py --runs RUN [RUN ...] --checkpoints
 
 Held-out pairs: the axis's test moves (the first ``--moves``) × ``--plants`` true plants
 drawn within its uncertainty from ``--plant-seed`` (default
@@ -28,6 +29,12 @@ Every tuner is judged in one :func:`vfgym.evaluate` call on those pairs:
 ``--exact``: the plant known exactly (runs trained without ``--axis``, on the agents' own
 move distribution); the held-out moves are the first ``--moves`` of that distribution's
 test split (``random_scenario(i, "test")``), each on the modelled plant.
+
+``--checkpoints`` judges nothing held out: it scores each run's checkpoints on the run's
+own validation pairs, as the run chose its best model, and prints for each the mean cost
+over the start's, the paired gain in standard errors, the pairs where it breaks a limit
+the start holds, and whether the shipping rule (:func:`vfgym.agents.selection.beats`)
+takes it over the start: why a run shipped what it shipped.
 
 Per seed: the held-out mean cost, the pairs feasible, the ratio to the base, the pairs
 where the agent is cheaper / dearer than the base, and the pairs where it breaks a limit
@@ -100,7 +107,8 @@ def own_base(folders: list[Path], axis):
     bases = {str(k.get("env_kwargs", {}).get("residual_base")) for k in kws}
     if len(bases) != 1 or len(envs) != 1 or not kws[0].get("env_kwargs", {}).get("residual"):
         raise SystemExit(f"--base own: the runs have residual bases {sorted(bases)}; give one")
-    config = make_env(envs.pop(), kws[0]["env_kwargs"]).unwrapped.config
+    env = make_env(envs.pop(), kws[0]["env_kwargs"]).unwrapped
+    config = env.core.config if hasattr(env, "core") else env.config  # VFServo-v0, VFTune-v0
     return (lambda sc: config.base_settings(sc)), bases.pop()
 
 
@@ -122,6 +130,67 @@ def oracle(axis, test, variants, out: Path) -> Judged:
     j = Judged("oracle", [o.cost for o in opt], [bool(o.feasible) for o in opt], how)
     cache.write_text(json.dumps({"key": key, **asdict(j)}))
     return j
+
+
+def start_costs(env, moves, plants) -> tuple[np.ndarray, np.ndarray]:
+    """The residual start's (the base's: action 0 throughout) cost and feasibility on
+    each validation pair."""
+    cost, ok = [], []
+    for move, plant in zip(moves, plants, strict=True):
+        env.reset(options={"scenario": move, "plant": plant})
+        while True:
+            *_, terminated, truncated, info = env.step(np.zeros(env.action_space.shape))
+            if terminated or truncated:
+                break
+        cost.append(float(info["cost"]))
+        ok.append(bool(info["feasible"]))
+    return np.array(cost), np.array(ok)
+
+
+def checkpoints(folder: Path) -> str:
+    """Each checkpoint of a residual run on its validation pairs against its start (the
+    base): a markdown table."""
+    from vfgym.agents import load_agent, make_env
+    from vfgym.agents.selection import (
+        SIGNIFICANCE,
+        beats,
+        validation_plants,
+        validation_scenarios,
+        validation_size,
+    )
+    from vfgym.agents.training import evaluate_policy_costs
+    from vfgym.io.runs import read_yaml
+
+    cfg = read_yaml(folder / "config.yaml")
+    params = cfg["hyperparams"]
+    kw = params.get("env_kwargs") or {}
+    n = validation_size(params, kw.get("axis"))
+    moves, plants = validation_scenarios(n, kw.get("axis")), validation_plants(n, kw.get("axis"))
+    env = make_env(cfg["env"], kw)
+    c0, ok0 = start_costs(env, moves, plants)
+    rows = [
+        f"{folder.name}: {n} validation pairs; the start (the base) {c0.mean():.4f}, "
+        f"feasible on {int(ok0.sum())}",
+        "",
+        "| steps | mean / start | gain (standard errors) | limits broken where the start "
+        f"holds | replaces the start (> {SIGNIFICANCE:g} s.e., no new break) |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    ckpts = sorted(
+        (int(q.stem.split("_")[1]), q) for q in (folder / "checkpoints").glob("model_*_steps.zip")
+    )
+    for k, path in ckpts:
+        agent = load_agent(path)
+        cost, ok = evaluate_policy_costs(agent.model, env, moves, agent.normalizer, plants)
+        ok = ok.astype(bool)
+        diff = c0 - cost
+        z = float(diff.mean() / (diff.std(ddof=1) / np.sqrt(len(diff))))
+        wins = beats(cost, c0, SIGNIFICANCE, ok, ok0)
+        rows.append(
+            f"| {k} | {cost.mean() / c0.mean():.4f} | {z:.2f} | {int(np.sum(ok0 & ~ok))} | "
+            f"{'yes' if wins else 'no'} |"
+        )
+    return "\n".join(rows) + "\n"
 
 
 def run_label(folder: Path) -> tuple[str, int, int, str, str]:
@@ -209,6 +278,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     p.add_argument("--exact", action="store_true", help="the plant known exactly (no --axis)")
     p.add_argument("--no-oracle", action="store_true", help="no oracle row")
+    p.add_argument(
+        "--checkpoints",
+        action="store_true",
+        help="only score each run's checkpoints on its validation pairs against its start",
+    )
     p.add_argument("--fit-runs", default="runs", help="runs dir holding fit/AXIS (default runs)")
     p.add_argument("--plants", type=int, default=16)
     p.add_argument("--plant-seed", type=int, default=VERDICT_PLANT_SEED)
@@ -217,11 +291,16 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    folders = [Path(r) for r in args.runs]
+    if args.checkpoints:
+        text = "\n".join(checkpoints(f) for f in folders)
+        print(text)
+        (out / "checkpoints.md").write_text(text)
+        return 0
     axis = PAPER_AXIS if args.exact else load_axis(args.axis)
     base_file = Path(args.base or Path(args.fit_runs) / "fit" / axis.name / "settings_model.json")
     if args.base != "own" and not base_file.is_file():
         raise SystemExit(f"--base {base_file}: no such file; make it: vfgym fit --axis {args.axis}")
-    folders = [Path(r) for r in args.runs]
     walls: dict[Path, float] = {}
     if args.train:
         for algo in args.algos.split(","):
