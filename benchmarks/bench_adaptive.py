@@ -279,6 +279,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--exact", action="store_true", help="the plant known exactly (no --axis)")
     p.add_argument("--no-oracle", action="store_true", help="no oracle row")
     p.add_argument(
+        "--model",
+        default="best_model.zip",
+        help="which of each run's models to judge (default best_model.zip; final_model.zip: "
+        "the last, as shipped without the choice)",
+    )
+    p.add_argument(
         "--checkpoints",
         action="store_true",
         help="only score each run's checkpoints on its validation pairs against its start",
@@ -321,7 +327,7 @@ def main(argv: list[str] | None = None) -> int:
     else:
         first, how = load_tuner(base_file, axis, warn=print), f"vfgym fit --axis {args.axis}"
         where = axis
-    tuners = [first] + [load_tuner(f / "best_model.zip", where, warn=print) for f in folders]
+    tuners = [first] + [load_tuner(f / args.model, where, warn=print) for f in folders]
     scored = judge(tuners, axis, test, variants)
     c0, f0 = scored[0]
     base = Judged("base", c0.tolist(), f0.tolist(), how)
