@@ -9,6 +9,7 @@ against the robust per-move base they started from and against an oracle.
     python benchmarks/bench_adaptive.py --runs RUN [RUN ...] --base own [--no-oracle]
     python benchmarks/bench_adaptive.py --runs RUN [RUN ...] --exact --moves 256 --no-oracle
     python benchmarks/bench_adaptive.py --runs RUN [RUN ...] --checkpoints
+    python benchmarks/bench_adaptive.py --eval-time 32,256 [--fit-runs RUNS]
 
 Held-out pairs: the axis's test moves (the first ``--moves``) × ``--plants`` true plants
 drawn within its uncertainty from ``--plant-seed`` (default
@@ -35,6 +36,11 @@ own validation pairs, as the run chose its best model, and prints for each the m
 over the start's, the paired gain in standard errors, the pairs where it breaks a limit
 the start holds, and whether the shipping rule (:func:`vfgym.agents.selection.beats`)
 takes it over the start: why a run shipped what it shipped.
+
+``--eval-time N,M`` times one validation evaluation (a run's ``HeldOutEval`` call) of
+an untrained residual PPO agent on N, then M validation pairs of the axis, VFServo-v0 and
+VFTune-v0, each on its shipped env arguments with the fit's model as the base: the first
+call (which computes each move's base) and the next.
 
 Per seed: the held-out mean cost, the pairs feasible, the ratio to the base, the pairs
 where the agent is cheaper / dearer than the base, and the pairs where it breaks a limit
@@ -193,6 +199,34 @@ def checkpoints(folder: Path) -> str:
     return "\n".join(rows) + "\n"
 
 
+def eval_time(axis_file: str, base_file: Path, counts: list[int]) -> str:
+    """Seconds of one validation evaluation of a fresh residual PPO agent, first and
+    second call, on each count of validation pairs (VFServo-v0, VFTune-v0)."""
+    import time
+
+    from vfgym.agents import hyperparams as hp
+    from vfgym.agents import make_env
+    from vfgym.agents.selection import validation_plants, validation_scenarios
+    from vfgym.agents.training import evaluate_policy_costs, start_at_base
+
+    lines = []
+    for env_id, base in (("vfgym/VFServo-v0", "model"), ("vfgym/VFTune-v0", "model-lookup")):
+        kw = dict(hp.load("ppo", env_id)["env_kwargs"])
+        kw |= {"axis": axis_file, "residual_base": f"{base}:{base_file}"}
+        env = make_env(env_id, kw)
+        model = hp.algo_class("ppo")("MlpPolicy", env, seed=0, device="cpu")
+        start_at_base(model)
+        for n in counts:
+            moves, plants = validation_scenarios(n, axis_file), validation_plants(n, axis_file)
+            took = []
+            for _ in range(2):
+                t0 = time.perf_counter()
+                evaluate_policy_costs(model, env, moves, None, plants)
+                took.append(time.perf_counter() - t0)
+            lines.append(f"{env_id}: {n} pairs, first call {took[0]:.1f} s, next {took[1]:.1f} s")
+    return "\n".join(lines)
+
+
 def run_label(folder: Path) -> tuple[str, int, int, str, str]:
     """(algo, seed, steps, command, env) of a run folder."""
     from vfgym.io.runs import read_yaml
@@ -284,6 +318,7 @@ def main(argv: list[str] | None = None) -> int:
         help="which of each run's models to judge (default best_model.zip; final_model.zip: "
         "the last, as shipped without the choice)",
     )
+    p.add_argument("--eval-time", default=None, help="time validation calls on N,M pairs")
     p.add_argument(
         "--checkpoints",
         action="store_true",
@@ -304,6 +339,10 @@ def main(argv: list[str] | None = None) -> int:
         (out / "checkpoints.md").write_text(text)
         return 0
     axis = PAPER_AXIS if args.exact else load_axis(args.axis)
+    if args.eval_time:
+        fit = Path(args.fit_runs) / "fit" / axis.name / "settings_model.json"
+        print(eval_time(args.axis, fit, [int(x) for x in args.eval_time.split(",")]))
+        return 0
     base_file = Path(args.base or Path(args.fit_runs) / "fit" / axis.name / "settings_model.json")
     if args.base != "own" and not base_file.is_file():
         raise SystemExit(f"--base {base_file}: no such file; make it: vfgym fit --axis {args.axis}")
