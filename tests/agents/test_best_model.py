@@ -1,4 +1,4 @@
-"""Which evaluation's model becomes a run's best (vfgym.agents.training.beats): a later
+"""Which evaluation's model becomes a run's best (vfgym.agents.selection.beats): a later
 model must beat the best by more than the validation scenarios' spread."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vfgym.agents.training import SIGNIFICANCE, _best_so_far, beats
+from vfgym.agents.selection import SIGNIFICANCE, beats, best_is_start, best_so_far
 
 BEST = np.array([2.0, 3.0, 4.0, 5.0, 2.5, 3.5, 4.5, 1.5])
 
@@ -49,20 +49,41 @@ def test_a_cheaper_model_feasible_on_fewer_pairs_never_replaces_the_best():
     assert beats(BEST * 0.9, BEST)  # feasibility not known: the costs decide
 
 
+def test_feasibility_is_compared_pair_by_pair_not_by_count():
+    """A model feasible on as many pairs as the best, but not on the same ones (it breaks
+    a limit on a pair where the best holds), never replaces it, however much cheaper."""
+    best_ok = np.ones(len(BEST), bool)
+    best_ok[0] = False
+    swapped = np.ones(len(BEST), bool)
+    swapped[5] = False  # as many feasible pairs, one of them where the best broke a limit
+    assert int(swapped.sum()) == int(best_ok.sum())
+    assert not beats(BEST * 0.5, BEST, feasible=swapped, best_feasible=best_ok)
+    assert beats(BEST * 0.5, BEST, feasible=best_ok, best_feasible=best_ok)
+
+
+def test_best_is_start_reads_whether_a_later_evaluation_was_shipped(tmp_path):
+    assert not best_is_start(tmp_path)  # no evaluation yet
+    head = "timesteps,mean_cost,median_cost,best\n"
+    (tmp_path / "evaluations.csv").write_text(head + "16,3.0,3.0,1\n20016,2.9,2.9,0\n")
+    assert best_is_start(tmp_path)
+    (tmp_path / "evaluations.csv").write_text(head + "16,3.0,3.0,1\n20016,2.9,2.9,1\n")
+    assert not best_is_start(tmp_path)
+
+
 def test_a_continued_run_keeps_its_best_and_its_costs(tmp_path):
-    assert _best_so_far(tmp_path) == (float("inf"), None, None)
+    assert best_so_far(tmp_path) == (float("inf"), None, None)
     (tmp_path / "evaluations.csv").write_text(
         "timesteps,mean_cost,median_cost,best\n0,3.0,3.0,1\n100,2.9,2.9,0\n200,2.95,2.9,1\n"
     )
-    mean, costs, ok = _best_so_far(tmp_path)
+    mean, costs, ok = best_so_far(tmp_path)
     assert mean == 2.95 and costs is None and ok is None  # from before the costs were kept
     (tmp_path / "best_model_costs.json").write_text("[2.9, 3.0]")
-    mean, costs, ok = _best_so_far(tmp_path)
+    mean, costs, ok = best_so_far(tmp_path)
     assert mean == 2.95 and costs.tolist() == [2.9, 3.0] and ok is None
     (tmp_path / "best_model_costs.json").write_text(
         '{"cost": [2.9, 3.0], "feasible": [true, false]}'
     )
-    mean, costs, ok = _best_so_far(tmp_path)
+    mean, costs, ok = best_so_far(tmp_path)
     assert costs.tolist() == [2.9, 3.0] and ok.tolist() == [True, False]
 
 

@@ -54,7 +54,14 @@ SWEEP_TRIM = ["--trials", "4"]
 FIT_TRIM = ["--moves", "8", "--no-progress"]
 GRID_TRIM = ["--points", "3", "--refine", "1"]
 EVAL_TRIM = ["--count", "4", "--bootstrap", "200"]
-EVERY = ["eval_freq=64", "n_eval_scenarios=1", "checkpoint_freq=64", "n_timesteps=64", "n_envs=2"]
+EVERY = [
+    "eval_freq=64",
+    "n_eval_scenarios=1",
+    "n_eval_scenarios_uncertain=1",
+    "checkpoint_freq=64",
+    "n_timesteps=64",
+    "n_envs=2",
+]
 TRAIN_TRIM = {
     "ppo": [*EVERY, "n_steps=32", "batch_size=32", "n_epochs=1"],
     "sac": [*EVERY, "learning_starts=16", "batch_size=16", "buffer_size=1000"],

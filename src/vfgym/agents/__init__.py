@@ -5,7 +5,8 @@ stable-baselines3 is imported when a model is trained or loaded).
 - :func:`train` trains PPO, SAC, TD3 or RecurrentPPO (``ppo_lstm``, sb3-contrib) on
   ``vfgym/VFTune-v0`` or ``vfgym/VFServo-v0`` into a run folder
   (:mod:`vfgym.agents.training`), with the hyperparameters of
-  :mod:`vfgym.agents.hyperparams` (:func:`load_hyperparams`).
+  :mod:`vfgym.agents.hyperparams` (:func:`load_hyperparams`); its ``best_model.zip`` is
+  chosen on validation (move, plant) pairs (:mod:`vfgym.agents.selection`).
 - :func:`load_agent` reads a saved agent with its run config and observation
   normalisation; :func:`load_model` the bare model (:mod:`vfgym.agents.loaded`).
 - :func:`policy_settings` turns a VFTune-v0 agent into a function from a move to the
@@ -41,7 +42,8 @@ from vfgym.agents.loaded import (
     settings_policy,
     vecnormalize_path,
 )
-from vfgym.agents.training import train, validation_plants, validation_scenarios
+from vfgym.agents.selection import validation_plants, validation_scenarios
+from vfgym.agents.training import train
 from vfgym.agents.tuners import load_tuner
 from vfgym.permove import Tuner, TunerWarning
 

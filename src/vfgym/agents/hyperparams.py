@@ -34,6 +34,7 @@ RUN_KEYS: dict[str, tuple[type, ...]] = {
     "action_noise_std": (int, float),
     "eval_freq": (int,),
     "n_eval_scenarios": (int,),
+    "n_eval_scenarios_uncertain": (int,),
     "checkpoint_freq": (int,),
     "normalize": (bool, dict),
 }
@@ -145,6 +146,7 @@ RANGES: dict[str, Callable[[str, Any], Any]] = {
     "n_timesteps": _count(1),
     "eval_freq": _count(1),
     "n_eval_scenarios": _count(1),
+    "n_eval_scenarios_uncertain": _count(1),
     "checkpoint_freq": _count(1),
     "action_noise_std": _real(0.0),
     "policy": lambda name, v: check_choice(name, v, tuple(sorted(set(POLICIES.values())))),

@@ -9,16 +9,12 @@ holds the best's cost on each validation scenario) and ``final_model.zip``.
 Starting the same run again continues from its last checkpoint; an interrupt (Ctrl-C)
 saves a checkpoint first, so nothing trained is lost.
 
-Held-out scenarios: the train split's seeds from :data:`VALIDATION_SEED0` on, which
-training (seeds drawn in [0, 2³¹)) never reaches; the test split is kept for the final
-report.
+Held-out scenarios and the rule that picks the best model: :mod:`vfgym.agents.selection`.
 """
 
 from __future__ import annotations
 
-import csv
 import json
-import math
 import re
 from collections.abc import Callable
 from pathlib import Path
@@ -28,107 +24,21 @@ import numpy as np
 
 from vfgym._validate import check_int
 from vfgym.io.runs import read_yaml, write_text, write_yaml
-from vfgym.moves.distribution import random_scenario
 from vfgym.moves.scenarios import Scenario
 
 from .hyperparams import POLICIES, algo_class
 from .loaded import Agent, env_options, make_env, rollout_info, vecnormalize_path
-
-VALIDATION_SEED0 = 2**40
-"""First train-split seed of the held-out validation scenarios."""
-
-SIGNIFICANCE = 2.0
-"""A later model replaces the best one only if its mean validation cost is lower by more
-than this many standard errors of the per-scenario differences (:func:`beats`)."""
-
-
-def beats(
-    costs: np.ndarray,
-    best: np.ndarray | None,
-    z: float = SIGNIFICANCE,
-    feasible: np.ndarray | None = None,
-    best_feasible: np.ndarray | None = None,
-) -> bool:
-    """Whether a model with validation ``costs`` replaces the best so far, whose costs on
-    the same scenarios are ``best``: its mean cost is lower by more than ``z`` standard
-    errors of the paired differences (the scenarios' spread), so that a model a hair
-    better on these scenarios, and as likely worse on others, does not replace one that
-    is known (a residual agent's start is its base setting; a noise-level pick of a later
-    model was worse on held-out moves more often than not); and it is feasible on at least
-    as many of them, so that a model cheaper by breaking a limit on some true plants never
-    replaces one that holds (the base, feasible on the axis's design).
-
-    Parameters
-    ----------
-    costs : numpy.ndarray
-        The candidate's cost on each validation scenario.
-    best : numpy.ndarray or None
-        The best model's, on the same scenarios (None: no best yet, the candidate wins).
-    z : float
-        Standard errors required.
-    feasible, best_feasible : numpy.ndarray or None
-        Each one's feasibility on the same scenarios (None: not known, not compared).
-
-    Returns
-    -------
-    bool
-        True if the candidate becomes the best.
-    """
-    costs = np.asarray(costs, dtype=np.float64)
-    if best is None:
-        return True
-    known = feasible is not None and best_feasible is not None
-    if known and int(np.sum(feasible)) < int(np.sum(best_feasible)):  # type: ignore[arg-type]
-        return False
-    diff = np.asarray(best, dtype=np.float64) - costs
-    gain = float(diff.mean())
-    if len(diff) < 2:
-        return gain > 0.0
-    se = float(diff.std(ddof=1)) / math.sqrt(len(diff))
-    return gain > 0.0 and gain > z * se
-
-
-VALIDATION_PLANT_SEED = 2**40
-"""Seed of the validation moves' true plants on an axis with uncertainty (one a move)."""
-
-
-def validation_plants(n: int, axis: Any = None) -> list[Any]:
-    """The true plant of each validation move: drawn within the axis's uncertainty from
-    :data:`VALIDATION_PLANT_SEED` (fixed, so that every evaluation scores the same
-    (move, plant) pairs and a model is compared with the best on them), or the modelled
-    plant where the axis states none.
-
-    Parameters
-    ----------
-    n : int
-        Validation moves.
-    axis : Axis, str or None
-        The axis (or its file); ``None``: the paper's.
-
-    Returns
-    -------
-    list of PlantVariant
-        One per validation move.
-    """
-    from vfgym.moves.axis import PAPER_AXIS, load_axis
-    from vfgym.plant.uncertainty import NOMINAL, draw_plants
-
-    ax = PAPER_AXIS if axis is None else axis
-    ax = load_axis(ax) if isinstance(ax, (str, Path)) else ax
-    if ax.uncertainty.exact:
-        return [NOMINAL] * n
-    return list(draw_plants(ax.uncertainty, ax.plant.motor, n, VALIDATION_PLANT_SEED))
-
-
-def validation_scenarios(n: int, axis: Any = None) -> list[Scenario]:
-    """The held-out scenarios the evaluation callback scores (never drawn in training);
-    on an axis (an :class:`~vfgym.moves.axis.Axis` or its file), its train move set's."""
-    if axis is None:
-        return [random_scenario(VALIDATION_SEED0 + i, "train") for i in range(n)]
-    from vfgym.moves.axis import load_axis
-
-    axis = load_axis(axis) if isinstance(axis, (str, Path)) else axis
-    return [axis.moves.train.pick(VALIDATION_SEED0 + i, "train", axis.plant) for i in range(n)]
+from .selection import (
+    BEST_COSTS,
+    SIGNIFICANCE,
+    append_eval,
+    beats,
+    best_is_start,
+    best_so_far,
+    validation_plants,
+    validation_scenarios,
+    validation_size,
+)
 
 
 def _activation(name: str) -> Any:
@@ -187,7 +97,7 @@ def _callbacks(
             super().__init__()
             self.freq, self.scenarios, self.plants = freq, scenarios, plants
             self.env = make_env(env_id, env_kwargs)
-            self.best, self.best_costs, self.best_ok = _best_so_far(run)
+            self.best, self.best_costs, self.best_ok = best_so_far(run)
             self.next_at = 0
 
         def _on_step(self) -> bool:
@@ -212,7 +122,7 @@ def _callbacks(
                     write_text(run / BEST_COSTS, json.dumps(doc))
                     if normalizer is not None:
                         normalizer.save(str(vecnormalize_path(run / "best_model.zip")))
-                _append_eval(run, self.num_timesteps, mean, float(np.median(costs)), new)
+                append_eval(run, self.num_timesteps, mean, float(np.median(costs)), new)
             return True
 
     class Progress(BaseCallback):
@@ -244,7 +154,7 @@ def _callbacks(
         def _on_training_end(self) -> None:
             self.bar.close()
 
-    n_eval = params.get("n_eval_scenarios", 16)
+    n_eval = validation_size(params, env_kwargs.get("axis"))
     evaluator = HeldOutEval(
         params.get("eval_freq", 10_000),
         validation_scenarios(n_eval, env_kwargs.get("axis")),
@@ -273,36 +183,6 @@ def _final_steps(model: Any, total: int) -> int:
     if rollout <= 0 or total <= start:
         return max(total, start)
     return start + -(-(total - start) // rollout) * rollout
-
-
-BEST_COSTS = "best_model_costs.json"
-"""The best model's cost on each validation scenario, beside ``best_model.zip``."""
-
-
-def _best_so_far(run: Path) -> tuple[float, np.ndarray | None, np.ndarray | None]:
-    """The best model's mean validation cost, its costs and feasibility by scenario, of a
-    run being continued (``inf`` and None: none yet; the costs None for a run from before
-    they were kept, whose best is then judged by its mean; the feasibility None for one
-    from before it was)."""
-    path, costs_path = run / "evaluations.csv", run / BEST_COSTS
-    if not path.is_file():
-        return float("inf"), None, None
-    with path.open() as fh:
-        rows = [r for r in csv.DictReader(fh) if r.get("best") == "1"]
-    if not rows:
-        return float("inf"), None, None
-    doc = json.loads(costs_path.read_text()) if costs_path.is_file() else None
-    if isinstance(doc, list):  # costs only, as first kept
-        doc = {"cost": doc}
-    costs = None if doc is None else np.array(doc["cost"], float)
-    ok = None if doc is None or "feasible" not in doc else np.array(doc["feasible"], bool)
-    return float(rows[-1]["mean_cost"]), costs, ok
-
-
-def _append_eval(run: Path, steps: int, mean: float, median: float, best: bool) -> None:
-    path = run / "evaluations.csv"
-    text = path.read_text() if path.is_file() else "timesteps,mean_cost,median_cost,best\n"
-    write_text(path, text + f"{steps},{mean:.6g},{median:.6g},{int(best)}\n")
 
 
 def latest_checkpoint(run: Path) -> tuple[Path, int] | None:
@@ -432,6 +312,7 @@ def train(
             "action_noise_std",
             "eval_freq",
             "n_eval_scenarios",
+            "n_eval_scenarios_uncertain",
             "checkpoint_freq",
             "normalize",
         )
@@ -490,6 +371,12 @@ def train(
         if normalizer is not None:
             normalizer.save(str(vecnormalize_path(run / name)))
     venv.close()
+    if best_is_start(run):
+        start = "its residual base itself" if env_kwargs.get("residual") else "the untrained policy"
+        log(
+            "no later model beat the start on the validation pairs (feasible wherever it is, "
+            f"cheaper by {SIGNIFICANCE:g} standard errors): best_model.zip is the start, {start}"
+        )
     from .heldout import heldout_result
 
     result = heldout_result(run / "best_model.zip", params)
