@@ -46,6 +46,7 @@ import tempfile
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -147,6 +148,14 @@ def main(argv: list[str] | None = None) -> int:
         help="--regret on each plant with its Coulomb friction and load torque scaled down "
         "(ratio and sign kept) until the static error (|load| + Coulomb)/K3 is 80 %% of "
         "the in-position window: only such a plant can be feasible on every move",
+    )
+    ap.add_argument(
+        "--regret-axes",
+        choices=("both", "true", "id"),
+        default="both",
+        help="the fits --regret runs: both, or only the true (or identified) axis's; a "
+        "settings model already in --runs-dir for the same axis is kept, a fit stopped "
+        "there continues from its checkpointed optima",
     )
     ap.add_argument("--runs-dir", help="where --regret's fits write (default: a temp folder)")
     args = ap.parse_args(argv)
@@ -250,7 +259,7 @@ def main(argv: list[str] | None = None) -> int:
             idents = [
                 within_window(axis, k, d, plan.pulses, args.after_enable) for k, d, _ in idents
             ]
-        regret(axis, idents, args.runs_dir)
+        regret(axis, idents, args.runs_dir, args.regret_axes)
     return 0
 
 
@@ -288,8 +297,36 @@ def within_window(
     return k, scaled, ident
 
 
-def regret(axis: Axis, idents: list[tuple[int, Drawn, Identified]], runs_dir: str | None) -> None:
-    """``vfgym fit`` on the identified and on the true axis, judged on the true plant."""
+FIT_SECONDS = "bench_fit_seconds.txt"
+"""Where :func:`regret` records how long a fit took, beside its settings model."""
+
+
+def _fitted(ax: Axis, run: Path, fit_axis: Any, cfg: Any, load_tuner: Any) -> tuple[Any, float]:
+    """The settings model ``vfgym fit`` learns for ``ax`` in ``run``, and the fit's seconds
+    (nan: not recorded). A model already there, learnt on the same plant, measures and
+    uncertainty (no warning from ``load_tuner``), is kept: the fit is deterministic."""
+    path = run / "settings_model.json"
+    if path.is_file():
+        said: list[str] = []
+        tuner = load_tuner(path, axis=ax, warn=said.append)
+        if not said:
+            done = run / FIT_SECONDS
+            return tuner, float(done.read_text()) if done.is_file() else float("nan")
+    t0 = time.perf_counter()
+    fit_axis(ax, run, cfg, progress=False)
+    seconds = time.perf_counter() - t0
+    (run / FIT_SECONDS).write_text(f"{seconds:.1f}\n")
+    return load_tuner(path, axis=ax, warn=lambda msg: None), seconds
+
+
+def regret(
+    axis: Axis,
+    idents: list[tuple[int, Drawn, Identified]],
+    runs_dir: str | None,
+    axes: str = "both",
+) -> None:
+    """``vfgym fit`` on the identified and on the true axis, judged on the true plant
+    (``axes``: ``true`` or ``id`` runs only that one's fits, printing nothing to compare)."""
     import vfgym
     from vfgym.permove import FitConfig, fit_axis, load_tuner
 
@@ -304,13 +341,19 @@ def regret(axis: Axis, idents: list[tuple[int, Drawn, Identified]], runs_dir: st
         )
         out = {}
         for label, ax in (("id", ident.axis), ("true", true_axis)):
+            if axes not in ("both", label):
+                continue
             run = base / f"plant{k}-{label}"
             run.mkdir(parents=True, exist_ok=True)
-            t0 = time.perf_counter()
-            fit_axis(ax, run, FitConfig(), progress=False)
-            tuner = load_tuner(run / "settings_model.json", axis=ax, warn=lambda msg: None)
+            tuner, seconds = _fitted(ax, run, fit_axis, FitConfig(), load_tuner)
             ev = vfgym.evaluate(tuner, "test", axis=true_axis)
-            out[label] = (ev.feasible[0], float(ev.mean_cost[0]), time.perf_counter() - t0)
+            out[label] = (ev.feasible[0], float(ev.mean_cost[0]), seconds)
+        if axes != "both":
+            (label,) = out
+            f, c, s = out[label]
+            print(f"{k:5d}  {drawn.ratio:5.2f}  {label}: feasible {int(f.sum())}/{f.size}, "
+                  f"mean cost {c:.4g}, fit {s:.0f} s", flush=True)  # fmt: skip
+            continue
         f_id, c_id, s_id = out["id"]
         f_tr, c_tr, s_tr = out["true"]
         ok_true = bool(np.all(f_tr))
