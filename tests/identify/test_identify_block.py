@@ -86,6 +86,7 @@ def test_the_block_of_a_plant_within_the_window_stays_within_it(plan, tmp_path, 
     if not gain.excited:
         line = [n for n in ident.notes if n.startswith("torque_per_count: not excited")]
         assert len(line) == 1 and "leaves the gain out" in line[0], ident.notes
+        assert "so g is below" in line[0] and "out of the uncertainty block" in line[0]
 
 
 def test_the_resolution_is_the_floor_over_the_largest_sensitivity():

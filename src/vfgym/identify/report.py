@@ -229,9 +229,14 @@ def not_excited_notes(fit: Fit) -> list[str]:
     out = []
     for e in fit.estimates:
         if not e.excited:
+            held = (
+                "out of the uncertainty block"
+                if e.name == "torque_per_count"
+                else f"with the range [{e.low:.4g}, {e.high:.4g}]"
+            )
             out.append(
                 f"{e.name}: not excited ({why[e.name]}): left at its nominal value "
-                f"{e.value:.4g} with the range [{e.low:.4g}, {e.high:.4g}]"
+                f"{e.value:.4g} {held}"
             )
     return out
 
