@@ -289,12 +289,34 @@ def within_window(
     scaled = replace(drawn, truth=t, variant=variant)
     with tempfile.TemporaryDirectory() as tmp:
         ident, _, _ = identify_drawn(axis, scaled, pulses, Path(tmp) / "w.vcd", after_enable)
+    worst, outside = block_check(ident, t)
     print(
         f"plant {k} within the window: Coulomb {t['coulomb_nm']:.4g} N*m, load "
         f"{t['load_torque_nm']:+.4g} N*m (x{f:.3f}); identified, residual "
-        f"{ident.fit.residual_rms_counts:.3g} counts"
+        f"{ident.fit.residual_rms_counts:.3g} counts; the block's worst plant stops "
+        f"{worst:.2f} counts from a target (window {axis.measures.in_position_counts:g}); "
+        f"the true plant outside the block in: {' '.join(outside) or '-'}"
     )
     return k, scaled, ident
+
+
+def block_check(ident: Identified, truth: dict[str, float]) -> tuple[float, list[str]]:
+    """How far from its target the identified block's worst plant stops at most (counts:
+    its highest Coulomb friction plus load over its lowest K3), and the quantities whose
+    true value lies outside the block."""
+    unc = ident.axis.uncertainty
+    k3 = ident.axis.plant.torque_per_count_nm
+    g_lo = unc.torque_per_count[0] if unc.torque_per_count else 1.0
+    worst = (unc.coulomb_nm[1] + max(map(abs, unc.load_torque_nm))) / (k3 * g_lo)
+    outside = []
+    for e in ident.fit.estimates:
+        value, span = truth[e.name], getattr(unc, e.name)
+        if e.name in ("inertia", "torque_per_count"):
+            value /= e.value  # the block's factors are on the estimates
+        lo, hi = span if span is not None else (1.0, 1.0)  # (the gain as set)
+        if not lo <= value <= hi:
+            outside.append(e.name)
+    return worst, outside
 
 
 FIT_SECONDS = "bench_fit_seconds.txt"
