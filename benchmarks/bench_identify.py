@@ -159,6 +159,11 @@ def main(argv: list[str] | None = None) -> int:
         "settings model already in --runs-dir for the same axis is kept, a fit stopped "
         "there continues from its checkpointed optima",
     )
+    ap.add_argument(
+        "--regret-only",
+        action="store_true",
+        help="identify only the plants --regret fits (the accuracy lines are theirs only)",
+    )
     ap.add_argument("--runs-dir", help="where --regret's fits write (default: a temp folder)")
     args = ap.parse_args(argv)
     chosen = (
@@ -190,6 +195,8 @@ def main(argv: list[str] | None = None) -> int:
     top = nominal.pulse_top_speed_rad_s
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.plants):
+            if args.regret_only and k not in chosen:
+                continue
             drawn = draw(axis, args.seed, k)
             truth = drawn.truth
             ident, wall, cpu = identify_drawn(
