@@ -328,6 +328,28 @@ def block_check(ident: Identified, truth: dict[str, float]) -> tuple[float, list
     return worst, outside
 
 
+def lost_move(ev: Any, j: int, ident: Identified) -> str:
+    """Why the identified axis's settings model loses test move ``j`` on the true plant:
+    the limits its settings break there, on the identified plant, and on how many of the
+    block's design plants (what the robust pick had to be feasible on)."""
+    from vfgym.scoring import CONSTRAINTS, Move, on_plant, score_pairs
+
+    sc, s = ev.scenarios[j], ev.chosen[0][j]
+    mv = Move.of(sc, ident.axis.plant)
+    design = ident.axis.design_plants()
+    on = score_pairs([s] * (1 + len(design)), [mv, *(on_plant(mv, v) for v in design)],
+                     measures=ident.axis.measures)  # fmt: skip
+    c = ev.constraints[0, j]
+    broken = ", ".join(f"{n} {v:+.4g}" for n, v in zip(CONSTRAINTS, c, strict=True) if v > 0)
+    worst = max(on[1:], key=lambda r: float(np.max(r.constraints)), default=None)
+    return (
+        f"{sc.name}: on the true plant {broken}; on the identified plant "
+        f"{float(np.max(on[0].constraints)):+.4g}; infeasible on "
+        f"{sum(not r.feasible for r in on[1:])}/{len(design)} design plants"
+        + (f" (worst {float(np.max(worst.constraints)):+.4g})" if worst is not None else "")
+    )
+
+
 FIT_SECONDS = "bench_fit_seconds.txt"
 """Where :func:`regret` records how long a fit took, beside its settings model."""
 
@@ -372,7 +394,7 @@ def regret(
         true_axis = replace(
             axis, plant=drawn.variant.apply(axis.plant), uncertainty=EXACT, name=f"true-{k}"
         )
-        out = {}
+        out, lost = {}, []
         for label, ax in (("true", true_axis), ("id", ident.axis)):
             if axes not in ("both", "counted", label):
                 continue
@@ -383,12 +405,16 @@ def regret(
             tuner, seconds = _fitted(ax, run, fit_axis, FitConfig(), load_tuner)
             ev = vfgym.evaluate(tuner, "test", axis=true_axis)
             out[label] = (ev.feasible[0], float(ev.mean_cost[0]), seconds)
+            if label == "id":
+                lost = [lost_move(ev, j, ident) for j in np.flatnonzero(~ev.feasible[0])]
         if len(out) == 1:
             (label,) = out
             f, c, s = out[label]
             print(f"{k:5d}  {drawn.ratio:5.2f}  {label}: feasible {int(f.sum())}/{f.size}, "
                   f"mean cost {c:.4g}, fit {s:.0f} s", flush=True)  # fmt: skip
             continue
+        for line in lost:
+            print(f"       lost {line}")
         f_id, c_id, s_id = out["id"]
         f_tr, c_tr, s_tr = out["true"]
         ok_true = bool(np.all(f_tr))
