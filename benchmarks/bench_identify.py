@@ -198,6 +198,9 @@ def main(argv: list[str] | None = None) -> int:
             if args.regret_only and k not in chosen:
                 continue
             drawn = draw(axis, args.seed, k)
+            if args.regret_only and args.regret_within_window:
+                idents.append((k, drawn, None))  # identified within the window below
+                continue
             truth = drawn.truth
             ident, wall, cpu = identify_drawn(
                 axis, drawn, plan.pulses, Path(tmp) / "c.vcd", args.after_enable
@@ -237,6 +240,19 @@ def main(argv: list[str] | None = None) -> int:
                 f"{wall:6.2f}  {cpu:5.1f}  {' '.join(outside) or '-'}",
                 flush=True,
             )
+    if rows:
+        summary(rows, hits, total)
+    if idents:
+        if args.regret_within_window:
+            idents = [
+                within_window(axis, k, d, plan.pulses, args.after_enable) for k, d, _ in idents
+            ]
+        regret(axis, idents, args.runs_dir, args.regret_axes)
+    return 0
+
+
+def summary(rows: list[dict], hits: dict[str, int], total: dict[str, int]) -> None:
+    """The accuracy, coverage and time lines against the goals."""
     a = {key: np.array([r[key] for r in rows]) for key in rows[0]}
     print("(* the load torque not excited: left at its nominal value)")
     print()
@@ -263,13 +279,6 @@ def main(argv: list[str] | None = None) -> int:
         f"{a['cpu'].mean():.2f} s, max {a['cpu'].max():.2f} s; load average now {load:.1f}"
     )
     print(f"explained (residual near the floor): {int(a['explained'].sum())}/{len(rows)}")
-    if idents:
-        if args.regret_within_window:
-            idents = [
-                within_window(axis, k, d, plan.pulses, args.after_enable) for k, d, _ in idents
-            ]
-        regret(axis, idents, args.runs_dir, args.regret_axes)
-    return 0
 
 
 WINDOW_SHARE = 0.8
