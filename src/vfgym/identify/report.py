@@ -29,6 +29,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from vfgym.identify.excite import MIN_SATURATED_S
 from vfgym.identify.fit import PARAMS, QUANTISATION_FLOOR, Estimate, Fit
 from vfgym.identify.model import SAMPLE_TICKS, Record, torque_limit
 from vfgym.moves.axis import Axis
@@ -206,14 +207,21 @@ def not_excited_notes(fit: Fit) -> list[str]:
         "viscous_nm_s_rad": "constant speed at fewer than two speeds: run constant-speed "
         "segments at two or more speeds",
         "load_torque_nm": "no constant-speed segment: run moves that cruise",
-        "torque_per_count": "the torque never reaches its limit, so the response fixes only "
-        "J/K3 and torque/K3: the inertia and torques are stated for the gain as set, and the "
-        "uncertainty block leaves the gain out; a drive whose gain is g times the one set "
-        "(and the inertia and torques g times these) makes the same capture and differs "
-        "only where the torque reaches its limit, at 1/g of the torque; "
-        f"the fastest move asked {share:.0%} of the limit, so g is below {1 / share:.3g}"
-        if share > 0
-        else "the torque never reaches its limit",
+        "torque_per_count": (
+            "the torque never reaches its limit"
+            if share < 1.0
+            else f"the torque is at its limit for only {fit.saturated_s * 1e3:.0f} ms, under "
+            f"the {MIN_SATURATED_S * 1e3:.0f} ms from which the gain separates"
+        )
+        + ", so the response fixes only J/K3 and torque/K3: the inertia and torques are "
+        "stated for the gain as set, and the uncertainty block leaves the gain out; a drive "
+        "whose gain is g times the one set (and the inertia and torques g times these) makes "
+        "the same capture but where the torque reaches its limit, at 1/g of the torque"
+        + (
+            f"; the fastest move asked {share:.0%} of the limit, so g is below {1 / share:.3g}"
+            if 0.0 < share < 1.0
+            else ""
+        ),
         "inertia": "no move accelerates the axis",
     }
     if not exc.speeds_rad_s:
