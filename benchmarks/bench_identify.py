@@ -46,6 +46,7 @@ import tempfile
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -148,6 +149,21 @@ def main(argv: list[str] | None = None) -> int:
         "(ratio and sign kept) until the static error (|load| + Coulomb)/K3 is 80 %% of "
         "the in-position window: only such a plant can be feasible on every move",
     )
+    ap.add_argument(
+        "--regret-axes",
+        choices=("both", "counted", "true", "id"),
+        default="both",
+        help="the fits --regret runs: both; both where the true axis's fit is feasible on "
+        "every move (counted), else only the true one's; or only the true (or identified) "
+        "axis's. A "
+        "settings model already in --runs-dir for the same axis is kept, a fit stopped "
+        "there continues from its checkpointed optima",
+    )
+    ap.add_argument(
+        "--regret-only",
+        action="store_true",
+        help="identify only the plants --regret fits (the accuracy lines are theirs only)",
+    )
     ap.add_argument("--runs-dir", help="where --regret's fits write (default: a temp folder)")
     args = ap.parse_args(argv)
     chosen = (
@@ -179,7 +195,12 @@ def main(argv: list[str] | None = None) -> int:
     top = nominal.pulse_top_speed_rad_s
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.plants):
+            if args.regret_only and k not in chosen:
+                continue
             drawn = draw(axis, args.seed, k)
+            if args.regret_only and args.regret_within_window:
+                idents.append((k, drawn, None))  # identified within the window below
+                continue
             truth = drawn.truth
             ident, wall, cpu = identify_drawn(
                 axis, drawn, plan.pulses, Path(tmp) / "c.vcd", args.after_enable
@@ -219,6 +240,19 @@ def main(argv: list[str] | None = None) -> int:
                 f"{wall:6.2f}  {cpu:5.1f}  {' '.join(outside) or '-'}",
                 flush=True,
             )
+    if rows:
+        summary(rows, hits, total)
+    if idents:
+        if args.regret_within_window:
+            idents = [
+                within_window(axis, k, d, plan.pulses, args.after_enable) for k, d, _ in idents
+            ]
+        regret(axis, idents, args.runs_dir, args.regret_axes)
+    return 0
+
+
+def summary(rows: list[dict], hits: dict[str, int], total: dict[str, int]) -> None:
+    """The accuracy, coverage and time lines against the goals."""
     a = {key: np.array([r[key] for r in rows]) for key in rows[0]}
     print("(* the load torque not excited: left at its nominal value)")
     print()
@@ -245,13 +279,6 @@ def main(argv: list[str] | None = None) -> int:
         f"{a['cpu'].mean():.2f} s, max {a['cpu'].max():.2f} s; load average now {load:.1f}"
     )
     print(f"explained (residual near the floor): {int(a['explained'].sum())}/{len(rows)}")
-    if idents:
-        if args.regret_within_window:
-            idents = [
-                within_window(axis, k, d, plan.pulses, args.after_enable) for k, d, _ in idents
-            ]
-        regret(axis, idents, args.runs_dir)
-    return 0
 
 
 WINDOW_SHARE = 0.8
@@ -280,16 +307,90 @@ def within_window(
     scaled = replace(drawn, truth=t, variant=variant)
     with tempfile.TemporaryDirectory() as tmp:
         ident, _, _ = identify_drawn(axis, scaled, pulses, Path(tmp) / "w.vcd", after_enable)
+    worst, outside = block_check(ident, t)
     print(
         f"plant {k} within the window: Coulomb {t['coulomb_nm']:.4g} N*m, load "
         f"{t['load_torque_nm']:+.4g} N*m (x{f:.3f}); identified, residual "
-        f"{ident.fit.residual_rms_counts:.3g} counts"
+        f"{ident.fit.residual_rms_counts:.3g} counts; the block's worst plant stops "
+        f"{worst:.2f} counts from a target (window {axis.measures.in_position_counts:g}); "
+        f"the true plant outside the block in: {' '.join(outside) or '-'}"
     )
     return k, scaled, ident
 
 
-def regret(axis: Axis, idents: list[tuple[int, Drawn, Identified]], runs_dir: str | None) -> None:
-    """``vfgym fit`` on the identified and on the true axis, judged on the true plant."""
+def block_check(ident: Identified, truth: dict[str, float]) -> tuple[float, list[str]]:
+    """How far from its target the identified block's worst plant stops at most (counts:
+    its highest Coulomb friction plus load over its lowest K3), and the quantities whose
+    true value lies outside the block."""
+    unc = ident.axis.uncertainty
+    k3 = ident.axis.plant.torque_per_count_nm
+    g_lo = unc.torque_per_count[0] if unc.torque_per_count else 1.0
+    worst = (unc.coulomb_nm[1] + max(map(abs, unc.load_torque_nm))) / (k3 * g_lo)
+    outside = []
+    for e in ident.fit.estimates:
+        value, span = truth[e.name], getattr(unc, e.name)
+        if e.name in ("inertia", "torque_per_count"):
+            value /= e.value  # the block's factors are on the estimates
+        lo, hi = span if span is not None else (1.0, 1.0)  # (the gain as set)
+        if not lo <= value <= hi:
+            outside.append(e.name)
+    return worst, outside
+
+
+def lost_move(ev: Any, j: int, ident: Identified) -> str:
+    """Why the identified axis's settings model loses test move ``j`` on the true plant:
+    the limits its settings break there, on the identified plant, and on how many of the
+    block's design plants (what the robust pick had to be feasible on)."""
+    from vfgym.scoring import CONSTRAINTS, Move, on_plant, score_pairs
+
+    sc, s = ev.scenarios[j], ev.chosen[0][j]
+    mv = Move.of(sc, ident.axis.plant)
+    design = ident.axis.design_plants()
+    on = score_pairs([s] * (1 + len(design)), [mv, *(on_plant(mv, v) for v in design)],
+                     measures=ident.axis.measures)  # fmt: skip
+    c = ev.constraints[0, j]
+    broken = ", ".join(f"{n} {v:+.4g}" for n, v in zip(CONSTRAINTS, c, strict=True) if v > 0)
+    worst = max(on[1:], key=lambda r: float(np.max(r.constraints)), default=None)
+    return (
+        f"{sc.name}: on the true plant {broken}; on the identified plant "
+        f"{float(np.max(on[0].constraints)):+.4g}; infeasible on "
+        f"{sum(not r.feasible for r in on[1:])}/{len(design)} design plants"
+        + (f" (worst {float(np.max(worst.constraints)):+.4g})" if worst is not None else "")
+    )
+
+
+FIT_SECONDS = "bench_fit_seconds.txt"
+"""Where :func:`regret` records how long a fit took, beside its settings model."""
+
+
+def _fitted(ax: Axis, run: Path, fit_axis: Any, cfg: Any, load_tuner: Any) -> tuple[Any, float]:
+    """The settings model ``vfgym fit`` learns for ``ax`` in ``run``, and the fit's seconds
+    (nan: not recorded). A model already there, learnt on the same plant, measures and
+    uncertainty (no warning from ``load_tuner``), is kept: the fit is deterministic."""
+    path = run / "settings_model.json"
+    if path.is_file():
+        said: list[str] = []
+        tuner = load_tuner(path, axis=ax, warn=said.append)
+        if not said:
+            done = run / FIT_SECONDS
+            return tuner, float(done.read_text()) if done.is_file() else float("nan")
+    t0 = time.perf_counter()
+    fit_axis(ax, run, cfg, progress=False)
+    seconds = time.perf_counter() - t0
+    (run / FIT_SECONDS).write_text(f"{seconds:.1f}\n")
+    return load_tuner(path, axis=ax, warn=lambda msg: None), seconds
+
+
+def regret(
+    axis: Axis,
+    idents: list[tuple[int, Drawn, Identified]],
+    runs_dir: str | None,
+    axes: str = "both",
+) -> None:
+    """``vfgym fit`` on the identified and on the true axis, judged on the true plant
+    (``axes``: ``true`` or ``id`` runs only that one's fits, printing nothing to compare;
+    ``counted`` the identified axis's only where the true axis's is feasible on every
+    move, the plants the goal is stated over)."""
     import vfgym
     from vfgym.permove import FitConfig, fit_axis, load_tuner
 
@@ -302,15 +403,27 @@ def regret(axis: Axis, idents: list[tuple[int, Drawn, Identified]], runs_dir: st
         true_axis = replace(
             axis, plant=drawn.variant.apply(axis.plant), uncertainty=EXACT, name=f"true-{k}"
         )
-        out = {}
-        for label, ax in (("id", ident.axis), ("true", true_axis)):
+        out, lost = {}, []
+        for label, ax in (("true", true_axis), ("id", ident.axis)):
+            if axes not in ("both", "counted", label):
+                continue
+            if label == "id" and axes == "counted" and not np.all(out["true"][0]):
+                break  # outside the goal's plants: no identified-axis fit
             run = base / f"plant{k}-{label}"
             run.mkdir(parents=True, exist_ok=True)
-            t0 = time.perf_counter()
-            fit_axis(ax, run, FitConfig(), progress=False)
-            tuner = load_tuner(run / "settings_model.json", axis=ax, warn=lambda msg: None)
+            tuner, seconds = _fitted(ax, run, fit_axis, FitConfig(), load_tuner)
             ev = vfgym.evaluate(tuner, "test", axis=true_axis)
-            out[label] = (ev.feasible[0], float(ev.mean_cost[0]), time.perf_counter() - t0)
+            out[label] = (ev.feasible[0], float(ev.mean_cost[0]), seconds)
+            if label == "id":
+                lost = [lost_move(ev, j, ident) for j in np.flatnonzero(~ev.feasible[0])]
+        if len(out) == 1:
+            (label,) = out
+            f, c, s = out[label]
+            print(f"{k:5d}  {drawn.ratio:5.2f}  {label}: feasible {int(f.sum())}/{f.size}, "
+                  f"mean cost {c:.4g}, fit {s:.0f} s", flush=True)  # fmt: skip
+            continue
+        for line in lost:
+            print(f"       lost {line}")
         f_id, c_id, s_id = out["id"]
         f_tr, c_tr, s_tr = out["true"]
         ok_true = bool(np.all(f_tr))

@@ -166,7 +166,7 @@ def _identify(axis: Any, settings: Any, args: argparse.Namespace) -> int:
     from vfgym.identify.capture import parse_signal_map, read_capture
     from vfgym.identify.fit import QUANTISATION_FLOOR, fit
     from vfgym.identify.model import record_of
-    from vfgym.identify.report import MARGIN, MIN_HALF, identify_report
+    from vfgym.identify.report import MARGIN, identify_report
     from vfgym.moves.axis import write_axis
 
     out = check_output_path("--out", args.out)
@@ -213,8 +213,7 @@ def _identify(axis: Any, settings: Any, args: argparse.Namespace) -> int:
         print(f"note: {note}")
     write_axis(ident.axis, out)
     print(
-        f"wrote {out}: uncertainty = the 95 % intervals x {MARGIN:g} (at least "
-        f"+/-{MIN_HALF['inertia']:.1%} on inertia and gain, +/-{MIN_HALF['torque_share']:.1%} "
-        "of rated torque on the torques)"
+        f"wrote {out}: uncertainty = the 95 % intervals x {MARGIN:g}, each at least the "
+        "change that moves no sample by more than the quantisation floor"
     )
     return 0

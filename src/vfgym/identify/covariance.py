@@ -109,4 +109,29 @@ def quantisation_meat(
     return meat + rest * (jac.T @ jac)
 
 
-__all__ = ["HARMONICS", "pieces", "quantisation_meat"]
+def resolution(jac: np.ndarray, floor: float) -> np.ndarray:
+    """The finest change of each coordinate one reading of the count shows.
+
+    A change that moves no sample's simulated count by more than the quantisation
+    ``floor`` (the RMS error of reading a position as whole counts) is below what any
+    single sample can show; the fit resolves finer only by averaging many samples.
+
+    Parameters
+    ----------
+    jac : numpy.ndarray
+        The residuals' Jacobian (samples × coordinates, counts per unit coordinate).
+    floor : float
+        The quantisation floor (counts RMS).
+
+    Returns
+    -------
+    numpy.ndarray
+        Per coordinate, ``floor`` over the largest sensitivity of any sample (inf for a
+        coordinate no sample responds to).
+    """
+    most = np.max(np.abs(jac), axis=0) if jac.size else np.zeros(jac.shape[1])
+    with np.errstate(divide="ignore"):
+        return floor / most
+
+
+__all__ = ["HARMONICS", "pieces", "quantisation_meat", "resolution"]

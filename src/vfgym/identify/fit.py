@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from vfgym.identify.covariance import pieces, quantisation_meat
+from vfgym.identify.covariance import pieces, quantisation_meat, resolution
 from vfgym.identify.excite import MIN_SATURATED_S, Excitation, excitation
 from vfgym.identify.model import SAMPLE_TICKS, Record, Response, Start, respond_many
 from vfgym.params import Plant, Settings
@@ -84,6 +84,10 @@ class Estimate:
         The nominal axis's value (factor 1 for inertia and gain).
     excited : bool
         False when the captures cannot show it: held at its nominal value.
+    resolution : float
+        The change of this quantity alone that moves no sample's simulated count by more
+        than the quantisation floor: finer than one reading shows (its units; 0 when not
+        excited). :mod:`vfgym.identify.report` makes it the least half-width of the range.
     """
 
     name: str
@@ -92,6 +96,7 @@ class Estimate:
     high: float
     nominal: float
     excited: bool
+    resolution: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -505,6 +510,7 @@ def _fit(records: Sequence[Record], nominal: Plant, settings: Settings) -> Fit:
     lengths = [r.used(r.measured).size for r in records]
     cov = _covariance(problem, z, jac)
     sd_z = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    res_z = resolution(jac, QUANTISATION_FLOOR)
     rms = float(np.sqrt(np.mean(res**2)))
     phys = scale.physical(z)
     nominal_phys = scale.physical(scale.z0)
@@ -512,17 +518,17 @@ def _fit(records: Sequence[Record], nominal: Plant, settings: Settings) -> Fit:
     k = 0
     for i, name in enumerate(PARAMS):
         if free[i]:
-            half = Z95 * sd_z[k]
+            half, d = Z95 * sd_z[k], scale.jacobian_diag(z)[i]  # d: physical per z
+            r = float(res_z[k] * d)
             k += 1
-            lo_z, hi_z = z[i] - half, z[i] + half
             if i in (0, 4):
-                lo, hi = math.exp(lo_z), math.exp(hi_z)
+                lo, hi = math.exp(z[i] - half), math.exp(z[i] + half)
             else:
-                d = scale.jacobian_diag(z)[i]
                 lo, hi = phys[i] - half * d, phys[i] + half * d
                 if name in ("coulomb_nm", "viscous_nm_s_rad"):
                     lo = max(0.0, lo)
-            estimates.append(Estimate(name, float(phys[i]), lo, hi, float(nominal_phys[i]), True))
+            v, v0 = float(phys[i]), float(nominal_phys[i])
+            estimates.append(Estimate(name, v, lo, hi, v0, True, r))
         else:
             lo, hi = wide_range(name, nominal)
             v = float(nominal_phys[i])

@@ -4,12 +4,22 @@ The identified axis is the nominal one with the estimates written in: the total 
 as the load's ``inertia_ratio`` (the rotor's inertia kept; below the rotor's own, the
 rotor's inertia itself is lowered, ratio 0), the friction and load torque as absolute
 values, and the drive's gain so that the K3 in force is the estimate (``follows_load``
-kept as set). Its ``uncertainty:`` block is made of the 95 % intervals widened by
-:data:`MARGIN` (and at least :data:`MIN_HALF` each side), relative to the identified
-plant as :class:`~vfgym.plant.uncertainty.Uncertainty` states them. A quantity the
-captures leave unknown keeps its nominal value with a wide range
-(:func:`vfgym.identify.fit.wide_range`); without a saturating move, every torque and the
-inertia are known only relative to the gain, so their ranges widen by the gain's.
+kept as set). Its ``uncertainty:`` block is what the captures warrant, relative to the
+identified plant as :class:`~vfgym.plant.uncertainty.Uncertainty` states them: each
+estimated quantity's 95 % interval widened by :data:`MARGIN`, and at least its
+:attr:`~vfgym.identify.fit.Estimate.resolution` each side (the change no single reading
+of the count shows). A quantity the captures leave unknown keeps its nominal value with
+a wide range (:func:`vfgym.identify.fit.wide_range`).
+
+Without a saturating move the drive's gain is left out of the block. Below the torque
+limit the response fixes only J/K3 and τ/K3: a drive whose gain is g times the one set,
+with g times the inertia and torques, makes the same capture. A box cannot state that
+line; the smallest box holding it (the gain's wide range on the gain, the inertia and
+every torque at once) holds plants g² off in J/K3 that the capture rules out, and a
+tuner made robust to them is robust to plants that are not there. The inertia and
+torques are stated for the gain as set, and :func:`not_excited_notes` says what that
+leaves out: along the line the plants differ only where the torque reaches its limit,
+which a gain g reaches at 1/g of the torque.
 """
 
 from __future__ import annotations
@@ -19,18 +29,18 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from vfgym.identify.excite import MIN_SATURATED_S
 from vfgym.identify.fit import PARAMS, QUANTISATION_FLOOR, Estimate, Fit
-from vfgym.identify.model import SAMPLE_TICKS, Record
+from vfgym.identify.model import SAMPLE_TICKS, Record, torque_limit
 from vfgym.moves.axis import Axis
 from vfgym.params import Plant
 from vfgym.plant.uncertainty import FACTOR_RANGE, Uncertainty
 
 MARGIN = 2.0
-"""The uncertainty block's half-widths are this many times the 95 % intervals'."""
-
-MIN_HALF = {"inertia": 0.005, "torque_per_count": 0.005, "torque_share": 0.002}
-"""Least half-widths of the uncertainty block: 0.5 % on the factors, 0.2 % of the rated
-torque on the torques (viscous friction: its torque at the pulse train's top speed)."""
+"""The uncertainty block's half-widths are this many times the 95 % intervals' (3.9
+standard errors: a normal estimate falls outside with odds of 1 in 10 000, so the block
+holds all five quantities of an axis whose intervals are right but for a few percent of
+its coverage, as measured in docs/results/identify.md)."""
 
 EXPLAINED = 3.0
 """A fit whose RMS residual exceeds this many quantisation floors does not explain the
@@ -102,10 +112,10 @@ def identified_plant(nominal: Plant, fit: Fit) -> Plant:
     return replace(nominal, motor=motor, servo=replace(sv, torque_per_count_nm=per))
 
 
-def _widen(e: Estimate, scale: float) -> tuple[float, float]:
-    """The estimate's interval times :data:`MARGIN`, at least ``scale`` each side."""
-    lo = e.value - max(MARGIN * (e.value - e.low), scale)
-    hi = e.value + max(MARGIN * (e.high - e.value), scale)
+def _widen(e: Estimate) -> tuple[float, float]:
+    """The estimate's interval times :data:`MARGIN`, at least its resolution each side."""
+    lo = e.value - max(MARGIN * (e.value - e.low), e.resolution)
+    hi = e.value + max(MARGIN * (e.high - e.value), e.resolution)
     return lo, hi
 
 
@@ -117,37 +127,26 @@ def uncertainty_of(fit: Fit, nominal: Plant) -> Uncertainty:
     fit : Fit
         The fit.
     nominal : Plant
-        The nominal plant (its rated torque and top speed give the least half-widths).
+        The nominal plant (its motor's limits bound the torques' ranges).
 
     Returns
     -------
     Uncertainty
-        Inertia and gain as factors on the identified values, the torques absolute.
+        Inertia and gain as factors on the identified values, the torques absolute; the
+        gain left out where the captures do not separate it from the inertia.
     """
     m = nominal.motor
-    t_min = MIN_HALF["torque_share"] * m.rated_torque_nm
     ranges: dict[str, tuple[float, float]] = {}
-    gain = fit.estimate("torque_per_count")
-    g_lo, g_hi = (1.0, 1.0) if gain.excited else (gain.low, gain.high)
     for name in PARAMS:
         e = fit.estimate(name)
+        if name == "torque_per_count" and not e.excited:
+            continue  # the line the captures leave open is no box (module doc)
+        lo, hi = _widen(e) if e.excited else (e.low, e.high)
         if name in ("inertia", "torque_per_count"):
-            if e.excited:
-                lo, hi = _widen(e, MIN_HALF[name] * e.value)
-                f_lo, f_hi = lo / e.value, hi / e.value
-            else:
-                f_lo, f_hi = e.low, e.high
-            if name == "inertia":
-                f_lo, f_hi = f_lo * g_lo, f_hi * g_hi
-            ranges[name] = (max(FACTOR_RANGE[0], f_lo), min(FACTOR_RANGE[1], f_hi))
-            continue
-        scale = t_min / nominal.pulse_top_speed_rad_s if name == "viscous_nm_s_rad" else t_min
-        lo, hi = _widen(e, scale) if e.excited else (e.low, e.high)
-        ends = [lo * g_lo, lo * g_hi, hi * g_lo, hi * g_hi]
-        lo, hi = min(ends), max(ends)
-        if name != "load_torque_nm":
-            lo = max(0.0, lo)
-        ranges[name] = (lo, hi)
+            ranges[name] = (max(FACTOR_RANGE[0], lo / e.value), min(FACTOR_RANGE[1], hi / e.value))
+        else:
+            ranges[name] = (lo if name == "load_torque_nm" else max(0.0, lo), hi)
+    # every plant of the block a motor the axis can have (Uncertainty.check_motor)
     b_lo, b_hi = ranges["viscous_nm_s_rad"]
     b_most = 0.99 * m.peak_torque_nm / m.knee_speed_rad_s
     ranges["viscous_nm_s_rad"] = (min(b_lo, b_most), min(b_hi, b_most))
@@ -158,6 +157,33 @@ def uncertainty_of(fit: Fit, nominal: Plant) -> Uncertainty:
     l_lo, l_hi = ranges["load_torque_nm"]
     ranges["load_torque_nm"] = (max(l_lo, -room), min(l_hi, room))
     return Uncertainty(**ranges)
+
+
+def torque_share(fit: Fit, plant: Plant) -> float:
+    """The largest share of its torque limit the fitted plant asks for over the captures.
+
+    Parameters
+    ----------
+    fit : Fit
+        The fit.
+    plant : Plant
+        The fitted plant (gives the torque–speed curve).
+
+    Returns
+    -------
+    float
+        Largest |torque| over the limit at its speed (1 where the torque saturates).
+    """
+    most = 0.0
+    for r in fit.responses:
+        limit = torque_limit(plant, r.speed_rad_s, r.torque_nm)
+        ask = np.abs(r.torque_nm)
+        at = limit > 0.0  # (none past the motor's top speed)
+        if np.any(at):
+            most = max(most, float(np.max(ask[at] / limit[at])))
+        if np.any(~at & (ask > 0.0)):
+            return 1.0
+    return most
 
 
 def not_excited_notes(fit: Fit) -> list[str]:
@@ -174,14 +200,28 @@ def not_excited_notes(fit: Fit) -> list[str]:
         The lines, naming the quantity, why, and the value and range it is left with.
     """
     exc = fit.excitation
+    share = torque_share(fit, fit.plant)
     why = {
         "coulomb_nm": "constant speed in one direction only: only Coulomb friction plus load "
         "torque is seen; run the moves both ways",
         "viscous_nm_s_rad": "constant speed at fewer than two speeds: run constant-speed "
         "segments at two or more speeds",
         "load_torque_nm": "no constant-speed segment: run moves that cruise",
-        "torque_per_count": "the torque never reaches its limit, so the response fixes only "
-        "J/K3 and torque/K3; inertia, friction and load ranges are widened by the gain's",
+        "torque_per_count": (
+            "the torque never reaches its limit"
+            if share < 1.0
+            else f"the torque is at its limit for only {fit.saturated_s * 1e3:.0f} ms, under "
+            f"the {MIN_SATURATED_S * 1e3:.0f} ms from which the gain separates"
+        )
+        + ", so the response fixes only J/K3 and torque/K3: the inertia and torques are "
+        "stated for the gain as set, and the uncertainty block leaves the gain out; a drive "
+        "whose gain is g times the one set (and the inertia and torques g times these) makes "
+        "the same capture but where the torque reaches its limit, at 1/g of the torque"
+        + (
+            f"; the fastest move asked {share:.0%} of the limit, so g is below {1 / share:.3g}"
+            if 0.0 < share < 1.0
+            else ""
+        ),
         "inertia": "no move accelerates the axis",
     }
     if not exc.speeds_rad_s:
@@ -197,9 +237,14 @@ def not_excited_notes(fit: Fit) -> list[str]:
     out = []
     for e in fit.estimates:
         if not e.excited:
+            held = (
+                "out of the uncertainty block"
+                if e.name == "torque_per_count"
+                else f"with the range [{e.low:.4g}, {e.high:.4g}]"
+            )
             out.append(
                 f"{e.name}: not excited ({why[e.name]}): left at its nominal value "
-                f"{e.value:.4g} with the range [{e.low:.4g}, {e.high:.4g}]"
+                f"{e.value:.4g} {held}"
             )
     return out
 
@@ -355,12 +400,12 @@ def identify_report(nominal_axis: Axis, fit: Fit, records: Sequence[Record]) -> 
 __all__ = [
     "EXPLAINED",
     "MARGIN",
-    "MIN_HALF",
     "Identified",
     "counts_per_pulse",
     "identified_plant",
     "identify_report",
     "likely_cause",
     "not_excited_notes",
+    "torque_share",
     "uncertainty_of",
 ]
