@@ -137,6 +137,37 @@ def test_a_retried_trial_is_run_under_its_new_worker(tmp_path):
     assert t.user_attrs[WORKER_ATTR] == worker_id() != "h/1/x"
 
 
+def test_a_trial_whose_worker_died_before_its_first_heartbeat_is_retried(tmp_path):
+    """A worker killed after it named itself on a trial but before Optuna's heartbeat
+    thread wrote once leaves a running trial no heartbeat makes stale: the other workers
+    fail and retry it by its dead process, rather than wait for it for ever."""
+    import subprocess
+    import sys
+    import threading
+
+    from vfgym.tuning._workers import WORKER_ATTR
+
+    code = "from vfgym.tuning._workers import worker_id; print(worker_id())"
+    dead = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True).stdout.strip()  # fmt: skip
+    cfg = tuning.SweepConfig(scenarios="short-move", trials=2, heartbeat=1)
+    spec = tuning.resolve_storage("sqlite", tmp_path)
+    storage = tuning.open_storage(spec, heartbeat=1)
+    study = optuna.create_study(study_name="s", storage=storage)
+    study.enqueue_trial(tuning.baseline_params(("rise",)))
+    orphan = study.ask()  # running, never a heartbeat
+    orphan.set_user_attr(WORKER_ATTR, dead)
+    worker = threading.Thread(target=tuning.run_worker, args=(cfg, spec, "s"), daemon=True)
+    worker.start()
+    worker.join(timeout=120)
+    assert not worker.is_alive(), "the worker waits for a dead worker's trial"
+    trials = optuna.load_study(study_name="s", storage=storage).trials
+    assert trials[orphan.number].state == optuna.trial.TrialState.FAIL
+    retries = [t for t in trials if t.system_attrs.get("failed_trial") == orphan.number]
+    assert len(retries) == 1 and retries[0].state == optuna.trial.TrialState.COMPLETE
+    assert sum(t.state == optuna.trial.TrialState.COMPLETE for t in trials) == 2
+
+
 def _trial_list(tmp_path: Path, study: str) -> list[tuple]:
     return [
         (r["params_value_rad"], r["params_error_limit_rad"], r["params_k"], r["value"])

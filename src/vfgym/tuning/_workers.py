@@ -234,7 +234,9 @@ class _Budget:
     so several workers overshoot it): :meth:`wait` says whether a trial may run, waiting
     while the running ones could fill the budget, and meanwhile fails and retries dead
     workers' trials (``fail_stale_trials``, which ``optimize`` runs only when a trial
-    starts; on a journal, by process; a trial killed before its first heartbeat)."""
+    starts; by process on this host, as a journal has no heartbeat and a worker killed
+    before its first heartbeat leaves none; by age, a trial whose worker died before it
+    began)."""
 
     def __init__(self, study: Study, cfg: SweepConfig, spec: StorageSpec, interrupts: Any) -> None:
         self.study, self.budget, self.every = study, trial_budget(cfg), cfg.heartbeat
@@ -348,8 +350,10 @@ class _Budget:
             age = (now - t.datetime_start).total_seconds() if t.datetime_start else 0.0
             if worker is None:  # its worker died before it began (Optuna: no heartbeat)
                 dead = age > self.orphan_s
-            else:  # (a retry holds its dead worker's name until its new worker writes its own)
-                dead = self.journal and age > self.every and _worker_alive(worker) is False
+            else:  # a dead process on this host: a journal has no heartbeat, and an RDB's
+                # misses a worker killed before its first one (the trial stays running)
+                # (a retry holds its dead worker's name until its new worker writes its own)
+                dead = age > self.every and _worker_alive(worker) is False
             if dead and _fail_and_retry(self.study, copy.deepcopy(t), self.lock):
                 self.recovered.append(t.number)
 
