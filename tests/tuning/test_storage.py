@@ -119,3 +119,43 @@ def test_two_sweeps_started_at_the_same_moment_on_a_new_study_both_run(tmp_path,
     assert set(states) <= {optuna.trial.TrialState.COMPLETE, optuna.trial.TrialState.PRUNED}
     baselines = [t.user_attrs["baseline"] for t in study.trials if "baseline" in t.user_attrs]
     assert sorted(baselines) == ["paper", "rule-of-thumb"]
+
+
+POP = """
+import json, sys, time
+import optuna
+from vfgym import tuning
+optuna.logging.set_verbosity(optuna.logging.ERROR)
+spec = tuning.StorageSpec(*sys.argv[1:4])
+study = optuna.load_study(study_name="pop", storage=tuning.open_storage(spec))
+time.sleep(max(0.0, float(sys.argv[4]) - time.time()))
+print(json.dumps([study.ask().number for _ in range(int(sys.argv[5]))]))
+"""
+
+
+@pytest.mark.parametrize("kind", ["sqlite", "journal"])
+def test_two_workers_never_pop_the_same_enqueued_trial(tmp_path, kind):
+    """SQLite has no row locks: a worker reading a waiting trial's state and another writing
+    it between the read and the write both ran it (optuna/optuna#4002). Two processes ask
+    150 trials each from 300 enqueued at the same moment; each is handed out once."""
+    import json
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    spec = tuning.resolve_storage(kind, tmp_path)
+    study = optuna.create_study(study_name="pop", storage=tuning.open_storage(spec))
+    for i in range(300):
+        study.enqueue_trial({"x": float(i)})
+    src = str(Path(__file__).resolve().parents[2] / "src")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([src, os.environ.get("PYTHONPATH", "")]))
+    at = str(time.time() + 4.0)
+    run = [sys.executable, "-c", POP, spec.kind, spec.url, spec.path or "", at, "150"]
+    pipe = subprocess.PIPE
+    procs = [subprocess.Popen(run, env=env, text=True, stdout=pipe, stderr=pipe) for _ in range(2)]
+    outs = [p.communicate(timeout=300) for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], [err for _, err in outs]
+    a, b = (json.loads(out) for out, _ in outs)
+    assert set(a).isdisjoint(b)
+    assert sorted(a + b) == list(range(300))

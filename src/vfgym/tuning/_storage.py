@@ -333,19 +333,25 @@ class _Flock:
 
 
 def _sqlite_wal(storage: RDBStorage) -> None:
-    """Put the SQLite file in write-ahead-log mode with ``synchronous=NORMAL``: readers never
-    wait for a writer (a worker frozen mid-write blocks none), and a commit needs no fsync
-    (a process's crash loses nothing committed; a power cut may lose the last commits)."""
+    """Put the SQLite file in write-ahead-log mode with ``synchronous=NORMAL`` (a commit
+    needs no fsync: a process's crash loses nothing committed, a power cut may lose the
+    last commits), and begin every transaction ``IMMEDIATE``: SQLite has no ``SELECT ...
+    FOR UPDATE``, so Optuna's read-then-write of a trial's state let two workers both pop
+    the same enqueued trial (optuna/optuna#4002; the later one then failed with "Cannot
+    tell a COMPLETE trial"). Holding the write lock from the read on makes it atomic."""
     import sqlalchemy
 
     def on_connect(dbapi_conn: Any, _record: Any) -> None:
+        dbapi_conn.isolation_level = None  # no implicit BEGIN: on_begin issues it
         cur = dbapi_conn.cursor()
+        if str(cur.execute("PRAGMA journal_mode").fetchone()[0]).lower() != "wal":
+            cur.execute("PRAGMA journal_mode=WAL")
         cur.execute("PRAGMA synchronous=NORMAL")
         cur.close()
 
+    def on_begin(conn: Any) -> None:
+        conn.exec_driver_sql("BEGIN IMMEDIATE")
+
     sqlalchemy.event.listen(storage.engine, "connect", on_connect)
-    storage.engine.dispose()  # pooled connections opened before the listener
-    with storage.engine.connect() as conn:
-        mode = conn.exec_driver_sql("PRAGMA journal_mode").scalar()
-        if str(mode).lower() != "wal":
-            conn.exec_driver_sql("PRAGMA journal_mode=WAL")
+    sqlalchemy.event.listen(storage.engine, "begin", on_begin)
+    storage.engine.dispose()  # pooled connections opened before the listeners
