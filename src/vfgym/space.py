@@ -128,11 +128,14 @@ def grid(
 
 @dataclass(frozen=True)
 class Relative:
-    """The search coordinates that fit the problem, for samplers that work in them.
+    """The tuned settings' one coordinate system: the compass sampler searches its unit
+    coordinates, the settings models learn its log coordinates (``k_ref`` the move's
+    usable k: :mod:`vfgym.permove.targets`) and the envs' residual actions are offsets in
+    it (:mod:`vfgym.envs`).
 
     The optimum sits on the acceleration limit, with the error limit tied to ``value``
     (the paper: most efficient when equal; below it, the top speed drops to L/value of
-    δ·f). So ``k`` is searched relative to ``k_ref`` (the limit's k,
+    δ·f). So ``k`` is taken relative to ``k_ref`` (the limit's k,
     :func:`vfgym.params.usable_k`) and ``L`` relative to ``value``; all four on log scales:
 
     ======  ====================  =====================================
@@ -144,8 +147,9 @@ class Relative:
     3       ts_over_tf            :data:`SPACE`'s (0.02 – 1)
     ======  ====================  =====================================
 
-    A point is given in unit coordinates u ∈ [0, 1]⁴ (log-linear along each axis); the
-    settings it stands for are clipped to :data:`SPACE` (L = ratio · value may leave it).
+    Log coordinates are the natural logarithms of the four; unit coordinates u ∈ [0, 1]⁴
+    map each range log-linearly. The settings a point stands for are clipped to
+    :data:`SPACE` (L = ratio · value may leave it).
     """
 
     k_ref: float
@@ -166,17 +170,36 @@ class Relative:
             ]
         )
 
+    def to_log(self, s: Settings) -> np.ndarray:
+        """The log coordinates of ``s``: ln value, ln(L/value), ln(k/k_ref), ln Ts/Tf (not
+        clipped); what the settings models learn (:mod:`vfgym.permove.targets`)."""
+        return np.log(
+            [s.value_rad, s.error_limit_rad / s.value_rad, s.k / self.k_ref, s.ts_over_tf]
+        )
+
     def to_unit(self, s: Settings) -> np.ndarray:
         """The unit coordinates of ``s`` (clipped to [0, 1]⁴)."""
-        x = np.log([s.value_rad, s.error_limit_rad / s.value_rad, s.k / self.k_ref, s.ts_over_tf])
         b = self.bounds()
-        return np.clip((x - b[:, 0]) / (b[:, 1] - b[:, 0]), 0.0, 1.0)
+        return np.clip((self.to_log(s) - b[:, 0]) / (b[:, 1] - b[:, 0]), 0.0, 1.0)
+
+    def from_log(self, x: Any, accel_law: str = "rise") -> Settings:
+        """The settings at log coordinates ``x``, clipped to SPACE: the inverse of
+        :meth:`to_log` on the whole space (L/value is not held to :data:`LIMIT_RATIO`,
+        the sampler's range, but to what SPACE allows)."""
+        b = self.bounds()
+        v, lim, _, _ = SPACE
+        b[1] = np.log([lim.low / v.high, lim.high / v.low])
+        x = np.clip(np.asarray(x, dtype=np.float64).reshape(len(SPACE)), b[:, 0], b[:, 1])
+        return self._at(x, accel_law)
 
     def settings(self, u: Any, accel_law: str = "rise") -> Settings:
         """The settings at unit coordinates ``u`` (clipped to [0, 1]⁴, then to SPACE)."""
         b = self.bounds()
         t = np.clip(np.asarray(u, dtype=np.float64).reshape(len(SPACE)), 0.0, 1.0)
-        value, ratio, k_ratio, a = np.exp(b[:, 0] + t * (b[:, 1] - b[:, 0]))
+        return self._at(b[:, 0] + t * (b[:, 1] - b[:, 0]), accel_law)
+
+    def _at(self, x: np.ndarray, accel_law: str) -> Settings:
+        value, ratio, k_ratio, a = np.exp(x)
         v, lim, k, ts = SPACE
         return Settings(
             value_rad=_clip(value, v),

@@ -228,3 +228,36 @@ def test_the_wheel_carries_the_shipped_model():
     for p in files:
         rel = p.relative_to(REPO / "src" / "vfgym").as_posix()
         assert any(fnmatch.fnmatch(rel, g) for g in globs), rel
+
+
+def test_a_pick_model_file_of_the_older_targets_picks_the_same_settings(tmp_path):
+    """Files written with the older targets (value, L and Ts/Tf as the search space's unit
+    coordinates, k as log10(k / k_a)) still load: their library is read into today's
+    coordinates and picks the same settings; an older regression is refused, in one line."""
+    d = json.loads(PRETRAINED.read_text())
+    old = []
+    for row in np.array(d["library"]):  # today's log coordinates, back to the older ones
+        value, limit = np.exp(row[0]), np.exp(row[0] + row[1])
+        old.append([SPACE[0].to_unit(value), SPACE[1].to_unit(limit), row[2] / np.log(10.0),
+                    SPACE[3].to_unit(np.exp(row[3]))])  # fmt: skip
+    d |= {"targets": ["value_rad", "error_limit_rad", "log10_k_over_ka", "ts_over_tf"]}
+    (tmp_path / "old.json").write_text(json.dumps(d | {"library": old}))
+    then, now = load_settings_model(tmp_path / "old.json"), load_settings_model()
+    for sc in scenario_set("test", 6, 7, LOAD):
+        a, b = then.settings(sc), now.settings(sc)
+        for f in SPACE:
+            assert getattr(a, f.name) == pytest.approx(getattr(b, f.name), rel=1e-12)
+    fit = fit_settings_model(scenario_set("train", 8, 3, LOAD), read_optima_rows(8), degree=1)
+    fit.save(tmp_path / "reg.json")
+    reg = json.loads((tmp_path / "reg.json").read_text()) | {"targets": d["targets"]}
+    (tmp_path / "reg.json").write_text(json.dumps(reg))
+    with pytest.raises(ValueError, match="older vfgym's regression: fit it again") as e:
+        load_settings_model(tmp_path / "reg.json")
+    assert "\n" not in str(e.value)
+
+
+def read_optima_rows(n: int) -> list[MoveOptimum]:
+    """n optima of the shipped training set's first moves, renamed onto scenario_set's."""
+    rows = read_optima(REPO / "experiments" / "optima" / "train.csv")[:n]
+    moves = scenario_set("train", n, 3, LOAD)
+    return [replace(o, scenario=sc.name) for o, sc in zip(rows, moves, strict=True)]

@@ -32,7 +32,16 @@ from vfgym.params import PAPER_PLANT, Plant
 
 from .optima import MoveOptimum
 from .pick import PICK_KIND, PickModel, fit_pick_model, greedy_library, ratio_table
-from .targets import TARGETS, TargetModel, accel_k, model_head, settings_targets, target_settings
+from .targets import (
+    TARGETS,
+    TARGETS_0_1,
+    TargetModel,
+    accel_k,
+    from_targets_0_1,
+    model_head,
+    settings_targets,
+    target_settings,
+)
 
 PRETRAINED = Path(__file__).parent / "pretrained" / "settings_model.json"
 """The shipped model (its ``config.yaml`` and ``command.txt`` beside it)."""
@@ -157,15 +166,22 @@ def load_settings_model(path: str | Path = PRETRAINED) -> PickModel | SettingsMo
         d = None
     if not isinstance(d, dict) or d.get("kind") not in (MODEL_KIND, PICK_KIND):
         raise ValueError(f"--model {p}: not a vfgym settings model ({PICK_KIND} JSON)")
-    if d.get("features") != list(SCENARIO_FEATURES) or d.get("targets") != list(TARGETS):
-        raise ValueError(f"--model {p}: made for other features or targets than this vfgym's")
+    old = d.get("targets") == list(TARGETS_0_1)  # a library reads into today's targets
+    if d.get("features") != list(SCENARIO_FEATURES) or not (
+        d.get("targets") == list(TARGETS) or (old and d["kind"] == PICK_KIND)
+    ):
+        again = " (an older vfgym's regression: fit it again)" if old else ""
+        raise ValueError(
+            f"--model {p}: made for other features or targets than this vfgym's{again}"
+        )
     if d["kind"] == PICK_KIND:
+        library = np.array(d["library"], dtype=np.float64)
         return PickModel(
             neighbours=int(d["neighbours"]),
             mean=np.array(d["mean"], dtype=np.float64),
             scale=np.array(d["scale"], dtype=np.float64),
             points=np.array(d["points"], dtype=np.float64),
-            library=np.array(d["library"], dtype=np.float64),
+            library=from_targets_0_1(library) if old else library,
             ratios=np.array(d["ratios"], dtype=np.float64),
             weights=np.array(d["weights"], dtype=np.float64),
             accel_law=str(d["accel_law"]),

@@ -1,9 +1,8 @@
-"""The coordinates the settings models learn and predict in.
-
-Value, L and Ts/Tf as unit coordinates of :data:`vfgym.space.SPACE` (log scales), and k
-as log10(k / k_a), k_a the k that holds the pulse train to the loaded motor's usable
-acceleration (:func:`vfgym.params.usable_k`), which carries most of a load's effect on
-the best k: a step's optimal k sits at k_a, on the acceleration limit.
+"""The coordinates the settings models learn and predict in: :class:`vfgym.space.Relative`'s
+log coordinates, with ``k_ref`` the move's k_a, the k that holds the pulse train to the
+loaded motor's usable acceleration (:func:`vfgym.params.usable_k`). k_a carries most of a
+load's effect on the best k (a step's optimal k sits at k_a, on the acceleration limit),
+and L/value is 1 on the cost's ridge (L = value).
 """
 
 from __future__ import annotations
@@ -22,11 +21,11 @@ from vfgym.moves.features import SCENARIO_FEATURES, scenario_features
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings, usable_k
 
-TARGETS = ("value_rad", "error_limit_rad", "log10_k_over_ka", "ts_over_tf")
-"""What the regression predicts (module doc)."""
-K_LOG_RANGE = 4.0
-"""log10(k / k_a) is clipped to ±this before k is clipped to the search space."""
-
+TARGETS = ("log_value_rad", "log_limit_over_value", "log_k_over_ka", "log_ts_over_tf")
+"""What the models predict (module doc), natural logarithms."""
+TARGETS_0_1 = ("value_rad", "error_limit_rad", "log10_k_over_ka", "ts_over_tf")
+"""The targets of model files written by vfgym 0.1 (value, L and Ts/Tf as unit coordinates
+of :data:`vfgym.space.SPACE` in [-1, 1], k as log10(k / k_a)): :func:`from_targets_0_1`."""
 
 accel_k = usable_k
 """k_a: the k that holds the pulse train to the loaded motor's usable acceleration
@@ -34,7 +33,7 @@ accel_k = usable_k
 
 
 def settings_targets(settings: Settings, plant: Plant) -> np.ndarray:
-    """The regression targets of settings on a move's plant (order of :data:`TARGETS`).
+    """The targets of settings on a move's plant (order of :data:`TARGETS`).
 
     Parameters
     ----------
@@ -48,14 +47,12 @@ def settings_targets(settings: Settings, plant: Plant) -> np.ndarray:
     numpy.ndarray
         float64, (4,).
     """
-    u = np.array([d.to_unit(getattr(settings, d.name)) for d in space.SPACE])  # float64
-    u[2] = math.log10(settings.k / accel_k(plant))
-    return u
+    return space.Relative(accel_k(plant)).to_log(settings)
 
 
 def target_settings(t: np.ndarray, plant: Plant, accel_law: str = "rise") -> Settings:
-    """Settings from regression targets (the inverse of :func:`settings_targets`, clipped
-    to the search space).
+    """Settings from targets (the inverse of :func:`settings_targets`, clipped to the
+    coordinates' ranges and the search space).
 
     Parameters
     ----------
@@ -71,11 +68,30 @@ def target_settings(t: np.ndarray, plant: Plant, accel_law: str = "rise") -> Set
     Settings
         Inside :data:`vfgym.space.SPACE`.
     """
-    u = np.clip(np.asarray(t, dtype=np.float64), -1.0, 1.0)
-    kd = space.SPACE[2]
-    k = accel_k(plant) * 10.0 ** float(np.clip(t[2], -K_LOG_RANGE, K_LOG_RANGE))
-    u[2] = kd.to_unit(min(max(k, kd.low), kd.high))
-    return space.from_action(u, accel_law)
+    return space.Relative(accel_k(plant)).from_log(t, accel_law)
+
+
+def from_targets_0_1(t: np.ndarray) -> np.ndarray:
+    """Targets (:data:`TARGETS`) from rows of :data:`TARGETS_0_1`, the same settings: a
+    pick model's library of an older file is read into today's coordinates.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        (n, 4).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n, 4).
+    """
+    v, lim, _, ts = space.SPACE
+    rows = []
+    for t0, t1, t2, t3 in np.asarray(t, dtype=np.float64).reshape(-1, 4):
+        value = math.log(v.from_unit(t0))
+        rows.append([value, math.log(lim.from_unit(t1)) - value, t2 * math.log(10.0),
+                     math.log(ts.from_unit(t3))])  # fmt: skip
+    return np.array(rows, dtype=np.float64).reshape(-1, 4)
 
 
 class TargetModel:
@@ -168,10 +184,11 @@ def model_head(kind: str, accel_law: str) -> dict[str, Any]:
 
 
 __all__ = [
-    "K_LOG_RANGE",
     "TARGETS",
+    "TARGETS_0_1",
     "TargetModel",
     "accel_k",
+    "from_targets_0_1",
     "model_head",
     "settings_targets",
     "target_settings",
