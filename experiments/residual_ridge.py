@@ -1,13 +1,14 @@
 """How VFServo-v0's cost answers small residual actions: the mean cost of the first
 ``--moves`` validation moves (train split, never drawn in training) under constant
 offsets on one setting at a time and under per-interval Gaussian noise, with the shipped
-model's look-up (``model-lookup``) as base, for L's offset of L alone and of L/value
-(``residual_ratio``, L held at the base's ratio).
+model's look-up (``model-lookup``) as base, with L/value free and held at the base's
+(``residual_scale`` 0 for it, as the shipped hyperparameters).
 
     python experiments/residual_ridge.py [--moves 8] [--offset 0.02] [--noise 0.05]
 
-The cost has a ridge along L = value (docs/model.md §1; docs/agents.md, residual actions):
-an offset of L alone, or of the value with L fixed, leaves it.
+The cost has a ridge along L = value (docs/model.md §1; docs/results/agents.md, residual
+actions): an offset of L/value leaves it. (Residual actions were once offsets of L alone
+as an option; they are now always of L/value, :class:`vfgym.space.Relative`.)
 """
 
 from __future__ import annotations
@@ -20,8 +21,8 @@ from vfgym.agents import make_env, validation_scenarios
 
 BASE = {"residual": True, "residual_base": "model-lookup", "interval_s": 0.005}
 VARIANTS = {
-    "L alone": BASE,
-    "L/value, L held": {**BASE, "residual_ratio": True, "residual_scale": [0.25, 0, 0.25, 0.25]},
+    "L/value free": BASE,
+    "L/value held": {**BASE, "residual_scale": [0.25, 0, 0.25, 0.25]},
 }
 
 

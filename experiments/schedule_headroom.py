@@ -8,13 +8,14 @@ VFServo-v0 episode with a fixed action sequence, its end-of-episode cost).
         [--sigma 0.2] [--seed 0] [--show 3]
 
 Each move is one VFServo-v0 env with residual actions on the move's optimum
-(``residual_base``: its settings, ``residual_ratio``: L's offset of L/value, each action
-of ±1 moving a setting 0.25 in unit coordinates), so the zero action is the optimum bit
-for bit. Schedules are piecewise constant: ``P`` pieces, the action ``a_j`` held over
-the control intervals [s_j, s_{j+1}) with s_0 = 0 and the switch times s_j a share of
-the optimum's own episode length (its steps until it settles). Three searches, each
-CMA-ES (``cmaes``, ``--evals`` episodes, started at the zero action with σ ``--sigma``
-in action units, the same seed), on the least cost, an infeasible move paying 10 more:
+(``residual_base``: its settings; L's offset of L/value, each action of ±1 moving a
+coordinate of :class:`vfgym.space.Relative` an eighth of its range), so the zero action
+is the optimum bit for bit. Schedules are piecewise constant: ``P`` pieces, the action
+``a_j`` held over the control intervals [s_j, s_{j+1}) with s_0 = 0 and the switch
+times s_j a share of the optimum's own episode length (its steps until it settles).
+Three searches, each CMA-ES (``cmaes``, ``--evals`` episodes, started at the zero action
+with σ ``--sigma`` in action units, the same seed), on the least cost, an infeasible move
+paying 10 more:
 
 * fixed: one piece (4 numbers), a fixed setting near the optimum: the control, the
   search's own gain over the optimum, which the optimum's grid (6⁴ points then 8 rounds
@@ -67,7 +68,6 @@ class Schedules:
             scenario,
             residual=True,
             residual_base=base,
-            residual_ratio=True,
             interval_s=interval_s,
         )
         self.steps = self.episode_steps()
@@ -175,8 +175,7 @@ def main() -> None:
         print(f"{sched.scenario.name}: optimum {cost[i, 0]:.4f}, fixed search {cost[i, 1]:.4f}, "
               f"2 switches {cost[i, -1]:.4f}; the optimum settles after {sched.steps} "
               f"intervals")  # fmt: skip
-        tune = VFTuneEnv(sched.scenario, residual=True, residual_base=sched.base,
-                         residual_ratio=True)  # fmt: skip
+        tune = VFTuneEnv(sched.scenario, residual=True, residual_base=sched.base)
         tune.reset()
         print(f"  the optimum: {fmt(sched.base)}")
         ends = [*switches, None]

@@ -3,7 +3,9 @@
 It drives Optuna's suggestions (:func:`suggest`), the agents' action scaling
 (:func:`from_action` maps a point of [−1, 1]⁴ onto the settings, :func:`to_action` back),
 the exhaustive grid (:func:`grid`) and the checks on settings files. Ranges spanning
-decades are searched on a log scale.
+decades are searched on a log scale. :class:`Relative` is the settings' one coordinate
+system where the problem's shape matters (L relative to the value, k to the acceleration
+limit's): the compass sampler, the settings models and the envs' residual actions.
 """
 
 from __future__ import annotations
@@ -169,6 +171,13 @@ class Relative:
                 [a.low, a.high],
             ]
         )
+
+    @staticmethod
+    def widths() -> np.ndarray:
+        """(4,) the width of each axis's log range (k's does not depend on ``k_ref``):
+        the envs' residual actions move a coordinate by up to half of it times its scale."""
+        b = Relative(1.0).bounds()
+        return b[:, 1] - b[:, 0]
 
     def to_log(self, s: Settings) -> np.ndarray:
         """The log coordinates of ``s``: ln value, ln(L/value), ln(k/k_ref), ln Ts/Tf (not

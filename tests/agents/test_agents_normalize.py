@@ -182,7 +182,7 @@ def test_a_residual_vftune_agent_starts_as_the_shipped_model(algo):
     from vfgym.agents.training import start_at_base
     from vfgym.permove.supervised import load_settings_model
 
-    kw = {"residual": True, "residual_base": "model-lookup", "residual_ratio": True}
+    kw = {"residual": True, "residual_base": "model-lookup"}
     env = make_env("vfgym/VFTune-v0", kw)
     model = algo_class(algo)("MlpPolicy", env, seed=0, device="cpu")
     start_at_base(model)
@@ -211,7 +211,7 @@ def test_the_model_base_is_the_shipped_model_checked_on_the_move(env_id):
     shipped = load_settings_model()
     assert shipped.check > 1
     lookup = replace(shipped, check=0)
-    kw = {"residual": True, "residual_base": "model", "residual_ratio": True}
+    kw = {"residual": True, "residual_base": "model"}
     env = make_env(env_id, {**kw, **({"interval_s": 0.005} if "Servo" in env_id else {})})
     differ = 0
     for name in ("test-0", "test-5", "test-10", "short-move"):

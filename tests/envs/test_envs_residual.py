@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, Settings, evaluate
 from vfgym.envs.servo import ServoConfig, VFServoEnv
 from vfgym.envs.vector import VFServoVectorEnv
-from vfgym.space import SPACE, from_action, to_action
+from vfgym.space import SPACE, Relative, from_action, to_action
 
 ZERO = np.zeros(4, dtype=np.float32)
 TUNED = Settings(value_rad=0.7, error_limit_rad=1.3, k=37.0, ts_over_tf=0.31)
@@ -64,23 +66,62 @@ def test_vector_env_takes_the_same_residual_steps():
         assert r2[0] == r1 and np.array_equal(o2[1], o1)
 
 
-def test_residual_offset_moves_the_unit_coordinates_by_the_scale():
+def test_residual_offset_moves_the_relative_coordinates_by_the_scale():
+    """An action a moves space.Relative's log coordinates (value, L/value, k, Ts/Tf) by
+    scale × a × half each axis's width from the base's; the observation shows the settings
+    in force as the search space's unit coordinates."""
     env = VFServoEnv("paper-step", residual=True, residual_scale=0.5)
     env.reset()
     a = np.array([0.4, -0.6, 1.0, 0.0])
     obs, *_ = env.step(a)
-    expected = np.clip(to_action(PAPER_SETTINGS) + 0.5 * a, -1.0, 1.0)
-    np.testing.assert_allclose(obs[14:18], expected, atol=1e-6)
-    # a setting moved off its base lands where the search space maps its unit coordinate
-    w = env._w
+    rel = Relative(PAPER_SETTINGS.k)
+    s = rel.from_log(rel.to_log(PAPER_SETTINGS) + 0.5 * a * Relative.widths() / 2.0)
     from vfgym.envs import _batch as B
     from vfgym.plant import _layout as L
 
-    s = from_action(expected)
-    assert w[B.W_PRM + L.P_VALUE] == pytest.approx(s.value_rad, rel=1e-6)  # to_action is float32
+    w = env._w
+    assert w[B.W_PRM + L.P_VALUE] == pytest.approx(s.value_rad, rel=1e-12)
+    assert w[B.W_PRM + L.P_LIMIT] == pytest.approx(s.error_limit_rad, rel=1e-12)
+    assert w[B.W_PRM + L.P_VALUE] / w[B.W_PRM + L.P_STEP] == pytest.approx(s.k, rel=1e-12)
     assert w[B.W_PRM + L.P_A] == PAPER_SETTINGS.ts_over_tf  # a zero offset: the base exactly
-    assert w[B.W_PRM + L.P_VALUE] != PAPER_SETTINGS.value_rad
+    np.testing.assert_allclose(obs[14:18], to_action(s), atol=1e-6)
     assert len(SPACE) == 4
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    base=st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4),
+    act=st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4),
+    scale=st.lists(st.sampled_from([0.0, 0.1, 0.25, 1.0, 2.0]), min_size=4, max_size=4),
+)
+def test_the_compiled_residual_mapping_is_relatives_offset(base, act, scale):
+    """map_action (compiled) against space.Relative (an independent oracle): the offset in
+    Relative's coordinates, clipped to the space; a zero offset keeps a setting bit for bit
+    (L: unless the value moved); L = value stays so bit for bit."""
+    from vfgym.envs import _batch as B
+
+    b = from_action(np.array(base))
+    a, sc = np.array(act), np.array(scale)
+    unit = np.zeros(4)
+    row = np.array([getattr(b, f) for f in B.SETTING_FIELDS])
+    got = B.map_action(a, B.space_table(), True, sc, row, unit)
+    rel = Relative(1.0)
+    want = rel.from_log(rel.to_log(b) + sc * a * Relative.widths() / 2.0)
+    for g, f in zip(got, B.SETTING_FIELDS, strict=True):
+        assert g == pytest.approx(getattr(want, f), rel=1e-12)
+    held = sc * a == 0.0
+    for i in (0, 2, 3):
+        if held[i]:
+            assert got[i] == row[i]
+    if held[0] and held[1]:
+        assert got[1] == row[1]
+    np.testing.assert_allclose(
+        unit, [d.to_unit(g) for d, g in zip(SPACE, got, strict=True)], atol=1e-12
+    )
+    b2 = b.replace(error_limit_rad=b.value_rad)
+    row2 = np.array([getattr(b2, f) for f in B.SETTING_FIELDS])
+    v, lim, *_ = B.map_action(a, B.space_table(), True, sc * [1, 0, 1, 1], row2, unit)
+    assert lim == v
 
 
 @pytest.mark.parametrize(
@@ -100,8 +141,8 @@ def test_bad_residual_arguments_name_themselves(kwargs, name):
 RIDGE = Settings(value_rad=0.6, error_limit_rad=0.6, k=40.0, ts_over_tf=0.5)
 
 
-def test_residual_ratio_keeps_l_equal_to_the_value_bit_for_bit():
-    env = VFServoEnv("paper-step", residual=True, residual_base=RIDGE, residual_ratio=True)
+def test_l_keeps_the_bases_ratio_to_the_value_bit_for_bit():
+    env = VFServoEnv("paper-step", residual=True, residual_base=RIDGE)
     env.reset()
     from vfgym.envs import _batch as B
     from vfgym.plant import _layout as L
@@ -110,11 +151,6 @@ def test_residual_ratio_keeps_l_equal_to_the_value_bit_for_bit():
     w = env._w
     assert w[B.W_PRM + L.P_VALUE] != RIDGE.value_rad
     assert w[B.W_PRM + L.P_LIMIT] == w[B.W_PRM + L.P_VALUE]
-    # without the ratio, L stays at its base while the value moves
-    env = VFServoEnv("paper-step", residual=True, residual_base=RIDGE)
-    env.reset()
-    env.step(np.array([0.37, 0.0, -0.2, 0.1]))
-    assert env._w[B.W_PRM + L.P_LIMIT] == RIDGE.error_limit_rad
 
 
 def test_a_zero_scale_holds_its_setting_at_the_base():
@@ -127,7 +163,8 @@ def test_a_zero_scale_holds_its_setting_at_the_base():
 
     env.step(np.array([0.4, -0.9, 1.0, 0.8]))
     w = env._w
-    assert w[B.W_PRM + L.P_LIMIT] == TUNED.error_limit_rad
+    ratio = w[B.W_PRM + L.P_LIMIT] / w[B.W_PRM + L.P_VALUE]  # L/value held, not L
+    assert ratio == pytest.approx(TUNED.error_limit_rad / TUNED.value_rad, rel=1e-12)
     assert w[B.W_PRM + L.P_A] == TUNED.ts_over_tf
     assert w[B.W_PRM + L.P_VALUE] != TUNED.value_rad
 
@@ -142,7 +179,7 @@ def test_vftune_residual_zero_action_is_the_base_and_matches_vfservo():
     from vfgym.envs.tune import VFTuneEnv
     from vfgym.envs.vector import VFTuneVectorEnv
 
-    kw = {"residual": True, "residual_base": TUNED, "residual_ratio": True}
+    kw = {"residual": True, "residual_base": TUNED}
     env = VFTuneEnv("short-move", **kw)
     obs, _ = env.reset()
     assert obs.shape == (23,) and env.observation_space.shape == (23,)

@@ -72,14 +72,13 @@ C_SCALE = _c + 4  # the move's size (rad): observation scale
 C_VMAX = _c + 5  # pulse train top speed δ·f (rad/s)
 C_SHAPE = _c + 6  # tracking-error shaping weight
 C_VIOL = _c + 7  # 1: end the episode on a constraint violation
-C_DIMS = _c + 8  # 4 × (action index, low, high, log) for value, error limit, k, Ts/Tf;
-# for a log dimension low and high are stored as log(low), log(high)
-C_RES = C_DIMS + 16  # 1: residual actions, 0: absolute
+C_DIMS = _c + 8  # 4 × (action index, low, high, log, width) for value, error limit, k,
+# Ts/Tf (space_table); for a log dimension low and high are stored as log(low), log(high)
+C_RES = C_DIMS + 20  # 1: residual actions, 0: absolute
 C_RSCALE = C_RES + 1  # residual actions: each offset's scale in unit coordinates (4 slots,
 # in SETTING_FIELDS order)
 C_BASE = C_RSCALE + 4  # residual actions: the base settings (4 slots, SETTING_FIELDS order)
-C_RATIO = C_BASE + 4  # residual actions: 1 when L's offset is of L/value (residual_ratio)
-_x = C_RATIO + 1
+_x = C_BASE + 4
 # per-step results and running values
 X_COST = _x + 0  # running cost after the last interval
 X_COST_PREV = _x + 1  # running cost before the last interval
@@ -148,56 +147,56 @@ def action_ok(act) -> bool:
 
 
 @_jit
-def map_action(act, dims, residual: bool, scales, ratio: bool, base, unit) -> tuple:
+def map_action(act, dims, residual: bool, scales, base, unit) -> tuple:
     """The four settings (value, L, k, Ts/Tf) an action in [-1, 1]⁴ stands for, and (into
-    ``unit``, in action order) their unit coordinates: the one mapping of both envs.
+    ``unit``, in action order) their unit coordinates in the search space: the one
+    mapping of both envs.
 
-    ``dims`` holds 4 × (action index, low, high, log) in that order (a log dimension's low
-    and high as their logarithms). Absolute actions: each entry is the unit coordinate, as
-    the search space maps it. Residual actions: entry × its ``scales`` (in the order of
-    ``dims``) is an offset in unit coordinates from ``base`` (the four settings, in that
-    order); a zero offset gives the
-    base exactly (no round trip through the unit coordinate), any other is clipped to the
-    space. With ``ratio`` L's offset is of the ratio L/value: once the value has moved, L
-    is the new value times the base's L/value, then offset; a base with L = value keeps
-    L = value bit for bit under any value offset (the V-F controller's cost has a ridge
-    there: docs/model.md §1). Both dimensions are logarithmic then (checked by the
-    config)."""
+    ``dims`` holds 4 × (action index, low, high, log, width) in that order
+    (:func:`space_table`: a log dimension's low and high as their logarithms). Absolute
+    actions: each entry is the unit coordinate, as the search space maps it. Residual
+    actions: an offset in :class:`vfgym.space.Relative`'s coordinates (logarithms of the
+    value, L/value, k and Ts/Tf), entry × its ``scales`` (in the order of ``dims``) × half
+    the axis's ``width``, from ``base`` (the four settings, in that order), each setting
+    clipped to the search space. Once the value has moved, L is the new value times the
+    base's L/value, then offset, so a base with L = value keeps L = value bit for bit
+    under any value offset (the V-F controller's cost has a ridge there: docs/model.md
+    §1); a setting whose offset is zero is its base exactly (no round trip through the
+    logarithm)."""
     v0 = 0.0
     v1 = 0.0
     v2 = 0.0
     v3 = 0.0
     moved = False  # the value is off its base (residual actions)
-    zv = 0.0  # the value's new coordinate (its logarithm for a log dimension)
+    zv = 0.0  # the value's new logarithm
     for f in range(4):
-        b = 4 * f
+        b = 5 * f
         j = int(dims[b])
         lo = dims[b + 1]
         hi = dims[b + 2]
-        log = dims[b + 3] != 0.0
         c = min(max(float(act[j]), -1.0), 1.0)
         if not residual:
-            x = from_unit(c, lo, hi, log)
+            x = from_unit(c, lo, hi, dims[b + 3] != 0.0)
             u = c
         else:
+            w = dims[b + 4]
             d = scales[f] * c
             xb = base[f]
-            x0 = math.log(xb) if log else xb
-            if f == 1 and ratio and moved:
-                vb = math.log(base[0]) if log else base[0]
-                y = min(max(zv + (x0 - vb) + d * (hi - lo) / 2.0, lo), hi)
-                x = math.exp(y) if log else y
+            x0 = math.log(xb)
+            if f == 1 and moved:
+                y = min(max(zv + (x0 - math.log(base[0])) + d * w / 2.0, lo), hi)
+                x = math.exp(y)
                 u = min(max(2.0 * (y - lo) / (hi - lo) - 1.0, -1.0), 1.0)
             else:
                 t0 = (x0 - lo) / (hi - lo)
                 x = xb
                 if d != 0.0:
-                    y = min(max(x0 + d * (hi - lo) / 2.0, lo), hi)
-                    x = math.exp(y) if log else y
+                    y = min(max(x0 + d * w / 2.0, lo), hi)
+                    x = math.exp(y)
                     if f == 0:
                         zv = y
                         moved = True
-                u = min(max(2.0 * t0 - 1.0 + d, -1.0), 1.0)
+                u = min(max(2.0 * t0 - 1.0 + d * (w / (hi - lo)), -1.0), 1.0)
         unit[j] = u
         if f == 0:
             v0 = x
@@ -217,10 +216,9 @@ def apply_action(act, w) -> bool:
         return False
     x0, x1, x2, x3 = map_action(
         act,
-        w[C_DIMS : C_DIMS + 16],
+        w[C_DIMS : C_DIMS + 20],
         w[C_RES] != 0.0,
         w[C_RSCALE : C_RSCALE + 4],
-        w[C_RATIO] != 0.0,
         w[C_BASE : C_BASE + 4],
         w[X_SET : X_SET + 4],
     )

@@ -50,34 +50,34 @@ SERVO_TRACKING_WEIGHT = 0.0
 SERVO_VIOLATION_PENALTY = 5.0
 """Subtracted at a constraint violation when ``terminate_on_violation`` is on."""
 RESIDUAL_SCALE = 0.25
-"""With residual actions, an action of ±1 moves a setting this far (in the search space's
-unit coordinates, [-1, 1]) from its base: an eighth of each setting's (log) range either
-way (both envs)."""
+"""With residual actions, an action of ±1 moves each coordinate of
+:class:`vfgym.space.Relative` this many half ranges from its base: an eighth of its (log)
+range either way (both envs)."""
 RESET_OPTIONS = ("scenario", "scenario_seed", "plant")
 
 SETTING_FIELDS = ("value_rad", "error_limit_rad", "k", "ts_over_tf")
 """The order in which the compiled step reads the search space's dimensions."""
 
 
-def space_table(ratio: bool = False) -> np.ndarray:
-    """(action index, low, high, log) of each setting in :data:`SETTING_FIELDS` order, read
-    from :data:`vfgym.space.SPACE`; a log dimension's low and high as their logarithms (the
-    very numbers ``from_unit`` computes, so the compiled mapping stays bit for bit the
-    search space's). ``ratio``: residual actions with L's offset of L/value
-    (:func:`vfgym.envs._batch.map_action`), which needs value and L on the same (log)
-    scale."""
-    from vfgym.space import SPACE
+def space_table() -> np.ndarray:
+    """(action index, low, high, log, width) of each setting in :data:`SETTING_FIELDS`
+    order: the range read from :data:`vfgym.space.SPACE`, a log dimension's low and high
+    as their logarithms (the very numbers ``from_unit`` computes, so the compiled mapping
+    stays bit for bit the search space's), and the width of its axis in
+    :class:`vfgym.space.Relative`, in which residual actions are offsets (L's axis is
+    L/value: :func:`vfgym.envs._batch.map_action`)."""
+    from vfgym.space import SPACE, Relative
 
     names = [d.name for d in SPACE]
     if sorted(names) != sorted(SETTING_FIELDS):
         raise RuntimeError(f"the search space {names} is not the four settings {SETTING_FIELDS}")
-    dims = [SPACE[names.index(f)] for f in SETTING_FIELDS]
-    if ratio and not (dims[0].log and dims[1].log):
-        raise RuntimeError("residual_ratio needs value and L on log scales in vfgym.space.SPACE")
+    if not all(d.log for d in SPACE):  # Relative's coordinates are logarithms
+        raise RuntimeError("residual actions need every setting on a log scale in SPACE")
+    widths = dict(zip(names, Relative.widths(), strict=True))
     rows = []
-    for d in dims:
-        lo, hi = (math.log(d.low), math.log(d.high)) if d.log else (d.low, d.high)
-        rows.append((float(names.index(d.name)), lo, hi, 1.0 if d.log else 0.0))
+    for f in SETTING_FIELDS:
+        d = SPACE[names.index(f)]
+        rows.append((float(names.index(f)), math.log(d.low), math.log(d.high), 1.0, widths[f]))
     return np.array(rows, dtype=np.float64).reshape(-1)
 
 
@@ -292,24 +292,23 @@ class EnvConfig:
     bounds : Bounds
         Bounds of the constraints.
     residual : bool
-        Residual actions: the action times ``residual_scale`` is an offset, in the search
-        space's unit coordinates, from the base setting, so the zero action gives the base
-        setting exactly (VFServo-v0: the base is also in force before the first action;
-        VFTune-v0: the observation ends with the base as an action, 4 more entries).
+        Residual actions: the action times ``residual_scale`` is an offset from the base
+        setting in :class:`vfgym.space.Relative`'s coordinates (the logarithms of the
+        value, L/value, k and Ts/Tf; ±1 moves one by ``residual_scale`` times half its
+        range): L keeps the base's L/value as the value moves, so a base with L = value
+        (the cost's ridge, docs/model.md §1) keeps it bit for bit. The zero action gives
+        the base setting exactly (VFServo-v0: the base is also in force before the first
+        action; VFTune-v0: the observation ends with the base as an action, 4 more
+        entries).
     residual_scale : float or tuple of 4 floats
-        The largest offset of a residual action, in unit coordinates: one for every
-        setting, in (0, 2], or one per setting in the action's order (value, L, k, Ts/Tf),
-        each in [0, 2] (0 holds that setting at its base; with ``residual_ratio``, L at
-        the base's L/value).
+        The largest offset of a residual action, in half ranges: one for every setting,
+        in (0, 2], or one per setting in the action's order (value, L/value, k, Ts/Tf),
+        each in [0, 2] (0 holds that coordinate at its base).
     residual_base : Settings, callable or None
         The base of residual actions: fixed settings, a callable ``(scenario, plant) ->
         Settings`` giving each move's (a per-move settings model; asked with ``plant``,
         before the move's load), or None for the env's default (:meth:`default_base`).
         Its law is replaced by ``accel_law``.
-    residual_ratio : bool
-        With residual actions, L's offset is of the ratio L/value (L moves with the
-        value), not of L alone: a base with L = value keeps L = value under any offset of
-        the value (the cost's ridge, docs/model.md §1).
 
     Raises
     ------
@@ -330,7 +329,6 @@ class EnvConfig:
     residual: bool = False
     residual_scale: float | tuple[float, ...] = RESIDUAL_SCALE
     residual_base: Settings | Callable[[Scenario, Plant], Settings] | None = None
-    residual_ratio: bool = False
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -340,9 +338,8 @@ class EnvConfig:
         s(self, "measures", measures)
         check_scoring(self.weights, self.bounds, self.measures, self.plant)
         s(self, "accel_law", check_choice("accel_law", self.accel_law, ACCEL_LAWS))
-        for name in ("residual", "residual_ratio"):
-            if not isinstance(getattr(self, name), bool):
-                raise ValueError(f"{name}={getattr(self, name)!r} must be a bool")
+        if not isinstance(self.residual, bool):
+            raise ValueError(f"residual={self.residual!r} must be a bool")
         scale = self.residual_scale
         if isinstance(scale, (list, tuple)):
             if len(scale) != 4:

@@ -70,7 +70,7 @@ class ServoConfig(EnvConfig):
     ----------
     scenario, split, seed_range, accel_law, axis, plant, measures, weights, bounds
         As :class:`vfgym.envs._common.EnvConfig` (an axis resolved there).
-    residual, residual_scale, residual_base, residual_ratio
+    residual, residual_scale, residual_base
         As :class:`vfgym.envs._common.EnvConfig`: with residual actions the base is also
         in force before the first action; ``residual_base`` None is
         ``initial_settings``.
@@ -148,7 +148,7 @@ class ServoCore:
         prm = pack(PAPER_SETTINGS, config.plant, config.measures, 1.0, 1)
         self.ring_len = B.ring_size(prm)
         self.acc_window = int(prm[L.P_ACC_W])
-        self._dims = B.space_table(config.residual and config.residual_ratio)
+        self._dims = B.space_table()
 
     @property
     def accel_law(self) -> str:
@@ -175,11 +175,10 @@ class ServoCore:
         }
         for k, v in cfg.items():
             w[k] = v
-        w[B.C_DIMS : B.C_DIMS + 16] = self._dims
+        w[B.C_DIMS : B.C_DIMS + 20] = self._dims
         w[B.C_RES] = 1.0 if c.residual else 0.0
         w[B.C_RSCALE : B.C_RSCALE + 4] = c.residual_scales()
         w[B.C_BASE : B.C_BASE + 4] = [getattr(set0, f) for f in SETTING_FIELDS]
-        w[B.C_RATIO] = 1.0 if c.residual and c.residual_ratio else 0.0
         w[B.X_SET : B.X_SET + 4] = to_action(set0).astype(np.float64)
         w[B.W_OBS + B.N_DYN : B.W_OBS + self.n_obs] = ep.features
         B.reset_row(w, ring, cmd)
@@ -223,10 +222,11 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     interval, mapped onto their ranges by the search space (:data:`vfgym.space.SPACE`, log
     scales). With ``residual=True`` the action is instead an offset from a base setting
     (``residual_base``: the paper's by default, fixed tuned settings, or a per-move model's):
-    each setting's unit coordinate is the base's plus ``residual_scale`` × the action, so
-    the zero action holds the base exactly, and the return of zero actions is minus the
-    base's cost bit for bit. The acceleration law is the ``accel_law`` argument. NaN or
-    out-of-box actions raise ``ValueError``.
+    an offset of ``residual_scale`` × the action in :class:`vfgym.space.Relative`'s
+    coordinates (value, L/value, k, Ts/Tf on log scales; L keeps the base's L/value as the
+    value moves), so the zero action holds the base exactly, and the return of zero
+    actions is minus the base's cost bit for bit. The acceleration law is the
+    ``accel_law`` argument. NaN or out-of-box actions raise ``ValueError``.
 
     ## Observation Space
 

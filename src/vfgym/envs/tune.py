@@ -36,7 +36,7 @@ class TuneConfig(EnvConfig):
     ----------
     scenario, split, seed_range, accel_law, axis, plant, measures, weights, bounds
         As :class:`vfgym.envs._common.EnvConfig`.
-    residual, residual_scale, residual_base, residual_ratio
+    residual, residual_scale, residual_base
         As :class:`vfgym.envs._common.EnvConfig` (``residual_base`` None: the paper's).
     violation_penalty : float
         Subtracted from the reward of a move that breaks a constraint (0: the reward is
@@ -97,7 +97,7 @@ class ActionMap:
     def __init__(self, config: TuneConfig) -> None:
         self.config = config
         self.residual = config.residual
-        self._dims = B.space_table(config.residual and config.residual_ratio)
+        self._dims = B.space_table()
         self._scales = config.residual_scales()
         self._unit = np.zeros(len(SPACE))
 
@@ -118,10 +118,9 @@ class ActionMap:
         s = action_settings(action, law)  # checks the action
         if base is None:
             return s
-        c = self.config
         a = as_action(action)
         base_row = np.array([getattr(base, f) for f in B.SETTING_FIELDS])
-        row = (a, self._dims, True, self._scales, c.residual_ratio, base_row, self._unit)
+        row = (a, self._dims, True, self._scales, base_row, self._unit)
         value, limit, k, ts = B.map_action(*row)
         return Settings(value_rad=value, error_limit_rad=limit, k=k, ts_over_tf=ts, accel_law=law)
 
@@ -145,9 +144,10 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     acceleration law is the ``accel_law`` argument. NaN or out-of-box actions raise
     ``ValueError``. With ``residual=True`` the action is instead an offset from a base
     setting (``residual_base``: the paper's by default, fixed settings, or a per-move
-    model's), as VFServo-v0's residual actions and through the same compiled mapping: each
-    setting's unit coordinate is the base's plus ``residual_scale`` × the action, so the
-    zero action gives the base exactly (``residual_ratio``: L's offset is of L/value).
+    model's), as VFServo-v0's residual actions and through the same compiled mapping: an
+    offset of ``residual_scale`` × the action in :class:`vfgym.space.Relative`'s
+    coordinates (value, L/value, k, Ts/Tf on log scales), so the zero action gives the base
+    exactly.
 
     ## Observation Space
 
@@ -229,7 +229,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         ``axis`` (an axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant,
         measures and move sets), the scoring path's inputs ``plant``, ``measures``,
         ``weights``, ``bounds`` (:func:`vfgym.evaluate`), and ``residual``,
-        ``residual_scale``, ``residual_base``, ``residual_ratio`` (residual actions),
+        ``residual_scale``, ``residual_base`` (residual actions),
         ``violation_penalty``.
 
     Raises
