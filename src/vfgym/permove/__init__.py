@@ -15,8 +15,12 @@ torch-free (numpy and the scoring path only; no torch, no stable-baselines3).
   file of ``vfgym fit``) a :class:`Tuner`, move → settings, that warns in one line when
   used off its machine or its training moves (:mod:`vfgym.permove.tuners`). A trained
   VFTune-v0 agent is read by :func:`vfgym.agents.load_tuner` into the same :class:`Tuner`.
+- :class:`EstimatingScheduler` adapts during the move on an axis whose plant is known only
+  within ranges: the robust base first, the plant told from the response, then settings
+  for that plant (:mod:`vfgym.permove.adaptive`).
 """
 
+from vfgym.permove.adaptive import AdaptiveOptions, EstimatingScheduler
 from vfgym.permove.fit import (
     FitConfig,
     FitResult,
@@ -54,6 +58,8 @@ from vfgym.permove.tuners import (
 
 __all__ = [
     "PRETRAINED",
+    "AdaptiveOptions",
+    "EstimatingScheduler",
     "FitConfig",
     "FitResult",
     "MoveOptimum",
