@@ -94,3 +94,13 @@ def test_bench_agents_groups_run_folders_by_algo_env_and_hyperparameters(tmp_pat
         ("sac", "VFServo-v0 #2"): ["b0"],
         ("td3", "VFServo-v0"): ["c0"],
     }
+
+
+def test_bench_estimating_runs_and_the_scheduler_holds_the_bases_feasibility():
+    """On a few pairs, with the shipped model as the base: the scheduler row is there, and
+    it breaks no limit the base holds (what its continuations are checked for)."""
+    args = ["--model", "src/vfgym/permove/pretrained/settings_model.json", "--moves", "2",
+            "--plants", "3", "--evals", "12"]  # fmt: skip
+    stdout = _run("bench_estimating.py", *args)
+    row = next(ln for ln in stdout.splitlines() if ln.startswith("| estimating scheduler |"))
+    assert row.rstrip().endswith("| 0 |"), row  # limits broken where the base holds

@@ -124,3 +124,21 @@ def test_schedule_headroom_runs_and_no_schedule_is_worse_than_the_optimum():
     optimum, *found = (float(c.split()[0]) for c in row.strip("| ").split(" | ")[2:])
     assert len(found) == 3 and all(c <= optimum for c in found)
     assert "from interval 0:" in out.stdout
+
+
+def test_adaptive_headroom_runs_and_no_schedule_is_worse_than_the_base():
+    """Its own check (the zero schedule costs the base's evaluate cost bit for bit) holds,
+    and each search starts from the zero schedule, so none ends above the base."""
+    model = "src/vfgym/permove/pretrained/settings_model.json"
+    args = ["--model", model, "--moves", "1", "--plants", "2", "--evals", "12"]
+    out = subprocess.run(
+        [sys.executable, "experiments/adaptive_headroom.py", *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    ratio = next(ln for ln in out.stdout.splitlines() if ln.startswith("| / base |"))
+    cells = [c.strip() for c in ratio.split("|")[2:] if c.strip()]
+    assert len(cells) == 4 and all(float(x) <= 1.0 for x in cells)
