@@ -21,6 +21,7 @@ import pytest
 import yaml
 
 from vfgym.cli import main
+from vfgym.permove import PRETRAINED
 
 HAS_SB3 = importlib.util.find_spec("stable_baselines3") is not None
 REPO = Path(__file__).resolve().parents[2]
@@ -157,6 +158,8 @@ CASES = [
     (["evaluate", "--settings", "list.yaml"], "list.yaml: settings=[1, 2, 3]"),
     (["evaluate", "--model", "missing.zip"], "missing.zip: no such file"),
     (["evaluate"], "nothing to evaluate"),
+    (["evaluate", "--adaptive", "missing.json"], "--adaptive missing.json: no such file"),
+    (["evaluate", "--adaptive", str(PRETRAINED)], "states no uncertainty"),
     # plot
     (["plot", "scurve", "--short-rad", "-1"], "--short-rad='-1' is out of range"),
     (["plot", "scurve", "--short-rad", "nan"], "--short-rad='nan' is out of range"),

@@ -7,6 +7,7 @@ import csv
 import json
 import sys
 import types
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,6 +18,7 @@ from vfgym.cli import main
 from vfgym.moves.baselines import rule_of_thumb
 from vfgym.moves.distribution import scenario_set
 
+ROOT = Path(__file__).resolve().parents[2]
 TUNED = {"value_rad": 0.7, "error_limit_rad": 0.7, "k": 350.0, "ts_over_tf": 0.25}
 
 
@@ -132,3 +134,21 @@ def test_bad_input_one_line(tmp_path, capsys, content, extra, needle, names_file
 def test_nothing_to_evaluate(tmp_path, capsys):
     assert run_eval(tmp_path, "--scenarios", "short-move") == 2
     assert "nothing to evaluate" in capsys.readouterr().err
+
+
+def test_adaptive_runs_a_settings_model_as_the_scheduler_that_tells_the_plant(tmp_path, capsys):
+    """--adaptive MODEL on an uncertain axis: one more column, judged on the same pairs as
+    the model itself; recorded in config.yaml."""
+    from vfgym.permove import PRETRAINED
+
+    axis = str(ROOT / "experiments" / "axes" / "loads-uncertain.yaml")
+    argv = ["evaluate", "--axis", axis, "--adaptive", str(PRETRAINED), "--model",
+            str(PRETRAINED), "--against", "paper", "--plants", "2", "--runs-dir",
+            str(tmp_path), "--name", "a"]  # fmt: skip
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    rows = [ln for ln in out.splitlines() if "(move, plant)" not in ln and "/64 (" in ln]
+    labels = ["model:settings_model", "adaptive:settings_model"]
+    assert [r.split()[0] for r in rows] == [*labels, "paper"]
+    cfg = yaml.safe_load((tmp_path / "evaluate" / "a" / "config.yaml").read_text())
+    assert [m["label"] for m in cfg["models"]] == labels

@@ -34,6 +34,10 @@ PAGES = ("README.md", "docs")  # the README and every Markdown page under docs/
 HAS_SB3 = importlib.util.find_spec("stable_baselines3") is not None
 
 TRIMS = {
+    "evaluate-axis": (
+        "evaluate on an uncertain axis: 2 test moves, 2 plants, 200 bootstrap resamples "
+        "(the axis's 32 moves x 16 plants: the adaptive scheduler's tables take ~2 min)"
+    ),
     "trials": (
         "sweeps: 4 trials (quick.yaml asks 300, ~35 s here; the cmaes line 500, minutes); "
         "the sampler, storage, workers and report paths run all the same"
@@ -54,6 +58,7 @@ SWEEP_TRIM = ["--trials", "4"]
 FIT_TRIM = ["--moves", "8", "--no-progress"]
 GRID_TRIM = ["--points", "3", "--refine", "1"]
 EVAL_TRIM = ["--count", "4", "--bootstrap", "200"]
+AXIS_EVAL_TRIM = ["--scenarios", "test-0,test-1", "--plants", "2", "--bootstrap", "200"]
 EVERY = [
     "eval_freq=64",
     "n_eval_scenarios=1",
@@ -395,7 +400,7 @@ README_RUNS: dict[str, list[Run]] = {
             trim="grid",
         ),
     ],
-    "vfgym evaluate --settings best.yaml [--model M.zip] --against "
+    "vfgym evaluate --settings best.yaml [--model M.zip] [--adaptive M.json] --against "
     "paper,rule-of-thumb,fixed-frequency,scurve --scenarios test": [
         Run(
             "eval",
@@ -560,6 +565,25 @@ README_RUNS: dict[str, list[Run]] = {
             ["fit", "--axis", "experiments/axes/loads-uncertain.yaml", *FIT_TRIM],
             writes=("runs/fit/loads-uncertain/settings_model.json",),
             trim="fit",
+        ),
+    ],
+    "vfgym evaluate --axis experiments/axes/loads-uncertain.yaml --adaptive "
+    "runs/fit/loads-uncertain/settings_model.json --model "
+    "runs/fit/loads-uncertain/settings_model.json": [
+        Run(
+            "eval-adaptive",
+            [
+                "evaluate",
+                "--axis",
+                "experiments/axes/loads-uncertain.yaml",
+                "--adaptive",
+                "runs/fit/loads-uncertain/settings_model.json",
+                "--model",
+                "runs/fit/loads-uncertain/settings_model.json",
+                *AXIS_EVAL_TRIM,
+            ],
+            needs=("fit-lu",),
+            trim="evaluate-axis",
         ),
     ],
     "vfgym train --algo ppo --env vfgym/VFServo-v0 --axis experiments/axes/loads-uncertain.yaml "

@@ -43,6 +43,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "(agents need the agents extra); repeat to compare several",
     )
     p.add_argument(
+        "--adaptive",
+        action="append",
+        default=[],
+        metavar="MODEL.json",
+        help="a settings model of the axis (vfgym fit's) run as a scheduler that holds its "
+        "robust setting for 2 ms, tells the true plant from the response and ramps to "
+        "settings for that plant (vfgym.permove.EstimatingScheduler; an --axis with an "
+        "uncertainty: block); repeat to compare several",
+    )
+    p.add_argument(
         "--against",
         default="paper,rule-of-thumb,fixed-frequency,scurve",
         metavar="NAMES",
@@ -137,6 +147,23 @@ def load_policy(model_path: str, axis: str | None = None, command: str = "evalua
     return load_tuner(str(p), axis, warn=warn_line(command))
 
 
+def adaptive_scheduler(model_path: str, axis: Any) -> Any:
+    """``--adaptive``: the axis's settings model run as a
+    :class:`vfgym.permove.EstimatingScheduler`; a one-line ``ValueError`` for a missing
+    file or an axis without uncertainty."""
+    from vfgym.permove import EstimatingScheduler, load_settings_model
+
+    if not Path(model_path).is_file():
+        raise ValueError(f"--adaptive {model_path}: no such file")
+    if axis.uncertainty.exact:
+        raise ValueError(
+            f"--adaptive {model_path} is not allowed on axis {axis.name}: it states no "
+            "uncertainty, so there is no plant to tell (give --axis FILE with an "
+            "uncertainty: block)"
+        )
+    return EstimatingScheduler(axis, load_settings_model(model_path))
+
+
 def run(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
@@ -157,8 +184,10 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS
     from vfgym.space import settings_to_dict
 
-    if not args.settings and not args.model:
-        raise ValueError("nothing to evaluate: give --settings FILE.yaml and/or --model MODEL")
+    if not args.settings and not args.model and not args.adaptive:
+        raise ValueError(
+            "nothing to evaluate: give --settings FILE.yaml, --model MODEL or --adaptive MODEL"
+        )
     on = axis_from_args(args)  # the problem: the paper's axis without --axis
     for opt, v in (("--count", args.count), ("--first-seed", args.first_seed)):
         if args.axis and v is not None:
@@ -201,6 +230,11 @@ def run(args: argparse.Namespace) -> int:
         Candidate(lab, policy=pol, source=m)
         for lab, pol, m in zip(m_labels, policies, args.model, strict=True)
     ]
+    a_labels = [f"adaptive:{lab}" for lab in _labels(args.adaptive, taken)]
+    cands += [
+        Candidate(lab, policy=adaptive_scheduler(m, on), source=m)
+        for lab, m in zip(a_labels, args.adaptive, strict=True)
+    ]
     plants = VERDICT_PLANTS if args.plants is None else args.plants
     report = compare(
         cands,
@@ -226,7 +260,10 @@ def run(args: argparse.Namespace) -> int:
                 for f, lab, s in zip(args.settings, s_labels, settings, strict=True)
             ],
             "models": [
-                {"file": m, "label": lab} for m, lab in zip(args.model, m_labels, strict=True)
+                {"file": m, "label": lab}
+                for m, lab in zip(
+                    [*args.model, *args.adaptive], [*m_labels, *a_labels], strict=True
+                )
             ],
             "against": [b.label for b in base],
             "scenarios": args.scenarios,
