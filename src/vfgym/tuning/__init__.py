@@ -24,29 +24,15 @@ from vfgym.tuning._aggregate import AGGREGATES, Aggregate, aggregate, aggregate_
 from vfgym.tuning._config import SAMPLERS, GridConfig, SweepConfig
 from vfgym.tuning._grid import GridResult, GridRow, run_grid
 from vfgym.tuning._objective import Objective, StoredResult, stored_result
-from vfgym.tuning._results import (
-    FoundReference,
-    best_trial,
-    compare,
-    find_reference,
-    gap_pct,
-    trial_settings,
-)
-from vfgym.tuning._storage import StorageSpec, find_storage, open_storage, resolve_storage
-from vfgym.tuning._study import (
-    baseline_params,
-    create_or_load,
-    make_sampler,
-    relative_space,
-    warm_starts,
-)
+from vfgym.tuning._results import best_trial, compare, trial_settings
+from vfgym.tuning._storage import StorageSpec, open_storage, resolve_storage
+from vfgym.tuning._study import baseline_params, create_or_load, make_sampler
 from vfgym.tuning._workers import WorkerReport, run_worker
 
 __all__ = [
     "AGGREGATES",
     "SAMPLERS",
     "Aggregate",
-    "FoundReference",
     "GridConfig",
     "GridResult",
     "GridRow",
@@ -61,16 +47,11 @@ __all__ = [
     "best_trial",
     "compare",
     "create_or_load",
-    "find_reference",
-    "find_storage",
-    "gap_pct",
     "make_sampler",
     "open_storage",
-    "relative_space",
     "resolve_storage",
     "run_grid",
     "run_worker",
     "stored_result",
     "trial_settings",
-    "warm_starts",
 ]

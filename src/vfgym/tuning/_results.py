@@ -198,22 +198,13 @@ def compare(
 
 
 class FoundReference(NamedTuple):
-    """A grid reference found for a sweep (:func:`find_reference`).
-
-    Attributes
-    ----------
-    record : dict
-        The grid's ``reference.yaml`` mapping.
-    path : pathlib.Path
-        The file.
-    """
+    """A grid's ``reference.yaml`` mapping (``record``) and its file (``path``)."""
 
     record: dict[str, Any]
     path: Path
 
     @property
     def cost(self) -> float:
-        """The reference's cost."""
         return float(self.record["cost"])
 
 
@@ -224,33 +215,11 @@ def find_reference(
     laws: tuple[str, ...],
     axis: str | None = None,
 ) -> FoundReference | None:
-    """The grid reference for these scenarios, laws and axis.
-
-    Parameters
-    ----------
-    cfg_reference : str or None
-        ``--reference``: a ``reference.yaml`` or a grid's run folder; ``None``: the least
-        costly match under ``runs_dir/grid/*/``.
-    runs_dir : str
-        The runs folder.
-    scenarios : list of Scenario
-        The sweep's scenarios.
-    laws : tuple of str
-        The sweep's laws.
-    axis : str or None
-        The axis's :func:`~vfgym.moves.axis.axis_digest`.
-
-    Returns
-    -------
-    FoundReference or None
-        The reference, or ``None`` when none matches.
-
-    Raises
-    ------
-    ValueError
-        Naming ``reference``, if the one given is not a grid reference or is for other
-        scenarios, laws or axis.
-    """
+    """The grid reference ``--reference`` names (a ``reference.yaml`` or a grid's run
+    folder), else the least costly one under ``runs_dir/grid/*/`` for these scenarios,
+    laws and axis (its :func:`~vfgym.moves.axis.axis_digest`); ``None`` if none matches.
+    ValueError naming ``reference`` if the one given is not one or is for another
+    problem."""
     names = [s.name for s in scenarios]
     if cfg_reference:
         p = Path(cfg_reference)
@@ -290,18 +259,7 @@ def find_reference(
 
 
 def gap_pct(cost: float, ref_cost: float) -> float:
-    """How far a cost is above a reference's.
-
-    Parameters
-    ----------
-    cost, ref_cost : float
-        The cost, and the reference's.
-
-    Returns
-    -------
-    float
-        100·(cost − ref_cost)/ref_cost, in %.
-    """
+    """How far ``cost`` is above ``ref_cost``, in % of it."""
     return 100.0 * (cost - ref_cost) / ref_cost
 
 
