@@ -89,9 +89,7 @@ def write_trials_csv(study: Study, path: Path) -> Path:
     (which needs pandas, not a dependency), each part of the stored result a column of
     its own, lists and dicts as JSON."""
     trials = study.get_trials(deepcopy=False)
-    names = study.metric_names or (
-        ["value"] if len(study.directions) == 1 else [str(i) for i in range(len(study.directions))]
-    )
+    names = study.metric_names or [str(i) for i in range(len(study.directions))]
     value_cols = ["value"] if len(names) == 1 else [f"values_{n}" for n in names]
     params = sorted({k for t in trials for k in t.params})
     flat = []
@@ -145,13 +143,13 @@ def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
     }
     if form == "pareto":
         jobs["pareto_front"] = lambda: figures.pareto_figure(study)
+    if len(study.get_trials(deepcopy=False, states=complete)) < 2:
+        return {name: "skipped: fewer than 2 completed trials" for name in jobs}
     out: dict[str, str] = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for name, draw in jobs.items():
             try:
-                if len(study.get_trials(deepcopy=False, states=complete)) < 2:
-                    raise ValueError("fewer than 2 completed trials")
                 fig = draw()
                 tmp = run_dir / f".{name}.tmp.png"
                 fig.savefig(tmp, dpi=100)
@@ -220,22 +218,21 @@ def find_reference(
     laws and axis (its :func:`~vfgym.moves.axis.axis_digest`); ``None`` if none matches.
     ValueError naming ``reference`` if the one given is not one or is for another
     problem."""
-    names = [s.name for s in scenarios]
+    want = {"scenarios": [s.name for s in scenarios], "laws": list(laws), "axis": axis}
+
+    def other(data: dict[str, Any]) -> str | None:  # the first key naming another problem
+        return next((k for k, v in want.items() if data.get(k) != v), None)
+
     if cfg_reference:
         p = Path(cfg_reference)
         p = p / "reference.yaml" if p.is_dir() else p
         data = read_yaml(p)
         if not isinstance(data, dict) or "cost" not in data or "settings" not in data:
             raise ValueError(f"reference={str(p)!r} is not a grid reference (no settings/cost)")
-        if data.get("scenarios") != names or list(data.get("laws", [])) != list(laws):
+        if (key := other(data)) is not None:
             raise ValueError(
-                f"reference={str(p)!r} is for scenarios {data.get('scenarios')} and laws "
-                f"{data.get('laws')}, not {names} and {list(laws)}"
-            )
-        if data.get("axis") != axis:
-            raise ValueError(
-                f"reference={str(p)!r} is for axis {data.get('axis')}, not {axis}: give a "
-                "grid reference made with the same --axis"
+                f"reference={str(p)!r} is for {key} {data.get(key)!r}, not {want[key]!r}: "
+                f"give a grid reference made for the same {key}"
             )
         return FoundReference(data, p)
     found = []
@@ -244,14 +241,9 @@ def find_reference(
             data = read_yaml(p)
         except ValueError:
             continue
-        if (
-            isinstance(data, dict)
-            and data.get("scenarios") == names
-            and list(data.get("laws", [])) == list(laws)
-            and data.get("axis") == axis
-            and isinstance(data.get("cost"), (int, float))
-        ):
-            found.append((float(data["cost"]), str(p), data))
+        cost = data.get("cost") if isinstance(data, dict) else None
+        if isinstance(cost, (int, float)) and other(data) is None:
+            found.append((float(cost), str(p), data))
     if not found:
         return None
     _, p, data = min(found, key=lambda x: (x[0], x[1]))
