@@ -8,13 +8,9 @@ samplers that learn them; the Pareto form minimises the three objectives' means.
 warm starts (the paper's settings, the rule of thumb) are the study's first trials, and a
 setting already scored in the study is not simulated again.
 
-Storage and workers are Optuna's: a SQLite file in the run folder (default), a journal
-file (processes on one machine), or PostgreSQL shared by machines; each worker is
-``study.optimize``, and on RDB storages Optuna's heartbeat fails and retries the trial of
-a worker that died. vfgym adds only what Optuna lacks (:mod:`vfgym.tuning._workers`):
-the study's trial budget across workers, dead workers on a journal, and Ctrl-C acted on
-only inside a simulation; the same command with the same ``--study`` continues a stopped
-study (docs/guide/distributed.md).
+Storage and workers are Optuna's (a SQLite file in the run folder by default, a journal
+file, or PostgreSQL shared by machines; each worker is ``study.optimize``); the same
+command with the same ``--study`` continues a stopped study (docs/guide/distributed.md).
 
 The grid (:func:`run_grid`) evaluates :func:`vfgym.space.grid` through the batched kernel,
 refined around its best points: the near-true optimum a sweep's best is reported against.

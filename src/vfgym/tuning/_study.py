@@ -26,8 +26,8 @@ if TYPE_CHECKING:
 META_KEY = "vfgym"
 """Study user attribute recording what the study optimises (checked when resumed)."""
 
-SAMPLER_NEEDS = {"cmaes": ("cmaes",), "gp": ("torch", "scipy")}
-"""Packages a sampler needs beyond Optuna."""
+SAMPLER_NEEDS = {"gp": ("torch",)}
+"""Packages a sampler needs beyond vfgym's dependencies (Optuna's GPSampler: torch)."""
 
 
 def check_sampler(cfg: SweepConfig) -> None:
