@@ -164,7 +164,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         obs = self._observations(study, trials)
         if len(obs) < 2:
             plan = self._sobol(max(last, 0))
-            return plan[len(trials) % len(plan) :][:1] or plan[:1]
+            return [plan[len(trials) % len(plan)]]
         return self._model(max(last, 0), obs, min(obs, key=rank), self._fresh_steps(),
                            len(obs), pending, self.options.extra_batch, "extra")  # fmt: skip
 
