@@ -57,7 +57,7 @@ from vfgym.moves.axis import axis_digest, axis_kwargs
 from vfgym.params import PAPER_PLANT
 from vfgym.scoring import CONSTRAINTS
 from vfgym.tuning._results import FoundReference, find_reference, gap_pct
-from vfgym.tuning._study import relative_space, warm_starts
+from vfgym.tuning._study import relative_space
 
 PROBLEMS = (
     "paper-step",
@@ -213,7 +213,7 @@ def run_relative(
     law = cfg.laws[0]
     objective = tuning.Objective(scenarios, cfg.laws, "cost", **axis_kwargs(axis),
                                  aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha)  # fmt: skip
-    starts = [s for _, s in warm_starts(scenarios, base)]
+    starts = [s for _, s in tuning.warm_starts(scenarios, base)]
     scored = objective.score_many(starts)  # (not counted: the study scores them again)
     best_start = min(
         range(len(starts)), key=lambda i: (not scored[i].attrs["feasible"], scored[i].values)

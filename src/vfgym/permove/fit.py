@@ -325,7 +325,7 @@ def best_fixed(scenarios: Sequence[Scenario], axis: Axis, trials: int) -> Settin
     Settings
         The best trial's settings (feasible first).
     """
-    from vfgym.tuning._study import warm_starts
+    from vfgym.tuning import warm_starts
 
     from .refine import short_sweep
 

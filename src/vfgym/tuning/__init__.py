@@ -22,7 +22,7 @@ from vfgym.tuning._grid import GridResult, GridRow, run_grid
 from vfgym.tuning._objective import Objective, StoredResult, stored_result
 from vfgym.tuning._results import best_trial, compare, trial_settings
 from vfgym.tuning._storage import StorageSpec, open_storage, resolve_storage
-from vfgym.tuning._study import baseline_params, create_or_load, make_sampler
+from vfgym.tuning._study import baseline_params, create_or_load, make_sampler, warm_starts
 from vfgym.tuning._workers import WorkerReport, run_worker
 
 __all__ = [
@@ -50,4 +50,5 @@ __all__ = [
     "run_worker",
     "stored_result",
     "trial_settings",
+    "warm_starts",
 ]

@@ -175,9 +175,22 @@ def baseline_params(laws: tuple[str, ...], settings: Settings = PAPER_SETTINGS) 
 
 
 def warm_starts(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> list[tuple[str, Settings]]:
-    """The settings a study tries first, labelled: the paper's, and the rule of thumb
-    (:func:`vfgym.moves.baselines.rule_of_thumb`) for the most loaded of the scenarios'
-    plants on ``base`` (its limits bind the set) if it differs."""
+    """The settings a study tries first.
+
+    Parameters
+    ----------
+    scenarios : list of Scenario
+        The sweep's scenarios.
+    base : Plant
+        The plant their loads are added to (an axis's).
+
+    Returns
+    -------
+    list of (str, Settings)
+        ``paper``: the paper's settings; ``rule-of-thumb``
+        (:func:`vfgym.moves.baselines.rule_of_thumb`) for the most loaded plant, whose
+        limits bind the set, if it differs.
+    """
     plants = [sc.plant(base) for sc in scenarios]
     loaded = min(plants, key=usable_accel) if plants else base
     out = [("paper", PAPER_SETTINGS)]
