@@ -29,6 +29,7 @@ from trials_to_reference import problem_config, problem_reference
 from vfgym import space, tuning
 from vfgym.moves.axis import axis_kwargs
 from vfgym.params import PAPER_PLANT
+from vfgym.tuning._study import relative_space
 
 POINTS = 7
 """Grid points per coordinate in each round."""
@@ -46,7 +47,7 @@ def main() -> None:
         ref = float(found[0]["cost"])
         cfg = problem_config(problem, objective="cost")
         scenarios, axis = cfg.scenario_list(), cfg.load_axis()
-        rel = tuning.relative_space(scenarios, PAPER_PLANT if axis is None else axis.plant)
+        rel = relative_space(scenarios, PAPER_PLANT if axis is None else axis.plant)
         objective = tuning.Objective(
             scenarios, cfg.laws, "cost", **axis_kwargs(axis),
             aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha,

@@ -56,6 +56,8 @@ from vfgym import space, tuning
 from vfgym.moves.axis import axis_digest, axis_kwargs
 from vfgym.params import PAPER_PLANT
 from vfgym.scoring import CONSTRAINTS
+from vfgym.tuning._results import FoundReference, find_reference, gap_pct
+from vfgym.tuning._study import relative_space
 
 PROBLEMS = (
     "paper-step",
@@ -111,12 +113,10 @@ def problem_config(problem: str, **kw: object) -> tuning.SweepConfig:
     return tuning.SweepConfig(scenarios=problem, **kw)  # type: ignore[arg-type]
 
 
-def problem_reference(refs: str, problem: str) -> tuning.FoundReference:
+def problem_reference(refs: str, problem: str) -> FoundReference:
     """The grid reference of a problem in the runs folder ``refs`` (exits if none)."""
     cfg = problem_config(problem)
-    found = tuning.find_reference(
-        None, refs, cfg.scenario_list(), ("rise",), axis_digest(cfg.load_axis())
-    )
+    found = find_reference(None, refs, cfg.scenario_list(), ("rise",), axis_digest(cfg.load_axis()))
     if found is None:
         raise SystemExit(f"no grid reference for {problem} in {refs}/grid/*/")
     return found
@@ -166,7 +166,7 @@ def run_one(
             res = tuning.stored_result(t)
             if res is not None and res.feasible:
                 best = min(best, res.cost)
-            gaps.append(tuning.gap_pct(best, ref_cost) if best < math.inf else math.inf)
+            gaps.append(gap_pct(best, ref_cost) if best < math.inf else math.inf)
             secs.append((t.datetime_complete - start).total_seconds())
         top = tuning.best_trial(study)
         top_res = None if top is None else tuning.stored_result(top)
@@ -209,7 +209,7 @@ def run_relative(
     scenarios = cfg.scenario_list()
     axis = cfg.load_axis()
     base = PAPER_PLANT if axis is None else axis.plant
-    rel = tuning.relative_space(scenarios, base)
+    rel = relative_space(scenarios, base)
     law = cfg.laws[0]
     objective = tuning.Objective(scenarios, cfg.laws, "cost", **axis_kwargs(axis),
                                  aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha)  # fmt: skip
@@ -243,7 +243,7 @@ def run_relative(
                     best = float(res.values)
                 key = (not res.attrs["feasible"], res.values)
                 top = key if top is None or key < top else top
-                gaps.append(tuning.gap_pct(best, ref_cost) if best < math.inf else math.inf)
+                gaps.append(gap_pct(best, ref_cost) if best < math.inf else math.inf)
                 secs.append(time.monotonic() - start)
     return Run(gaps, secs, bool(top is not None and not top[0]))
 

@@ -17,7 +17,12 @@ from vfgym.moves.axis import load_axis
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning import AGGREGATES, aggregate, aggregate_costs
-from vfgym.tuning._aggregate import check_aggregate, cvar
+from vfgym.tuning._aggregate import check_aggregate
+
+
+def cvar(costs, alpha=0.25) -> float:
+    return float(aggregate_costs(costs, "cvar", alpha))
+
 
 AXES = Path(__file__).resolve().parents[2] / "experiments" / "axes"
 

@@ -88,6 +88,18 @@ def test_sweep_reports_its_gap_to_the_reference(grid_run, capsys):
     assert "reference" in capsys.readouterr().err
 
 
+def test_a_reference_for_another_problem_is_passed_over_or_refused_by_its_key(grid_run):
+    from vfgym.tuning._results import find_reference
+
+    scenarios = tuning.GridConfig(scenarios="short-move").scenario_list()
+    runs = str(grid_run.parent.parent)
+    assert find_reference(None, runs, scenarios, ("rise",)).path == grid_run / "reference.yaml"
+    for laws, axis, key in ((("rise", "slew"), None, "laws"), (("rise",), "abc", "axis")):
+        assert find_reference(None, runs, scenarios, laws, axis) is None
+        with pytest.raises(ValueError, match=f"^reference=.* is for {key} "):
+            find_reference(str(grid_run), runs, scenarios, laws, axis)
+
+
 def test_bad_grid_options(tmp_path, capsys):
     assert cli.main(["grid", "--points", "1", "--runs-dir", str(tmp_path)]) == 2
     err = capsys.readouterr().err

@@ -11,6 +11,7 @@ import pytest
 import yaml
 
 from vfgym import cli, tuning
+from vfgym.tuning._storage import find_storage
 
 
 @pytest.mark.parametrize("kind", ["sqlite", "journal"])
@@ -20,11 +21,11 @@ def test_a_recorded_storage_is_found_again_even_when_the_folder_moved(tmp_path, 
     study = optuna.create_study(study_name="s", storage=tuning.open_storage(spec))
     study.optimize(lambda t: t.suggest_float("x", 0.0, 1.0), n_trials=3)
     params = [t.params for t in study.trials]
-    assert tuning.find_storage(spec.display, run) == spec  # as config.yaml records it
-    assert tuning.find_storage(kind, run) == spec
+    assert find_storage(spec.display, run) == spec  # as config.yaml records it
+    assert find_storage(kind, run) == spec
     moved = tmp_path / "b"
     shutil.move(run, moved)
-    found = tuning.find_storage(spec.display, moved)  # the old path is gone
+    found = find_storage(spec.display, moved)  # the old path is gone
     assert found.kind == kind and found.path == str(
         (moved / run.joinpath(spec.path).name).resolve()
     )
@@ -44,7 +45,7 @@ def test_a_recorded_storage_is_found_again_even_when_the_folder_moved(tmp_path, 
 )
 def test_find_storage_bad_input(tmp_path, text, needle):
     with pytest.raises(ValueError, match="storage=") as e:
-        tuning.find_storage(text, tmp_path)
+        find_storage(text, tmp_path)
     assert needle in str(e.value) and "\n" not in str(e.value)
 
 

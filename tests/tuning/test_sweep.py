@@ -14,6 +14,7 @@ from vfgym import cli, space, tuning
 from vfgym.commands._common import load_settings
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import CONSTRAINTS, evaluate
+from vfgym.tuning._results import gap_pct
 from vfgym.tuning._study import SAMPLER_NEEDS
 
 
@@ -299,7 +300,7 @@ def test_storage_urls(tmp_path):
 
 
 def test_gap_and_best_trial_prefers_feasible():
-    assert tuning.gap_pct(1.01, 1.0) == pytest.approx(1.0)
+    assert gap_pct(1.01, 1.0) == pytest.approx(1.0)
     study = optuna.create_study()
     dist = space.distributions()
     for cost, feas in ((1.0, False), (2.0, True), (3.0, True)):

@@ -98,6 +98,7 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.commands._common import Interrupted
     from vfgym.io.runs import read_yaml
     from vfgym.moves.axis import axis_digest
+    from vfgym.tuning._results import find_reference
     from vfgym.tuning._study import check_sampler, trial_budget
 
     file_data = read_yaml(args.config) if args.config else None
@@ -113,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
     _check_same_storage(run_dir, spec.display)
     axis = cfg.load_axis()
     reference = (
-        tuning.find_reference(cfg.reference, cfg.runs_dir, scenarios, cfg.laws, axis_digest(axis))
+        find_reference(cfg.reference, cfg.runs_dir, scenarios, cfg.laws, axis_digest(axis))
         if cfg.aggregate == "mean"
         else None
     )  # a grid's reference is a mean cost
@@ -386,7 +387,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     from vfgym.params import PAPER_SETTINGS
     from vfgym.report import axis_verdict, compact_rows, format_compact, format_verdict
     from vfgym.tuning._aggregate import describe, set_cost
-    from vfgym.tuning._results import best_record, write_plots, write_trials_csv
+    from vfgym.tuning._results import best_record, gap_pct, write_plots, write_trials_csv
     from vfgym.tuning._study import trial_budget
 
     write_trials_csv(study, run_dir / "trials.csv")
@@ -434,7 +435,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         lines.append(
             f"best: trial {best.number}, {describe(cfg)} cost {record.cost:.4f} "
             f"({'feasible' if record.feasible else 'INFEASIBLE'}) against the paper's "
-            f"{paper_cost:.4f} ({tuning.gap_pct(record.cost, paper_cost):+.1f} %)"
+            f"{paper_cost:.4f} ({gap_pct(record.cost, paper_cost):+.1f} %)"
         )
         if record.reference is not None:
             lines.append(

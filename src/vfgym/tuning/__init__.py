@@ -8,13 +8,9 @@ samplers that learn them; the Pareto form minimises the three objectives' means.
 warm starts (the paper's settings, the rule of thumb) are the study's first trials, and a
 setting already scored in the study is not simulated again.
 
-Storage and workers are Optuna's: a SQLite file in the run folder (default), a journal
-file (processes on one machine), or PostgreSQL shared by machines; each worker is
-``study.optimize``, and on RDB storages Optuna's heartbeat fails and retries the trial of
-a worker that died. vfgym adds only what Optuna lacks (:mod:`vfgym.tuning._workers`):
-the study's trial budget across workers, dead workers on a journal, and Ctrl-C acted on
-only inside a simulation; the same command with the same ``--study`` continues a stopped
-study (docs/guide/distributed.md).
+Storage and workers are Optuna's (a SQLite file in the run folder by default, a journal
+file, or PostgreSQL shared by machines; each worker is ``study.optimize``); the same
+command with the same ``--study`` continues a stopped study (docs/guide/distributed.md).
 
 The grid (:func:`run_grid`) evaluates :func:`vfgym.space.grid` through the batched kernel,
 refined around its best points: the near-true optimum a sweep's best is reported against.
@@ -24,29 +20,15 @@ from vfgym.tuning._aggregate import AGGREGATES, Aggregate, aggregate, aggregate_
 from vfgym.tuning._config import SAMPLERS, GridConfig, SweepConfig
 from vfgym.tuning._grid import GridResult, GridRow, run_grid
 from vfgym.tuning._objective import Objective, StoredResult, stored_result
-from vfgym.tuning._results import (
-    FoundReference,
-    best_trial,
-    compare,
-    find_reference,
-    gap_pct,
-    trial_settings,
-)
-from vfgym.tuning._storage import StorageSpec, find_storage, open_storage, resolve_storage
-from vfgym.tuning._study import (
-    baseline_params,
-    create_or_load,
-    make_sampler,
-    relative_space,
-    warm_starts,
-)
+from vfgym.tuning._results import best_trial, compare, trial_settings
+from vfgym.tuning._storage import StorageSpec, open_storage, resolve_storage
+from vfgym.tuning._study import baseline_params, create_or_load, make_sampler, warm_starts
 from vfgym.tuning._workers import WorkerReport, run_worker
 
 __all__ = [
     "AGGREGATES",
     "SAMPLERS",
     "Aggregate",
-    "FoundReference",
     "GridConfig",
     "GridResult",
     "GridRow",
@@ -61,12 +43,8 @@ __all__ = [
     "best_trial",
     "compare",
     "create_or_load",
-    "find_reference",
-    "find_storage",
-    "gap_pct",
     "make_sampler",
     "open_storage",
-    "relative_space",
     "resolve_storage",
     "run_grid",
     "run_worker",

@@ -41,18 +41,6 @@ def check_aggregate(how: Any, cvar_alpha: Any) -> tuple[str, float]:
     return how, check_real("cvar_alpha", cvar_alpha, 0.0, 1.0, lo_open=True)
 
 
-def cvar(costs: Any, alpha: float = DEFAULT_CVAR_ALPHA) -> float:
-    """The mean of the costliest ``alpha`` share of the finite costs (NaN if none)."""
-    x = np.asarray(costs, dtype=float).ravel()
-    x = np.sort(x[np.isfinite(x)])[::-1]
-    n = x.size
-    if n == 0:
-        return math.nan
-    above = np.arange(n) / n  # the weight of the moves costlier than each one
-    w = np.minimum(1.0 / n, np.maximum(0.0, alpha - above))
-    return float(np.dot(w, x) / w.sum())
-
-
 def aggregate_costs(
     costs: Any, how: str = DEFAULT_AGGREGATE, cvar_alpha: float = DEFAULT_CVAR_ALPHA
 ) -> np.ndarray:
@@ -80,9 +68,12 @@ def aggregate_costs(
         x = row[np.isfinite(row)]
         if x.size == 0:
             return math.nan
-        return float(
-            x.mean() if how == "mean" else x.max() if how == "worst" else cvar(x, cvar_alpha)
-        )
+        if how != "cvar":
+            return float(x.mean() if how == "mean" else x.max())
+        x, n = np.sort(x)[::-1], x.size
+        above = np.arange(n) / n  # the weight of the moves costlier than each one
+        w = np.minimum(1.0 / n, np.maximum(0.0, cvar_alpha - above))
+        return float(np.dot(w, x) / w.sum())
 
     out = np.array([one(r) for r in np.atleast_2d(c)], dtype=np.float64)
     return out.reshape(()) if c.ndim == 1 else out

@@ -14,8 +14,8 @@ basins, and a compass stays in the first it finds. So the search alternates:
    move to the best poll that beats the centre; per direction widen the step ×1.5 where a
    poll beat the centre, else halve it.
 3. ``model``: once the compass has spent ``compass_trials`` trials without moving, or its
-   steps are below ``min_step``, a batch over the whole space maximising the expected
-   improvement (by at least ``xi``) times the probability of feasibility
+   steps are below ``min_step``, ``model_batch`` points over the whole space maximising
+   the expected improvement (by at least ``xi``) times the probability of feasibility
    (:mod:`vfgym.tuning._model`); until a feasible point beats the centre, where the
    compass starts again. Between batches a compass cut short with a step still at or above
    ``resume_floor`` goes on; a batch's best point of another basin within ``explore_gap``
@@ -46,43 +46,18 @@ ATTR = "vfgym:compass"
 
 @dataclass(frozen=True)
 class CompassOptions:
-    """Settings of :class:`CompassSampler`, as it runs by default.
+    """Settings of :class:`CompassSampler`, as it runs by default (the module docstring
+    says where each acts; step sizes in natural-log units)."""
 
-    Attributes
-    ----------
-    n_init : int
-        Latin-hypercube points of the first generation.
-    step0, min_step : float
-        First and smallest compass step (natural-log units).
-    compass_trials : int
-        Trials of a compass before the model is consulted (a compass whose last
-        generation moved goes on past it).
-    model_batch : int
-        Points of a model batch.
-    xi : float
-        Least relative improvement the model seeks over the best feasible cost.
-    extra_batch : int
-        Model points handed to a worker that asks while another's generation runs.
-    explore_gap : float
-        A model point of another basin within this fraction of the centre's cost gets a
-        compass.
-    refit_growth : float
-        A model batch fits its Gaussian processes' hyperparameters again (from the last
-        fit's) once the completed trials number this many times those of the last fit.
-    resume_floor : float
-        After a model batch that did not beat the centre, a compass with a step still at
-        or above this goes on from the centre with its steps.
-    """
-
-    n_init: int = 6
-    step0: float = 0.4
+    n_init: int = 6  # Latin-hypercube points of the first generation
+    step0: float = 0.4  # the first compass step along each direction
     min_step: float = 0.1
     compass_trials: int = 50
     model_batch: int = 8
     xi: float = 0.03
-    extra_batch: int = 4
+    extra_batch: int = 4  # model points for a worker asking while a generation runs
     explore_gap: float = 0.1
-    refit_growth: float = 1.25
+    refit_growth: float = 1.25  # hyperparameters fitted again once the trials grow this much
     resume_floor: float = 0.025
 
 
@@ -189,7 +164,7 @@ class CompassSampler(optuna.samplers.BaseSampler):
         obs = self._observations(study, trials)
         if len(obs) < 2:
             plan = self._sobol(max(last, 0))
-            return plan[len(trials) % len(plan) :][:1] or plan[:1]
+            return [plan[len(trials) % len(plan)]]
         return self._model(max(last, 0), obs, min(obs, key=rank), self._fresh_steps(),
                            len(obs), pending, self.options.extra_batch, "extra")  # fmt: skip
 

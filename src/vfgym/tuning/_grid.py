@@ -141,8 +141,7 @@ def run_grid(
             done += len(chunk)
             if progress is not None:
                 progress(done, max(total, done), best_cost)
-    feas = [r for r in rows.values() if r.feasible]
-    best = min(feas or rows.values(), key=lambda r: r.cost)
+    best = min(rows.values(), key=lambda r: (not r.feasible, r.cost))
     return GridResult(list(rows.values()), best, scenarios)
 
 

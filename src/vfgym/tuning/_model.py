@@ -14,6 +14,7 @@ from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 from scipy.special import log_ndtr
+from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
 from vfgym.tuning._gp import Believer, GaussianProcess, log_expected_improvement
 
@@ -46,6 +47,7 @@ class Proposal(NamedTuple):
     thetas: dict[str, list[float]]
 
 
+@threadpool_limits.wrap(limits=1, user_api="blas")
 def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
             xi: float, rng: np.random.Generator, n_laws: int = 1,
             starts: dict[str, list[float]] | None = None,
@@ -56,15 +58,6 @@ def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n:
     ``starts`` (a previous batch's :attr:`Proposal.thetas`), or keeps it unless ``refit``.
     The linear algebra runs on one thread: OpenBLAS's threads spin on matrices this
     small, 30x slower on a busy machine."""
-    from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
-
-    with threadpool_limits(1, user_api="blas"):
-        return _propose(x, obs, pending, n, xi, rng, n_laws, starts, refit)
-
-
-def _propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n: int,
-             xi: float, rng: np.random.Generator, n_laws: int,
-             starts: dict[str, list[float]] | None, refit: bool) -> Proposal:  # fmt: skip
     if len(obs) > MODEL_POINTS:
         order = sorted(range(len(obs)), key=lambda i: rank(obs[i]))
         keep = sorted(set(order[: MODEL_POINTS // 2]) | set(range(len(obs))[-MODEL_POINTS // 2 :]))

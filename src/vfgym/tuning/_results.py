@@ -89,9 +89,7 @@ def write_trials_csv(study: Study, path: Path) -> Path:
     (which needs pandas, not a dependency), each part of the stored result a column of
     its own, lists and dicts as JSON."""
     trials = study.get_trials(deepcopy=False)
-    names = study.metric_names or (
-        ["value"] if len(study.directions) == 1 else [str(i) for i in range(len(study.directions))]
-    )
+    names = study.metric_names or [str(i) for i in range(len(study.directions))]
     value_cols = ["value"] if len(names) == 1 else [f"values_{n}" for n in names]
     params = sorted({k for t in trials for k in t.params})
     flat = []
@@ -145,13 +143,13 @@ def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
     }
     if form == "pareto":
         jobs["pareto_front"] = lambda: figures.pareto_figure(study)
+    if len(study.get_trials(deepcopy=False, states=complete)) < 2:
+        return {name: "skipped: fewer than 2 completed trials" for name in jobs}
     out: dict[str, str] = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for name, draw in jobs.items():
             try:
-                if len(study.get_trials(deepcopy=False, states=complete)) < 2:
-                    raise ValueError("fewer than 2 completed trials")
                 fig = draw()
                 tmp = run_dir / f".{name}.tmp.png"
                 fig.savefig(tmp, dpi=100)
@@ -198,22 +196,13 @@ def compare(
 
 
 class FoundReference(NamedTuple):
-    """A grid reference found for a sweep (:func:`find_reference`).
-
-    Attributes
-    ----------
-    record : dict
-        The grid's ``reference.yaml`` mapping.
-    path : pathlib.Path
-        The file.
-    """
+    """A grid's ``reference.yaml`` mapping (``record``) and its file (``path``)."""
 
     record: dict[str, Any]
     path: Path
 
     @property
     def cost(self) -> float:
-        """The reference's cost."""
         return float(self.record["cost"])
 
 
@@ -224,49 +213,26 @@ def find_reference(
     laws: tuple[str, ...],
     axis: str | None = None,
 ) -> FoundReference | None:
-    """The grid reference for these scenarios, laws and axis.
+    """The grid reference ``--reference`` names (a ``reference.yaml`` or a grid's run
+    folder), else the least costly one under ``runs_dir/grid/*/`` for these scenarios,
+    laws and axis (its :func:`~vfgym.moves.axis.axis_digest`); ``None`` if none matches.
+    ValueError naming ``reference`` if the one given is not one or is for another
+    problem."""
+    want = {"scenarios": [s.name for s in scenarios], "laws": list(laws), "axis": axis}
 
-    Parameters
-    ----------
-    cfg_reference : str or None
-        ``--reference``: a ``reference.yaml`` or a grid's run folder; ``None``: the least
-        costly match under ``runs_dir/grid/*/``.
-    runs_dir : str
-        The runs folder.
-    scenarios : list of Scenario
-        The sweep's scenarios.
-    laws : tuple of str
-        The sweep's laws.
-    axis : str or None
-        The axis's :func:`~vfgym.moves.axis.axis_digest`.
+    def other(data: dict[str, Any]) -> str | None:  # the first key naming another problem
+        return next((k for k, v in want.items() if data.get(k) != v), None)
 
-    Returns
-    -------
-    FoundReference or None
-        The reference, or ``None`` when none matches.
-
-    Raises
-    ------
-    ValueError
-        Naming ``reference``, if the one given is not a grid reference or is for other
-        scenarios, laws or axis.
-    """
-    names = [s.name for s in scenarios]
     if cfg_reference:
         p = Path(cfg_reference)
         p = p / "reference.yaml" if p.is_dir() else p
         data = read_yaml(p)
         if not isinstance(data, dict) or "cost" not in data or "settings" not in data:
             raise ValueError(f"reference={str(p)!r} is not a grid reference (no settings/cost)")
-        if data.get("scenarios") != names or list(data.get("laws", [])) != list(laws):
+        if (key := other(data)) is not None:
             raise ValueError(
-                f"reference={str(p)!r} is for scenarios {data.get('scenarios')} and laws "
-                f"{data.get('laws')}, not {names} and {list(laws)}"
-            )
-        if data.get("axis") != axis:
-            raise ValueError(
-                f"reference={str(p)!r} is for axis {data.get('axis')}, not {axis}: give a "
-                "grid reference made with the same --axis"
+                f"reference={str(p)!r} is for {key} {data.get(key)!r}, not {want[key]!r}: "
+                f"give a grid reference made for the same {key}"
             )
         return FoundReference(data, p)
     found = []
@@ -275,14 +241,9 @@ def find_reference(
             data = read_yaml(p)
         except ValueError:
             continue
-        if (
-            isinstance(data, dict)
-            and data.get("scenarios") == names
-            and list(data.get("laws", [])) == list(laws)
-            and data.get("axis") == axis
-            and isinstance(data.get("cost"), (int, float))
-        ):
-            found.append((float(data["cost"]), str(p), data))
+        cost = data.get("cost") if isinstance(data, dict) else None
+        if isinstance(cost, (int, float)) and other(data) is None:
+            found.append((float(cost), str(p), data))
     if not found:
         return None
     _, p, data = min(found, key=lambda x: (x[0], x[1]))
@@ -290,18 +251,7 @@ def find_reference(
 
 
 def gap_pct(cost: float, ref_cost: float) -> float:
-    """How far a cost is above a reference's.
-
-    Parameters
-    ----------
-    cost, ref_cost : float
-        The cost, and the reference's.
-
-    Returns
-    -------
-    float
-        100·(cost − ref_cost)/ref_cost, in %.
-    """
+    """How far ``cost`` is above ``ref_cost``, in % of it."""
     return 100.0 * (cost - ref_cost) / ref_cost
 
 

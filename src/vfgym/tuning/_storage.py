@@ -146,27 +146,10 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
 
 
 def find_storage(text: str, run_dir: Path) -> StorageSpec:
-    """The storage a sweep's run folder recorded, found again.
-
-    Parameters
-    ----------
-    text : str
-        The folder's ``config.yaml`` ``storage`` (:attr:`StorageSpec.display`) or what
-        ``--storage`` names.
-    run_dir : Path
-        The run folder, where a file no longer where it was recorded is looked for (the
-        folder was moved).
-
-    Returns
-    -------
-    StorageSpec
-        The storage, pointing at the moved file where it was moved.
-
-    Raises
-    ------
-    ValueError
-        Naming ``storage``, for a masked password, an unknown URL or a missing file.
-    """
+    """The storage a sweep's ``config.yaml`` recorded (:attr:`StorageSpec.display`) or
+    ``--storage`` names, its file looked for in ``run_dir`` if no longer where recorded (the
+    folder was moved). ValueError naming ``storage`` for a masked password, an unknown URL
+    or a missing file."""
     t = str(text).strip()
     if "***" in t:
         raise ValueError(f"storage={t!r}: the password is masked; give the storage URL again")

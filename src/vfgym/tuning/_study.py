@@ -26,8 +26,8 @@ if TYPE_CHECKING:
 META_KEY = "vfgym"
 """Study user attribute recording what the study optimises (checked when resumed)."""
 
-SAMPLER_NEEDS = {"cmaes": ("cmaes",), "gp": ("torch", "scipy")}
-"""Packages a sampler needs beyond Optuna."""
+SAMPLER_NEEDS = {"gp": ("torch",)}
+"""Packages a sampler needs beyond vfgym's dependencies (Optuna's GPSampler: torch)."""
 
 
 def check_sampler(cfg: SweepConfig) -> None:
@@ -121,21 +121,8 @@ def _grid_sampler(search_space: dict[str, list[Any]], seed: int | None) -> BaseS
 
 
 def relative_space(scenarios: list[Scenario], base: Plant = PAPER_PLANT) -> space.Relative:
-    """The compass sampler's coordinates for a scenario set.
-
-    Parameters
-    ----------
-    scenarios : list of Scenario
-        The sweep's scenarios.
-    base : Plant
-        The plant their loads are added to (an axis's).
-
-    Returns
-    -------
-    vfgym.space.Relative
-        ``k`` relative to the geometric mean, over the scenarios' plants, of
-        :func:`vfgym.params.usable_k`.
-    """
+    """The compass sampler's coordinates for a scenario set on ``base``: ``k`` relative to
+    the geometric mean, over the scenarios' plants, of :func:`vfgym.params.usable_k`."""
     ks = [usable_k(sc.plant(base)) for sc in scenarios] or [usable_k(base)]
     return space.Relative(float(np.exp(np.mean(np.log(ks)))))
 

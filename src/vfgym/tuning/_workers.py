@@ -55,18 +55,16 @@ class DeferredInterrupt:
         self.open = False
         self.pending = False
         self._old: Any = None
-        self._installed = False
 
     def __enter__(self) -> DeferredInterrupt:
         if threading.current_thread() is threading.main_thread():
             self._old = signal.signal(signal.SIGINT, self._handle)
-            self._installed = True
         return self
 
     def __exit__(self, kind: Any, exc: Any, tb: Any) -> None:
-        if self._installed:
+        if self._old is not None:
             signal.signal(signal.SIGINT, self._old)
-            self._installed = False
+            self._old = None
         if kind is None:
             self.check()
 
