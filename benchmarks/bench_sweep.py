@@ -34,7 +34,6 @@ from typing import NamedTuple
 
 from vfgym import evaluate, space, tuning
 from vfgym.io.runs import read_yaml
-from vfgym.moves.axis import axis_kwargs
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -80,7 +79,7 @@ def sweep_seconds(
     storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
     study, _ = tuning.create_or_load(storage, "bench", cfg, cfg.scenario_list())
     scenarios = cfg.scenario_list()
-    evaluate(space.Settings(), scenarios[:1], **axis_kwargs(cfg.load_axis()))  # compiled
+    evaluate(space.Settings(), scenarios[:1], axis=cfg.axis_or_paper())  # compiled
     statements = [0]
 
     def count(*_: object) -> None:
@@ -114,11 +113,11 @@ def kernel_seconds(config: Path, settings: list) -> Seconds:
     """Seconds to simulate each setting on the config's moves, one setting a call."""
     cfg = tuning.SweepConfig.resolve(read_yaml(config), {}, source=str(config))
     scenarios = cfg.scenario_list()
-    on_axis = axis_kwargs(cfg.load_axis())
-    evaluate(settings[0], scenarios, **on_axis)  # compiled
+    axis = cfg.axis_or_paper()
+    evaluate(settings[0], scenarios, axis=axis)  # compiled
     t, c = time.perf_counter(), time.process_time()
     for s in settings:
-        evaluate(s, scenarios, **on_axis)
+        evaluate(s, scenarios, axis=axis)
     return Seconds(time.perf_counter() - t, time.process_time() - c)
 
 

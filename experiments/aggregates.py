@@ -27,7 +27,7 @@ import yaml
 
 from vfgym import cli, evaluate, tuning
 from vfgym.commands._common import load_settings
-from vfgym.moves.axis import PAPER_AXIS, axis_kwargs, load_axis
+from vfgym.moves.axis import PAPER_AXIS, load_axis
 
 
 def one_run(axis: str, how: str, seed: int, args: argparse.Namespace, runs: str) -> dict:
@@ -47,7 +47,7 @@ def one_run(axis: str, how: str, seed: int, args: argparse.Namespace, runs: str)
     rows = {r["controller"]: r for r in summary["verdict"]["controllers"]}
     ax = PAPER_AXIS if axis == "default" else load_axis(axis)
     test = ax.scenarios("test")
-    cost = evaluate(load_settings(str(run / "best.yaml")), test, **axis_kwargs(ax)).cost[0]
+    cost = evaluate(load_settings(str(run / "best.yaml")), test, axis=ax).cost[0]
     return {
         "axis": ax.name,
         "aggregate": how,

@@ -29,7 +29,6 @@ from pathlib import Path
 import numpy as np
 
 from vfgym import Settings, evaluate, tuning
-from vfgym.moves.axis import axis_kwargs
 from vfgym.scoring import CONSTRAINTS
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -61,11 +60,11 @@ def main() -> None:
     for problem in args.problems.split(";"):
         cfg = problem_config(problem)
         scen = cfg.scenario_list()
-        on_axis = axis_kwargs(cfg.load_axis())
+        axis = cfg.axis_or_paper()
         data = problem_reference(args.refs, problem).record
         ref = Settings(**data["settings"])
         ref_cost = float(data["cost"])
-        own = tuning.aggregate(evaluate(ref, scen, **on_axis))
+        own = tuning.aggregate(evaluate(ref, scen, axis=axis))
         pairs = zip(CONSTRAINTS, own.constraints[0], strict=True)
         margins = ", ".join(f"{c} {v:+.3f}" for c, v in pairs)
         print(f"\n{problem}: reference cost {ref_cost:.5f} (re-scored {own.cost[0]:.5f}; "
@@ -73,7 +72,7 @@ def main() -> None:
         print(f"{'box':>7s} {'feasible':>9s} {'1 %':>7s} {'2 %':>7s} {'median':>8s} "
               f"{'best':>8s}  binds")  # fmt: skip
         for h in WIDTHS:
-            agg = tuning.aggregate(evaluate(box(ref, h, args.count, rng), scen, **on_axis))
+            agg = tuning.aggregate(evaluate(box(ref, h, args.count, rng), scen, axis=axis))
             gap = 100.0 * (agg.cost / ref_cost - 1.0)
             ok = agg.feasible
             bad = agg.constraints[~ok]

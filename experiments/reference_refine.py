@@ -27,7 +27,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from trials_to_reference import problem_config, problem_reference
 
 from vfgym import space, tuning
-from vfgym.moves.axis import axis_kwargs
 from vfgym.params import PAPER_PLANT
 from vfgym.tuning._study import relative_space
 
@@ -49,7 +48,7 @@ def main() -> None:
         scenarios, axis = cfg.scenario_list(), cfg.load_axis()
         rel = relative_space(scenarios, PAPER_PLANT if axis is None else axis.plant)
         objective = tuning.Objective(
-            scenarios, cfg.laws, "cost", **axis_kwargs(axis),
+            scenarios, cfg.laws, "cost", axis=cfg.axis_or_paper(),
             aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha,
         )  # fmt: skip
         b = rel.bounds()

@@ -53,7 +53,7 @@ import numpy as np
 import optuna
 
 from vfgym import space, tuning
-from vfgym.moves.axis import axis_digest, axis_kwargs
+from vfgym.moves.axis import axis_digest
 from vfgym.params import PAPER_PLANT
 from vfgym.scoring import CONSTRAINTS
 from vfgym.tuning._results import FoundReference, find_reference, gap_pct
@@ -211,7 +211,7 @@ def run_relative(
     base = PAPER_PLANT if axis is None else axis.plant
     rel = relative_space(scenarios, base)
     law = cfg.laws[0]
-    objective = tuning.Objective(scenarios, cfg.laws, "cost", **axis_kwargs(axis),
+    objective = tuning.Objective(scenarios, cfg.laws, "cost", axis=cfg.axis_or_paper(),
                                  aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha)  # fmt: skip
     starts = [s for _, s in tuning.warm_starts(scenarios, base)]
     scored = objective.score_many(starts)  # (not counted: the study scores them again)

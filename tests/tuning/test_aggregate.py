@@ -123,7 +123,7 @@ def test_feasible_only_if_feasible_on_every_move():
 def test_the_objective_minimises_the_aggregate_and_needs_every_train_move():
     axis = load_axis(AXES / "vertical.yaml")
     train = axis.scenarios("train")
-    on = {"plant": axis.plant, "measures": axis.measures}
+    on = {"axis": axis}
     ev = evaluate(PAPER_SETTINGS, train, **on)
     ok = [sc for sc, f in zip(train, ev.feasible[0], strict=True) if f]
     bad = [sc for sc, f in zip(train, ev.feasible[0], strict=True) if not f]

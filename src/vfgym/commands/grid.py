@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     from vfgym import tuning
     from vfgym._validate import check_output_path
     from vfgym.io.runs import read_yaml, record_command, write_text, write_yaml
-    from vfgym.moves.axis import AXIS_FILE, axis_kwargs, write_axis
+    from vfgym.moves.axis import AXIS_FILE, write_axis
     from vfgym.report import format_compact
     from vfgym.tuning._grid import grid_reference, write_grid_csv
 
@@ -100,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
     ref = grid_reference(cfg, result)
     ref["elapsed_s"] = round(elapsed, 3)
     write_yaml(run_dir / "reference.yaml", ref)
-    cmp = tuning.compare(result.best.settings, scenarios, label="grid", **axis_kwargs(axis))
+    cmp = tuning.compare(result.best.settings, scenarios, label="grid", axis=cfg.axis_or_paper())
     s = ref["settings"]
     n = len(result.rows)
     text = "\n".join(

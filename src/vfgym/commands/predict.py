@@ -43,7 +43,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from vfgym._validate import check_int, check_output_path
     from vfgym.commands._common import axis_from_args, scenario_from_args, warn_line
-    from vfgym.moves.axis import axis_kwargs
     from vfgym.space import settings_to_dict
 
     refine_n = (
@@ -81,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     if refine_n is not None:
         from vfgym.permove import refine
 
-        r = refine(scenario, settings, refine_n, seed=seed, **axis_kwargs(axis))
+        r = refine(scenario, settings, refine_n, seed=seed, axis=axis)
         doc = {
             "settings": settings_to_dict(r.settings),
             "source": f"{source}, refined by {refine_n} trials (seed {seed})",

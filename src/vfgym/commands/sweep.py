@@ -383,7 +383,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     and summary.yaml. Returns the exit status."""
     from vfgym import tuning
     from vfgym.io.runs import write_text, write_yaml
-    from vfgym.moves.axis import PAPER_AXIS, axis_kwargs
+    from vfgym.moves.axis import PAPER_AXIS
     from vfgym.params import PAPER_SETTINGS
     from vfgym.report import axis_verdict, compact_rows, format_compact, format_verdict
     from vfgym.tuning._aggregate import describe, set_cost
@@ -429,7 +429,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         lines.append("no completed trial yet")
     else:
         settings = tuning.trial_settings(best)
-        cmp = tuning.compare(settings, scenarios, **axis_kwargs(cfg.load_axis()))
+        cmp = tuning.compare(settings, scenarios, axis=cfg.axis_or_paper())
         paper_cost = set_cost(PAPER_SETTINGS, scenarios, cfg)  # as the sweep scores
         record = best_record(study, best, cfg, spec, scenarios, paper_cost, reference)
         lines.append(

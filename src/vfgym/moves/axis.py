@@ -368,24 +368,6 @@ def plant_on(
             axis.measures if measures is None else measures)  # fmt: skip
 
 
-def axis_kwargs(axis: Axis | None) -> dict[str, Any]:
-    """``plant=`` and ``measures=`` for :func:`vfgym.evaluate`, the reports and the
-    objective.
-
-    Parameters
-    ----------
-    axis : Axis or None
-        The axis, or ``None`` for the paper's.
-
-    Returns
-    -------
-    dict
-        The axis's ``plant`` and ``measures``, or empty (their defaults, the paper's) for
-        ``None``.
-    """
-    return {} if axis is None else {"plant": axis.plant, "measures": axis.measures}
-
-
 def content_digest(data: Any) -> str:
     """12 hex digits of the SHA-256 of ``data`` as key-sorted JSON: the fingerprint of a
     run folder's axis (:func:`axis_digest`) and of a tuner's machine
@@ -524,7 +506,6 @@ __all__ = [
     "MoveSets",
     "axis_digest",
     "axis_from_dict",
-    "axis_kwargs",
     "axis_notes",
     "axis_to_dict",
     "load_axis",

@@ -335,9 +335,7 @@ def best_fixed(scenarios: Sequence[Scenario], axis: Axis, trials: int) -> Settin
         scenarios,
         first,
         trials,
-        plant=axis.plant,
-        measures=axis.measures,
-        plants=axis.design_plants(),
+        axis=axis,
         also=[s for _, s in rest],
     ).settings
 

@@ -15,9 +15,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from vfgym._validate import check_int
+from vfgym.moves.axis import PAPER_AXIS, Axis
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
-from vfgym.plant.uncertainty import PlantVariant
+from vfgym.params import Settings
 
 
 @dataclass(frozen=True)
@@ -50,8 +50,7 @@ def refine(
     start: Settings,
     trials: int,
     *,
-    plant: Plant = PAPER_PLANT,
-    measures: Measures = DEFAULT_MEASURES,
+    axis: Axis = PAPER_AXIS,
     seed: int | None = 0,
 ) -> Refinement:
     """Run ``trials`` trials of the default sampler on one move, from ``start``.
@@ -64,10 +63,9 @@ def refine(
         The settings enqueued first (an amortised tuner's prediction).
     trials : int
         Trials in all, the enqueued one included, ≥ 1.
-    plant : Plant
-        The base plant (an axis's).
-    measures : Measures
-        Windows and bands of the measures (an axis's).
+    axis : Axis
+        The problem: its plant, measures and, where it states uncertainty, its design
+        plants, on which every trial must also be feasible.
     seed : int or None
         The sampler's seed.
 
@@ -82,7 +80,7 @@ def refine(
         If ``trials`` is not a whole number ≥ 1.
     """
     trials = check_int("refine", trials, 1)
-    return short_sweep([scenario], start, trials, plant=plant, measures=measures, seed=seed)
+    return short_sweep([scenario], start, trials, axis=axis, seed=seed)
 
 
 def short_sweep(
@@ -90,10 +88,8 @@ def short_sweep(
     start: Settings,
     trials: int,
     *,
-    plant: Plant = PAPER_PLANT,
-    measures: Measures = DEFAULT_MEASURES,
+    axis: Axis = PAPER_AXIS,
     seed: int | None = 0,
-    plants: Sequence[PlantVariant] = (),
     also: Sequence[Settings] = (),
 ) -> Refinement:
     """``trials`` trials of the default sampler on moves (the mean cost), ``start`` first.
@@ -106,13 +102,11 @@ def short_sweep(
         The settings enqueued first; their law is the one searched.
     trials : int
         Trials in all, ≥ 1.
-    plant, measures : Plant, Measures
-        The axis's plant and measures.
+    axis : Axis
+        The problem: its plant, measures and design plants (every trial must also be
+        feasible on them).
     seed : int or None
         The sampler's seed.
-    plants : sequence of PlantVariant
-        True plants every trial must also be feasible on (an axis's
-        :meth:`~vfgym.moves.axis.Axis.design_plants`).
     also : sequence of Settings
         More settings enqueued after ``start`` (a sweep's other warm starts).
 
@@ -140,13 +134,11 @@ def short_sweep(
         warnings.simplefilter("ignore")
         # coordinates from the moves on the axis's plant
         storage = optuna.storages.InMemoryStorage()
-        sampler = make_sampler(cfg, cfg.seed, list(scenarios), storage, plant=plant)
+        sampler = make_sampler(cfg, cfg.seed, list(scenarios), storage, plant=axis.plant)
         study = optuna.create_study(storage=storage, direction="minimize", sampler=sampler)
     for s in (start, *also):
         study.enqueue_trial(baseline_params(laws, s))
-    objective = Objective(
-        list(scenarios), laws, "cost", plant=plant, measures=measures, plants=plants
-    )
+    objective = Objective(list(scenarios), laws, "cost", axis=axis)
     study.optimize(objective, n_trials=trials)
     done = study.trials
     best = best_trial(study)

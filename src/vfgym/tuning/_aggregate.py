@@ -20,7 +20,6 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from vfgym._validate import check_choice, check_real
-from vfgym.moves.axis import axis_kwargs
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 from vfgym.scoring import Evaluation, evaluate
@@ -140,5 +139,5 @@ def describe(cfg: SweepConfig) -> str:
 def set_cost(settings: Settings, scenarios: Sequence[Scenario], cfg: SweepConfig) -> float:
     """A setting's cost over the sweep's scenarios on its axis, as the sweep scores it (the
     paper's settings', to report the tuned ones against)."""
-    ev = evaluate(settings, list(scenarios), **axis_kwargs(cfg.axis_or_paper()))
+    ev = evaluate(settings, list(scenarios), axis=cfg.axis_or_paper())
     return float(aggregate_costs(ev.cost[0], cfg.aggregate, cfg.cvar_alpha))

@@ -15,7 +15,7 @@ import numpy as np
 
 from vfgym import space
 from vfgym.io.runs import write_text
-from vfgym.moves.axis import axis_digest, axis_kwargs
+from vfgym.moves.axis import axis_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.scoring import CONSTRAINTS, evaluate
@@ -89,8 +89,8 @@ def run_grid(
         Every setting evaluated, and the best.
     """
     scenarios = cfg.scenario_list()
-    on_axis = axis_kwargs(cfg.axis_or_paper())
-    evaluate(PAPER_SETTINGS, scenarios, **on_axis)  # compile/load once before timing batches
+    axis = cfg.axis_or_paper()
+    evaluate(PAPER_SETTINGS, scenarios, axis=axis)  # compile/load once before timing batches
     levels: list[tuple[int, list[Settings]]] = [(0, space.grid(cfg.points, cfg.laws))]
     total = len(levels[0][1]) * (1 + cfg.refine * cfg.keep)
     rows: dict[Settings, GridRow] = {}
@@ -126,7 +126,7 @@ def run_grid(
         todo = [s for s in levels[-1][1] if s not in rows]
         for i in range(0, len(todo), cfg.batch):
             chunk = todo[i : i + cfg.batch]
-            agg = aggregate(evaluate(chunk, scenarios, **on_axis))
+            agg = aggregate(evaluate(chunk, scenarios, axis=axis))
             for j, s in enumerate(chunk):
                 rows[s] = GridRow(
                     level=level,

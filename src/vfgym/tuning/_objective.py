@@ -10,14 +10,14 @@ system attribute, the list Optuna reads into ``trial.constraints`` (Optuna's
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from contextlib import nullcontext
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from vfgym import space
+from vfgym.moves.axis import PAPER_AXIS, Axis
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
-from vfgym.plant.uncertainty import PlantVariant
+from vfgym.params import Settings
 from vfgym.scoring import CONSTRAINTS, evaluate
 from vfgym.tuning._aggregate import DEFAULT_AGGREGATE, DEFAULT_CVAR_ALPHA, aggregate
 
@@ -38,9 +38,8 @@ class Result(NamedTuple):
 
 
 class Objective:
-    """Settings from the trial → :func:`vfgym.evaluate` on the scenarios (on ``plant``
-    with ``measures``: an axis's) → cost (or the three objectives), with the result stored
-    on the trial.
+    """Settings from the trial → :func:`vfgym.evaluate` on the scenarios (on the axis)
+    → cost (or the three objectives), with the result stored on the trial.
 
     A setting already scored (in this process, or by a completed trial of the study) is
     not simulated again: the trial copies that result and records ``cached_from``.
@@ -53,17 +52,14 @@ class Objective:
         The acceleration laws searched.
     form : str
         ``cost`` (one objective) or ``pareto`` (the three objectives).
-    plant : Plant
-        The plant the settings run on (an axis's, see :class:`vfgym.moves.axis.Axis`).
-    measures : Measures
-        Windows and bands of the measures (an axis's).
+    axis : Axis
+        The problem: the settings run on its plant, are scored with its measures, and
+        must also be feasible on its :meth:`~vfgym.moves.axis.Axis.design_plants` (the
+        cost is the modelled plant's).
     aggregate : str
         The cost's aggregate over the scenarios (:func:`vfgym.tuning.aggregate`).
     cvar_alpha : float
         The share of the costliest scenarios ``cvar`` averages.
-    plants : sequence of PlantVariant
-        True plants a setting must also be feasible on (an axis's
-        :meth:`~vfgym.moves.axis.Axis.design_plants`); its cost is the modelled plant's.
     """
 
     def __init__(
@@ -72,16 +68,14 @@ class Objective:
         laws: tuple[str, ...],
         form: str,
         *,
-        plant: Plant = PAPER_PLANT,
-        measures: Measures = DEFAULT_MEASURES,
+        axis: Axis = PAPER_AXIS,
         aggregate: str = DEFAULT_AGGREGATE,
         cvar_alpha: float = DEFAULT_CVAR_ALPHA,
-        plants: Sequence[PlantVariant] = (),
     ) -> None:
         self.scenarios = scenarios
         self.laws = laws
         self.form = form
-        self.plant, self.measures, self.plants = plant, measures, tuple(plants)
+        self.axis, self.plants = axis, tuple(axis.design_plants())
         self.how = (aggregate, cvar_alpha)
         self.cache: dict[Settings, Result] = {}
         self.simulated = 0
@@ -122,8 +116,7 @@ class Objective:
             One per setting: the aggregate cost (``cost`` form) or the objectives' means,
             and the parts of its stored result.
         """
-        ev = evaluate(settings, self.scenarios, plant=self.plant, measures=self.measures,
-                      plants=self.plants)  # fmt: skip
+        ev = evaluate(settings, self.scenarios, axis=self.axis, plants=self.plants)
         agg = aggregate(ev, *self.how)
         out = []
         for i, s in enumerate(settings):

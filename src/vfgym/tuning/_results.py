@@ -16,9 +16,9 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 from vfgym import report, space
 from vfgym.io.runs import read_yaml, write_text
-from vfgym.moves.axis import machine_digest
+from vfgym.moves.axis import PAPER_AXIS, Axis, machine_digest
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, PAPER_SETTINGS, Measures, Plant, Settings
+from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.report import Candidate, Report
 from vfgym.scoring import CONSTRAINTS, OBJECTIVES
 from vfgym.tuning._config import SweepConfig
@@ -165,8 +165,7 @@ def compare(
     scenarios: list[Scenario],
     label: str = "tuned",
     *,
-    plant: Plant = PAPER_PLANT,
-    measures: Measures = DEFAULT_MEASURES,
+    axis: Axis = PAPER_AXIS,
 ) -> Report:
     """The paper's settings against ``best`` on each scenario (:func:`vfgym.report.compare`).
 
@@ -178,10 +177,8 @@ def compare(
         The sweep's (or grid's) scenario set.
     label : str
         ``best``'s column label.
-    plant : Plant
-        The plant the scenarios run on (an axis's).
-    measures : Measures
-        Windows and bands of the measures (an axis's).
+    axis : Axis
+        The problem the scenarios run on (its plant and measures).
 
     Returns
     -------
@@ -192,7 +189,7 @@ def compare(
         Candidate("paper", PAPER_SETTINGS, source="paper", role="baseline"),
         Candidate(label, best, source=label),
     ]
-    return report.compare(candidates, [], scenarios, plant=plant, measures=measures)
+    return report.compare(candidates, [], scenarios, axis=axis)
 
 
 class FoundReference(NamedTuple):

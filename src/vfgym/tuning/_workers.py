@@ -27,7 +27,7 @@ from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from vfgym.moves.axis import AxisNote, axis_kwargs
+from vfgym.moves.axis import AxisNote
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
@@ -158,12 +158,10 @@ def run_worker(
         storage = open_storage(spec, cfg.heartbeat, cfg.grace)
         sampler = make_sampler(cfg, seed, scenarios, storage)
         study = optuna.load_study(study_name=study_name, storage=storage, sampler=sampler)
-        objective = Objective(
-            scenarios, cfg.laws, str(cfg.objective), plant=axis.plant, measures=axis.measures,
-            aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha, plants=axis.design_plants(),
-        )  # fmt: skip
+        objective = Objective(scenarios, cfg.laws, str(cfg.objective), axis=axis,
+                              aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha)  # fmt: skip
         objective.guard = interrupts.allowed
-        evaluate(PAPER_SETTINGS, scenarios[:1], **axis_kwargs(axis))  # the kernel compiled first
+        evaluate(PAPER_SETTINGS, scenarios[:1], axis=axis)  # the kernel compiled first
         gate = _Budget(study, cfg, spec, interrupts)
         current: list[int] = []  # the trial in a simulation here
         ran: list[int] = []
