@@ -244,3 +244,35 @@ def test_a_working_folders_own_hyperparameter_file_is_read_before_the_shipped_on
     own.write_text("vfgym/VFTune-v0:\n  gamma: 0.5\n")
     assert hp.default_file("ppo") == Path("agents/hyperparams/ppo.yml")
     assert hp.load("ppo", "vfgym/VFTune-v0")["gamma"] == 0.5
+
+
+@pytest.mark.parametrize(
+    ("ratio", "scale", "warns"),
+    [
+        (True, [0.25, 0.0, 0.25, 0.25], False),  # the shipped files': the same actions
+        (True, [0.25, 0.25, 0.25, 0.25], True),  # L/value's offset over another range
+        (False, [0.25, 0.0, 0.25, 0.25], True),  # L alone, not L/value
+    ],
+)
+def test_a_run_saved_with_residual_ratio_loads_and_says_when_its_actions_changed(
+    tmp_path, ratio, scale, warns
+):
+    """Runs saved when residual actions had a ``residual_ratio`` option load (the option
+    dropped: actions are always offsets of L/value now), one line where L's actions
+    changed meaning."""
+    import warnings
+
+    from vfgym.agents.loaded import make_env, run_config
+    from vfgym.permove import TunerWarning
+
+    kw = {"residual": True, "residual_ratio": ratio, "residual_scale": scale}
+    cfg = {"algo": "ppo", "env": "vfgym/VFTune-v0", "hyperparams": {"env_kwargs": kw}}
+    (tmp_path / "config.yaml").write_text(yaml.safe_dump(cfg))
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        got = run_config(tmp_path / "best_model.zip")
+    env_kwargs = got["hyperparams"]["env_kwargs"]
+    assert "residual_ratio" not in env_kwargs
+    make_env("vfgym/VFTune-v0", env_kwargs)  # the env takes what is left
+    lines = [str(w.message) for w in seen if issubclass(w.category, TunerWarning)]
+    assert len(lines) == int(warns) and all("\n" not in ln for ln in lines)

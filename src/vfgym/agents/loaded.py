@@ -69,8 +69,34 @@ def run_config(model_path: str | Path) -> dict[str, Any]:
         if cfg.is_file():
             data = read_yaml(cfg)
             if isinstance(data, dict) and "algo" in data:
-                return data
+                return _without_residual_ratio(data, model_path)
     return {}
+
+
+def _without_residual_ratio(cfg: dict[str, Any], model_path: Path) -> dict[str, Any]:
+    """A run saved when residual actions had the option ``residual_ratio`` (they are now
+    always offsets of L/value, :class:`vfgym.space.Relative`): the option is dropped. Its
+    actions mean what they meant with the ratio on and L/value held (its scale 0, as the
+    shipped hyperparameters); otherwise one line says that L's actions changed meaning."""
+    kw = (cfg.get("hyperparams") or {}).get("env_kwargs")
+    if not isinstance(kw, dict) or "residual_ratio" not in kw:
+        return cfg
+    ratio = kw.pop("residual_ratio")
+    scale = kw.get("residual_scale")
+    held = isinstance(scale, (list, tuple)) and len(scale) == 4 and scale[1] == 0
+    if kw.get("residual") and not (ratio and held):
+        import warnings
+
+        from vfgym.permove import TunerWarning
+
+        was = "L/value over L's range" if ratio else "L alone"
+        warnings.warn(
+            f"{model_path}: trained with residual actions offsetting {was}; they now offset "
+            "L/value over its own range: its L actions mean something else (train it again)",
+            TunerWarning,
+            stacklevel=3,
+        )
+    return cfg
 
 
 def load_model(model_path: str | Path) -> tuple[Any, dict[str, Any]]:
