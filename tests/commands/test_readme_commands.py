@@ -638,6 +638,33 @@ README_RUNS: dict[str, list[Run]] = {
         ]
         for algo in ("ppo", "ppo_lstm")
     },
+    # docs/results/agents.md: SAC and TD3 on the adaptive env, the shipped hyperparameters
+    **{
+        f"vfgym train --algo {algo} --env vfgym/VFServo-v0 --seed 1 --axis "
+        "experiments/axes/loads-uncertain.yaml": [
+            Run(
+                f"adaptive-{algo}",
+                train_trim(
+                    [
+                        "train",
+                        "--algo",
+                        algo,
+                        "--env",
+                        "vfgym/VFServo-v0",
+                        "--seed",
+                        "1",
+                        "--axis",
+                        "experiments/axes/loads-uncertain.yaml",
+                    ]
+                ),
+                needs=("fit-lu",),
+                writes=(f"runs/train/{algo}-VFServo-v0-seed1/best_model.zip",),
+                trim="train",
+                agents=True,
+            )
+        ]
+        for algo in ("sac", "td3")
+    },
     "vfgym train --algo ppo --env vfgym/VFTune-v0 --seed 3": [
         Run(
             "tune-seed3",
