@@ -105,11 +105,11 @@ def judge(tuners, axis, test, variants) -> list[tuple[np.ndarray, np.ndarray]]:
 def own_base(folders: list[Path], axis):
     """The runs' residual base as their env makes it (move → settings), and its label;
     every run must have the same one."""
-    from vfgym.agents import make_env
-    from vfgym.io.runs import read_yaml
+    from vfgym.agents import make_env, run_config
 
-    kws = [(read_yaml(f / "config.yaml").get("hyperparams") or {}) for f in folders]
-    envs = {read_yaml(f / "config.yaml").get("env") for f in folders}
+    cfgs = [run_config(f / "best_model.zip") for f in folders]
+    kws = [(c.get("hyperparams") or {}) for c in cfgs]
+    envs = {c.get("env") for c in cfgs}
     bases = {str(k.get("env_kwargs", {}).get("residual_base")) for k in kws}
     if len(bases) != 1 or len(envs) != 1 or not kws[0].get("env_kwargs", {}).get("residual"):
         raise SystemExit(f"--base own: the runs have residual bases {sorted(bases)}; give one")
@@ -156,8 +156,9 @@ def start_costs(env, moves, plants) -> tuple[np.ndarray, np.ndarray]:
 def checkpoints(folder: Path) -> str:
     """Each checkpoint of a residual run on its validation pairs against its start (the
     base): a markdown table."""
-    from vfgym.agents import load_agent, make_env
+    from vfgym.agents import load_agent, make_env, run_config
     from vfgym.agents.selection import (
+        MIN_GAIN,
         SIGNIFICANCE,
         beats,
         validation_plants,
@@ -165,9 +166,8 @@ def checkpoints(folder: Path) -> str:
         validation_size,
     )
     from vfgym.agents.training import evaluate_policy_costs
-    from vfgym.io.runs import read_yaml
 
-    cfg = read_yaml(folder / "config.yaml")
+    cfg = run_config(folder / "best_model.zip")  # (a run of an earlier vfgym read as today's)
     params = cfg["hyperparams"]
     kw = params.get("env_kwargs") or {}
     n = validation_size(params, kw.get("axis"))
@@ -179,7 +179,8 @@ def checkpoints(folder: Path) -> str:
         f"feasible on {int(ok0.sum())}",
         "",
         "| steps | mean / start | gain (standard errors) | limits broken where the start "
-        f"holds | replaces the start (> {SIGNIFICANCE:g} s.e., no new break) |",
+        f"holds | replaces the start (> {SIGNIFICANCE:g} s.e. and {100 * MIN_GAIN:g} %, no new "
+        "break) |",
         "| --- | --- | --- | --- | --- |",
     ]
     ckpts = sorted(

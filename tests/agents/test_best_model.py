@@ -102,3 +102,11 @@ def test_a_run_folder_is_continued_only_on_the_same_problem(tmp_path):
         check_same_run(tmp_path, "ppo", "vfgym/VFServo-v0", 0, kw | {"axis": "b.yaml"})
     with pytest.raises(ValueError, match="seed=0, not 1"):
         check_same_run(tmp_path, "ppo", "vfgym/VFServo-v0", 1, kw)
+
+
+def test_a_gain_below_the_least_share_never_replaces_the_best():
+    """0.1 % cheaper on every pair (no spread: far beyond 2 standard errors) is below the
+    least gain; 0.6 % is not."""
+    assert not beats(BEST * 0.999, BEST)
+    assert beats(BEST * 0.994, BEST)
+    assert beats(BEST * 0.999, BEST, min_gain=0.0)

@@ -30,6 +30,7 @@ from .hyperparams import POLICIES, algo_class
 from .loaded import Agent, env_options, make_env, rollout_info, vecnormalize_path
 from .selection import (
     BEST_COSTS,
+    MIN_GAIN,
     SIGNIFICANCE,
     append_eval,
     beats,
@@ -375,7 +376,8 @@ def train(
         start = "its residual base itself" if env_kwargs.get("residual") else "the untrained policy"
         log(
             "no later model beat the start on the validation pairs (feasible wherever it is, "
-            f"cheaper by {SIGNIFICANCE:g} standard errors): best_model.zip is the start, {start}"
+            f"cheaper by {SIGNIFICANCE:g} standard errors and {100 * MIN_GAIN:g} %): "
+            f"best_model.zip is the start, {start}"
         )
     from .heldout import heldout_result
 
