@@ -10,11 +10,13 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import functools
 import os
 import random
 import re
 import time
 import warnings
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -229,13 +231,15 @@ def _rdb(spec: StorageSpec, heartbeat: int, grace: int | None, tries: int = 8) -
     )
 
     def rdb() -> RDBStorage:
-        return optuna.storages.RDBStorage(
-            spec.url,
-            engine_kwargs=kw,
-            heartbeat_interval=heartbeat,
-            grace_period=grace or 2 * heartbeat,
-            heartbeat_stale_trial_callback=RetryStale(spec.path),
-        )
+        common: dict[str, Any] = {
+            "engine_kwargs": kw,
+            "heartbeat_interval": heartbeat,
+            "grace_period": grace or 2 * heartbeat,
+            "heartbeat_stale_trial_callback": RetryStale(spec.path),
+        }
+        if spec.kind == "sqlite" and spec.path:
+            return _sqlite_storage()(spec.url, spec.path + ".pop", **common)
+        return optuna.storages.RDBStorage(spec.url, **common)
 
     for attempt in range(tries - 1):
         try:
@@ -316,25 +320,45 @@ class _Flock:
 
 
 def _sqlite_wal(storage: RDBStorage) -> None:
-    """Put the SQLite file in write-ahead-log mode with ``synchronous=NORMAL`` (a commit
-    needs no fsync: a process's crash loses nothing committed, a power cut may lose the
-    last commits), and begin every transaction ``IMMEDIATE``: SQLite has no ``SELECT ...
-    FOR UPDATE``, so Optuna's read-then-write of a trial's state let two workers both pop
-    the same enqueued trial (optuna/optuna#4002; the later one then failed with "Cannot
-    tell a COMPLETE trial"). Holding the write lock from the read on makes it atomic."""
+    """Put the SQLite file in write-ahead-log mode with ``synchronous=NORMAL``: readers never
+    wait for a writer (a worker frozen mid-write blocks none), and a commit needs no fsync
+    (a process's crash loses nothing committed; a power cut may lose the last commits)."""
     import sqlalchemy
 
     def on_connect(dbapi_conn: Any, _record: Any) -> None:
-        dbapi_conn.isolation_level = None  # no implicit BEGIN: on_begin issues it
         cur = dbapi_conn.cursor()
-        if str(cur.execute("PRAGMA journal_mode").fetchone()[0]).lower() != "wal":
-            cur.execute("PRAGMA journal_mode=WAL")
         cur.execute("PRAGMA synchronous=NORMAL")
         cur.close()
 
-    def on_begin(conn: Any) -> None:
-        conn.exec_driver_sql("BEGIN IMMEDIATE")
-
     sqlalchemy.event.listen(storage.engine, "connect", on_connect)
-    sqlalchemy.event.listen(storage.engine, "begin", on_begin)
-    storage.engine.dispose()  # pooled connections opened before the listeners
+    storage.engine.dispose()  # pooled connections opened before the listener
+    with storage.engine.connect() as conn:
+        mode = conn.exec_driver_sql("PRAGMA journal_mode").scalar()
+        if str(mode).lower() != "wal":
+            conn.exec_driver_sql("PRAGMA journal_mode=WAL")
+
+
+@functools.cache
+def _sqlite_storage() -> Callable[..., RDBStorage]:
+    """Optuna's RDB storage for a SQLite file, with the pop of an enqueued trial made
+    atomic: SQLite has no ``SELECT ... FOR UPDATE``, so Optuna's read of a waiting trial's
+    state and its write of "running" let two workers both pop the same trial
+    (optuna/optuna#4002; the later one then failed with "Cannot tell a COMPLETE trial").
+    That read and write run under an ``flock`` of the file's ``.pop`` (the kernel drops it
+    when its holder dies); readers are not held up."""
+    import optuna
+
+    class SQLiteStorage(optuna.storages.RDBStorage):
+        def __init__(self, url: str, pop_lock: str, **kw: Any) -> None:
+            self.pop_lock = pop_lock
+            super().__init__(url, **kw)
+
+        def set_trial_state_values(
+            self, trial_id: int, state: Any, values: Sequence[float] | None = None
+        ) -> bool:
+            if state != optuna.trial.TrialState.RUNNING:
+                return super().set_trial_state_values(trial_id, state, values)
+            with _Flock(self.pop_lock):
+                return super().set_trial_state_values(trial_id, state, values)
+
+    return SQLiteStorage
