@@ -74,6 +74,16 @@ TRAIN_TRIM = {
     "ppo_lstm": [*EVERY, "n_steps=32", "batch_size=32", "n_epochs=1"],
 }
 AGAINST = "paper,rule-of-thumb,fixed-frequency,scurve"
+LU = "experiments/axes/loads-uncertain.yaml"
+ADAPTIVE = [
+    "--env",
+    "vfgym/VFServo-v0",
+    "--seed",
+    "1",
+    "--axis",
+    "experiments/axes/loads-uncertain.yaml",
+]
+LONG = ["--hyperparams", "n_timesteps=500000"]
 
 
 def train_trim(argv: list[str]) -> list[str]:
@@ -609,61 +619,20 @@ README_RUNS: dict[str, list[Run]] = {
             agents=True,
         ),
     ],
-    # docs/results/agents.md: the adaptive agents' benchmark runs (their base fitted first)
+    # docs/results/agents.md: the adaptive agents' benchmark runs (their base fitted first):
+    # PPO and RecurrentPPO for 500 k steps, SAC and TD3 on their shipped hyperparameters
     **{
-        f"vfgym train --algo {algo} --env vfgym/VFServo-v0 --seed 1 --axis "
-        "experiments/axes/loads-uncertain.yaml --hyperparams n_timesteps=500000": [
+        " ".join(["vfgym train --algo", algo, *ADAPTIVE, *extra]): [
             Run(
                 f"adaptive-{algo}",
-                train_trim(
-                    [
-                        "train",
-                        "--algo",
-                        algo,
-                        "--env",
-                        "vfgym/VFServo-v0",
-                        "--seed",
-                        "1",
-                        "--axis",
-                        "experiments/axes/loads-uncertain.yaml",
-                        "--hyperparams",
-                        "n_timesteps=500000",
-                    ]
-                ),
+                train_trim(["train", "--algo", algo, *ADAPTIVE, *extra]),
                 needs=("fit-lu",),
                 writes=(f"runs/train/{algo}-VFServo-v0-seed1/best_model.zip",),
                 trim="train",
                 agents=True,
             )
         ]
-        for algo in ("ppo", "ppo_lstm")
-    },
-    # docs/results/agents.md: SAC and TD3 on the adaptive env, the shipped hyperparameters
-    **{
-        f"vfgym train --algo {algo} --env vfgym/VFServo-v0 --seed 1 --axis "
-        "experiments/axes/loads-uncertain.yaml": [
-            Run(
-                f"adaptive-{algo}",
-                train_trim(
-                    [
-                        "train",
-                        "--algo",
-                        algo,
-                        "--env",
-                        "vfgym/VFServo-v0",
-                        "--seed",
-                        "1",
-                        "--axis",
-                        "experiments/axes/loads-uncertain.yaml",
-                    ]
-                ),
-                needs=("fit-lu",),
-                writes=(f"runs/train/{algo}-VFServo-v0-seed1/best_model.zip",),
-                trim="train",
-                agents=True,
-            )
-        ]
-        for algo in ("sac", "td3")
+        for algo, extra in (("ppo", LONG), ("ppo_lstm", LONG), ("sac", []), ("td3", []))
     },
     "vfgym train --algo ppo --env vfgym/VFTune-v0 --seed 3": [
         Run(

@@ -175,7 +175,7 @@ class EstimatingScheduler(Scheduler):
         cont: Continuation | None = None
         t = 0
         while True:
-            act = np.zeros(4) if cont is None else _ramp(cont, table.hold, t)
+            act = np.zeros(4) if cont is None else _ramp(cont.action, cont.ramp, table.hold, t)
             obs, _, term, trunc, info = env.step(act)
             t += 1
             if term or trunc:
@@ -227,11 +227,12 @@ def _between(a: PlantVariant, b: PlantVariant, w: float) -> PlantVariant:
     return PlantVariant(**{k: u + w * (v - u) for k, (u, v) in x.items()})
 
 
-def _ramp(cont: Continuation, hold: int, t: int) -> np.ndarray:
-    """The action at interval ``t``: the base until ``hold``, then the linear ramp."""
+def _ramp(action: np.ndarray, ramp: int, hold: int, t: int) -> np.ndarray:
+    """The action at interval ``t``: the base until ``hold``, then a linear ramp of
+    ``ramp`` intervals to ``action``."""
     if t < hold:
         return np.zeros(4)
-    return cont.action * min(1.0, (t - hold + 1) / cont.ramp)
+    return action * min(1.0, (t - hold + 1) / ramp)
 
 
 def _episode(env: VFServoEnv, plant: PlantVariant, act: Any) -> tuple[dict[str, Any], int]:
@@ -271,10 +272,9 @@ def _search(
     def run(x: np.ndarray) -> tuple[bool, float, np.ndarray, int]:
         a = np.clip(x[:4], -1.0, 1.0)
         ramp = max(1, round(float(np.clip(x[4], 0.0, 1.0)) * steps))
-        c = Continuation(plant, np.empty(0), a, ramp, math.nan)
         ok, cost = True, math.nan
         for i, p in enumerate([plant, *near]):
-            info, _ = _episode(env, p, lambda t: _ramp(c, hold, t))
+            info, _ = _episode(env, p, lambda t: _ramp(a, ramp, hold, t))
             ok = ok and bool(info["feasible"])
             cost = float(info["cost"]) if i == 0 else cost
             if not ok:
