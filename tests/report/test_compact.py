@@ -10,8 +10,9 @@ import math
 import numpy as np
 import pytest
 
-from vfgym import Settings, evaluate, get_scenario, tuning
+from vfgym import PAPER_AXIS, Settings, evaluate, get_scenario
 from vfgym.report import Column, Report, compact_rows, format_compact
+from vfgym.tuning._results import against_paper
 
 # An earlier main job's best (quick.yaml on three named scenarios, trial 38): a fixed input.
 QUICK_BEST = Settings(
@@ -42,7 +43,7 @@ QUICK = ["paper-step", "short-move", "long-move"]
 
 
 def test_the_main_jobs_table_digit_for_digit():
-    cmp = tuning.compare(QUICK_BEST, [get_scenario(n) for n in QUICK])
+    cmp = against_paper(QUICK_BEST, [get_scenario(n) for n in QUICK], "tuned", PAPER_AXIS)
     assert [c.label for c in cmp.columns] == ["paper", "tuned"]
     assert [c.role for c in cmp.columns] == ["baseline", "tuned"]
     assert format_compact(cmp) == QUICK_TABLE
@@ -50,7 +51,7 @@ def test_the_main_jobs_table_digit_for_digit():
 
 def test_rows_are_evaluates_and_the_set_aggregates_them():
     scens = ["short-move", "paper-sine", "reversal", "test-3"]
-    cmp = tuning.compare(QUICK_BEST, scens, label="grid")
+    cmp = against_paper(QUICK_BEST, scens, "grid", PAPER_AXIS)
     ev = evaluate([Settings(), QUICK_BEST], scens)
     table = compact_rows(cmp)
     assert table.scenario_count == 4 and len(table.rows) == 8 and len(table.set) == 2

@@ -137,7 +137,7 @@ def test_one_feasibility_model_per_broken_constraint():
         g = np.array([u[0] - 0.7, 0.3 - u[1], -1.0])  # the third never broken
         v = float(np.maximum(g, 0.0).sum())
         obs.append(Observation(i, u, "rise", float(1.0 + u @ u), v, v <= 0.0, g))
-    assert len(_fit(x, obs, 0.0, []).cgps) == 2
+    assert len(_fit(x, obs, 0.0).cgps) == 2
 
 
 class _Trial(NamedTuple):

@@ -152,6 +152,16 @@ def test_a_model_batch_takes_the_best_candidate_when_every_product_underflows():
     np.testing.assert_array_equal(chosen, cand[want])
 
 
+def _posterior(gp: GaussianProcess, x: np.ndarray, y_std: np.ndarray, xs: np.ndarray):
+    """The posterior mean and deviation at ``xs`` given standardised ``y_std`` at ``x``, with
+    ``gp``'s hyperparameters and standardisation: the textbook formulas, solved directly."""
+    k = gp.var * numpy_matern52(x, x, gp.lengths) + (gp.noise + 1e-10) * np.eye(len(x))
+    ks = gp.var * numpy_matern52(xs, x, gp.lengths)
+    mean = ks @ np.linalg.solve(k, y_std) * gp.scale + gp.mean
+    var = gp.var - np.einsum("ij,ji->i", ks, np.linalg.solve(k, ks.T))
+    return mean, np.sqrt(np.maximum(var, 1e-18)) * gp.scale
+
+
 def test_believed_points_give_the_posterior_of_conditioning_on_their_predictions():
     x, y = _data(40, seed=5)
     cand = np.random.default_rng(6).random((200, 4))
@@ -159,13 +169,27 @@ def test_believed_points_give_the_posterior_of_conditioning_on_their_predictions
     b = Believer(gp, cand)
     mu0, _ = gp.predict(cand)
     np.testing.assert_allclose(b.mean, mu0, rtol=1e-12, atol=1e-12)
+    xs, ys = x, gp.y
     for j in (17, 3, 150, 90):
         b.believe(j)
-        gp.condition(cand[j][None], float(gp.predict(cand[j][None])[0][0]))
-        mu, sd = gp.predict(cand)
+        xs, ys = np.vstack([xs, cand[j]]), np.append(ys, (mu0[j] - gp.mean) / gp.scale)
+        mu, sd = _posterior(gp, xs, ys, cand)
         np.testing.assert_allclose(mu, b.mean, rtol=1e-8, atol=1e-8)
         np.testing.assert_allclose(b.sd(), sd, rtol=1e-6, atol=1e-8)
     assert b.sd()[17] < 0.1 * sd.max()  # a believed point is nearly known
+
+
+def test_pending_points_are_believed_before_a_batch_is_chosen():
+    """A worker's batch while others run: the running points count as believed (their
+    neighbourhood less uncertain), and none of them is chosen again."""
+    x, y = _data(30)
+    gp = _ours(x, y)
+    cand = np.random.default_rng(7).random((64, 4))
+    fit = _Fit(gp, [], float(y.min()))
+    (first,) = fit.choose(1, lambda: cand)
+    (again,) = fit.choose(1, lambda: cand, [first])
+    assert not np.array_equal(again, first)
+    np.testing.assert_array_equal(again, fit.choose(2, lambda: cand)[1])
 
 
 def test_a_model_batch_chooses_distinct_candidates():

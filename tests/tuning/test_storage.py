@@ -160,3 +160,48 @@ def test_two_workers_never_pop_the_same_enqueued_trial(tmp_path, kind):
     a, b = (json.loads(out) for out, _ in outs)
     assert set(a).isdisjoint(b)
     assert sorted(a + b) == list(range(300))
+
+
+FAIL_ALL = """
+import copy, json, sys, time
+import optuna
+from vfgym import tuning
+from vfgym.tuning._workers import _fail_and_retry
+optuna.logging.set_verbosity(optuna.logging.ERROR)
+spec = tuning.StorageSpec(*sys.argv[1:4])
+study = optuna.load_study(study_name="dead", storage=tuning.open_storage(spec))
+running = [copy.deepcopy(t) for t in study.get_trials(deepcopy=False)]
+time.sleep(max(0.0, float(sys.argv[4]) - time.time()))
+print(json.dumps([t.number for t in running if _fail_and_retry(study, t)]))
+"""
+
+
+@pytest.mark.parametrize("kind", ["sqlite", "journal"])
+def test_two_workers_never_retry_the_same_dead_trial(tmp_path, kind):
+    """Two workers that take the same running trials as dead at the same moment: each trial
+    is failed by one of them only, and enqueued again once (on SQLite, without row locks,
+    both read "running" before either wrote "failed" unless the state change is atomic)."""
+    import json
+    import subprocess
+    import sys
+    import time
+    from collections import Counter
+    from pathlib import Path
+
+    spec = tuning.resolve_storage(kind, tmp_path)
+    study = optuna.create_study(study_name="dead", storage=tuning.open_storage(spec))
+    for _ in range(150):
+        study.ask({"x": optuna.distributions.FloatDistribution(0.0, 1.0)})
+    src = str(Path(__file__).resolve().parents[2] / "src")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([src, os.environ.get("PYTHONPATH", "")]))
+    at = str(time.time() + 4.0)
+    run = [sys.executable, "-c", FAIL_ALL, spec.kind, spec.url, spec.path or "", at]
+    pipe = subprocess.PIPE
+    procs = [subprocess.Popen(run, env=env, text=True, stdout=pipe, stderr=pipe) for _ in range(2)]
+    outs = [p.communicate(timeout=300) for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], [err for _, err in outs]
+    a, b = (json.loads(out) for out, _ in outs)
+    assert set(a).isdisjoint(b) and sorted(a + b) == list(range(150))
+    trials = optuna.load_study(study_name="dead", storage=tuning.open_storage(spec)).trials
+    retried = Counter(t.system_attrs.get("failed_trial") for t in trials[150:])
+    assert retried == Counter(range(150))

@@ -58,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.moves.axis import AXIS_FILE, write_axis
     from vfgym.report import format_compact
     from vfgym.tuning._grid import grid_reference, write_grid_csv
+    from vfgym.tuning._results import against_paper
 
     keys = [f.lstrip("-").replace("-", "_") for f, _ in OPTIONS] + ["progress"]
     file_data = read_yaml(args.config) if args.config else None
@@ -100,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
     ref = grid_reference(cfg, result)
     ref["elapsed_s"] = round(elapsed, 3)
     write_yaml(run_dir / "reference.yaml", ref)
-    cmp = tuning.compare(result.best.settings, scenarios, label="grid", axis=cfg.axis_or_paper())
+    cmp = against_paper(result.best.settings, scenarios, "grid", cfg.axis_or_paper())
     s = ref["settings"]
     n = len(result.rows)
     text = "\n".join(

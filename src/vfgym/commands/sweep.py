@@ -387,7 +387,13 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     from vfgym.params import PAPER_SETTINGS
     from vfgym.report import axis_verdict, compact_rows, format_compact, format_verdict
     from vfgym.tuning._aggregate import describe, set_cost
-    from vfgym.tuning._results import best_record, gap_pct, write_plots, write_trials_csv
+    from vfgym.tuning._results import (
+        against_paper,
+        best_record,
+        gap_pct,
+        write_plots,
+        write_trials_csv,
+    )
     from vfgym.tuning._study import trial_budget
 
     write_trials_csv(study, run_dir / "trials.csv")
@@ -429,7 +435,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         lines.append("no completed trial yet")
     else:
         settings = tuning.trial_settings(best)
-        cmp = tuning.compare(settings, scenarios, axis=cfg.axis_or_paper())
+        cmp = against_paper(settings, scenarios, "tuned", cfg.axis_or_paper())
         paper_cost = set_cost(PAPER_SETTINGS, scenarios, cfg)  # as the sweep scores
         record = best_record(study, best, cfg, spec, scenarios, paper_cost, reference)
         lines.append(

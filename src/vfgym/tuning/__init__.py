@@ -20,7 +20,7 @@ from vfgym.tuning._aggregate import AGGREGATES, Aggregate, aggregate, aggregate_
 from vfgym.tuning._config import SAMPLERS, GridConfig, SweepConfig
 from vfgym.tuning._grid import GridResult, GridRow, run_grid
 from vfgym.tuning._objective import Objective, StoredResult, stored_result
-from vfgym.tuning._results import best_trial, compare, trial_settings
+from vfgym.tuning._results import best_trial, trial_settings
 from vfgym.tuning._storage import StorageSpec, open_storage, resolve_storage
 from vfgym.tuning._study import baseline_params, create_or_load, make_sampler, warm_starts
 from vfgym.tuning._workers import WorkerReport, run_worker
@@ -41,7 +41,6 @@ __all__ = [
     "aggregate_costs",
     "baseline_params",
     "best_trial",
-    "compare",
     "create_or_load",
     "make_sampler",
     "open_storage",

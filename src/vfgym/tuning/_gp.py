@@ -159,12 +159,6 @@ class GaussianProcess:
         self.linv = np.linalg.inv(self.chol)  # L⁻¹: predictions multiply, not solve
         self.alpha = self.linv.T @ (self.linv @ self.y)
 
-    def condition(self, x: np.ndarray, y: float) -> None:
-        """Add one observation, keeping the hyperparameters (a batch's "believed" points)."""
-        self.x = np.vstack([self.x, x])
-        self.y = np.append(self.y, (y - self.mean) / self.scale)
-        self._factor()
-
     def predict(self, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Posterior mean and standard deviation at the rows of ``xs``, in ``y``'s units."""
         at = Believer(self, xs)
@@ -175,8 +169,8 @@ class Believer:
     """The posterior of ``gp`` (left as it is) at the candidates ``xs`` while candidates
     are added to its observations at their predicted means (the kriging believer): the
     mean stays, the variance takes a rank-one update per point. As
-    :meth:`GaussianProcess.condition` then :meth:`GaussianProcess.predict` up to rounding,
-    at O(candidates × points) per point instead of O(candidates × points²)."""
+    conditioning the process on it then predicting, up to rounding, at O(candidates ×
+    points) per point instead of O(candidates × points²)."""
 
     def __init__(self, gp: GaussianProcess, xs: np.ndarray) -> None:
         self.gp = gp

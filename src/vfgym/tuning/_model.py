@@ -53,8 +53,8 @@ def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n:
             starts: dict[str, list[float]] | None = None,
             refit: bool = True) -> Proposal:  # fmt: skip
     """``n`` points of highest expected improvement (by at least ``xi`` over the best
-    feasible cost) times probability of feasibility, each conditioned on the previous
-    ones and on ``pending`` at their predicted values. Each model's fit starts from
+    feasible cost) times probability of feasibility, each believed at its predicted values
+    (:meth:`_Fit.choose`), as ``pending`` first. Each model's fit starts from
     ``starts`` (a previous batch's :attr:`Proposal.thetas`), or keeps it unless ``refit``.
     The linear algebra runs on one thread: OpenBLAS's threads spin on matrices this
     small, 30x slower on a busy machine."""
@@ -62,7 +62,7 @@ def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n:
         order = sorted(range(len(obs)), key=lambda i: rank(obs[i]))
         keep = sorted(set(order[: MODEL_POINTS // 2]) | set(range(len(obs))[-MODEL_POINTS // 2 :]))
         x, obs = x[keep], [obs[i] for i in keep]
-    fit = _fit(x, obs, xi, pending, starts, refit)
+    fit = _fit(x, obs, xi, starts, refit)
     feas = np.array([o.feasible for o in obs])
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     top = x[np.argsort(np.where(feas, y, np.inf), kind="stable")[:3]]
@@ -80,7 +80,7 @@ def propose(x: np.ndarray, obs: list[Observation], pending: list[np.ndarray], n:
             c[:, 4] = np.round(c[:, 4] * (n_laws - 1)) / (n_laws - 1)
         return c
 
-    return Proposal(fit.choose(n, candidates), fit.thetas())
+    return Proposal(fit.choose(n, candidates, pending), fit.thetas())
 
 
 class _Fit(NamedTuple):
@@ -97,14 +97,17 @@ class _Fit(NamedTuple):
         models = zip(("cost", *self.keys), (self.gp, *self.cgps), strict=False)
         return {k: [float(t) for t in m.theta] for k, m in models}
 
-    def choose(self, n: int, candidates: Any) -> list[np.ndarray]:
+    def choose(self, n: int, candidates: Any, pending: Sequence[np.ndarray] = ()) -> list:
         """``n`` distinct points of one set of ``candidates()``, each believed at its
-        predicted values before the next is chosen."""
-        c = candidates()
+        predicted values before the next is chosen, as the ``pending`` points first."""
+        c = np.vstack([*pending, candidates()])
         cost, *cons = each(lambda m: Believer(m, c), [self.gp, *self.cgps])
-        taken = np.zeros(len(c), dtype=bool)
+        taken = np.arange(len(c)) < len(pending)
+        for j in range(len(pending)):
+            for m in (cost, *cons):
+                m.believe(j)
         out = []
-        for _ in range(min(n, len(c))):
+        for _ in range(min(n, len(c) - len(pending))):
             sd = cost.sd()
             log_pf = np.zeros(len(c))
             for m in cons:
@@ -123,11 +126,11 @@ class _Fit(NamedTuple):
         return out
 
 
-def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndarray],
+def _fit(x: np.ndarray, obs: list[Observation], xi: float,
          starts: dict[str, list[float]] | None = None, refit: bool = True) -> _Fit:  # fmt: skip
     """Gaussian processes on log cost (on the feasible points once there are three) and on
-    the broken constraints (signed log), conditioned on ``pending`` at their predicted
-    values, each from ``starts``' hyperparameters of its name (kept unless ``refit``)."""
+    the broken constraints (signed log), each from ``starts``' hyperparameters of its name
+    (kept unless ``refit``)."""
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     feas = np.array([o.feasible for o in obs])
     cons = np.array([o.constraints for o in obs])
@@ -138,10 +141,7 @@ def _fit(x: np.ndarray, obs: list[Observation], xi: float, pending: list[np.ndar
     def model(data: tuple[np.ndarray, np.ndarray, str]) -> GaussianProcess:
         xs, ys, key = data
         start = starts.get(key)
-        m = GaussianProcess(xs, ys, start=start, fit=refit or start is None)
-        for p in pending:
-            m.condition(p[None], float(m.predict(p[None])[0][0]))
-        return m
+        return GaussianProcess(xs, ys, start=start, fit=refit or start is None)
 
     keyed = _constraint_models(cons)
     gp, *cgps = each(model, [(x[fit], yf, "cost"), *((x, _signed_log(c), k) for k, c in keyed)])

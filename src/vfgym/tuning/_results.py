@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 from vfgym import report, space
 from vfgym.io.runs import read_yaml, write_text
-from vfgym.moves.axis import PAPER_AXIS, Axis, machine_digest
+from vfgym.moves.axis import Axis, machine_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.report import Candidate, Report
@@ -160,31 +160,8 @@ def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
     return out
 
 
-def compare(
-    best: Settings,
-    scenarios: list[Scenario],
-    label: str = "tuned",
-    *,
-    axis: Axis = PAPER_AXIS,
-) -> Report:
-    """The paper's settings against ``best`` on each scenario (:func:`vfgym.report.compare`).
-
-    Parameters
-    ----------
-    best : Settings
-        The tuned settings.
-    scenarios : list of Scenario
-        The sweep's (or grid's) scenario set.
-    label : str
-        ``best``'s column label.
-    axis : Axis
-        The problem the scenarios run on (its plant and measures).
-
-    Returns
-    -------
-    vfgym.report.Report
-        Columns ``paper`` (the baseline) then ``label``.
-    """
+def against_paper(best: Settings, scenarios: list[Scenario], label: str, axis: Axis) -> Report:
+    """The paper's settings (the baseline) then ``best`` as ``label``, on each scenario."""
     candidates = [
         Candidate("paper", PAPER_SETTINGS, source="paper", role="baseline"),
         Candidate(label, best, source=label),

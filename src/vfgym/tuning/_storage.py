@@ -8,8 +8,7 @@ added, each for what Optuna does not do, is said where it lives.
 
 from __future__ import annotations
 
-import contextlib
-import copy
+import fcntl
 import functools
 import os
 import random
@@ -235,7 +234,7 @@ def _rdb(spec: StorageSpec, heartbeat: int, grace: int | None, tries: int = 8) -
             "engine_kwargs": kw,
             "heartbeat_interval": heartbeat,
             "grace_period": grace or 2 * heartbeat,
-            "heartbeat_stale_trial_callback": RetryStale(spec.path),
+            "heartbeat_stale_trial_callback": RetryStale(),
         }
         if spec.kind == "sqlite" and spec.path:
             return _sqlite_storage()(spec.url, spec.path + ".pop", **common)
@@ -253,67 +252,46 @@ MAX_RETRY = 3
 """A trial whose worker died is enqueued again at most this many times."""
 
 
-def retry_once(study: Study, trial: FrozenTrial, lock: str | None = None) -> bool:
-    """Enqueue a failed trial again (Optuna's ``RetryHeartbeatStaleTrialCallback``) unless
-    a worker already has, and say whether this call did: Optuna fails a stale trial in a
-    read and a write, which two workers on SQLite (no row locks) or a journal may both
-    pass. ``lock``: the storage's file, whose ``.retry`` is ``flock``-ed around the check
-    and the retry (None on PostgreSQL, whose rows are locked)."""
-    import optuna
-
-    history = [*trial.system_attrs.get("retry_history", []), trial.number]
-    with _Flock(lock + ".retry") if lock else contextlib.nullcontext():
-        trials = study.get_trials(deepcopy=False)
-        if any(t.system_attrs.get("retry_history") == history for t in trials):
-            return False
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-            retry = optuna.storages.RetryHeartbeatStaleTrialCallback(max_retry=MAX_RETRY)
-            retry(study, copy.deepcopy(trial))
-    return True
-
-
 class RetryStale:
-    """The heartbeat-stale trial callback: :func:`retry_once`, noting the trials it retried
-    (a sweep reports them)."""
+    """Optuna's ``RetryHeartbeatStaleTrialCallback`` (the failed trial enqueued again with
+    its settings), noting the trials it retried: a sweep reports them. Each storage lets
+    one process only fail a running trial (PostgreSQL's row lock, the journal's order, the
+    SQLite file's ``flock`` below), so a trial is retried once."""
 
-    def __init__(self, lock: str | None = None) -> None:
-        self.lock = lock
+    def __init__(self) -> None:
         self.failed: list[int] = []
 
     def __call__(self, study: Study, trial: FrozenTrial) -> None:
-        if retry_once(study, trial, self.lock):
-            self.failed.append(trial.number)
+        import optuna
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+            optuna.storages.RetryHeartbeatStaleTrialCallback(max_retry=MAX_RETRY)(study, trial)
+        self.failed.append(trial.number)
 
 
 class _Flock:
-    """An ``flock`` on the file ``path``: Optuna's journal file locks outlive a holder
-    killed while writing, stalling the others for a grace period; the kernel drops an
-    ``flock`` when its holder dies. Every process writing the journal must use it."""
+    """An ``flock`` on the file ``path``, which the kernel drops when its holder dies:
+    Optuna's journal file locks outlive a holder killed while writing, stalling the others
+    for a grace period. Every process writing the journal must use it."""
 
     def __init__(self, path: str) -> None:
         self._path = path
         self._fd: int | None = None
 
     def acquire(self) -> bool:
-        import fcntl
-
         fd = os.open(self._path, os.O_RDWR | os.O_CREAT, 0o644)
         fcntl.flock(fd, fcntl.LOCK_EX)
         self._fd = fd
         return True
 
     def release(self) -> None:
-        import fcntl
-
         if self._fd is not None:
-            fcntl.flock(self._fd, fcntl.LOCK_UN)
-            os.close(self._fd)
+            os.close(self._fd)  # (closing the file drops the lock)
             self._fd = None
 
-    def __enter__(self) -> _Flock:
+    def __enter__(self) -> None:
         self.acquire()
-        return self
 
     def __exit__(self, *exc: object) -> None:
         self.release()
@@ -340,12 +318,13 @@ def _sqlite_wal(storage: RDBStorage) -> None:
 
 @functools.cache
 def _sqlite_storage() -> Callable[..., RDBStorage]:
-    """Optuna's RDB storage for a SQLite file, with the pop of an enqueued trial made
-    atomic: SQLite has no ``SELECT ... FOR UPDATE``, so Optuna's read of a waiting trial's
-    state and its write of "running" let two workers both pop the same trial
-    (optuna/optuna#4002; the later one then failed with "Cannot tell a COMPLETE trial").
-    That read and write run under an ``flock`` of the file's ``.pop`` (the kernel drops it
-    when its holder dies); readers are not held up."""
+    """Optuna's RDB storage for a SQLite file, each change of a trial's state made atomic:
+    SQLite has no ``SELECT ... FOR UPDATE``, so Optuna's read of a trial's state and its
+    write of the next one let two workers both pop the same waiting trial
+    (optuna/optuna#4002; the later one then failed with "Cannot tell a COMPLETE trial"), or
+    both fail the same stale one and retry it twice. That read and write run under an
+    ``flock`` of the file's ``.pop`` (the kernel drops it when its holder dies); readers
+    are not held up."""
     import optuna
 
     class SQLiteStorage(optuna.storages.RDBStorage):
@@ -356,8 +335,6 @@ def _sqlite_storage() -> Callable[..., RDBStorage]:
         def set_trial_state_values(
             self, trial_id: int, state: Any, values: Sequence[float] | None = None
         ) -> bool:
-            if state != optuna.trial.TrialState.RUNNING:
-                return super().set_trial_state_values(trial_id, state, values)
             with _Flock(self.pop_lock):
                 return super().set_trial_state_values(trial_id, state, values)
 

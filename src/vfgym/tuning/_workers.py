@@ -14,7 +14,6 @@ from __future__ import annotations
 import copy
 import datetime
 import json
-import os
 import signal
 import socket
 import subprocess
@@ -27,12 +26,14 @@ from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING, Any
 
+import psutil
+
 from vfgym.moves.axis import AxisNote
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
 from vfgym.tuning._objective import Objective
-from vfgym.tuning._storage import MAX_RETRY, RetryStale, StorageSpec, open_storage, retry_once
+from vfgym.tuning._storage import MAX_RETRY, RetryStale, StorageSpec, open_storage
 from vfgym.tuning._study import make_sampler, trial_budget
 
 if TYPE_CHECKING:
@@ -207,9 +208,7 @@ def run_worker(
         except KeyboardInterrupt:
             rep.stopped = "interrupted"
             for n in current:
-                _fail_and_retry(
-                    study, copy.deepcopy(study.get_trials(deepcopy=False)[n]), spec.path
-                )
+                _fail_and_retry(study, copy.deepcopy(study.get_trials(deepcopy=False)[n]))
             raise
         finally:
             rep.simulated = objective.simulated
@@ -237,7 +236,7 @@ class _Budget:
     def __init__(self, study: Study, cfg: SweepConfig, spec: StorageSpec, interrupts: Any) -> None:
         self.study, self.budget, self.every = study, trial_budget(cfg), cfg.heartbeat
         self.workers = cfg.workers  # (this command's; other commands on the study: rare)
-        self.journal, self.lock = spec.kind == "journal", spec.path
+        self.journal = spec.kind == "journal"
         self.interrupts = interrupts
         self.recovered: list[int] = []
         self.orphan_s = max(30.0, 6.0 * self.every)
@@ -350,13 +349,13 @@ class _Budget:
                 # misses a worker killed before its first one (the trial stays running)
                 # (a retry holds its dead worker's name until its new worker writes its own)
                 dead = age > self.every and _worker_alive(worker) is False
-            if dead and _fail_and_retry(self.study, copy.deepcopy(t), self.lock):
+            if dead and _fail_and_retry(self.study, copy.deepcopy(t)):
                 self.recovered.append(t.number)
 
 
-def _fail_and_retry(study: Study, trial: FrozenTrial, lock: str | None) -> bool:
-    """Fail a running trial and enqueue it again once; False if it had completed or was
-    retried already."""
+def _fail_and_retry(study: Study, trial: FrozenTrial) -> bool:
+    """Fail a running trial (or take one failed) and enqueue it again; False if it had
+    completed, or another worker failed it first (the storage lets one only)."""
     import optuna
 
     state = optuna.trial.TrialState
@@ -367,41 +366,27 @@ def _fail_and_retry(study: Study, trial: FrozenTrial, lock: str | None) -> bool:
             return False
     elif trial.state != state.FAIL:
         return False
-    return retry_once(study, trial, lock)
+    RetryStale()(study, trial)
+    return True
 
 
 def worker_id() -> str:
     """``host/pid/start-time`` of this process (the start time guards against pid reuse)."""
-    pid = os.getpid()
-    return f"{socket.gethostname()}/{pid}/{_proc_start(pid)}"
-
-
-def _proc_start(pid: int) -> str:
-    try:
-        with open(f"/proc/{pid}/stat", encoding="ascii", errors="replace") as fh:
-            rest = fh.read().rsplit(")", 1)[1].split()
-        return "Z" if rest[0] in ("Z", "X") else rest[19]
-    except (OSError, IndexError):
-        return ""
+    me = psutil.Process()
+    return f"{socket.gethostname()}/{me.pid}/{me.create_time()!r}"
 
 
 def _worker_alive(worker: str) -> bool | None:
     """Whether the process that ran a trial is alive; None when it is on another host."""
     host, _, rest = worker.partition("/")
-    pid_s, _, start = rest.partition("/")
-    if host != socket.gethostname() or not pid_s.isdigit():
+    pid, _, start = rest.partition("/")
+    if host != socket.gethostname() or not pid.isdigit():
         return None
-    pid = int(pid_s)
-    if os.path.isdir("/proc"):
-        now = _proc_start(pid)
-        return bool(now) and now != "Z" and (not start or now == start)
     try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
+        p = psutil.Process(int(pid))
+        return p.status() != psutil.STATUS_ZOMBIE and repr(p.create_time()) == start
+    except psutil.NoSuchProcess:
         return False
-    except PermissionError:
-        return True
-    return True
 
 
 def spawn_workers(
