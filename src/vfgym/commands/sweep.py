@@ -89,6 +89,7 @@ def _check_ignored(file_data: object, cli: dict) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import dataclasses
     import signal
     import time
     from pathlib import Path
@@ -137,15 +138,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         if cfg.workers == 1:
             rep = tuning.run_worker(cfg, spec, name, 0, on_trial=bar.update)
-            reports.append(
-                {
-                    "stopped": rep.stopped,
-                    "trials": rep.trials,
-                    "simulated": rep.simulated,
-                    "recovered": rep.recovered,
-                    "exit": 0,
-                }
-            )
+            reports.append(dataclasses.asdict(rep) | {"exit": 0})
         else:
             reports = _run_workers(cfg, spec, name, study, bar)
     except KeyboardInterrupt:
@@ -155,7 +148,9 @@ def run(args: argparse.Namespace) -> int:
         bar.update(study, force=True)
         bar.close()
     elapsed = time.monotonic() - t0
-    code = _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapsed, reports)
+    made = sum(n0.values())  # the trials before this run's
+    code = _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapsed, reports,
+                   made)  # fmt: skip
     if interrupted:
         signal.signal(signal.SIGINT, signal.default_int_handler)
         raise Interrupted(
@@ -334,53 +329,60 @@ class _Bar:
 def _run_workers(cfg, spec, name, study, bar) -> list[dict]:
     """Start the worker processes and follow the study until they end. On Ctrl-C they
     finish or give back their trial; the interrupt is raised again afterwards."""
-    import json
+    import os
     import signal
     import time
+    from dataclasses import asdict
 
     from vfgym.tuning._workers import spawn_workers
 
-    procs = spawn_workers(cfg, spec, name, cfg.workers)
+    workers = spawn_workers(cfg, spec, name, cfg.workers)
+    reports: list[dict | None] = [None] * len(workers)
+
+    def collect() -> None:  # (read as they come: a report may exceed a pipe's buffer)
+        for i, w in enumerate(workers):
+            if reports[i] is None and w.report.poll():
+                try:
+                    reports[i] = asdict(w.report.recv())
+                except (EOFError, OSError):  # died before sending it
+                    reports[i] = {}
+
     interrupted = False
     try:
-        while any(p.poll() is None for p in procs):
+        while any(w.process.is_alive() for w in workers):
             bar.update(study)
+            collect()
             time.sleep(0.5)
     except KeyboardInterrupt:
         interrupted = True
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         deadline = time.monotonic() + 2.0
-        while time.monotonic() < deadline and any(p.poll() is None for p in procs):
+        while time.monotonic() < deadline and any(w.process.is_alive() for w in workers):
             time.sleep(0.05)
-        for p in procs:
-            if p.poll() is None:
-                p.send_signal(signal.SIGINT)
-        for p in procs:
-            try:
-                p.wait(timeout=60)
-            except Exception:
-                p.kill()
-                p.wait()
-    reports = []
-    for p in procs:
-        out = ""
-        if p.stdout is not None:
-            out = p.stdout.read()
-            p.stdout.close()
-        try:
-            rep = json.loads(out.strip().splitlines()[-1])
-        except (ValueError, IndexError):
-            rep = {"stopped": "interrupted" if p.returncode == 130 else "died", "trials": []}
-        rep["exit"] = p.returncode
-        reports.append(rep)
+        for w in workers:
+            if w.process.is_alive():
+                os.kill(w.process.pid, signal.SIGINT)
+        for w in workers:
+            w.process.join(timeout=60)
+            if w.process.is_alive():
+                w.process.kill()
+                w.process.join()
+    collect()
+    out = []
+    for w, rep in zip(workers, reports, strict=True):
+        code = w.process.exitcode
+        rep = rep or {"stopped": "interrupted" if code == 130 else "died", "trials": []}
+        out.append(rep | {"exit": code})
     if interrupted:
         raise KeyboardInterrupt
-    return reports
+    return out
 
 
-def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapsed, reports) -> int:
+def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapsed, reports,
+            made) -> int:  # fmt: skip
     """Trials CSV, best.yaml, plots, the tuned-vs-paper table (printed and in report.txt)
-    and summary.yaml. Returns the exit status."""
+    and summary.yaml; ``made``: the study's trials before this run. Returns the exit
+    status."""
     from vfgym import tuning
     from vfgym.io.runs import write_text, write_yaml
     from vfgym.moves.axis import PAPER_AXIS
@@ -411,14 +413,17 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         + (f", {n['pruned']} pruned: over the budget" if n["pruned"] else "")
         + f") in {elapsed:.1f} s"
     ]
+    # A dead worker's trial, or one interrupted, is failed and enqueued again (Optuna's
+    # retry names the trial it repeats): the study says which, whichever worker did it.
+    retried = sorted(t.system_attrs["failed_trial"] for t in study.get_trials(deepcopy=False)[made:]
+                     if "failed_trial" in t.system_attrs)  # fmt: skip
     if reports:
         sims = sum(int(r.get("simulated", 0)) for r in reports)
         ran = sum(len(r.get("trials", [])) for r in reports)
-        rec = sorted({x for r in reports for x in r.get("recovered", [])})
         lines.append(
             f"this run: {ran} trials by {len(reports)} worker(s), {sims} simulated "
             f"({ran - sims} repeated settings copied)"
-            + (f", dead workers' trials retried: {rec}" if rec else "")
+            + (f", failed trials retried: {retried}" if retried else "")
             + (f"; worker exits {[r['exit'] for r in reports]}" if len(reports) > 1 else "")
         )
     summary: dict = {
@@ -428,6 +433,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         "budget": budget,
         "elapsed_s": round(elapsed, 3),
         "workers": reports,
+        "retried": retried,
     }
     best = tuning.best_trial(study)
     code = 0

@@ -121,10 +121,8 @@ class CompassSampler(optuna.samplers.BaseSampler):
         return params
 
     def sample_independent(self, study: Any, trial: Any, name: str, dist: Any) -> Any:
-        rng = np.random.default_rng([self.seed, trial.number, 7])
-        return optuna.samplers.RandomSampler(seed=int(rng.integers(2**31))).sample_independent(
-            study, trial, name, dist
-        )
+        seed = int(np.random.default_rng([self.seed, trial.number, 7]).integers(2**31))
+        return optuna.samplers.RandomSampler(seed=seed).sample_independent(study, trial, name, dist)
 
     def _next(self, study: Any, number: int) -> dict[str, Any]:
         # No trial made since the queue was checked but this one (numbers count the
@@ -375,9 +373,8 @@ def _constraint_name(key: str) -> str:
 def last_thetas(tagged: list[Any]) -> tuple[dict[str, list[float]], int]:
     """The models' log hyperparameters of the latest model batch among the trials (its
     tag's ``theta``; empty if none), and the completed trials they were fitted on: where
-    the next batch's fits start, so that they take :data:`vfgym.tuning._gp.WARM_STEPS`
-    steps, not ``COLD_STEPS`` (or none, :attr:`CompassOptions.refit_growth`); read from
-    the study, so a resumed or shared search starts them the same."""
+    the next batch's fits start (or what they keep, :attr:`CompassOptions.refit_growth`);
+    read from the study, so a resumed or shared search starts them the same."""
     best: tuple[int, dict[str, list[float]], int] = (-1, {}, 0)
     for t in tagged:
         tag = t.system_attrs[ATTR]

@@ -237,24 +237,19 @@ class SweepConfig(_Options):
         how, alpha = check_aggregate(self.aggregate, self.cvar_alpha)
         s(self, "aggregate", how)
         s(self, "cvar_alpha", alpha)
-        s(self, "trials", check_int("trials", self.trials, 1))
+        ints = (("trials", 1, None), ("workers", 1, 256), ("seed", 0, 2**31 - 1),
+                ("grid_points", 2, 64), ("heartbeat", 1, None), ("grace", 1, None))  # fmt: skip
+        for name, lo, hi in ints:  # (seed and grace may be None)
+            if getattr(self, name) is not None:
+                s(self, name, check_int(name, getattr(self, name), lo, hi))
         if self.timeout is not None:
             s(self, "timeout", check_real("timeout", self.timeout, 0.0, lo_open=True))
-        s(self, "workers", check_int("workers", self.workers, 1, 256))
-        if self.seed is not None:
-            s(self, "seed", check_int("seed", self.seed, 0, 2**31 - 1))
-        s(self, "storage", str(self.storage))
         if self.study is not None:
             s(self, "study", check_name("study", self.study))
-        s(self, "runs_dir", str(self.runs_dir))
-        if self.reference is not None:
-            s(self, "reference", str(self.reference))
-        s(self, "grid_points", check_int("grid_points", self.grid_points, 2, 64))
+        for name in ("storage", "runs_dir") + (("reference",) if self.reference else ()):
+            s(self, name, str(getattr(self, name)))
         s(self, "plots", check_bool("plots", self.plots))
         s(self, "progress", check_bool("progress", self.progress))
-        s(self, "heartbeat", check_int("heartbeat", self.heartbeat, 1))
-        if self.grace is not None:
-            s(self, "grace", check_int("grace", self.grace, 1))
 
 
 @dataclass(frozen=True)
@@ -297,10 +292,9 @@ class GridConfig(_Options):
     def __post_init__(self) -> None:
         s = object.__setattr__
         self._check_scenarios()
-        s(self, "points", check_int("points", self.points, 2, 64))
-        s(self, "refine", check_int("refine", self.refine, 0, 10))
-        s(self, "keep", check_int("keep", self.keep, 1, 64))
-        s(self, "batch", check_int("batch", self.batch, 1, 1 << 20))
+        ints = (("points", 2, 64), ("refine", 0, 10), ("keep", 1, 64), ("batch", 1, 1 << 20))
+        for name, lo, hi in ints:
+            s(self, name, check_int(name, getattr(self, name), lo, hi))
         if self.name is not None:
             s(self, "name", check_name("name", self.name))
         s(self, "runs_dir", str(self.runs_dir))

@@ -91,8 +91,8 @@ def run_grid(
     scenarios = cfg.scenario_list()
     axis = cfg.axis_or_paper()
     evaluate(PAPER_SETTINGS, scenarios, axis=axis)  # compile/load once before timing batches
-    levels: list[tuple[int, list[Settings]]] = [(0, space.grid(cfg.points, cfg.laws))]
-    total = len(levels[0][1]) * (1 + cfg.refine * cfg.keep)
+    pts = space.grid(cfg.points, cfg.laws)
+    total = len(pts) * (1 + cfg.refine * cfg.keep)
     rows: dict[Settings, GridRow] = {}
     done = 0
     best_cost = math.inf
@@ -112,8 +112,7 @@ def run_grid(
                 if len(centers) == cfg.keep:
                     break
             step = step * 2.0 / (cfg.points - 1)
-            pts = []
-            half = step * (cfg.points - 1) / 2.0
+            half, pts = step * (cfg.points - 1) / 2.0, []
             for c in centers:
                 axes = [
                     np.linspace(max(-1.0, x - half), min(1.0, x + half), cfg.points) for x in c.u
@@ -122,8 +121,7 @@ def run_grid(
                     space.from_action(np.array(u), c.settings.accel_law)
                     for u in np.array(np.meshgrid(*axes, indexing="ij")).reshape(4, -1).T
                 ]
-            levels.append((level, pts))
-        todo = [s for s in levels[-1][1] if s not in rows]
+        todo = [s for s in pts if s not in rows]
         for i in range(0, len(todo), cfg.batch):
             chunk = todo[i : i + cfg.batch]
             agg = aggregate(evaluate(chunk, scenarios, axis=axis))

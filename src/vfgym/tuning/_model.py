@@ -151,19 +151,17 @@ def _fit(x: np.ndarray, obs: list[Observation], xi: float,
 
 T = TypeVar("T")
 R = TypeVar("R")
-_POOL: tuple[int, ThreadPoolExecutor] | None = None  # (the process that made it, the pool)
 
 
 def each(fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
     """``[fn(i) for i in items]`` on up to as many threads as cores: a batch's models are
     independent and their numpy work releases the GIL; each gives the same bits on
     whichever thread."""
-    global _POOL
-    if len(items) < 2 or (os.cpu_count() or 1) < 2:
+    threads = min(len(items), os.cpu_count() or 1)
+    if threads < 2:
         return [fn(i) for i in items]
-    if _POOL is None or _POOL[0] != os.getpid():  # (a forked worker has no threads)
-        _POOL = (os.getpid(), ThreadPoolExecutor(os.cpu_count(), "vfgym-model"))
-    return list(_POOL[1].map(fn, items))
+    with ThreadPoolExecutor(threads, "vfgym-model") as pool:
+        return list(pool.map(fn, items))
 
 
 def _constraint_models(cons: np.ndarray) -> list[tuple[str, np.ndarray]]:

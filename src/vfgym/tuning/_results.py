@@ -7,7 +7,6 @@ import csv
 import io
 import json
 import math
-import os
 import warnings
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
@@ -15,7 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from vfgym import report, space
-from vfgym.io.runs import read_yaml, write_text
+from vfgym.io.runs import read_yaml, write_atomically, write_text
 from vfgym.moves.axis import Axis, machine_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
@@ -150,10 +149,8 @@ def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
         warnings.simplefilter("ignore")
         for name, draw in jobs.items():
             try:
-                fig = draw()
-                tmp = run_dir / f".{name}.tmp.png"
-                fig.savefig(tmp, dpi=100)
-                os.replace(tmp, run_dir / f"{name}.png")
+                save = draw().savefig
+                write_atomically(run_dir / f"{name}.png", lambda t, s=save: s(t, dpi=100), ".png")
                 out[name] = f"{name}.png"
             except Exception as exc:  # Optuna refuses some figures (e.g. no spread to rank)
                 out[name] = f"skipped: {str(exc).splitlines()[0] if str(exc) else exc!r}"

@@ -234,7 +234,7 @@ def _rdb(spec: StorageSpec, heartbeat: int, grace: int | None, tries: int = 8) -
             "engine_kwargs": kw,
             "heartbeat_interval": heartbeat,
             "grace_period": grace or 2 * heartbeat,
-            "heartbeat_stale_trial_callback": RetryStale(),
+            "heartbeat_stale_trial_callback": retry,
         }
         if spec.kind == "sqlite" and spec.path:
             return _sqlite_storage()(spec.url, spec.path + ".pop", **common)
@@ -252,22 +252,16 @@ MAX_RETRY = 3
 """A trial whose worker died is enqueued again at most this many times."""
 
 
-class RetryStale:
-    """Optuna's ``RetryHeartbeatStaleTrialCallback`` (the failed trial enqueued again with
-    its settings), noting the trials it retried: a sweep reports them. Each storage lets
-    one process only fail a running trial (PostgreSQL's row lock, the journal's order, the
-    SQLite file's ``flock`` below), so a trial is retried once."""
+def retry(study: Study, trial: FrozenTrial) -> None:
+    """Optuna's ``RetryHeartbeatStaleTrialCallback``: the failed trial enqueued again with its
+    settings. Each storage lets one process only fail a running trial (PostgreSQL's row
+    lock, the journal's order, the SQLite file's ``flock`` below), so it is retried once."""
+    import optuna
 
-    def __init__(self) -> None:
-        self.failed: list[int] = []
-
-    def __call__(self, study: Study, trial: FrozenTrial) -> None:
-        import optuna
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-            optuna.storages.RetryHeartbeatStaleTrialCallback(max_retry=MAX_RETRY)(study, trial)
-        self.failed.append(trial.number)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        callback = optuna.storages.RetryHeartbeatStaleTrialCallback(max_retry=MAX_RETRY)
+    callback(study, trial)
 
 
 class _Flock:
@@ -304,15 +298,12 @@ def _sqlite_wal(storage: RDBStorage) -> None:
     import sqlalchemy
 
     def on_connect(dbapi_conn: Any, _record: Any) -> None:
-        cur = dbapi_conn.cursor()
-        cur.execute("PRAGMA synchronous=NORMAL")
-        cur.close()
+        dbapi_conn.execute("PRAGMA synchronous=NORMAL")
 
     sqlalchemy.event.listen(storage.engine, "connect", on_connect)
     storage.engine.dispose()  # pooled connections opened before the listener
     with storage.engine.connect() as conn:
-        mode = conn.exec_driver_sql("PRAGMA journal_mode").scalar()
-        if str(mode).lower() != "wal":
+        if str(conn.exec_driver_sql("PRAGMA journal_mode").scalar()).lower() != "wal":
             conn.exec_driver_sql("PRAGMA journal_mode=WAL")
 
 

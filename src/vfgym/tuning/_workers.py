@@ -13,18 +13,19 @@ from __future__ import annotations
 
 import copy
 import datetime
-import json
+import multiprocessing
 import signal
 import socket
-import subprocess
 import sys
 import threading
 import time
 import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, field
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
+from multiprocessing.process import BaseProcess
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import psutil
 
@@ -33,7 +34,7 @@ from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
 from vfgym.tuning._objective import Objective
-from vfgym.tuning._storage import MAX_RETRY, RetryStale, StorageSpec, open_storage
+from vfgym.tuning._storage import MAX_RETRY, StorageSpec, open_storage, retry
 from vfgym.tuning._study import make_sampler, trial_budget
 
 if TYPE_CHECKING:
@@ -102,15 +103,12 @@ class WorkerReport:
         The trials it completed.
     simulated : int
         Settings it simulated (the others were copied from equal settings).
-    recovered : list of int
-        Trials of dead workers it failed and enqueued again.
     stopped : str
-        ``done``, ``timeout`` or ``interrupted``.
+        ``done`` or ``timeout`` (an interrupted worker raises KeyboardInterrupt).
     """
 
     trials: list[int] = field(default_factory=list)
     simulated: int = 0
-    recovered: list[int] = field(default_factory=list)
     stopped: str = ""
 
 
@@ -206,15 +204,11 @@ def run_worker(
                     break
             rep.stopped = "done" if gate.done() else "timeout"
         except KeyboardInterrupt:
-            rep.stopped = "interrupted"
             for n in current:
                 _fail_and_retry(study, copy.deepcopy(study.get_trials(deepcopy=False)[n]))
             raise
         finally:
             rep.simulated = objective.simulated
-            cb = getattr(storage, "get_heartbeat_stale_trial_callback", lambda: None)()
-            noted = cb.failed if isinstance(cb, RetryStale) else []
-            rep.recovered = sorted(set(gate.recovered) | set(noted))
             if ran:
                 trials = study.get_trials(deepcopy=False)
                 complete = optuna.trial.TrialState.COMPLETE
@@ -238,7 +232,6 @@ class _Budget:
         self.workers = cfg.workers  # (this command's; other commands on the study: rare)
         self.journal = spec.kind == "journal"
         self.interrupts = interrupts
-        self.recovered: list[int] = []
         self.orphan_s = max(30.0, 6.0 * self.every)
         self.retry_s = max(5.0, 2.0 * self.every)  # a failed trial's retry is awaited this long
         self._due = 0.0
@@ -349,8 +342,8 @@ class _Budget:
                 # misses a worker killed before its first one (the trial stays running)
                 # (a retry holds its dead worker's name until its new worker writes its own)
                 dead = age > self.every and _worker_alive(worker) is False
-            if dead and _fail_and_retry(self.study, copy.deepcopy(t)):
-                self.recovered.append(t.number)
+            if dead:
+                _fail_and_retry(self.study, copy.deepcopy(t))
 
 
 def _fail_and_retry(study: Study, trial: FrozenTrial) -> bool:
@@ -366,7 +359,7 @@ def _fail_and_retry(study: Study, trial: FrozenTrial) -> bool:
             return False
     elif trial.state != state.FAIL:
         return False
-    RetryStale()(study, trial)
+    retry(study, trial)
     return True
 
 
@@ -389,38 +382,35 @@ def _worker_alive(worker: str) -> bool | None:
         return False
 
 
-def spawn_workers(
-    cfg: SweepConfig, spec: StorageSpec, study: str, n: int
-) -> list[subprocess.Popen[str]]:
-    """Start ``n`` worker processes on the study (``python -m vfgym.tuning``), each printing
-    its :class:`WorkerReport` as JSON; their job goes on stdin, so the storage password
-    never shows on a command line."""
-    procs = []
+class Worker(NamedTuple):
+    """A worker process (:func:`spawn_workers`) and the pipe its :class:`WorkerReport` comes
+    back through."""
+
+    process: BaseProcess
+    report: Connection
+
+
+def spawn_workers(cfg: SweepConfig, spec: StorageSpec, study: str, n: int) -> list[Worker]:
+    """Start ``n`` worker processes on the study: ``multiprocessing``'s spawn, a fresh
+    interpreter each, the job passed to it (the storage's password on no command line)."""
+    ctx = multiprocessing.get_context("spawn")
+    workers = []
     for i in range(n):
-        p = subprocess.Popen(
-            [sys.executable, "-m", "vfgym.tuning"],
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            text=True,
-        )
-        job = {"config": cfg.to_dict(), "storage": asdict(spec), "study": study, "index": i}
-        assert p.stdin is not None
-        p.stdin.write(json.dumps(job))
-        p.stdin.close()
-        procs.append(p)
-    return procs
+        report, send = ctx.Pipe(duplex=False)
+        process = ctx.Process(target=_worker_process, args=(cfg, spec, study, i, send))
+        process.start()
+        send.close()
+        workers.append(Worker(process, report))
+    return workers
 
 
-def worker_main() -> int:
-    """A worker process (``python -m vfgym.tuning``): its job as JSON on stdin, its
-    :class:`WorkerReport` as JSON on stdout; 130 if interrupted."""
+def _worker_process(cfg: SweepConfig, spec: StorageSpec, study: str, index: int,
+                    send: Connection) -> None:  # fmt: skip
+    """A worker process: its :class:`WorkerReport` sent back; exit status 130 if
+    interrupted."""
     warnings.simplefilter("ignore", AxisNote)  # the parent process says it once
-    job = json.loads(sys.stdin.read())
-    cfg = SweepConfig(**job["config"])
     try:
-        rep = run_worker(cfg, StorageSpec(**job["storage"]), job["study"], job["index"])
+        send.send(run_worker(cfg, spec, study, index))
     except KeyboardInterrupt:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
-        return 130
-    print(json.dumps(asdict(rep)), flush=True)
-    return 0
+        sys.exit(130)
