@@ -360,7 +360,7 @@ def _run_workers(cfg, spec, name, study, bar) -> list[dict]:
         while time.monotonic() < deadline and any(w.process.is_alive() for w in workers):
             time.sleep(0.05)
         for w in workers:
-            if w.process.is_alive():
+            if w.process.is_alive() and w.process.pid is not None:
                 os.kill(w.process.pid, signal.SIGINT)
         for w in workers:
             w.process.join(timeout=60)

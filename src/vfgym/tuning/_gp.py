@@ -17,8 +17,12 @@ import numpy as np
 from scipy.optimize import minimize
 from scipy.spatial.distance import cdist
 from scipy.special import ndtr
-from sklearn.gaussian_process import GaussianProcessRegressor
-from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
+from sklearn.gaussian_process import GaussianProcessRegressor  # type: ignore[import-untyped]
+from sklearn.gaussian_process.kernels import (  # type: ignore[import-untyped]
+    ConstantKernel,
+    Matern,
+    WhiteKernel,
+)
 
 LENGTH_BOUNDS = (0.02, 5.0)
 """Length scales allowed, in unit coordinates (the search box is [0, 1] per axis)."""

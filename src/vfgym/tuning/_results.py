@@ -4,6 +4,7 @@ settings against the paper's, and the gap to a grid reference."""
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import json
 import math
@@ -149,8 +150,8 @@ def write_plots(study: Study, run_dir: Path, form: str) -> dict[str, str]:
         warnings.simplefilter("ignore")
         for name, draw in jobs.items():
             try:
-                save = draw().savefig
-                write_atomically(run_dir / f"{name}.png", lambda t, s=save: s(t, dpi=100), ".png")
+                save = functools.partial(draw().savefig, dpi=100)
+                write_atomically(run_dir / f"{name}.png", save, ".png")
                 out[name] = f"{name}.png"
             except Exception as exc:  # Optuna refuses some figures (e.g. no spread to rank)
                 out[name] = f"skipped: {str(exc).splitlines()[0] if str(exc) else exc!r}"
