@@ -437,12 +437,16 @@ def test_a_closed_pipe_is_one_line_and_the_sweep_still_finishes(tmp_path):
     ids=["sweep", "grid"],
 )  # fmt: skip
 def test_an_interrupt_is_one_line_with_status_130(tmp_path, argv):
+    # Ctrl-C reaches the command as from a terminal: a test run started in the background
+    # of a script (`pytest &`) has SIGINT ignored, and a child inherits that and keeps it
+    # (the grid, which sets no handler of its own, then ran to its end).
     p = subprocess.Popen(
         _vfgym(*argv, "--runs-dir", str(tmp_path)),
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
         env=_env(),
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         assert p.stdout.readline().startswith(f"vfgym {argv[0]}:")  # the header: it runs
@@ -452,7 +456,6 @@ def test_an_interrupt_is_one_line_with_status_130(tmp_path, argv):
     finally:
         if p.poll() is None:
             p.kill()
-    # (the end of stdout says whether the run finished as if no interrupt had come)
     assert p.returncode == 130, (err, out[-400:])
     # (on a cold numba cache the first use says once that it compiles: not the interrupt's)
     err = "".join(ln for ln in err.splitlines(True) if not ln.startswith("vfgym: compiling"))
