@@ -397,6 +397,7 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
         write_trials_csv,
     )
     from vfgym.tuning._study import trial_budget
+    from vfgym.tuning._workers import RETRY
 
     write_trials_csv(study, run_dir / "trials.csv")
     n = _counts(study)
@@ -415,8 +416,8 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     ]
     # A dead worker's trial, or one interrupted, is failed and enqueued again (Optuna's
     # retry names the trial it repeats): the study says which, whichever worker did it.
-    retried = sorted(t.system_attrs["failed_trial"] for t in study.get_trials(deepcopy=False)[made:]
-                     if "failed_trial" in t.system_attrs)  # fmt: skip
+    retried = sorted(t.system_attrs[RETRY] for t in study.get_trials(deepcopy=False)[made:]
+                     if RETRY in t.system_attrs)  # fmt: skip
     if reports:
         sims = sum(int(r.get("simulated", 0)) for r in reports)
         ran = sum(len(r.get("trials", [])) for r in reports)
