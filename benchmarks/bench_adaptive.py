@@ -13,7 +13,7 @@ against the robust per-move base they started from and against an oracle.
 
 Held-out pairs: the axis's test moves (the first ``--moves``) × ``--plants`` true plants
 drawn within its uncertainty from ``--plant-seed`` (default
-:data:`vfgym.plant.uncertainty.VERDICT_PLANT_SEED`); agents are trained on the train split
+:data:`vfgym.axis.VERDICT_PLANT_SEED`); agents are trained on the train split
 and select their best model on validation pairs of other seeds
 (:func:`vfgym.agents.selection.validation_plants`), so none of these pairs was seen.
 
@@ -82,7 +82,7 @@ class Judged:
 
 def pairs(axis, moves: int, plants: int, seed: int):
     """(held-out moves, true plants)."""
-    from vfgym.plant.uncertainty import draw_plants
+    from vfgym.axis import draw_plants
 
     if axis.uncertainty.exact:
         raise SystemExit(f"--axis {axis.name}: states no uncertainty; adaptive agents need one")
@@ -296,8 +296,8 @@ def main(argv: list[str] | None = None) -> int:
 
     from vfgym import PAPER_AXIS, load_axis
     from vfgym.agents import load_tuner
+    from vfgym.axis import VERDICT_PLANT_SEED
     from vfgym.moves.distribution import random_scenario
-    from vfgym.plant.uncertainty import VERDICT_PLANT_SEED
 
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--axis", default="experiments/axes/loads-uncertain.yaml")

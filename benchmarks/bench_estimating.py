@@ -30,9 +30,9 @@ def main(argv: list[str] | None = None) -> int:
     from bench_adaptive import judge, pairs
 
     from vfgym import load_axis
+    from vfgym.axis import VERDICT_PLANT_SEED
     from vfgym.permove import load_settings_model, load_tuner
     from vfgym.permove.adaptive import AdaptiveOptions, EstimatingScheduler
-    from vfgym.plant.uncertainty import VERDICT_PLANT_SEED
 
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--axis", default="experiments/axes/loads-uncertain.yaml")

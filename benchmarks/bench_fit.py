@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vfgym.moves.axis import Axis, load_axis
+from vfgym.axis import Axis, load_axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.permove.fit import FitConfig, checkpointed_optima, fit_axis
 from vfgym.permove.optima import MoveOptimum, OptimumSearch

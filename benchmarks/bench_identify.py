@@ -50,15 +50,14 @@ from typing import Any
 
 import numpy as np
 
+from vfgym.axis import EXACT, PAPER_AXIS, Axis, PlantVariant, load_axis
 from vfgym.identify.capture import read_capture
 from vfgym.identify.fit import PARAMS, fit
 from vfgym.identify.model import record_of
 from vfgym.identify.plan import make_plan
 from vfgym.identify.report import Identified, identify_report
 from vfgym.identify.signals import record_capture
-from vfgym.moves.axis import PAPER_AXIS, Axis, load_axis
 from vfgym.params import PAPER_SETTINGS
-from vfgym.plant.uncertainty import EXACT, PlantVariant
 
 CAPTURE_S = 2.0
 ENABLE_TO_MOVES_S = 0.2

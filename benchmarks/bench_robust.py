@@ -41,12 +41,11 @@ from pathlib import Path
 import numpy as np
 
 from vfgym import PAPER_AXIS, Settings, cli, evaluate, load_axis
+from vfgym.axis import EXACT, VERDICT_PLANT_SEED, VERDICT_PLANTS, draw_plants, write_axis
 from vfgym.commands._common import load_settings
-from vfgym.moves.axis import write_axis
 from vfgym.moves.baselines import Baseline
 from vfgym.permove.optima import OptimumSearch, move_optima
 from vfgym.permove.supervised import load_settings_model
-from vfgym.plant.uncertainty import EXACT, VERDICT_PLANT_SEED, VERDICT_PLANTS, draw_plants
 from vfgym.scoring import Move, score_across, score_robust
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -160,7 +159,7 @@ def part_evaluate(axis, args) -> None:
 def part_nominal() -> None:
     s = Settings(value_rad=0.882, error_limit_rad=0.872, k=430.9, ts_over_tf=1.0)
     test = PAPER_AXIS.scenarios("test")
-    from vfgym.plant.uncertainty import PlantVariant
+    from vfgym.axis import PlantVariant
 
     line = []
     for f in (0.95, 1.02, 1.05, 1.10, 1.25):

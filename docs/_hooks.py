@@ -97,7 +97,7 @@ def axis_keys_markdown() -> str:
     """A table of keys for each dataclass an axis file is written in."""
     import vfgym
     from vfgym.moves.distribution import MoveDistribution
-    from vfgym.plant.uncertainty import Uncertainty
+    from vfgym.axis import Uncertainty
 
     where = [
         ("plant", vfgym.Plant),

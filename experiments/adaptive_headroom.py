@@ -40,10 +40,9 @@ import numpy as np
 from cmaes import CMA
 
 from vfgym import evaluate
+from vfgym.axis import VERDICT_PLANT_SEED, draw_plants, load_axis
 from vfgym.envs.servo import VFServoEnv
-from vfgym.moves.axis import load_axis
 from vfgym.permove import load_settings_model
-from vfgym.plant.uncertainty import VERDICT_PLANT_SEED, draw_plants
 
 INFEASIBLE = 10.0
 """Added to an infeasible schedule's cost in the search (never in the reported cost)."""

@@ -26,8 +26,8 @@ from pathlib import Path
 import yaml
 
 from vfgym import cli, evaluate, tuning
+from vfgym.axis import PAPER_AXIS, load_axis
 from vfgym.commands._common import load_settings
-from vfgym.moves.axis import PAPER_AXIS, load_axis
 
 
 def one_run(axis: str, how: str, seed: int, args: argparse.Namespace, runs: str) -> dict:

@@ -53,7 +53,7 @@ import numpy as np
 import optuna
 
 from vfgym import space, tuning
-from vfgym.moves.axis import axis_digest
+from vfgym.axis import axis_digest
 from vfgym.params import PAPER_PLANT
 from vfgym.scoring import CONSTRAINTS
 from vfgym.tuning._results import FoundReference, find_reference, gap_pct

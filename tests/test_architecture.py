@@ -32,6 +32,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("_validate", "_limits", "params", "space", "io"),  # shared vocabulary; io: files in/out
     ("plant",),  # params -> Trace
     ("moves",),  # what the plant is asked to do
+    ("axis",),  # the problem: plant, measures, moves, uncertainty
     ("scoring",),  # measures -> constraints -> cost
     ("tuning", "report", "envs", "identify"),  # built on the scoring path (identify: plant, moves)
     ("permove",),  # per-move settings models, torch-free

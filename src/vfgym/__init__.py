@@ -15,8 +15,8 @@ callable from a move to its settings, without torch.
 """
 
 from vfgym import envs  # importing envs registers vfgym/VFTune-v0, VFServo-v0
+from vfgym.axis import PAPER_AXIS, Axis, load_axis
 from vfgym.moves import baselines
-from vfgym.moves.axis import PAPER_AXIS, Axis, load_axis
 from vfgym.moves.distribution import get_scenario, random_scenario, scenario_set
 from vfgym.moves.pulse_sources import fixed_frequency_pulses, scurve_pulses
 from vfgym.moves.scenarios import SCENARIOS, Scenario

@@ -113,8 +113,8 @@ def main(argv: list[str] | None = None) -> int:
         0 on success, 2 for bad input or a file, pipe or package problem (one line on
         stderr), 130 after an interrupt, 1 for a bug (with its traceback).
     """
+    from vfgym.axis import AxisNote
     from vfgym.io.runs import set_command_line
-    from vfgym.moves.axis import AxisNote
 
     guard = _StdoutGuard(sys.stdout)
     sys.stdout = guard

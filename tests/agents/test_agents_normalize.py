@@ -93,7 +93,7 @@ def test_evaluate_runs_a_servo_agent_as_a_scheduler(servo_run, tmp_path, capsys)
 def test_load_tuner_gives_a_servo_agent_as_a_scheduler_that_evaluate_judges(servo_run):
     from vfgym import evaluate
     from vfgym.agents import load_tuner
-    from vfgym.plant.uncertainty import NOMINAL, PlantVariant
+    from vfgym.axis import NOMINAL, PlantVariant
     from vfgym.scoring import Scheduler
 
     run, _ = servo_run

@@ -18,7 +18,7 @@ from vfgym.agents import hyperparams as hp
 from vfgym.agents import make_env
 from vfgym.agents.selection import validation_plants, validation_scenarios, validation_size
 from vfgym.agents.training import start_at_base, train
-from vfgym.moves.axis import load_axis
+from vfgym.axis import load_axis
 
 REPO = Path(__file__).resolve().parents[2]
 AXIS = REPO / "experiments" / "axes" / "loads-uncertain.yaml"

@@ -14,9 +14,9 @@ pytest.importorskip("stable_baselines3")
 from vfgym.agents import load_tuner, policy_settings
 from vfgym.agents.hyperparams import HYPERPARAMS_DIR
 from vfgym.agents.selection import VALIDATION_SEED0, validation_scenarios
+from vfgym.axis import load_axis
 from vfgym.cli import main
 from vfgym.commands._common import load_settings
-from vfgym.moves.axis import load_axis
 from vfgym.permove.supervised import PRETRAINED
 
 REPO = Path(__file__).resolve().parents[2]
@@ -143,7 +143,7 @@ def test_residual_base_takes_a_settings_models_path(tmp_path):
 
 def test_validation_pairs_on_an_uncertain_axis_are_fixed_true_plants():
     from vfgym.agents.selection import validation_plants
-    from vfgym.plant.uncertainty import NOMINAL
+    from vfgym.axis import NOMINAL
 
     axis = REPO / "experiments" / "axes" / "loads-uncertain.yaml"
     plants = validation_plants(8, str(axis))

@@ -11,9 +11,9 @@ import pytest
 import yaml
 
 from vfgym import evaluate
+from vfgym.axis import AXIS_FILE, load_axis
 from vfgym.cli import main
 from vfgym.commands._common import load_settings
-from vfgym.moves.axis import AXIS_FILE, load_axis
 
 AXES = Path(__file__).resolve().parents[2] / "experiments" / "axes"
 

@@ -16,9 +16,9 @@ from test_envs_vector import compare_runs
 
 import vfgym.envs  # noqa: F401  (registers the ids)
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, Measures, evaluate
+from vfgym.axis import load_axis
 from vfgym.envs.servo import VFServoEnv
 from vfgym.envs.tune import VFTuneEnv
-from vfgym.moves.axis import load_axis
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.space import from_action, to_action
 

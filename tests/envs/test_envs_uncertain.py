@@ -13,8 +13,8 @@ import pytest
 
 import vfgym  # noqa: F401  (registers the envs)
 from vfgym import evaluate, load_axis
+from vfgym.axis import NOMINAL, PlantVariant
 from vfgym.envs.tune import action_settings
-from vfgym.plant.uncertainty import NOMINAL, PlantVariant
 
 AXIS = Path(__file__).resolve().parents[2] / "experiments" / "axes" / "loads-uncertain.yaml"
 

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+from vfgym.axis import PlantVariant
 from vfgym.identify.signals import record_capture
 from vfgym.params import Plant
-from vfgym.plant.uncertainty import PlantVariant
 
 REST_S = 0.5
 """Rest simulated before the pulse train (s): the record starts after 40–90 % of it, the

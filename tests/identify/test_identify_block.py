@@ -13,15 +13,14 @@ import numpy as np
 import pytest
 from capture_synth import Truth, capture_vcd, draw_truth
 
+from vfgym.axis import PAPER_AXIS, PlantVariant
 from vfgym.identify.capture import read_capture
 from vfgym.identify.covariance import resolution
 from vfgym.identify.fit import QUANTISATION_FLOOR, fit
 from vfgym.identify.model import record_of
 from vfgym.identify.plan import make_plan
 from vfgym.identify.report import MARGIN, identify_report
-from vfgym.moves.axis import PAPER_AXIS
 from vfgym.params import PAPER_SETTINGS
-from vfgym.plant.uncertainty import PlantVariant
 
 NOMINAL = PAPER_AXIS.plant
 K3 = NOMINAL.torque_per_count_nm

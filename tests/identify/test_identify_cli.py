@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 from capture_synth import capture_vcd, draw_truth
 
+from vfgym.axis import PAPER_AXIS, load_axis
 from vfgym.cli import main
 from vfgym.identify.plan import make_plan
 from vfgym.identify.signals import trace_edges, train_edges, write_edges_vcd
 from vfgym.io.trace_csv import write_trace_csv
-from vfgym.moves.axis import PAPER_AXIS, load_axis
 from vfgym.moves.scenarios import SCENARIOS
 from vfgym.params import PAPER_PLANT, PAPER_SETTINGS
 from vfgym.plant import simulate

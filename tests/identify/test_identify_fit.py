@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from capture_synth import capture_vcd, draw_truth
 
+from vfgym.axis import PAPER_AXIS
 from vfgym.identify.capture import read_capture
 from vfgym.identify.fit import PARAMS, QUANTISATION_FLOOR, fit
 from vfgym.identify.model import record_of
 from vfgym.identify.plan import make_plan, moves_pulses
 from vfgym.identify.report import EXPLAINED, identify_report
-from vfgym.moves.axis import PAPER_AXIS
 from vfgym.params import PAPER_SETTINGS
 
 NOMINAL = PAPER_AXIS.plant

@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from vfgym.axis import PlantVariant
 from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Settings
 from vfgym.plant import pack, reference, simulate, simulate_train
-from vfgym.plant.uncertainty import PlantVariant
 
 RATED = PAPER_PLANT.motor.rated_torque_nm
 PLANT = PlantVariant(

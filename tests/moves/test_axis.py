@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vfgym import PAPER_PLANT, PAPER_SETTINGS
-from vfgym.moves.axis import (
+from vfgym.axis import (
     AXIS_FILE,
     PAPER_AXIS,
     Axis,

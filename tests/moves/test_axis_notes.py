@@ -12,8 +12,8 @@ import pytest
 import yaml
 
 from vfgym import PAPER_AXIS, Settings, cli, evaluate, load_axis
-from vfgym.moves._axis_checks import holding_counts
-from vfgym.moves.axis import AxisNote, axis_notes
+from vfgym.axis import AxisNote, axis_notes
+from vfgym.axis._checks import holding_counts
 
 K3 = PAPER_AXIS.plant.torque_per_count_nm  # 5.3e-4 N·m per count on the bare paper motor
 
@@ -105,7 +105,7 @@ def test_a_best_yaml_used_on_another_axis_is_noted(tmp_path, capsys):
 def test_a_users_earlier_work_is_not_replaced_without_a_word(tmp_path, capsys):
     """A fit of an edited axis under the same name, and a study continued in another kind
     of storage, are refused in one line before anything is written."""
-    from vfgym.moves.axis import write_axis
+    from vfgym.axis import write_axis
 
     axes = Path(__file__).resolve().parents[2] / "experiments" / "axes"
     runs = tmp_path / "runs"

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import yaml
 
+from vfgym.axis import load_axis
 from vfgym.cli import main
-from vfgym.moves.axis import load_axis
 from vfgym.permove import fit as F
 from vfgym.permove.optima import OptimumSearch, read_optima
 from vfgym.permove.supervised import load_settings_model

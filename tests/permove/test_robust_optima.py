@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from vfgym import evaluate, load_axis
+from vfgym.axis import Uncertainty
 from vfgym.permove.optima import OptimumSearch, move_optima
-from vfgym.plant.uncertainty import Uncertainty
 
 AXES = Path(__file__).resolve().parents[2] / "experiments" / "axes"
 SEARCH = OptimumSearch(points=3, rounds=3, keep=2)
@@ -56,7 +56,7 @@ def test_fit_best_fixed_is_the_sweep_with_as_many_trials(tmp_path):
 def test_an_oracles_optima_are_each_true_plants_own():
     """``true_plants``: each move optimised as it runs on its true plant, so the optimum's
     cost is its cost there, and no more than the modelled plant's optimum costs there."""
-    from vfgym.plant.uncertainty import PlantVariant
+    from vfgym.axis import PlantVariant
 
     axis = load_axis(AXES / "paper.yaml")
     moves = axis.scenarios("test")[:3]

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from vfgym.axis import PAPER_AXIS, load_axis, machine_digest
 from vfgym.cli import main
-from vfgym.moves.axis import PAPER_AXIS, load_axis, machine_digest
 from vfgym.permove import (
     PRETRAINED,
     Tuner,

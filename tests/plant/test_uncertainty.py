@@ -19,12 +19,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vfgym import PAPER_AXIS, Settings, cli, evaluate, load_axis
-from vfgym.moves.axis import axis_digest, axis_from_dict, axis_to_dict
-from vfgym.plant.uncertainty import (
+from vfgym.axis import (
     EXACT,
     NOMINAL,
     PlantVariant,
     Uncertainty,
+    axis_digest,
+    axis_from_dict,
+    axis_to_dict,
     draw_plants,
     plant_design,
     sensitivity_variants,

@@ -12,8 +12,8 @@ import pytest
 import yaml
 
 from vfgym import Settings, cli, evaluate
+from vfgym.axis import PAPER_AXIS, load_axis
 from vfgym.commands._common import load_settings
-from vfgym.moves.axis import PAPER_AXIS, load_axis
 from vfgym.moves.distribution import scenario_set
 from vfgym.report import (
     VERDICT_BASELINES,

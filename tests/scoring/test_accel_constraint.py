@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vfgym import DEFAULT_MEASURES, PAPER_PLANT, Measures, evaluate, simulate
-from vfgym.moves.axis import load_axis
+from vfgym.axis import load_axis
 from vfgym.moves.distribution import scenario_set
 from vfgym.plant.measures import accel_window_ticks
 from vfgym.space import from_action

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from vfgym import Settings
+from vfgym.axis import Uncertainty, plant_design
 from vfgym.moves.distribution import random_scenario
 from vfgym.params import PAPER_PLANT
-from vfgym.plant.uncertainty import Uncertainty, plant_design
 from vfgym.scoring import Move, best_robust, score_robust
 from vfgym.space import from_action
 

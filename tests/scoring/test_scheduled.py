@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from vfgym import Settings, evaluate
+from vfgym.axis import PlantVariant
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT
 from vfgym.plant import simulate
-from vfgym.plant.uncertainty import PlantVariant
 from vfgym.report import Candidate, compare
 from vfgym.scoring import Move, Scheduler
 

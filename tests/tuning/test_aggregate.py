@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vfgym import cli, tuning
-from vfgym.moves.axis import load_axis
+from vfgym.axis import load_axis
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import CONSTRAINTS, Evaluation, evaluate
 from vfgym.tuning import AGGREGATES, aggregate, aggregate_costs

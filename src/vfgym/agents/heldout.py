@@ -80,7 +80,7 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
     HeldOutResult
         The mean costs and win counts.
     """
-    from vfgym.moves.axis import PAPER_AXIS, load_axis
+    from vfgym.axis import PAPER_AXIS, load_axis
     from vfgym.params import Settings
     from vfgym.permove import load_settings_model
     from vfgym.report import Candidate, compare
@@ -140,9 +140,8 @@ def axis_verdict(model_path: str | Path, axis_file: str | Path, sweep_trials: in
     tuple of (vfgym.report.Verdict, Settings)
         The verdict, and the best fixed setting it was judged against.
     """
-    from vfgym.moves.axis import load_axis
+    from vfgym.axis import VERDICT_PLANTS, load_axis
     from vfgym.permove import FitConfig, best_fixed
-    from vfgym.plant.uncertainty import VERDICT_PLANTS
     from vfgym.report import Candidate, baseline_candidates, compare, verdict
 
     axis = load_axis(axis_file)

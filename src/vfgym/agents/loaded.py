@@ -24,12 +24,11 @@ from typing import Any
 
 import numpy as np
 
+from vfgym.axis import Axis, PlantVariant
 from vfgym.io.runs import read_yaml
-from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 from vfgym.plant.measures import NAMES as METRIC_NAMES
-from vfgym.plant.uncertainty import PlantVariant
 from vfgym.scoring import Scheduler
 
 VECNORMALIZE_FILE = "vecnormalize.pkl"
@@ -177,7 +176,7 @@ def _measures_of(kw: dict[str, Any]) -> Any:
     axis = kw.get("axis")
     if axis is None:
         return kw.get("measures", DEFAULT_MEASURES)
-    from vfgym.moves.axis import load_axis
+    from vfgym.axis import load_axis
 
     return (load_axis(axis) if isinstance(axis, (str, Path)) else axis).measures
 
@@ -186,7 +185,7 @@ def _design_of(kw: dict[str, Any]) -> Any:
     axis = kw.get("axis")
     if axis is None:
         return ()
-    from vfgym.moves.axis import load_axis
+    from vfgym.axis import load_axis
 
     return (load_axis(axis) if isinstance(axis, (str, Path)) else axis).design_plants()
 

@@ -109,8 +109,7 @@ def validation_plants(n: int, axis: Any = None) -> list[Any]:
     list of PlantVariant
         One per validation move.
     """
-    from vfgym.moves.axis import PAPER_AXIS, load_axis
-    from vfgym.plant.uncertainty import NOMINAL, draw_plants
+    from vfgym.axis import NOMINAL, PAPER_AXIS, draw_plants, load_axis
 
     ax = PAPER_AXIS if axis is None else axis
     ax = load_axis(ax) if isinstance(ax, (str, Path)) else ax
@@ -121,10 +120,10 @@ def validation_plants(n: int, axis: Any = None) -> list[Any]:
 
 def validation_scenarios(n: int, axis: Any = None) -> list[Scenario]:
     """The held-out scenarios the evaluation callback scores (never drawn in training);
-    on an axis (an :class:`~vfgym.moves.axis.Axis` or its file), its train move set's."""
+    on an axis (an :class:`~vfgym.axis.Axis` or its file), its train move set's."""
     if axis is None:
         return [random_scenario(VALIDATION_SEED0 + i, "train") for i in range(n)]
-    from vfgym.moves.axis import load_axis
+    from vfgym.axis import load_axis
 
     axis = load_axis(axis) if isinstance(axis, (str, Path)) else axis
     return [axis.moves.train.pick(VALIDATION_SEED0 + i, "train", axis.plant) for i in range(n)]
@@ -152,7 +151,7 @@ def validation_size(params: dict[str, Any], axis: Any = None) -> int:
     n = int(params.get("n_eval_scenarios", 16))
     if axis is None:
         return n
-    from vfgym.moves.axis import load_axis
+    from vfgym.axis import load_axis
 
     ax = load_axis(axis) if isinstance(axis, (str, Path)) else axis
     return n if ax.uncertainty.exact else int(params.get("n_eval_scenarios_uncertain", n))

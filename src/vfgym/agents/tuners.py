@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from vfgym.moves.axis import PAPER_AXIS, Axis, load_axis, machine_digest
+from vfgym.axis import PAPER_AXIS, Axis, load_axis, machine_digest
 from vfgym.moves.features import scenario_features
 from vfgym.permove import Tuner, default_warn, outside_ranges
 from vfgym.permove import load_tuner as load_settings_tuner

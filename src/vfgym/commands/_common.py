@@ -23,7 +23,7 @@ def load_settings(path: str, axis: Any = None) -> Settings:
     ``settings`` (as ``best.yaml`` of a sweep and ``vfgym predict`` write). Any problem
     raises a one-line ``ValueError`` that names the file. Given the axis they are used on
     (``None``: the paper's), a ``best.yaml`` tuned for another machine (its ``machine``)
-    is noted in one line (:class:`~vfgym.moves.axis.AxisNote`)."""
+    is noted in one line (:class:`~vfgym.axis.AxisNote`)."""
     try:
         data = read_yaml(path)
         _note_machine(path, data, axis)
@@ -43,7 +43,7 @@ def load_settings(path: str, axis: Any = None) -> Settings:
 def _note_machine(path: str, data: Any, axis: Any) -> None:
     import warnings
 
-    from vfgym.moves.axis import PAPER_AXIS, AxisNote, machine_digest
+    from vfgym.axis import PAPER_AXIS, AxisNote, machine_digest
 
     if not isinstance(data, dict) or not isinstance(data.get("machine"), str):
         return
@@ -125,10 +125,10 @@ def add_axis_option(p: argparse.ArgumentParser) -> None:
 
 
 def axis_from_args(args: argparse.Namespace) -> Any:
-    """The :class:`~vfgym.moves.axis.Axis` of ``--axis FILE`` (a bad file: one-line
+    """The :class:`~vfgym.axis.Axis` of ``--axis FILE`` (a bad file: one-line
     ``ValueError`` naming it), or the paper's axis without the option (the default
     problem, :data:`vfgym.PAPER_AXIS`)."""
-    from vfgym.moves.axis import PAPER_AXIS, load_axis
+    from vfgym.axis import PAPER_AXIS, load_axis
 
     path = getattr(args, "axis", None)
     return load_axis(path) if path else PAPER_AXIS

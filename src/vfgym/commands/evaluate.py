@@ -16,8 +16,8 @@ AGENTS_HINT = 'pip install -c constraints.txt -e ".[agents]"'
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
+    from vfgym.axis import VERDICT_PLANT_SEED, VERDICT_PLANTS
     from vfgym.commands._common import SEED, add_axis_option, positive_int, whole
-    from vfgym.plant.uncertainty import VERDICT_PLANT_SEED, VERDICT_PLANTS
 
     p = sub.add_parser(
         "evaluate",
@@ -168,11 +168,10 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
     from vfgym._validate import check_name, check_output_path
+    from vfgym.axis import AXIS_FILE, VERDICT_PLANTS, write_axis
     from vfgym.commands._common import axis_from_args, load_settings
     from vfgym.io.runs import new_run_dir, record_command, write_yaml
-    from vfgym.moves.axis import AXIS_FILE, write_axis
     from vfgym.moves.baselines import BASELINE_NAMES
-    from vfgym.plant.uncertainty import VERDICT_PLANTS
     from vfgym.report import (
         Candidate,
         baseline_candidates,

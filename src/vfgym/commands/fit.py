@@ -45,9 +45,9 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from vfgym._validate import check_name, check_output_path
+    from vfgym.axis import AXIS_FILE, write_axis
     from vfgym.commands._common import Interrupted, axis_from_args
     from vfgym.io.runs import new_run_dir, record_command, write_text, write_yaml
-    from vfgym.moves.axis import AXIS_FILE, write_axis
     from vfgym.permove.fit import FitConfig, config_dict, fit_axis
     from vfgym.report import format_verdict
     from vfgym.space import settings_to_dict
@@ -93,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
 def _check_same_axis(run_dir: Path, axis: object, axis_file: str) -> None:
     """A fit continues only on the axis it was started on: an edited axis under the same
     name would silently replace the earlier fit's optima and model."""
-    from vfgym.moves.axis import AXIS_FILE, axis_digest, load_axis
+    from vfgym.axis import AXIS_FILE, axis_digest, load_axis
 
     old = run_dir / AXIS_FILE
     if not old.is_file():

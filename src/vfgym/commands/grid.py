@@ -54,8 +54,8 @@ def run(args: argparse.Namespace) -> int:
 
     from vfgym import tuning
     from vfgym._validate import check_output_path
+    from vfgym.axis import AXIS_FILE, write_axis
     from vfgym.io.runs import read_yaml, record_command, write_text, write_yaml
-    from vfgym.moves.axis import AXIS_FILE, write_axis
     from vfgym.report import format_compact
     from vfgym.tuning._grid import grid_reference, write_grid_csv
     from vfgym.tuning._results import against_paper

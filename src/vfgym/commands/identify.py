@@ -77,8 +77,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from vfgym.axis import PAPER_AXIS
     from vfgym.commands._common import axis_from_args, load_settings
-    from vfgym.moves.axis import PAPER_AXIS
     from vfgym.params import PAPER_SETTINGS
 
     axis = axis_from_args(args) or PAPER_AXIS
@@ -96,9 +96,9 @@ def _plan(axis: Any, settings: Any, out: Path) -> int:
     from dataclasses import replace
 
     from vfgym._validate import check_output_path
+    from vfgym.axis import MoveSet, MoveSets, write_axis
     from vfgym.identify.plan import make_plan
     from vfgym.identify.signals import record_capture, train_edges, write_edges_vcd
-    from vfgym.moves.axis import MoveSet, MoveSets, write_axis
 
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out={str(out)!r} is a file: with --plan give a folder")
@@ -163,11 +163,11 @@ DRY_START_S = -0.02
 
 def _identify(axis: Any, settings: Any, args: argparse.Namespace) -> int:
     from vfgym._validate import check_output_path
+    from vfgym.axis import write_axis
     from vfgym.identify.capture import parse_signal_map, read_capture
     from vfgym.identify.fit import QUANTISATION_FLOOR, fit
     from vfgym.identify.model import record_of
     from vfgym.identify.report import MARGIN, identify_report
-    from vfgym.moves.axis import write_axis
 
     out = check_output_path("--out", args.out)
     names = parse_signal_map(args.signals)

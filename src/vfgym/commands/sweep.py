@@ -96,9 +96,9 @@ def run(args: argparse.Namespace) -> int:
 
     from vfgym import tuning
     from vfgym._validate import check_output_path
+    from vfgym.axis import axis_digest
     from vfgym.commands._common import Interrupted
     from vfgym.io.runs import read_yaml
-    from vfgym.moves.axis import axis_digest
     from vfgym.tuning._results import find_reference
     from vfgym.tuning._study import check_sampler, trial_budget
 
@@ -270,7 +270,7 @@ def _record(run_dir, args, cfg, name, spec) -> None:
     write_yaml(run_dir / "config.yaml", {"command": "sweep", **conf})
     axis = cfg.load_axis()
     if axis is not None:  # the axis as tuned on, beside the config that names its file
-        from vfgym.moves.axis import AXIS_FILE, write_axis
+        from vfgym.axis import AXIS_FILE, write_axis
 
         write_axis(axis, run_dir / AXIS_FILE)
     if command_args() is not None:  # run by vfgym.cli.main
@@ -384,8 +384,8 @@ def _finish(study, cfg, spec, scenarios, run_dir, reference, interrupted, elapse
     and summary.yaml; ``made``: the study's trials before this run. Returns the exit
     status."""
     from vfgym import tuning
+    from vfgym.axis import PAPER_AXIS
     from vfgym.io.runs import write_text, write_yaml
-    from vfgym.moves.axis import PAPER_AXIS
     from vfgym.params import PAPER_SETTINGS
     from vfgym.report import axis_verdict, compact_rows, format_compact, format_verdict
     from vfgym.tuning._aggregate import describe, set_cost

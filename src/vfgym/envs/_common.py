@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from vfgym._validate import check_choice, check_int, check_real
-from vfgym.moves.axis import Axis, load_axis
+from vfgym.axis import EXACT, NOMINAL, Axis, PlantVariant, draw_plant, load_axis
 from vfgym.moves.distribution import get_scenario, random_scenario
 from vfgym.moves.features import main_move, scenario_features
 from vfgym.moves.scenarios import SPLITS, Scenario
@@ -25,7 +25,6 @@ from vfgym.params import (
     Plant,
     Settings,
 )
-from vfgym.plant.uncertainty import EXACT, NOMINAL, PlantVariant, draw_plant
 from vfgym.scoring import (
     CONSTRAINTS,
     DEFAULT_BOUNDS,
@@ -155,7 +154,7 @@ def resolve_axis(
     Parameters
     ----------
     axis : Axis, str, os.PathLike or None
-        An :class:`~vfgym.moves.axis.Axis` or an axis file's path; ``None`` for none.
+        An :class:`~vfgym.axis.Axis` or an axis file's path; ``None`` for none.
     plant : Plant
         The plant given beside it.
     measures : Measures
@@ -194,8 +193,8 @@ def resolve_axis(
 class ScenarioSource:
     """Where each episode's scenario comes from: a fixed one, or seeded draws from one
     split (train or test) of the random distribution, seeds in ``seed_range`` = [lo, hi);
-    on an ``axis``, from that split's move set (:meth:`vfgym.moves.axis.MoveSet.pick`)
-    and names resolved by :meth:`vfgym.moves.axis.Axis.scenario`."""
+    on an ``axis``, from that split's move set (:meth:`vfgym.axis.MoveSet.pick`)
+    and names resolved by :meth:`vfgym.axis.Axis.scenario`."""
 
     def __init__(
         self,
@@ -232,7 +231,7 @@ class ScenarioSource:
     def draw(self, rng: np.random.Generator, options: dict[str, Any] | None) -> Episode:
         """The next episode: from ``options`` if they name one, else fixed, else drawn; on
         an axis with uncertainty its true plant drawn within it after the move (or
-        ``options["plant"]``, a :class:`~vfgym.plant.uncertainty.PlantVariant`)."""
+        ``options["plant"]``, a :class:`~vfgym.axis.PlantVariant`)."""
         opts = check_options(options)
         if "scenario" in opts:
             sc = self._named(opts["scenario"])
@@ -265,7 +264,7 @@ class EnvConfig:
     Validated on construction, except the scenario and its draws, which
     :meth:`scenario_source` checks. An ``axis`` is resolved here, once, by
     :func:`resolve_axis`: afterwards ``axis`` is the loaded
-    :class:`~vfgym.moves.axis.Axis` and ``plant`` and ``measures`` are its own.
+    :class:`~vfgym.axis.Axis` and ``plant`` and ``measures`` are its own.
 
     Parameters
     ----------
@@ -280,7 +279,7 @@ class EnvConfig:
     accel_law : str
         ``"rise"`` (the paper's reading) or ``"slew"``.
     axis : Axis, str, os.PathLike or None
-        An axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant and measures,
+        An axis file's path or a :class:`vfgym.axis.Axis`: its plant and measures,
         and the moves of each split come from its move sets (a random set's draws, or a
         listed set's move ``seed mod len``); names resolve on the axis.
     plant : Plant
@@ -479,7 +478,7 @@ def check_options(options: Any) -> dict[str, Any]:
     if "plant" in options and not isinstance(options["plant"], PlantVariant):
         raise ValueError(
             f"options['plant']={options['plant']!r} must be a "
-            "vfgym.plant.uncertainty.PlantVariant (the episode's true plant)"
+            "vfgym.axis.PlantVariant (the episode's true plant)"
         )
     return options
 

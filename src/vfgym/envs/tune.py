@@ -226,7 +226,7 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         The other fields of :class:`TuneConfig`, where their defaults live and are
         checked: ``split`` (``"train"`` or ``"test"``), ``seed_range``
         ((low, high) of the scenario seeds), ``accel_law`` (``"rise"`` or ``"slew"``),
-        ``axis`` (an axis file's path or a :class:`vfgym.moves.axis.Axis`: its plant,
+        ``axis`` (an axis file's path or a :class:`vfgym.axis.Axis`: its plant,
         measures and move sets), the scoring path's inputs ``plant``, ``measures``,
         ``weights``, ``bounds`` (:func:`vfgym.evaluate`), and ``residual``,
         ``residual_scale``, ``residual_base`` (residual actions),

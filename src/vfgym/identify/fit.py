@@ -2,7 +2,7 @@
 recorded encoder count, by least squares, with 95 % intervals.
 
 Five parameters, relative to the nominal axis's plant (as a
-:class:`~vfgym.plant.uncertainty.PlantVariant` applies them): a factor on the total
+:class:`~vfgym.axis.PlantVariant` applies them): a factor on the total
 inertia, the Coulomb friction, the viscous friction, a constant load torque, and a factor
 on the drive's gain K3 as set. They are fitted in scaled coordinates (log factors,
 torques in % of the rated torque, viscous friction as its torque at the pulse train's top
@@ -38,11 +38,11 @@ from typing import Any
 
 import numpy as np
 
+from vfgym.axis import FACTOR_RANGE, PlantVariant
 from vfgym.identify.covariance import pieces, quantisation_meat, resolution
 from vfgym.identify.excite import MIN_SATURATED_S, Excitation, excitation
 from vfgym.identify.model import SAMPLE_TICKS, Record, Response, Start, respond_many
 from vfgym.params import Plant, Settings
-from vfgym.plant.uncertainty import FACTOR_RANGE, PlantVariant
 
 PARAMS = ("inertia", "coulomb_nm", "viscous_nm_s_rad", "load_torque_nm", "torque_per_count")
 """The estimated quantities, named as the fields of an axis's ``uncertainty:`` block."""

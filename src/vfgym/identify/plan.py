@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vfgym.moves.axis import Axis
+from vfgym.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_SETTINGS, Plant, Settings
 from vfgym.plant import simulate

@@ -5,7 +5,7 @@ as the load's ``inertia_ratio`` (the rotor's inertia kept; below the rotor's own
 rotor's inertia itself is lowered, ratio 0), the friction and load torque as absolute
 values, and the drive's gain so that the K3 in force is the estimate (``follows_load``
 kept as set). Its ``uncertainty:`` block is what the captures warrant, relative to the
-identified plant as :class:`~vfgym.plant.uncertainty.Uncertainty` states them: each
+identified plant as :class:`~vfgym.axis.Uncertainty` states them: each
 estimated quantity's 95 % interval widened by :data:`MARGIN`, and at least its
 :attr:`~vfgym.identify.fit.Estimate.resolution` each side (the change no single reading
 of the count shows). A quantity the captures leave unknown keeps its nominal value with
@@ -29,12 +29,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from vfgym.axis import FACTOR_RANGE, Axis, Uncertainty
 from vfgym.identify.excite import MIN_SATURATED_S
 from vfgym.identify.fit import PARAMS, QUANTISATION_FLOOR, Estimate, Fit
 from vfgym.identify.model import SAMPLE_TICKS, Record, torque_limit
-from vfgym.moves.axis import Axis
 from vfgym.params import Plant
-from vfgym.plant.uncertainty import FACTOR_RANGE, Uncertainty
 
 MARGIN = 2.0
 """The uncertainty block's half-widths are this many times the 95 % intervals' (3.9

@@ -12,13 +12,12 @@ scenarios
 baselines
     What tuned settings are judged against: the paper's settings, a rule of thumb, a
     fixed-frequency train and the S-curve source.
-axis
-    One machine and its moves from a YAML file: the plant, the measures, and the train
-    and test move sets (a list of moves or a random distribution).
+
+An axis (one machine, its moves and what it does not know) is :mod:`vfgym.axis`, the layer
+above this one.
 """
 
-from vfgym.moves import axis, baselines, profiles, pulse_sources, scenarios
-from vfgym.moves.axis import PAPER_AXIS, Axis, MoveSet, load_axis, write_axis
+from vfgym.moves import baselines, profiles, pulse_sources, scenarios
 from vfgym.moves.distribution import (
     DEFAULT_DISTRIBUTION,
     LOAD_DISTRIBUTION,
@@ -33,22 +32,16 @@ from vfgym.moves.scenarios import SCENARIOS, Scenario
 __all__ = [
     "DEFAULT_DISTRIBUTION",
     "LOAD_DISTRIBUTION",
-    "PAPER_AXIS",
     "SCENARIOS",
-    "Axis",
     "MoveDistribution",
-    "MoveSet",
     "Scenario",
-    "axis",
     "baselines",
     "fixed_frequency_pulses",
     "get_scenario",
-    "load_axis",
     "profiles",
     "pulse_sources",
     "random_scenario",
     "scenario_set",
     "scenarios",
     "scurve_pulses",
-    "write_axis",
 ]

@@ -2,7 +2,7 @@
 test seeds.
 
 :class:`MoveDistribution` is a random distribution, its ranges frozen. Its defaults are
-the moves of one machine, the load its own: the default axis's (:mod:`vfgym.moves.axis`;
+the moves of one machine, the load its own: the default axis's (:mod:`vfgym.axis`;
 an axis file gives its own ranges). :data:`LOAD_DISTRIBUTION` adds a random load to each
 move: what the agents learn across (:func:`random_scenario`). :func:`get_scenario` and
 :func:`scenario_set` resolve names (``paper-step``, ``train-3``, ``named``, ``test``) on

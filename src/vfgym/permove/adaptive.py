@@ -37,12 +37,11 @@ from typing import Any
 import numpy as np
 
 from vfgym._validate import check_int, check_real
+from vfgym.axis import Axis, PlantVariant
 from vfgym.envs.servo import VFServoEnv
-from vfgym.moves.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 from vfgym.plant.measures import NAMES as METRIC_NAMES
-from vfgym.plant.uncertainty import PlantVariant
 from vfgym.scoring import Scheduler
 
 N_SIGNATURE = 14

@@ -24,11 +24,10 @@ from typing import Any
 import numpy as np
 
 from vfgym._validate import check_int
-from vfgym.moves.axis import Axis
+from vfgym.axis import Axis, PlantVariant
 from vfgym.moves.distribution import MoveDistribution
 from vfgym.moves.scenarios import DRAWN_PROFILES, Scenario, ideal_move_time_s
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
-from vfgym.plant.uncertainty import PlantVariant
 from vfgym.scoring import Move, score_robust
 
 from .optima import MoveOptimum, OptimumSearch, move_optima, read_optima, write_optima
@@ -370,7 +369,7 @@ def fit_axis(
     """
     from tqdm.auto import tqdm
 
-    from vfgym.plant.uncertainty import VERDICT_PLANTS
+    from vfgym.axis import VERDICT_PLANTS
     from vfgym.report import Candidate, baseline_candidates, compare, verdict
 
     from .tuners import Tuner, trained_on

@@ -29,10 +29,10 @@ import numpy as np
 
 from vfgym import space
 from vfgym._validate import check_int
+from vfgym.axis import NOMINAL, PlantVariant
 from vfgym.io.runs import write_text
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
-from vfgym.plant.uncertainty import NOMINAL, PlantVariant
 from vfgym.scoring import (
     DEFAULT_BOUNDS,
     DEFAULT_WEIGHTS,
@@ -138,7 +138,7 @@ def move_optima(
         Called with one line after each stage.
     plants : sequence of PlantVariant
         True plants a setting must also be feasible on to count as feasible (an axis's
-        :meth:`~vfgym.moves.axis.Axis.design_plants`): robust optima. Only the
+        :meth:`~vfgym.axis.Axis.design_plants`): robust optima. Only the
         contenders are checked on them, best first (the module doc).
     true_plants : sequence of PlantVariant or None
         Each move's true plant, relative to the modelled one: the optimum of the move as

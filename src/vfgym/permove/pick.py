@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 
 from vfgym._validate import check_choice, check_int
+from vfgym.axis import PlantVariant
 from vfgym.moves.features import SCENARIO_FEATURES, scenario_features
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
-from vfgym.plant.uncertainty import PlantVariant
 
 from .optima import MoveOptimum
 from .targets import TargetModel, model_head, settings_targets, target_settings
@@ -182,7 +182,7 @@ class PickModel(TargetModel):
             The axis's measures, which the check scores with.
         plants : sequence of PlantVariant
             True plants a candidate must also be feasible on in the check (the axis's
-            :meth:`~vfgym.moves.axis.Axis.design_plants`).
+            :meth:`~vfgym.axis.Axis.design_plants`).
 
         Returns
         -------

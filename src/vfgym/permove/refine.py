@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from vfgym._validate import check_int
-from vfgym.moves.axis import PAPER_AXIS, Axis
+from vfgym.axis import PAPER_AXIS, Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from vfgym.moves.axis import PAPER_AXIS, Axis, load_axis, machine_digest
+from vfgym.axis import PAPER_AXIS, Axis, load_axis, machine_digest
 from vfgym.moves.features import SCENARIO_FEATURES, scenario_features
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings

@@ -17,12 +17,11 @@ from typing import Any
 import numpy as np
 
 from vfgym._validate import check_int
-from vfgym.moves.axis import PAPER_AXIS, Axis, plant_on
+from vfgym.axis import PAPER_AXIS, Axis, PlantVariant, plant_on
 from vfgym.moves.baselines import BASELINE_NAMES, Baseline, Controller, resolve
 from vfgym.moves.distribution import scenario_set
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Measures, Plant, Settings
-from vfgym.plant.uncertainty import PlantVariant
 from vfgym.report._stats import DEFAULT_RESAMPLES, Spread, WinLoss, outcome, spread
 from vfgym.scoring import (
     CONSTRAINTS,

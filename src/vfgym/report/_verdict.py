@@ -19,13 +19,14 @@ from typing import Any
 
 import numpy as np
 
-from vfgym.moves.axis import PAPER_AXIS, Axis
-from vfgym.moves.scenarios import Scenario
-from vfgym.params import Settings
-from vfgym.plant.uncertainty import (
+from vfgym.axis import (
+    PAPER_AXIS,
     VERDICT_PLANT_SEED,
     VERDICT_PLANTS,
+    Axis,
 )
+from vfgym.moves.scenarios import Scenario
+from vfgym.params import Settings
 from vfgym.report._comparison import Candidate, Report, baseline_candidates, compare
 from vfgym.report._stats import Spread, WinLoss
 from vfgym.report._tables import _grid
@@ -309,7 +310,7 @@ def axis_verdict(
     settings : Settings
         The tuned setting.
     axis : Axis
-        The axis tuned on (default: the paper's, :data:`vfgym.moves.axis.PAPER_AXIS`,
+        The axis tuned on (default: the paper's, :data:`vfgym.axis.PAPER_AXIS`,
         whose test moves are the 32 draws ``test-0`` … ``test-31`` of the default random
         distribution).
     tuned_on : sequence of Scenario

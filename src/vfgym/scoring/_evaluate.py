@@ -12,7 +12,15 @@ from typing import TYPE_CHECKING, Any
 import numba
 import numpy as np
 
-from vfgym.moves.axis import PAPER_AXIS, Axis, plant_on
+from vfgym.axis import (
+    NOMINAL,
+    PAPER_AXIS,
+    VERDICT_PLANT_SEED,
+    Axis,
+    PlantVariant,
+    draw_plants,
+    plant_on,
+)
 from vfgym.moves.baselines import (
     Baseline,
     Controller,
@@ -35,12 +43,6 @@ from vfgym.plant._notice import announce_compile
 from vfgym.plant._threads import keeps_torch_threads
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.plant.measures import from_acc
-from vfgym.plant.uncertainty import (
-    NOMINAL,
-    VERDICT_PLANT_SEED,
-    PlantVariant,
-    draw_plants,
-)
 
 if TYPE_CHECKING:
     from vfgym.scoring._plants import AcrossPlants
@@ -191,7 +193,7 @@ class Move:
     model : Plant or None
         The modelled plant the controllers are set for (baselines resolved, pulse sources
         planned, commands shaped on it), where ``plant`` is a true plant that differs
-        from it (:class:`~vfgym.plant.uncertainty.PlantVariant`); ``None``: ``plant``.
+        from it (:class:`~vfgym.axis.PlantVariant`); ``None``: ``plant``.
     """
 
     scenario: Scenario
@@ -452,13 +454,13 @@ def evaluate(
         trials being simulated): as :func:`score_pairs` runs it.
     plants : sequence of PlantVariant, or int
         True plants within an axis's uncertainty
-        (:func:`vfgym.plant.uncertainty.draw_plants`): every pair is also scored on each,
+        (:func:`vfgym.axis.draw_plants`): every pair is also scored on each,
         in the same batched call, into :attr:`Evaluation.across`. A count draws that many
         within the axis's uncertainty from ``plant_seed`` (an exactly known axis: the ±5 %
         inertia plants). Empty: the modelled plant only.
     plant_seed : int or None
         The seed ``plants`` were (or are) drawn from, recorded with them (default for a
-        count: :data:`vfgym.plant.uncertainty.VERDICT_PLANT_SEED`).
+        count: :data:`vfgym.axis.VERDICT_PLANT_SEED`).
 
     Returns
     -------

@@ -1,5 +1,5 @@
 """Results across true plants: the same (controller, move) pairs on plants drawn within an
-axis's uncertainty (:mod:`vfgym.plant.uncertainty`), as :func:`vfgym.evaluate` returns them
+axis's uncertainty (:mod:`vfgym.axis`), as :func:`vfgym.evaluate` returns them
 with ``plants=``."""
 
 from __future__ import annotations
@@ -10,10 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vfgym.axis import PlantVariant
 from vfgym.moves.baselines import Baseline, Controller, FixedFrequency, SCurveSource
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
-from vfgym.plant.uncertainty import PlantVariant
 from vfgym.scoring._cost import (
     CONSTRAINTS,
     DEFAULT_BOUNDS,
@@ -247,7 +247,7 @@ def score_robust(
     controllers, moves : sequence
         As :func:`score_pairs` takes them.
     plants : sequence of PlantVariant
-        The true plants (an axis's :meth:`~vfgym.moves.axis.Axis.design_plants`); empty:
+        The true plants (an axis's :meth:`~vfgym.axis.Axis.design_plants`); empty:
         :func:`score_pairs` alone.
     measures, weights, bounds : Measures, CostWeights, Bounds
         The scoring path's inputs.

@@ -9,10 +9,10 @@ from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from typing import Any
 
+from vfgym.axis import PlantVariant
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Measures
 from vfgym.plant.measures import NAMES as METRIC_NAMES
-from vfgym.plant.uncertainty import PlantVariant
 from vfgym.scoring._cost import Bounds, CostWeights, Score, score
 
 
@@ -35,7 +35,7 @@ class Scheduler(ABC):
             The move.
         plant : PlantVariant
             The true plant relative to the modelled one
-            (:data:`vfgym.plant.uncertainty.NOMINAL`: the modelled plant).
+            (:data:`vfgym.axis.NOMINAL`: the modelled plant).
 
         Returns
         -------

@@ -15,7 +15,7 @@ from vfgym._validate import (
     check_real,
     number_from_text,
 )
-from vfgym.moves.axis import PAPER_AXIS, Axis, load_axis
+from vfgym.axis import PAPER_AXIS, Axis, load_axis
 from vfgym.moves.distribution import scenario_set
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import ACCEL_LAWS
@@ -132,7 +132,7 @@ class _Options:
         Returns
         -------
         Axis
-            The axis file's, or :data:`~vfgym.moves.axis.PAPER_AXIS` without one.
+            The axis file's, or :data:`~vfgym.axis.PAPER_AXIS` without one.
         """
         return self.load_axis() or PAPER_AXIS
 
@@ -165,7 +165,7 @@ class SweepConfig(_Options):
     laws : tuple of str
         The acceleration laws searched (:data:`vfgym.params.ACCEL_LAWS`; one: fixed).
     axis : str or None
-        An axis file (:mod:`vfgym.moves.axis`): its plant, measures and move sets.
+        An axis file (:mod:`vfgym.axis`): its plant, measures and move sets.
     sampler : str
         One of :data:`SAMPLERS`.
     objective : str or None

@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 
 from vfgym import space
+from vfgym.axis import axis_digest
 from vfgym.io.runs import write_text
-from vfgym.moves.axis import axis_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.scoring import CONSTRAINTS, evaluate

@@ -15,7 +15,7 @@ from contextlib import nullcontext
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from vfgym import space
-from vfgym.moves.axis import PAPER_AXIS, Axis
+from vfgym.axis import PAPER_AXIS, Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 from vfgym.scoring import CONSTRAINTS, evaluate
@@ -54,7 +54,7 @@ class Objective:
         ``cost`` (one objective) or ``pareto`` (the three objectives).
     axis : Axis
         The problem: the settings run on its plant, are scored with its measures, and
-        must also be feasible on its :meth:`~vfgym.moves.axis.Axis.design_plants` (the
+        must also be feasible on its :meth:`~vfgym.axis.Axis.design_plants` (the
         cost is the modelled plant's).
     aggregate : str
         The cost's aggregate over the scenarios (:func:`vfgym.tuning.aggregate`).

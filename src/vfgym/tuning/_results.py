@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from vfgym import report, space
+from vfgym.axis import Axis, machine_digest
 from vfgym.io.runs import read_yaml, write_atomically, write_text
-from vfgym.moves.axis import Axis, machine_digest
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.report import Candidate, Report
@@ -187,7 +187,7 @@ def find_reference(
 ) -> FoundReference | None:
     """The grid reference ``--reference`` names (a ``reference.yaml`` or a grid's run
     folder), else the least costly one under ``runs_dir/grid/*/`` for these scenarios,
-    laws and axis (its :func:`~vfgym.moves.axis.axis_digest`); ``None`` if none matches.
+    laws and axis (its :func:`~vfgym.axis.axis_digest`); ``None`` if none matches.
     ValueError naming ``reference`` if the one given is not one or is for another
     problem."""
     want = {"scenarios": [s.name for s in scenarios], "laws": list(laws), "axis": axis}
@@ -243,7 +243,7 @@ class BestRecord:
     --settings`` reads), their scores over the scenarios (aggregate cost, feasible, worst
     of each constraint, objectives' means), and where they come from (the storage with its
     password masked; the axis file, ``None`` for the paper's; the axis's
-    :func:`~vfgym.moves.axis.machine_digest`, so that settings used on another machine are
+    :func:`~vfgym.axis.machine_digest`, so that settings used on another machine are
     noted)."""
 
     settings: dict[str, float | str]

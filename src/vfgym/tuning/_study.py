@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from vfgym import space
-from vfgym.moves.axis import axis_digest
+from vfgym.axis import axis_digest
 from vfgym.moves.baselines import rule_of_thumb, usable_accel
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings, usable_k

@@ -2,7 +2,7 @@
 
 Each mapping's keys are checked against the dataclass's own field names and every error
 is one ``ValueError`` line naming its key path (the command line turns it into exit
-status 2); :func:`vfgym.moves.axis.axis_from_dict` assembles the parts.
+status 2); :func:`vfgym.axis.axis_from_dict` assembles the parts.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import asdict, fields
 from typing import Any
 
-from vfgym.moves._move_sets import MoveSet
+from vfgym.axis._move_sets import MoveSet
 from vfgym.moves.distribution import MoveDistribution
 from vfgym.moves.scenarios import SCENARIOS, Scenario
 from vfgym.params import MOTOR_PRESETS, PAPER_PLANT, SGME_02A, Motor, Plant, Servo

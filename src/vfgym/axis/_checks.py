@@ -2,7 +2,7 @@
 and the measures' windows mean something on the axis's encoder and moves.
 
 Each check raises one ``ValueError`` line naming the key path, the value and the allowed
-range; :class:`vfgym.moves.axis.Axis` runs them on construction.
+range; :class:`vfgym.axis.Axis` runs them on construction.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """An axis's move sets: the moves it is tuned on (train) and judged on (test), each a
-list of moves or a seeded random distribution (:class:`vfgym.moves.axis.Axis` holds them).
+list of moves or a seeded random distribution (:class:`vfgym.axis.Axis` holds them).
 """
 
 from __future__ import annotations
