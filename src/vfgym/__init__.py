@@ -15,7 +15,7 @@ callable from a move to its settings, without torch.
 """
 
 from vfgym import envs  # importing envs registers vfgym/VFTune-v0, VFServo-v0
-from vfgym.axis import PAPER_AXIS, Axis, load_axis
+from vfgym.axis import LOADS_AXIS, PAPER_AXIS, Axis, load_axis
 from vfgym.moves import baselines
 from vfgym.moves.distribution import get_scenario, random_scenario, scenario_set
 from vfgym.moves.pulse_sources import fixed_frequency_pulses, scurve_pulses
@@ -45,6 +45,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "DEFAULT_MEASURES",
+    "LOADS_AXIS",
     "PAPER_ACCEL_LIMIT_RAD_S2",
     "PAPER_AXIS",
     "PAPER_K",

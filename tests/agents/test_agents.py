@@ -14,6 +14,7 @@ pytest.importorskip("stable_baselines3")
 from vfgym.agents import hyperparams as hp
 from vfgym.agents import load_model, policy_settings
 from vfgym.agents.training import train
+from vfgym.axis import PAPER_AXIS
 from vfgym.cli import main
 from vfgym.commands._common import load_settings
 
@@ -157,7 +158,7 @@ def test_cli_train_then_predict_gives_a_settings_file_evaluate_reads(tmp_path, c
         == 0
     )
     printed = yaml.safe_load(capsys.readouterr().out)
-    s = load_settings(str(out))
+    s = load_settings(str(out), PAPER_AXIS)
     assert printed["settings"]["k"] == s.k
     assert policy_settings(run / "best_model.zip")("test-3") == s
 

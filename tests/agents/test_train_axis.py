@@ -85,13 +85,13 @@ def test_cli_train_on_an_axis_then_predict_on_it(tmp_path, capsys):
                  "--out", str(out)]) == 0  # fmt: skip
     assert yaml.safe_load(capsys.readouterr().out)["scenario"] == "up"
     # the agent's own config names the axis: predicting without --axis resolves the same
-    assert policy_settings(model)("up") == load_settings(str(out))
+    assert policy_settings(model)("up") == load_settings(str(out), load_axis(path))
     # as a tuner: quiet on a move like its training draws, one line on a longer one
     seen: list[str] = []
     tuner = load_tuner(model, warn=seen.append)
     tuner(load_axis(path).moves.train.random.draw(12345, "train", load_axis(path).plant))
     assert seen == []
-    assert tuner("up") == load_settings(str(out))
+    assert tuner("up") == load_settings(str(out), load_axis(path))
     assert len(seen) == 1 and "is outside its training moves (log_distance" in seen[0], seen
     # a bad axis file fails before a run folder is made
     bad = tmp_path / "bad.yaml"

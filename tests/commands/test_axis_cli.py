@@ -52,8 +52,7 @@ def test_sweep_tunes_on_the_axis_train_moves(tmp_path, capsys):
     best = yaml.safe_load((run / "best.yaml").read_text())
     train = axis.scenarios("train")
     assert best["scenarios"] == [s.name for s in train] and best["axis"] == path
-    ev = evaluate(load_settings(str(run / "best.yaml")), train, plant=axis.plant,
-                  measures=axis.measures)  # fmt: skip
+    ev = evaluate(load_settings(str(run / "best.yaml"), axis), train, axis=axis)
     assert best["cost"] == pytest.approx(float(ev.mean_cost[0]), rel=1e-12)
     assert f"set ({len(train)})" in out
 
@@ -63,8 +62,11 @@ def test_sweep_workers_take_the_axis_and_a_study_keeps_its_axis(tmp_path, capsys
     assert sweep(tmp_path, "--axis", small, "--trials", "4", "--workers", "2", "--no-plots") == 0
     best = yaml.safe_load((tmp_path / "runs/sweep/s/best.yaml").read_text())
     axis = load_axis(small)
-    ev = evaluate(load_settings(str(tmp_path / "runs/sweep/s/best.yaml")),
-                  axis.scenarios("train"), plant=axis.plant, measures=axis.measures)  # fmt: skip
+    ev = evaluate(
+        load_settings(str(tmp_path / "runs/sweep/s/best.yaml"), axis),
+        axis.scenarios("train"),
+        axis=axis,
+    )
     assert best["cost"] == pytest.approx(float(ev.mean_cost[0]), rel=1e-12)
     # the same study on another axis with the same move names is refused
     other = SMALL | {"plant": {"motor": {"inertia_ratio": 4.0}}}
@@ -87,7 +89,7 @@ def test_evaluate_judges_on_the_axis_test_moves(tmp_path, capsys):
     axis = load_axis(path)
     assert load_axis(run / AXIS_FILE) == axis
     test = axis.scenarios("test")
-    ev = evaluate(load_settings(str(tuned)), test, plant=axis.plant, measures=axis.measures)
+    ev = evaluate(load_settings(str(tuned), axis), test, axis=axis)
     with (run / "results.csv").open() as fh:
         rows = [r for r in csv.DictReader(fh) if r["controller"] == "tuned"]
     assert [r["scenario"] for r in rows] == [s.name for s in test]
@@ -142,7 +144,7 @@ def test_simulate_export_and_plot_use_the_axis(tmp_path, capsys):
     axis = load_axis(small)
     assert main(["simulate", "--axis", small, "--scenario", "up"]) == 0
     out = capsys.readouterr().out
-    ev = evaluate("paper", [axis.scenario("up")], plant=axis.plant, measures=axis.measures)
+    ev = evaluate("paper", [axis.scenario("up")], axis=axis)
     assert f"on up: cost {ev.cost[0, 0]:.4g}" in out
     assert main(["simulate", "--axis", small, "--list"]) == 0
     listed = capsys.readouterr().out.split("\n")

@@ -90,7 +90,8 @@ def test_servo_config_holds_the_defaults_and_derives_the_ticks():
         ({"violation_penalty": -1.0}, "violation_penalty"),
         ({"initial_settings": "paper"}, "initial_settings"),
         ({"accel_law": "jerk"}, "accel_law"),
-        ({"measures": None}, "measures"),
+        ({"axis": None}, "axis"),
+        ({"weights": None}, "weights"),
         ({"settle_time_s": 2.0}, "settle_time_s"),
     ],
 )

@@ -11,6 +11,7 @@ import os
 import subprocess
 import sys
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import gymnasium as gym
@@ -22,6 +23,7 @@ from hypothesis import strategies as st
 import vfgym.envs
 from vfgym import (
     DEFAULT_MEASURES,
+    LOADS_AXIS,
     PAPER_SETTINGS,
     Bounds,
     CostWeights,
@@ -146,13 +148,13 @@ def test_servo_constant_action_scores_exactly_as_evaluate_and_returns_minus_the_
     env = VFServoEnv(scenario=scenario)
     a = np.array([0.1, 0.05, 0.35, 0.2], dtype=np.float32)
     rewards, _, term, trunc, info = run_episode(env, a)
-    ev = evaluate(from_action(a), scenario)
+    ev = evaluate(from_action(a), scenario, axis=LOADS_AXIS)  # the env's axis: names alike
     assert info["cost"] == ev.cost[0, 0]
     for name in METRIC_NAMES:
         assert info[name] == ev.metrics[0][0][name] or math.isnan(info[name]), name
     assert rewards.sum() == pytest.approx(-info["cost"], rel=1e-9, abs=1e-12)
     assert term != trunc
-    n = get_scenario(scenario).command().size
+    n = LOADS_AXIS.scenario(scenario).command().size
     assert info["steps"] == len(rewards) == math.ceil(info["control_ticks"] / 140)
     assert info["control_ticks"] <= n
     if trunc:
@@ -163,7 +165,7 @@ def test_servo_passes_its_scoring_inputs_to_the_scoring_path():
     measures = Measures(in_position_counts=0.5, accel_window_s=5e-4)  # under one count
     weights = CostWeights(time=2.0, overshoot=0.3, unsettled=1.0)
     bounds = Bounds(overshoot_windows=3.0)
-    kw = {"measures": measures, "weights": weights, "bounds": bounds}
+    kw = {"axis": replace(LOADS_AXIS, measures=measures), "weights": weights, "bounds": bounds}
     env = VFServoEnv(scenario="short-move", **kw)
     rewards, _, _, _, info = run_episode(env, PAPER_ACTION)
     ev = evaluate(from_action(PAPER_ACTION), "short-move", **kw)
@@ -491,7 +493,7 @@ def test_bad_reset_options_raise_clear_errors(env_cls, options, message):
         (VFServoEnv, {"initial_settings": {"k": 3}}, "initial_settings"),
         (VFServoEnv, {"tracking_weight": -1.0}, "tracking_weight"),
         (VFServoEnv, {"terminate_on_violation": "yes"}, "terminate_on_violation"),
-        (VFServoEnv, {"plant": "SGME"}, "plant"),
+        (VFServoEnv, {"axis": "SGME"}, "SGME: no such file"),
     ],
 )
 def test_bad_constructor_arguments_raise_clear_errors(env_cls, kwargs, message):

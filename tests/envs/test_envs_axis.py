@@ -16,7 +16,7 @@ from test_envs_vector import compare_runs
 
 import vfgym.envs  # noqa: F401  (registers the ids)
 from vfgym import PAPER_PLANT, PAPER_SETTINGS, Measures, evaluate
-from vfgym.axis import load_axis
+from vfgym.axis import LOADS_AXIS, load_axis
 from vfgym.envs.servo import VFServoEnv
 from vfgym.envs.tune import VFTuneEnv
 from vfgym.plant.measures import NAMES as METRIC_NAMES
@@ -83,7 +83,7 @@ def test_tune_reward_on_an_axis_is_minus_evaluate_on_the_axis(small):
     a = np.array([0.2, -0.1, 0.3, 0.0], dtype=np.float32)
     _, reward, _, _, info = env.step(a)
     sc = axis.scenario("test-1")
-    ev = evaluate(from_action(a), [sc], plant=axis.plant, measures=axis.measures)
+    ev = evaluate(from_action(a), [sc], axis=axis)
     assert reward == -ev.cost[0, 0] and info["scenario"] == "test-1"
     assert info["window_rad"] == pytest.approx(10 * axis.plant.motor.count_rad)
     # the paper's plant would score the same move otherwise
@@ -97,7 +97,7 @@ def test_servo_constant_action_on_an_axis_scores_as_evaluate(small):
     action = to_action(PAPER_SETTINGS).astype(np.float32)
     rewards, _, _, _, info = run_episode(env, action)
     sc = axis.scenario("up")
-    ev = evaluate(from_action(action), [sc], plant=axis.plant, measures=axis.measures)
+    ev = evaluate(from_action(action), [sc], axis=axis)
     assert info["cost"] == ev.cost[0, 0]
     for name in METRIC_NAMES:
         assert info[name] == ev.metrics[0][0][name] or math.isnan(info[name]), name
@@ -110,19 +110,22 @@ def test_vector_envs_on_an_axis_equal_single_envs(env_id, steps, small):
     assert ended >= 4
 
 
-def test_an_axis_brings_its_own_plant_and_measures(small):
-    with pytest.raises(ValueError, match=r"plant=.* is not allowed with axis='small'"):
+def test_the_axis_is_the_envs_one_problem_argument(small):
+    # no plant or measures beside it: an axis brings its own
+    with pytest.raises(TypeError, match="plant"):
         VFTuneEnv(axis=str(small), plant=PAPER_PLANT.with_motor(inertia_ratio=1.0))
-    with pytest.raises(ValueError, match=r"measures=.* is not allowed with axis='small'"):
+    with pytest.raises(TypeError, match="measures"):
         VFServoEnv(axis=str(small), measures=Measures(in_position_counts=3))
     with pytest.raises(ValueError, match=r"axis=3 is not allowed"):
         VFTuneEnv(axis=3)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match=r"nope\.yaml: no such file"):
         gym.make("vfgym/VFTune-v0", axis=str(small.parent / "nope.yaml"))
-    # the paper's defaults beside an axis are no conflict
-    env = VFTuneEnv(axis=str(small), plant=PAPER_PLANT)
-    assert env.config.plant == load_axis(small).plant
+    env = VFTuneEnv(axis=str(small))
     assert env.config.axis == load_axis(small)  # resolved once, in EnvConfig
+    assert env.config.plant == load_axis(small).plant
+    assert env.config.measures == load_axis(small).measures
+    # without one, the agents' distribution: the paper's plant under a random load a move
+    assert VFTuneEnv().config.axis == LOADS_AXIS == load_axis(AXES / "loads.yaml")
 
 
 def test_the_engineered_axes_make_environments():

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from vfgym import PAPER_PLANT, PAPER_SETTINGS, Settings, evaluate
+from vfgym import LOADS_AXIS, PAPER_PLANT, PAPER_SETTINGS, Settings, evaluate
 from vfgym.envs.servo import ServoConfig, VFServoEnv
 from vfgym.envs.vector import VFServoVectorEnv
 from vfgym.space import SPACE, Relative, from_action, to_action
@@ -31,7 +31,7 @@ def episode_cost(env: VFServoEnv, action, **reset_kw) -> tuple[float, float]:
 @pytest.mark.parametrize("scenario", ["paper-step", "reversal", "train-5"])
 def test_zero_residual_reproduces_the_paper_settings_bit_for_bit(scenario):
     cost, ret = episode_cost(VFServoEnv(scenario, residual=True), ZERO)
-    assert cost == evaluate(PAPER_SETTINGS, scenario).cost[0, 0]
+    assert cost == evaluate(PAPER_SETTINGS, scenario, axis=LOADS_AXIS).cost[0, 0]
     assert ret == pytest.approx(-cost, rel=1e-9, abs=1e-12)
 
 

@@ -32,7 +32,7 @@ def test_vftune_draws_true_plants_within_the_uncertainty_and_scores_on_them():
         seen.append(v.inertia)
         sc = env.unwrapped.episode.scenario
         s = action_settings(np.zeros(4), "rise")
-        ev = evaluate([s], [sc], plant=axis.plant, measures=axis.measures, plants=[v])
+        ev = evaluate([s], [sc], axis=axis, plants=[v])
         assert ev.across is not None
         assert info["cost"] == pytest.approx(float(ev.across.cost[0, 0, 0]), rel=1e-12)
     assert len(set(seen)) == 12  # a plant a draw

@@ -17,7 +17,7 @@ from gymnasium.vector import AutoresetMode
 
 import vfgym.envs
 import vfgym.envs._batch
-from vfgym import PAPER_PLANT, PAPER_SETTINGS, evaluate
+from vfgym import LOADS_AXIS, PAPER_SETTINGS, evaluate
 from vfgym.envs._common import ScenarioSource
 from vfgym.envs.tune import evaluate_pairs
 from vfgym.envs.vector import VFServoVectorEnv, VFTuneVectorEnv
@@ -249,7 +249,7 @@ def test_thread_count_changes_no_number(n, monkeypatch):
 
 
 def test_evaluate_pairs_equals_evaluate_pair_by_pair():
-    source = ScenarioSource(None, "train", None, PAPER_PLANT, DEFAULT_MEASURES)
+    source = ScenarioSource(None, "train", None, LOADS_AXIS)
     rng = np.random.default_rng(8)
     eps = [source.draw(rng, None) for _ in range(4)]
     eps += [source.draw(rng, {"scenario": name}) for name in ("paper-sine", "multi-move")]
@@ -259,7 +259,7 @@ def test_evaluate_pairs_equals_evaluate_pair_by_pair():
         settings, eps, measures=DEFAULT_MEASURES, weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS
     )
     for s, ep, res in zip(settings, eps, got, strict=True):
-        ev = evaluate(s, ep.scenario)
+        ev = evaluate(s, ep.scenario, axis=LOADS_AXIS)
         assert res.cost == ev.cost[0, 0]
         assert np.array_equal(res.constraints, ev.constraints[0, 0])
         assert_same(res.metrics, ev.metrics[0][0])

@@ -66,8 +66,9 @@ def test_friction_beyond_the_window_is_noted_and_the_note_is_true(tmp_path):
     notes = [str(w.message) for w in caught if issubclass(w.category, AxisNote)]
     assert len(notes) == 1 and "may stop the motor up to 18.9 counts" in notes[0]
     tuned = Settings(value_rad=0.882, error_limit_rad=0.872, k=430.9, ts_over_tf=1.0)
-    ev = evaluate(["paper", "rule-of-thumb", "scurve", tuned], axis.scenarios("test")[:6],
-                  plant=axis.plant, measures=axis.measures)  # fmt: skip
+    ev = evaluate(
+        ["paper", "rule-of-thumb", "scurve", tuned], axis.scenarios("test")[:6], axis=axis
+    )
     assert not ev.feasible.any()
     assert axis_notes(PAPER_AXIS) == []
 

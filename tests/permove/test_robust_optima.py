@@ -28,7 +28,7 @@ def test_robust_optima_are_feasible_on_every_design_plant_and_cost_no_less():
     assert any(not np.isclose(a.cost, b.cost) for a, b in zip(nominal, robust, strict=True))
     for o_n, o_r, sc in zip(nominal, robust, moves, strict=True):
         assert o_r.feasible
-        ev = evaluate([o_r.settings, o_n.settings], [sc], **kw, plants=design)
+        ev = evaluate([o_r.settings, o_n.settings], [sc], axis=axis, plants=design)
         assert ev.across is not None
         assert ev.across.feasible[0].all() and ev.feasible[0, 0]
         assert o_r.cost >= o_n.cost - 1e-12  # a constrained optimum costs no less
@@ -50,7 +50,7 @@ def test_fit_best_fixed_is_the_sweep_with_as_many_trials(tmp_path):
     assert cli.main(["sweep", "--config", str(AXES.parent / "quick.yaml"), "--axis", str(path),
                      "--trials", "12", "--study", "s", "--runs-dir", str(tmp_path),
                      "--no-progress"]) == 0  # fmt: skip
-    assert got == load_settings(str(tmp_path / "sweep" / "s" / "best.yaml"))
+    assert got == load_settings(str(tmp_path / "sweep" / "s" / "best.yaml"), axis)
 
 
 def test_an_oracles_optima_are_each_true_plants_own():

@@ -15,7 +15,7 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from vfgym import PAPER_PLANT, PAPER_SETTINGS, evaluate, get_scenario, scenario_set
+from vfgym import PAPER_AXIS, PAPER_PLANT, PAPER_SETTINGS, evaluate, get_scenario, scenario_set
 from vfgym.cli import main
 from vfgym.moves import LOAD_DISTRIBUTION as LOAD
 from vfgym.moves.features import scenario_features
@@ -185,7 +185,7 @@ def test_a_checked_pick_is_the_best_on_the_move_of_its_best_ranked_candidates():
 def test_refine_starts_from_the_prediction_and_never_ends_worse():
     sc = get_scenario("test-901", LOAD)
     start = load_settings_model().settings(sc)
-    r = refine(sc, start, 6)
+    r = refine(sc, start, 6, axis=PAPER_AXIS)
     assert len(r.costs) == 6
     assert r.start_cost == pytest.approx(evaluate(start, sc).cost[0, 0], rel=1e-12)
     assert r.cost <= r.start_cost or (r.feasible and not evaluate(start, sc).feasible[0, 0])

@@ -5,6 +5,7 @@ bare loop's natural frequency and damping (the patent's continuous model); the s
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -12,6 +13,7 @@ from helpers import linear_plant
 from scipy import signal
 
 from vfgym import PAPER_PLANT, Settings, evaluate, simulate
+from vfgym.axis import PAPER_AXIS
 from vfgym.moves.baselines import usable_accel
 from vfgym.params import DEFAULT_MEASURES
 
@@ -111,7 +113,9 @@ BEFORE = {
 
 def test_the_switch_restores_the_drive_tuned_for_the_bare_motor():
     mistuned = PAPER_PLANT.with_servo(follows_load=False)
-    ev = evaluate(["paper", "rule-of-thumb"], ["heavy-load"], plant=mistuned)
+    ev = evaluate(
+        ["paper", "rule-of-thumb"], ["heavy-load"], axis=replace(PAPER_AXIS, plant=mistuned)
+    )
     for ci, name in enumerate(BEFORE):
         m = ev.metrics[ci][0]
         for key, value in BEFORE[name].items():

@@ -103,7 +103,7 @@ def test_marks_on_made_up_columns():
     scens = [get_scenario("short-move"), get_scenario("paper-sine")]
     a = _column("a", [(2.0, True, True, 10.0, 0.0), (3.0, True, True, 0.0, 0.0)])
     b = _column("b", [(5.0, False, False, 80.0, 12.0), (1.0, True, True, 0.0, 0.0)])
-    text = format_compact(Report(scens, [a, b]))
+    text = format_compact(Report(scens, [a, b], PAPER_AXIS))
     lines = [" ".join(x.split()) for x in text.splitlines()]  # cells one space apart
     assert lines[2:10] == [
         "short-move a 10.00 0.000 0.00 70.0 0.500 2.0000 yes",
@@ -115,8 +115,8 @@ def test_marks_on_made_up_columns():
         "set (2) a 10.00 0.000 0.00 70.0 0.500 2.5000 2/2",
         "set (2) b 80.00* 12.000 2.00 70.0 0.500 3.0000 1/2",
     ]
-    assert not compact_rows(Report(scens, [a, b])).set[1].feasible
-    one = format_compact(Report(scens[:1], [a, b])).splitlines()
+    assert not compact_rows(Report(scens, [a, b], PAPER_AXIS)).set[1].feasible
+    one = format_compact(Report(scens[:1], [a, b], PAPER_AXIS)).splitlines()
     assert len(one) == 5 and not any(
         x.startswith("set (") for x in one
     )  # one scenario: no set rows

@@ -7,6 +7,7 @@ tolerance."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vfgym import DEFAULT_MEASURES, PAPER_PLANT, Measures, evaluate, simulate
-from vfgym.axis import load_axis
+from vfgym.axis import PAPER_AXIS, load_axis
 from vfgym.moves.distribution import scenario_set
 from vfgym.plant.measures import accel_window_ticks
 from vfgym.space import from_action
@@ -111,7 +112,7 @@ def test_no_feasible_run_reports_a_peak_above_the_limit(seed, low, tol_pct):
     plant = LOW_LIMIT if low else PAPER_PLANT
     measures = Measures(accel_tolerance_pct=tol_pct)
     scens = scenario_set("test", 3, int(rng.integers(0, 1000)))
-    ev = evaluate(ctrls, scens, plant=plant, measures=measures)
+    ev = evaluate(ctrls, scens, axis=replace(PAPER_AXIS, plant=plant, measures=measures))
     tol = tol_pct / 100.0
     for i in range(len(ctrls)):
         for j in range(len(scens)):

@@ -11,6 +11,7 @@ import pytest
 import yaml
 
 from vfgym import cli, space, tuning
+from vfgym.axis import PAPER_AXIS
 from vfgym.commands._common import load_settings
 from vfgym.scoring import evaluate
 
@@ -43,7 +44,7 @@ def test_grid_covers_the_space_and_its_best_is_the_reference(grid_run):
     assert ref["cost"] == min(float(r["cost"]) for r in feasible)
     assert ref["evaluated"] == len(rows) and ref["scenarios"] == ["short-move"]
     # The reference is a Settings-YAML file scored on the one path.
-    ev = evaluate(load_settings(str(grid_run / "reference.yaml")), "short-move")
+    ev = evaluate(load_settings(str(grid_run / "reference.yaml"), PAPER_AXIS), "short-move")
     assert float(ev.mean_cost[0]) == pytest.approx(ref["cost"], rel=1e-12)
     assert bool(ev.feasible.all()) == ref["feasible"]
 

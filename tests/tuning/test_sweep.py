@@ -11,6 +11,7 @@ import pytest
 import yaml
 
 from vfgym import cli, space, tuning
+from vfgym.axis import PAPER_AXIS
 from vfgym.commands._common import load_settings
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import CONSTRAINTS, evaluate
@@ -60,7 +61,7 @@ def test_run_folder_holds_everything_and_best_scores_on_the_one_path(tmp_path, c
 
     # best.yaml is what `vfgym evaluate --settings` reads, and its cost is evaluate()'s.
     best = yaml.safe_load((run / "best.yaml").read_text())
-    settings = load_settings(str(run / "best.yaml"))
+    settings = load_settings(str(run / "best.yaml"), PAPER_AXIS)
     ev = evaluate(settings, ["short-move", "paper-step"])
     assert best["cost"] == pytest.approx(float(ev.mean_cost[0]), rel=1e-12)
     assert best["feasible"] == bool(ev.feasible.all())
@@ -347,7 +348,7 @@ def test_a_pareto_sweep_returns_a_best_that_arrives(tmp_path, repo_root):
     assert cli.main([*args, "--study", "p", "--no-progress", "--no-plots"]) == 0
     run = tmp_path / "sweep" / "p"
     best = yaml.safe_load((run / "best.yaml").read_text())
-    ev = evaluate(load_settings(str(run / "best.yaml")), best["scenarios"])
+    ev = evaluate(load_settings(str(run / "best.yaml"), PAPER_AXIS), best["scenarios"])
     assert all(m["arrived"] for m in ev.metrics[0])
     assert ev.metrics[0][0]["pulse_count"] > 0
     rows = trials_csv(tmp_path, "p")

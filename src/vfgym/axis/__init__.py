@@ -4,9 +4,9 @@ and the true plants drawn within it).
 
 Every tuner, env, scheduler and evaluation holds an :class:`Axis`, resolved once where the
 user's input enters (a command line's ``--axis FILE``, a config file, a constructor):
-:data:`PAPER_AXIS` by default. It sits between the moves (``vfgym.moves``: what the plant
-is asked to do) and the scoring path (``vfgym.scoring``), which judges a controller on an
-axis's moves and plants.
+:data:`PAPER_AXIS` by default (the environments': :data:`LOADS_AXIS`). It sits between the
+moves (``vfgym.moves``: what the plant is asked to do) and the scoring path
+(``vfgym.scoring``), which judges a controller on an axis's moves and plants.
 
 Modules (private; everything public is named here)
 --------------------------------------------------
@@ -23,10 +23,11 @@ Modules (private; everything public is named here)
     (:class:`PlantVariant`), a tuner's design plants and a verdict's held-out plants.
 """
 
-from vfgym.axis._axis import PAPER_AXIS, Axis
+from vfgym.axis._axis import LOADS_AXIS, PAPER_AXIS, Axis
 from vfgym.axis._file import (
     AXIS_FILE,
     AxisNote,
+    as_axis,
     axis_digest,
     axis_from_dict,
     axis_notes,
@@ -34,7 +35,6 @@ from vfgym.axis._file import (
     content_digest,
     load_axis,
     machine_digest,
-    plant_on,
     write_axis,
 )
 from vfgym.axis._move_sets import MoveSet, MoveSets
@@ -61,6 +61,7 @@ __all__ = [
     "DESIGN_SEED",
     "EXACT",
     "FACTOR_RANGE",
+    "LOADS_AXIS",
     "NOMINAL",
     "PAPER_AXIS",
     "SENSITIVITY_INERTIA",
@@ -72,6 +73,7 @@ __all__ = [
     "MoveSets",
     "PlantVariant",
     "Uncertainty",
+    "as_axis",
     "axis_digest",
     "axis_from_dict",
     "axis_notes",
@@ -82,7 +84,6 @@ __all__ = [
     "load_axis",
     "machine_digest",
     "plant_design",
-    "plant_on",
     "sensitivity_variants",
     "write_axis",
 ]

@@ -6,11 +6,12 @@ default, and :mod:`vfgym.axis._file` reads and writes one as a YAML file.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from vfgym.axis._checks import check_arrives, check_limit, check_measures
-from vfgym.axis._move_sets import MoveSets
+from vfgym.axis._move_sets import MoveSet, MoveSets
 from vfgym.axis._uncertainty import EXACT, PlantVariant, Uncertainty, plant_design
+from vfgym.moves.distribution import LOAD_DISTRIBUTION
 from vfgym.moves.scenarios import SCENARIOS, SPLITS, Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant
 
@@ -185,4 +186,16 @@ class Axis:
 
 
 PAPER_AXIS = Axis()
-"""The paper's axis, the default: ``experiments/axes/paper.yaml`` holds the same."""
+"""The paper's axis, the default problem: ``experiments/axes/paper.yaml`` holds the same."""
+
+LOADS_AXIS = Axis(
+    name="loads",
+    description="the paper's plant under a random load per move (the agents' distribution)",
+    moves=MoveSets(
+        train=MoveSet(random=replace(LOAD_DISTRIBUTION, count=16)),
+        test=MoveSet(random=replace(LOAD_DISTRIBUTION, count=32)),
+    ),
+)
+"""The paper's plant under a random load per move (:data:`vfgym.moves.LOAD_DISTRIBUTION`):
+the distribution the agents learn across, the environments' default axis;
+``experiments/axes/loads.yaml`` holds the same."""

@@ -28,17 +28,18 @@ import hashlib
 import json
 import warnings
 from dataclasses import asdict
+from os import PathLike, fspath
 from pathlib import Path
 from typing import Any
 
-from vfgym.axis._axis import PAPER_AXIS, Axis, _listed
+from vfgym.axis._axis import Axis, _listed
 from vfgym.axis._checks import check_holding, check_servo
 from vfgym.axis._move_sets import MoveSet, MoveSets
 from vfgym.axis._parts import from_mapping, read_move_set, read_plant
 from vfgym.axis._uncertainty import EXACT, Uncertainty
 from vfgym.io.runs import read_yaml, write_yaml
 from vfgym.moves.scenarios import SPLITS
-from vfgym.params import MOTOR_PRESETS, SGME_02A, Measures, Plant
+from vfgym.params import MOTOR_PRESETS, SGME_02A, Measures
 
 AXIS_FILE = "axis.yaml"
 """The axis's copy in a run folder."""
@@ -145,39 +146,35 @@ def axis_to_dict(axis: Axis) -> dict[str, Any]:
     }
 
 
-def plant_on(
-    axis: Axis, plant: Plant | None = None, measures: Measures | None = None
-) -> tuple[Plant, Measures]:
-    """The plant and measures a call scores with on ``axis``: the axis's own, or, on the
-    paper's axis (the default problem), another plant or measures given beside it (the
-    paper's moves on another machine).
+def as_axis(axis: Axis | str | PathLike[str], name: str = "axis") -> Axis:
+    """An axis argument resolved: an :class:`Axis` as it is, an axis file's path loaded
+    (:func:`load_axis`, once a file: the load is cached).
+
+    The one place a public entry point (``vfgym.evaluate``, the envs, a tuner) turns what
+    the user gave into the problem object; everything below it holds the :class:`Axis`.
 
     Parameters
     ----------
-    axis : Axis
-        The problem.
-    plant, measures : Plant, Measures or None
-        Given beside the axis (``None``: the axis's).
+    axis : Axis, str or os.PathLike
+        The axis, or its file.
+    name : str
+        The argument's name, for the error message.
 
     Returns
     -------
-    tuple of (Plant, Measures)
-        What to score with.
+    Axis
+        The axis.
 
     Raises
     ------
     ValueError
-        If a plant or measures other than the axis's are given beside an axis other than
-        the paper's, which states its own.
+        If ``axis`` is neither, or its file is bad (one line naming the file).
     """
-    given = {"plant": plant, "measures": measures}
-    if axis != PAPER_AXIS:
-        for name, value in given.items():
-            if value is not None and value != getattr(axis, name):
-                raise ValueError(f"{name}= is not allowed with axis={axis.name!r}: the axis "
-                                 f"gives its own {name}; give one or the other")  # fmt: skip
-    return (axis.plant if plant is None else plant,
-            axis.measures if measures is None else measures)  # fmt: skip
+    if isinstance(axis, Axis):
+        return axis
+    if isinstance(axis, (str, PathLike)):
+        return load_axis(fspath(axis))
+    raise ValueError(f"{name}={axis!r} is not allowed: give a vfgym.Axis or an axis file's path")
 
 
 def content_digest(data: Any) -> str:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from vfgym._validate import check_int, check_real
 from vfgym.io.runs import read_yaml
@@ -12,18 +12,21 @@ from vfgym.moves.baselines import Baseline
 from vfgym.params import Settings
 from vfgym.space import NAMES, settings_from_dict
 
+if TYPE_CHECKING:
+    from vfgym.axis import Axis
+
 
 class Interrupted(KeyboardInterrupt):
     """An interrupt (Ctrl-C) caught by a command that saved its work; the message says
     where it is and how to continue (:func:`vfgym.cli.main` prints it, exit status 130)."""
 
 
-def load_settings(path: str, axis: Any = None) -> Settings:
+def load_settings(path: str, axis: Axis) -> Settings:
     """Settings from a YAML file: a mapping of the tuned settings, or one under the key
     ``settings`` (as ``best.yaml`` of a sweep and ``vfgym predict`` write). Any problem
-    raises a one-line ``ValueError`` that names the file. Given the axis they are used on
-    (``None``: the paper's), a ``best.yaml`` tuned for another machine (its ``machine``)
-    is noted in one line (:class:`~vfgym.axis.AxisNote`)."""
+    raises a one-line ``ValueError`` that names the file. A ``best.yaml`` tuned for
+    another machine than the axis they are used on (its ``machine``) is noted in one line
+    (:class:`~vfgym.axis.AxisNote`)."""
     try:
         data = read_yaml(path)
         _note_machine(path, data, axis)
@@ -40,17 +43,16 @@ def load_settings(path: str, axis: Any = None) -> Settings:
         raise ValueError(msg if msg.startswith(str(path)) else f"{path}: {msg}") from None
 
 
-def _note_machine(path: str, data: Any, axis: Any) -> None:
+def _note_machine(path: str, data: Any, axis: Axis) -> None:
     import warnings
 
-    from vfgym.axis import PAPER_AXIS, AxisNote, machine_digest
+    from vfgym.axis import AxisNote, machine_digest
 
     if not isinstance(data, dict) or not isinstance(data.get("machine"), str):
         return
-    ax = PAPER_AXIS if axis is None else axis
-    if data["machine"] != machine_digest(ax):
+    if data["machine"] != machine_digest(axis):
         warnings.warn(
-            f"{path}: tuned on axis {data.get('axis') or 'paper'}, used on axis {ax.name} with "
+            f"{path}: tuned on axis {data.get('axis') or 'paper'}, used on axis {axis.name} with "
             "another plant, measures or uncertainty: its verdict does not carry over; tune "
             "for this axis (vfgym sweep --axis FILE)",
             AxisNote,
@@ -58,7 +60,7 @@ def _note_machine(path: str, data: Any, axis: Any) -> None:
         )
 
 
-def controller_from_args(args: argparse.Namespace, axis: Any = None) -> Any:
+def controller_from_args(args: argparse.Namespace, axis: Axis) -> Any:
     """The controller named by --settings FILE or --baseline NAME (default: paper), on
     ``axis`` (:func:`load_settings`)."""
     if getattr(args, "settings", None):
@@ -124,7 +126,7 @@ def add_axis_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--axis", metavar="FILE.yaml", help=AXIS_HELP)
 
 
-def axis_from_args(args: argparse.Namespace) -> Any:
+def axis_from_args(args: argparse.Namespace) -> Axis:
     """The :class:`~vfgym.axis.Axis` of ``--axis FILE`` (a bad file: one-line
     ``ValueError`` naming it), or the paper's axis without the option (the default
     problem, :data:`vfgym.PAPER_AXIS`)."""
@@ -134,7 +136,7 @@ def axis_from_args(args: argparse.Namespace) -> Any:
     return load_axis(path) if path else PAPER_AXIS
 
 
-def scenario_from_args(args: argparse.Namespace, axis: Any) -> Any:
+def scenario_from_args(args: argparse.Namespace, axis: Axis) -> Any:
     """``--scenario NAME`` on the axis (its listed moves, the named scenarios, or
     ``<split>-<seed>`` of its random moves)."""
     return axis.scenario(args.scenario)

@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
         parse_timescale(args.timescale)
         if args.decimation != 1:
             raise ValueError(f"--decimation={args.decimation} is not allowed for vcd: every tick")
-    ctrl, label = _controller(args)
+    ctrl, label = _controller(args, axis)
     out = args.out if args.out is not None else f"{scenario.name}-{Path(label).stem}.{args.format}"
     out = check_output_path("--out", out)
     dec = args.decimation if args.format == "csv" else 1

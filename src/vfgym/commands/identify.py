@@ -77,12 +77,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from vfgym.axis import PAPER_AXIS
     from vfgym.commands._common import axis_from_args, load_settings
     from vfgym.params import PAPER_SETTINGS
 
-    axis = axis_from_args(args) or PAPER_AXIS
-    settings = load_settings(args.settings) if args.settings else PAPER_SETTINGS
+    axis = axis_from_args(args)
+    settings = load_settings(args.settings, axis) if args.settings else PAPER_SETTINGS
     if args.plan:
         if args.capture:
             raise ValueError("--capture is not allowed with --plan: the plan comes first")

@@ -134,15 +134,16 @@ def _load_given(name: str, storage: str, run_dir: Path) -> Any:
         raise ValueError(f"--storage {spec.display}: no study named {name!r} in it") from None
 
 
-def _controller(args: argparse.Namespace) -> tuple[Any, str]:
+def _controller(args: argparse.Namespace, axis: Any) -> tuple[Any, str]:
     """The controller and its label (a settings file's stem; its path if the stem is a
-    baseline's name, so that the two never share a label)."""
+    baseline's name, so that the two never share a label), used on ``axis``."""
     from vfgym.commands._common import load_settings
     from vfgym.moves.baselines import BASELINE_NAMES, Baseline
 
     if args.settings:
         stem = Path(args.settings).stem
-        return load_settings(args.settings), (args.settings if stem in BASELINE_NAMES else stem)
+        label = args.settings if stem in BASELINE_NAMES else stem
+        return load_settings(args.settings, axis), label
     name = args.baseline or "paper"
     return Baseline(name), name
 
@@ -182,17 +183,16 @@ def build_figure(args: argparse.Namespace) -> Any:
     plant = scenario.plant(axis.plant)
     if args.kind == "scurve":
         return plots.scurve_figure(plant, short_rad=args.short_rad, long_rad=args.long_rad)
-    ctrl, label = _controller(args)
-    on_axis = {"axis": axis}
+    ctrl, label = _controller(args, axis)
     if args.kind == "response":
-        ev = evaluate(ctrl, [scenario], keep_traces=True, **on_axis)
+        ev = evaluate(ctrl, [scenario], keep_traces=True, axis=axis)
         trace = own_trace(ev, scenario)
         title = f"{scenario.name}: {scenario.description}\n{ev.labels()[0]}"
         return plots.response_figure(
             trace, title=title, metrics=ev.metrics[0][0], tracking=scenario.tracking
         )
     others = _against(args, label)
-    ev = evaluate([ctrl, *(c.controller for c in others)], [scenario], keep_traces=True, **on_axis)
+    ev = evaluate([ctrl, *(c.controller for c in others)], [scenario], keep_traces=True, axis=axis)
     own_trace(ev, scenario)
     kept = ev.traces
     assert kept is not None  # keep_traces=True

@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         from vfgym.commands.evaluate import load_policy
         from vfgym.permove import Tuner
 
-        tuner = load_policy(args.model, args.axis, "predict")
+        tuner = load_policy(args.model, axis, "predict")
         if not isinstance(tuner, Tuner):  # a VFServo-v0 agent's scheduler
             from vfgym.agents import load_agent, schedule_of
 
@@ -73,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
                     "settings change during the move"
                 )
             doc = {"source": f"agent {args.model}", "scenario": scenario.name}
-            return _emit(doc | schedule_of(agent, scenario, args.axis), args.out)
+            return _emit(doc | schedule_of(agent, scenario, axis), args.out)
     settings = tuner(scenario)
     source = tuner.source
     doc = {"settings": settings_to_dict(settings), "source": source, "scenario": scenario.name}

@@ -6,20 +6,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from os import PathLike, fspath
 from typing import Any
 
 import numpy as np
 
 from vfgym._validate import check_choice, check_int, check_real
-from vfgym.axis import EXACT, NOMINAL, Axis, PlantVariant, draw_plant, load_axis
-from vfgym.moves.distribution import get_scenario, random_scenario
+from vfgym.axis import LOADS_AXIS, NOMINAL, Axis, PlantVariant, as_axis, draw_plant
 from vfgym.moves.features import main_move, scenario_features
 from vfgym.moves.scenarios import SPLITS, Scenario
 from vfgym.params import (
     ACCEL_LAWS,
-    DEFAULT_MEASURES,
-    PAPER_PLANT,
     PAPER_SETTINGS,
     Measures,
     Plant,
@@ -143,76 +139,27 @@ class Episode:
         )
 
 
-def resolve_axis(
-    axis: Axis | str | PathLike[str] | None, plant: Plant, measures: Measures
-) -> tuple[Axis | None, Plant, Measures]:
-    """An env's ``axis`` argument with its ``plant`` and ``measures``.
-
-    An axis brings its own plant and measures, so giving other ones beside it is an error
-    (the paper's defaults, or the axis's own, are no conflict).
-
-    Parameters
-    ----------
-    axis : Axis, str, os.PathLike or None
-        An :class:`~vfgym.axis.Axis` or an axis file's path; ``None`` for none.
-    plant : Plant
-        The plant given beside it.
-    measures : Measures
-        The measures given beside it.
-
-    Returns
-    -------
-    tuple of (Axis or None, Plant, Measures)
-        The axis (loaded from its file), and the plant and measures to use: the axis's,
-        or the ones given when there is no axis.
-
-    Raises
-    ------
-    ValueError
-        If ``axis`` is neither, its file is bad, or ``plant`` / ``measures`` differ from
-        the axis's.
-    """
-    if axis is None:
-        return None, plant, measures
-    if isinstance(axis, (str, PathLike)):
-        axis = load_axis(fspath(axis))
-    if not isinstance(axis, Axis):
-        raise ValueError(f"axis={axis!r} is not allowed: give an axis file's path or a vfgym Axis")
-    for name, value, default in (
-        ("plant", plant, PAPER_PLANT),
-        ("measures", measures, DEFAULT_MEASURES),
-    ):
-        if value != default and value != getattr(axis, name):
-            raise ValueError(
-                f"{name}={value!r} is not allowed with axis={axis.name!r}: the axis gives "
-                f"its own {name}; give one or the other"
-            )
-    return axis, axis.plant, axis.measures
-
-
 class ScenarioSource:
     """Where each episode's scenario comes from: a fixed one, or seeded draws from one
-    split (train or test) of the random distribution, seeds in ``seed_range`` = [lo, hi);
-    on an ``axis``, from that split's move set (:meth:`vfgym.axis.MoveSet.pick`)
-    and names resolved by :meth:`vfgym.axis.Axis.scenario`."""
+    split (train or test) of the axis's move sets (:meth:`vfgym.axis.MoveSet.pick`),
+    seeds in ``seed_range`` = [lo, hi); names resolved by :meth:`vfgym.axis.Axis.scenario`.
+    On an axis with uncertainty, each episode's true plant is drawn within it."""
 
     def __init__(
         self,
         scenario: str | Scenario | None,
         split: str,
         seed_range: tuple[int, int] | None,
-        base: Plant,
-        measures: Measures,
-        axis: Axis | None = None,
+        axis: Axis,
     ) -> None:
         check_choice("split", split, SPLITS)
         lo, hi = DEFAULT_SEED_RANGE if seed_range is None else _check_range(seed_range)
         self.split = split
         self.seed_range = (lo, hi)
-        self.base = base
-        self.measures = measures
         self.axis = axis
-        self.uncertainty = EXACT if axis is None else axis.uncertainty
+        self.base = axis.plant
+        self.measures = axis.measures
+        self.uncertainty = axis.uncertainty
         self.fixed = None if scenario is None else self._named(scenario)
         self._cache: dict[tuple[Scenario, PlantVariant], Episode] = {}
         if self.fixed is not None:
@@ -247,13 +194,10 @@ class ScenarioSource:
         return self.episode(sc, draw_plant(self.uncertainty, self.base.motor, rng))
 
     def _named(self, scenario: Any) -> Scenario:
-        sc = _check_scenario(scenario)
-        return get_scenario(sc) if self.axis is None else self.axis.scenario(sc)
+        return self.axis.scenario(_check_scenario(scenario))
 
     def seeded(self, seed: int) -> Scenario:
         """The scenario a draw of ``seed`` gives (on the source's split and axis)."""
-        if self.axis is None:
-            return random_scenario(seed, self.split)
         return self.axis.moves.of(self.split).pick(seed, self.split, self.base)
 
 
@@ -262,9 +206,9 @@ class EnvConfig:
     """The arguments both envs take (VFTune-v0's all of them), every default here.
 
     Validated on construction, except the scenario and its draws, which
-    :meth:`scenario_source` checks. An ``axis`` is resolved here, once, by
-    :func:`resolve_axis`: afterwards ``axis`` is the loaded
-    :class:`~vfgym.axis.Axis` and ``plant`` and ``measures`` are its own.
+    :meth:`scenario_source` checks. The ``axis`` is resolved here, once: an axis file's
+    path is loaded, and afterwards ``axis`` is the :class:`~vfgym.axis.Axis`, whose plant
+    and measures (:attr:`plant`, :attr:`measures`) the env scores with.
 
     Parameters
     ----------
@@ -278,14 +222,12 @@ class EnvConfig:
         (low, high): scenario seeds drawn in [low, high) (default [0, 2³¹)).
     accel_law : str
         ``"rise"`` (the paper's reading) or ``"slew"``.
-    axis : Axis, str, os.PathLike or None
-        An axis file's path or a :class:`vfgym.axis.Axis`: its plant and measures,
-        and the moves of each split come from its move sets (a random set's draws, or a
-        listed set's move ``seed mod len``); names resolve on the axis.
-    plant : Plant
-        The base plant (each scenario applies its load); with an axis, the axis's.
-    measures : Measures
-        Windows and bands of the measures; with an axis, the axis's.
+    axis : Axis, str or os.PathLike
+        The problem (:class:`vfgym.axis.Axis`, or an axis file's path, loaded here): its
+        plant and measures, and the moves of each split from its move sets (a random
+        set's draws, or a listed set's move ``seed mod len``); names resolve on the axis.
+        Default: :data:`vfgym.axis.LOADS_AXIS`, the paper's plant under a random load per
+        move (``experiments/axes/loads.yaml``, the distribution the agents learn across).
     weights : CostWeights
         Weights of the cost.
     bounds : Bounds
@@ -312,17 +254,14 @@ class EnvConfig:
     Raises
     ------
     ValueError
-        If an argument is of the wrong type or out of its range, or an axis is given
-        with another plant or measures.
+        If an argument is of the wrong type or out of its range, or the axis file is bad.
     """
 
     scenario: str | Scenario | None = None
     split: str = "train"
     seed_range: tuple[int, int] | None = None
     accel_law: str = "rise"
-    axis: Axis | str | PathLike[str] | None = None
-    plant: Plant = PAPER_PLANT
-    measures: Measures = DEFAULT_MEASURES
+    axis: Axis = LOADS_AXIS  # (an axis file's path is loaded on construction)
     weights: CostWeights = DEFAULT_WEIGHTS
     bounds: Bounds = DEFAULT_BOUNDS
     residual: bool = False
@@ -331,11 +270,8 @@ class EnvConfig:
 
     def __post_init__(self) -> None:
         s = object.__setattr__
-        axis, plant, measures = resolve_axis(self.axis, self.plant, self.measures)
-        s(self, "axis", axis)
-        s(self, "plant", plant)
-        s(self, "measures", measures)
-        check_scoring(self.weights, self.bounds, self.measures, self.plant)
+        s(self, "axis", as_axis(self.axis))
+        check_scoring(self.weights, self.bounds)
         s(self, "accel_law", check_choice("accel_law", self.accel_law, ACCEL_LAWS))
         if not isinstance(self.residual, bool):
             raise ValueError(f"residual={self.residual!r} must be a bool")
@@ -360,6 +296,16 @@ class EnvConfig:
                 f"residual_base={base!r} must be a vfgym.Settings, a callable "
                 "(scenario, plant) -> Settings, or None"
             )
+
+    @property
+    def plant(self) -> Plant:
+        """The axis's plant: the base each scenario applies its load to."""
+        return self.axis.plant
+
+    @property
+    def measures(self) -> Measures:
+        """The axis's windows and bands of the measures."""
+        return self.axis.measures
 
     def residual_scales(self) -> np.ndarray:
         """Each setting's ``residual_scale``, in the compiled mapping's order.
@@ -425,17 +371,14 @@ class EnvConfig:
         Returns
         -------
         ScenarioSource
-            On the axis's move sets if there is one.
+            On the axis's move sets.
 
         Raises
         ------
         ValueError
             If the scenario, split or seed range is bad (raised by :class:`ScenarioSource`).
         """
-        axis = self.axis if isinstance(self.axis, Axis) else None  # resolved on construction
-        return ScenarioSource(
-            self.scenario, self.split, self.seed_range, self.plant, self.measures, axis
-        )
+        return ScenarioSource(self.scenario, self.split, self.seed_range, self.axis)
 
 
 def _check_scenario(sc: Any) -> str | Scenario:
@@ -483,14 +426,9 @@ def check_options(options: Any) -> dict[str, Any]:
     return options
 
 
-def check_scoring(weights: Any, bounds: Any, measures: Any, plant: Any) -> None:
-    """The scoring path's inputs have the right types."""
-    for name, value, kind in (
-        ("weights", weights, CostWeights),
-        ("bounds", bounds, Bounds),
-        ("measures", measures, Measures),
-        ("plant", plant, Plant),
-    ):
+def check_scoring(weights: Any, bounds: Any) -> None:
+    """The scoring path's weights and bounds have the right types."""
+    for name, value, kind in (("weights", weights, CostWeights), ("bounds", bounds, Bounds)):
         if not isinstance(value, kind):
             raise ValueError(f"{name}={value!r} must be a vfgym {kind.__name__}")
 

@@ -68,7 +68,7 @@ class ServoConfig(EnvConfig):
 
     Parameters
     ----------
-    scenario, split, seed_range, accel_law, axis, plant, measures, weights, bounds
+    scenario, split, seed_range, accel_law, axis, weights, bounds
         As :class:`vfgym.envs._common.EnvConfig` (an axis resolved there).
     residual, residual_scale, residual_base
         As :class:`vfgym.envs._common.EnvConfig`: with residual actions the base is also
@@ -290,8 +290,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     accel_law="rise", interval_s=1e-3, settle_time_s=5e-3,
     initial_settings=PAPER_SETTINGS, tracking_weight=0.0, terminate_on_violation=False,
     violation_penalty=5.0, residual=False, residual_scale=0.25, residual_base=None,
-    plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
-    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None, axis=None)``; see
+    axis=LOADS_AXIS, weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``; see
     Parameters.
 
     ``gymnasium.make_vec("vfgym/VFServo-v0", num_envs=N)`` gives
@@ -312,7 +311,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     **options
         The other fields of :class:`ServoConfig`, where their defaults live and are
         checked: VFTune-v0's (``split``, ``seed_range``, ``accel_law``, ``axis``,
-        ``plant``, ``measures``, ``weights``, ``bounds``), and ``interval_s`` (the control
+        ``weights``, ``bounds``), and ``interval_s`` (the control
         interval, a whole number of ticks), ``settle_time_s`` (how long the motor must stay
         in position to end the episode), ``initial_settings`` (the settings in force
         before the first action), ``tracking_weight`` (weight of the tracking-error

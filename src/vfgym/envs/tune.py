@@ -34,7 +34,7 @@ class TuneConfig(EnvConfig):
 
     Parameters
     ----------
-    scenario, split, seed_range, accel_law, axis, plant, measures, weights, bounds
+    scenario, split, seed_range, accel_law, axis, weights, bounds
         As :class:`vfgym.envs._common.EnvConfig`.
     residual, residual_scale, residual_base
         As :class:`vfgym.envs._common.EnvConfig` (``residual_base`` None: the paper's).
@@ -191,8 +191,8 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     A scenario: the ``scenario`` argument or ``options={"scenario": name}`` if given,
     ``options={"scenario_seed": s}`` for a seed of the split, else a seed drawn from the
-    env's ``np_random`` in ``seed_range`` and the move ``random_scenario(seed, split)`` (on
-    an ``axis``, that split's move set's).
+    env's ``np_random`` in ``seed_range`` and that seed's move of the axis's move set for
+    the split (by default :data:`vfgym.axis.LOADS_AXIS`'s: ``random_scenario(seed, split)``).
     Train and test scenarios never coincide. The plant starts at rest at 0.
 
     ## Episode End
@@ -202,8 +202,8 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
     ## Arguments
 
     ``gymnasium.make("vfgym/VFTune-v0", scenario=None, split="train", seed_range=None,
-    accel_law="rise", plant=PAPER_PLANT, measures=DEFAULT_MEASURES,
-    weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None, axis=None)``; see
+    accel_law="rise", axis=LOADS_AXIS, weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS,
+    render_mode=None)``; see
     Parameters.
 
     ``gymnasium.make_vec("vfgym/VFTune-v0", num_envs=N)`` gives
@@ -226,9 +226,9 @@ class VFTuneEnv(gym.Env[np.ndarray, np.ndarray]):
         The other fields of :class:`TuneConfig`, where their defaults live and are
         checked: ``split`` (``"train"`` or ``"test"``), ``seed_range``
         ((low, high) of the scenario seeds), ``accel_law`` (``"rise"`` or ``"slew"``),
-        ``axis`` (an axis file's path or a :class:`vfgym.axis.Axis`: its plant,
-        measures and move sets), the scoring path's inputs ``plant``, ``measures``,
-        ``weights``, ``bounds`` (:func:`vfgym.evaluate`), and ``residual``,
+        ``axis`` (the problem, a :class:`vfgym.axis.Axis` or an axis file's path: its
+        plant, measures and move sets), the scoring path's inputs ``weights``,
+        ``bounds`` (:func:`vfgym.evaluate`), and ``residual``,
         ``residual_scale``, ``residual_base`` (residual actions),
         ``violation_penalty``.
 

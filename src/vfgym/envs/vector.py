@@ -293,8 +293,8 @@ class VFTuneVectorEnv(_BatchVectorEnv):
         As :class:`vfgym.envs.tune.VFTuneEnv`, for each sub-env.
     **options
         As :class:`vfgym.envs.tune.VFTuneEnv` (:class:`vfgym.envs._common.EnvConfig`'s
-        fields: ``split``, ``seed_range``, ``accel_law``, ``axis``, ``plant``,
-        ``measures``, ``weights``, ``bounds``, ``residual*``).
+        fields: ``split``, ``seed_range``, ``accel_law``, ``axis``, ``weights``,
+        ``bounds``, ``residual*``).
     """
 
     def __init__(

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from vfgym._validate import check_int
-from vfgym.axis import PAPER_AXIS, Axis
+from vfgym.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 
@@ -50,7 +50,7 @@ def refine(
     start: Settings,
     trials: int,
     *,
-    axis: Axis = PAPER_AXIS,
+    axis: Axis,
     seed: int | None = 0,
 ) -> Refinement:
     """Run ``trials`` trials of the default sampler on one move, from ``start``.
@@ -88,7 +88,7 @@ def short_sweep(
     start: Settings,
     trials: int,
     *,
-    axis: Axis = PAPER_AXIS,
+    axis: Axis,
     seed: int | None = 0,
     also: Sequence[Settings] = (),
 ) -> Refinement:

@@ -15,12 +15,13 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from os import PathLike
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from vfgym.axis import PAPER_AXIS, Axis, load_axis, machine_digest
+from vfgym.axis import PAPER_AXIS, Axis, as_axis, machine_digest
 from vfgym.moves.features import SCENARIO_FEATURES, scenario_features
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
@@ -155,7 +156,7 @@ def outside_ranges(
 
 def load_tuner(
     path: str | Path | None = None,
-    axis: str | Path | Axis | None = None,
+    axis: Axis | str | PathLike[str] = PAPER_AXIS,
     warn: Callable[[str], None] | None = None,
 ) -> Tuner:
     """The tuner in a settings model's file (JSON): the shipped one or one of ``vfgym fit``.
@@ -166,8 +167,8 @@ def load_tuner(
         The file; ``None``: the settings model vfgym ships (learnt on the paper's plant
         with varied loads). A VFTune-v0 agent (``.zip``) is read by
         :func:`vfgym.agents.load_tuner` instead.
-    axis : str, Path, Axis or None
-        The axis (file) of the moves; ``None``: the paper's.
+    axis : Axis, str or os.PathLike
+        The axis (or its file) of the moves (default: the paper's).
     warn : callable or None
         Gets each one-line warning (default: :func:`warnings.warn`, :class:`TunerWarning`).
 
@@ -187,11 +188,9 @@ def load_tuner(
             f"--model {path}: a trained agent; vfgym.agents.load_tuner reads it "
             "(the agents extra: stable-baselines3)"
         )
-    ax = load_axis(axis) if isinstance(axis, (str, Path)) else axis
-
+    ax = as_axis(axis)
     model = load_settings_model(PRETRAINED if path is None else path)
     own = getattr(model, "trained_on", None) or trained_on(PAPER_AXIS)
-    ax = ax or PAPER_AXIS
     source = SHIPPED_SOURCE if path is None else f"model {path}"
     if own.get("machine") != machine_digest(ax):
         warn(

@@ -12,16 +12,17 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from os import PathLike
 from typing import Any
 
 import numpy as np
 
 from vfgym._validate import check_int
-from vfgym.axis import PAPER_AXIS, Axis, PlantVariant, plant_on
+from vfgym.axis import PAPER_AXIS, Axis, PlantVariant, as_axis
 from vfgym.moves.baselines import BASELINE_NAMES, Baseline, Controller, resolve
 from vfgym.moves.distribution import scenario_set
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import Measures, Plant, Settings
+from vfgym.params import Plant, Settings
 from vfgym.report._stats import DEFAULT_RESAMPLES, Spread, WinLoss, outcome, spread
 from vfgym.scoring import (
     CONSTRAINTS,
@@ -187,6 +188,9 @@ class Report:
         The scenarios, in order (the columns' arrays are indexed by them).
     columns : list of Column
         One per candidate, tuned ones first.
+    axis : Axis
+        The problem the candidates ran on: its plant (each scenario adds its load) and
+        measures.
     resamples : int
         Bootstrap draws for the spreads.
     seed : int
@@ -200,6 +204,7 @@ class Report:
 
     scenarios: list[Scenario]
     columns: list[Column]
+    axis: Axis
     resamples: int = DEFAULT_RESAMPLES
     seed: int = 0
     scenario_spec: str = ""
@@ -333,11 +338,9 @@ def compare(
     baselines: str | Sequence[str] | Sequence[Candidate] = BASELINE_NAMES,
     scenarios: str | Scenario | Sequence[str | Scenario] = "test",
     *,
-    axis: Axis = PAPER_AXIS,
+    axis: Axis | str | PathLike[str] = PAPER_AXIS,
     count: int | None = None,
     first_seed: int | None = None,
-    plant: Plant | None = None,
-    measures: Measures | None = None,
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
     resamples: int = DEFAULT_RESAMPLES,
@@ -358,7 +361,7 @@ def compare(
         Baseline names (a comma-separated string or a list) or candidates.
     scenarios : str, Scenario, or a sequence of these
         The scenario set, resolved on the axis (:meth:`vfgym.Axis.scenario_set`).
-    axis : Axis
+    axis : Axis, str or os.PathLike
         The problem: its plant, measures, moves and uncertainty, as :func:`vfgym.evaluate`
         takes it (default: the paper's axis).
     count : int or None
@@ -366,8 +369,6 @@ def compare(
         (:func:`vfgym.scenario_set`) instead of the axis's move sets.
     first_seed : int or None
         Seed of the first of those draws (default 0).
-    plant, measures : Plant, Measures or None
-        On the paper's axis, another plant or measures (as :func:`vfgym.evaluate`).
     weights : CostWeights
         Weights of the cost.
     bounds : Bounds
@@ -407,18 +408,16 @@ def compare(
     dup = sorted({x for x in labels if labels.count(x) > 1})
     if dup:
         raise ValueError(f"controller labels must differ: {', '.join(dup)} given twice")
+    axis = as_axis(axis)
     spec = scenarios if isinstance(scenarios, str) else ""
     if count is None and first_seed is None:
         scens = axis.scenario_set(scenarios if isinstance(scenarios, str) else list(scenarios))
     else:  # random draws of the default distribution, as many as asked
         scens = scenario_set(scenarios, 16 if count is None else count, first_seed or 0)
-    plant, measures = plant_on(axis, plant, measures)
     ev = evaluate(
         [c.controller if c.controller is not None else c.policy for c in cands],
         scens,
         axis=axis,
-        plant=plant,
-        measures=measures,
         weights=weights,
         bounds=bounds,
         plants=plants,
@@ -428,7 +427,7 @@ def compare(
         _column_from_rows(
             cand,
             scens,
-            plant,
+            axis.plant,
             [
                 (ev.chosen[ci][si], ev.cost[ci, si], ev.constraints[ci, si], ev.metrics[ci][si])
                 for si in range(len(scens))
@@ -439,6 +438,7 @@ def compare(
     return Report(
         scenarios=scens,
         columns=columns,
+        axis=axis,
         resamples=resamples,
         seed=seed,
         scenario_spec=spec,

@@ -3,12 +3,14 @@
 ``params → simulate → trace → metrics → cost``: the plant (:mod:`vfgym.plant`) streams
 the measures of a move; :func:`score` turns them into the constraint values, the
 objectives and the scalar cost (``_cost``), as a :class:`Score`; :func:`evaluate` runs
-every (controller, scenario) pair in one compiled call and scores each (``_evaluate``).
-The Gymnasium envs' rewards, the Optuna objective and the reports all call it. The one
-compiled copy of the cost, the VFServo-v0 env's running cost, sits beside it
-(``_cost_compiled``), tested against :func:`score`.
+every (controller, move, plant) triple and scores each (``_evaluate``), the fixed
+controllers in one compiled call (``_batch``); ``_plants`` holds the results across true
+plants and the robust rule. The Gymnasium envs' rewards, the Optuna objective and the
+reports all call it. The one compiled copy of the cost, the VFServo-v0 env's running cost,
+sits beside it (``_cost_compiled``), tested against :func:`score`.
 """
 
+from vfgym.scoring._batch import Move, on_plant, score_pairs
 from vfgym.scoring._cost import (
     CONSTRAINTS,
     DEFAULT_BOUNDS,
@@ -24,12 +26,12 @@ from vfgym.scoring._cost import (
     score,
     yardsticks,
 )
-from vfgym.scoring._evaluate import Evaluation, Move, evaluate, on_plant, score_pairs
+from vfgym.scoring._evaluate import Evaluation, evaluate
 from vfgym.scoring._plants import (
     AcrossPlants,
     PlantSummary,
     best_robust,
-    score_across,
+    robust_constraints,
     score_robust,
     worst_on,
 )
@@ -55,8 +57,8 @@ __all__ = [
     "best_robust",
     "evaluate",
     "on_plant",
+    "robust_constraints",
     "score",
-    "score_across",
     "score_pairs",
     "score_robust",
     "worst_on",

@@ -1,15 +1,21 @@
-"""Every (controller, scenario) pair in one compiled, multi-threaded call, scored by
-:func:`vfgym.scoring.score`: what the envs, the sweeps and the reports all call."""
+"""Every (controller, move, plant) triple in one compiled, multi-threaded call, scored by
+:func:`vfgym.scoring.score`: what the envs, the sweeps and the reports all call.
+
+An evaluation is a list of triples: each controller on each scenario of the axis, on the
+modelled plant and on each true plant asked for. A fixed controller or a tuner's choice
+for the move runs in the batched kernel (:func:`vfgym.scoring.score_pairs`); a
+:class:`~vfgym.scoring.Scheduler` runs its own move on the same triples. Every controller
+so meets the same moves on the same plants, the axis's.
+"""
 
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field
+from os import PathLike
+from typing import Any
 
-import numba
 import numpy as np
 
 from vfgym.axis import (
@@ -18,8 +24,8 @@ from vfgym.axis import (
     VERDICT_PLANT_SEED,
     Axis,
     PlantVariant,
+    as_axis,
     draw_plants,
-    plant_on,
 )
 from vfgym.moves.baselines import (
     Baseline,
@@ -27,26 +33,12 @@ from vfgym.moves.baselines import (
     FixedFrequency,
     SCurveSource,
     controller_label,
-    resolve,
 )
 from vfgym.moves.scenarios import Scenario
-from vfgym.params import (
-    DEFAULT_MEASURES,
-    PAPER_PLANT,
-    Measures,
-    Plant,
-    Settings,
-)
-from vfgym.plant import Trace, command_end_s, pack, simulate
-from vfgym.plant import _kernel as K
-from vfgym.plant._notice import announce_compile
-from vfgym.plant._threads import keeps_torch_threads
+from vfgym.params import Settings
+from vfgym.plant import Trace, simulate
 from vfgym.plant.measures import NAMES as METRIC_NAMES
-from vfgym.plant.measures import from_acc
-
-if TYPE_CHECKING:
-    from vfgym.scoring._plants import AcrossPlants
-
+from vfgym.scoring._batch import Move, as_run, score_pairs
 from vfgym.scoring._cost import (
     CONSTRAINTS,
     DEFAULT_BOUNDS,
@@ -55,8 +47,8 @@ from vfgym.scoring._cost import (
     Bounds,
     CostWeights,
     Score,
-    score,
 )
+from vfgym.scoring._plants import AcrossPlants, robust_constraints
 from vfgym.scoring._scheduled import Scheduler, score_scheduled
 
 
@@ -112,8 +104,22 @@ class Evaluation:
 
     @property
     def feasible(self) -> np.ndarray:
-        """All constraints ≤ 0, per pair."""
+        """All constraints ≤ 0, per pair (on the modelled plant)."""
         return np.all(self.constraints <= 0.0, axis=-1)
+
+    @property
+    def robust_constraints(self) -> np.ndarray:
+        """Each pair's constraints as a robust tuner ranks it: the worst over the modelled
+        plant and every true plant of :attr:`across` (:func:`vfgym.scoring.robust_constraints`).
+
+        Returns
+        -------
+        numpy.ndarray
+            (controllers, scenarios, 4); :attr:`constraints` where there are no true plants.
+        """
+        if self.across is None:
+            return self.constraints
+        return robust_constraints(self.constraints, self.across.constraints, axis=1)
 
     def metric(self, name: str) -> np.ndarray:
         """One measure of every pair.
@@ -176,235 +182,11 @@ def _check_controllers(controllers: Any) -> list[Any]:
     return out
 
 
-@dataclass(frozen=True)
-class Move:
-    """A scenario made ready to simulate: its plant, its command and when that ends.
-
-    Parameters
-    ----------
-    scenario : Scenario
-        The scenario.
-    plant : Plant
-        The plant with the scenario's load.
-    command : numpy.ndarray
-        The position command per tick (rad).
-    command_end_s : float
-        Time at which the command reached its final value (s).
-    model : Plant or None
-        The modelled plant the controllers are set for (baselines resolved, pulse sources
-        planned, commands shaped on it), where ``plant`` is a true plant that differs
-        from it (:class:`~vfgym.axis.PlantVariant`); ``None``: ``plant``.
-    """
-
-    scenario: Scenario
-    plant: Plant
-    command: np.ndarray
-    command_end_s: float
-    model: Plant | None = None
-
-    @classmethod
-    def of(
-        cls, scenario: Scenario, base: Plant = PAPER_PLANT, variant: PlantVariant = NOMINAL
-    ) -> Move:
-        """The move of a scenario on a base plant, optionally on a true plant.
-
-        Parameters
-        ----------
-        scenario : Scenario
-            The scenario.
-        base : Plant
-            The plant before the scenario's load.
-        variant : PlantVariant
-            The true plant relative to the modelled one (default: the modelled plant).
-
-        Returns
-        -------
-        Move
-            Its (true) plant, command and command end, with the modelled plant.
-        """
-        plant = scenario.plant(base)
-        cmd = scenario.command(plant)
-        end = command_end_s(cmd, plant.tick_hz)
-        if variant.nominal:
-            return cls(scenario, plant, cmd, end)
-        return cls(scenario, variant.apply(plant), cmd, end, model=plant)
-
-
-def on_plant(move: Move, variant: PlantVariant) -> Move:
-    """The same move on a true plant (its command and controllers' plant unchanged).
-
-    Parameters
-    ----------
-    move : Move
-        A move on its modelled plant.
-    variant : PlantVariant
-        The true plant relative to the modelled one.
-
-    Returns
-    -------
-    Move
-        The move on ``variant.apply(move.plant)``, its ``model`` the modelled plant.
-    """
-    if variant.nominal:
-        return move
-    return replace(move, plant=variant.apply(move.plant), model=move.plant)
-
-
-def _as_run(c: Controller, move: Any) -> tuple[Settings, np.ndarray | None] | None:
-    """The settings and external pulse train a controller runs with on a move (``None``
-    pulses: the V-F controller makes them), or ``None`` if it cannot run it. Baselines and
-    pulse sources are set for the modelled plant (a move's ``model``, if it has one)."""
-    model = getattr(move, "model", None) or move.plant
-    c = resolve(c, model)
-    if isinstance(c, Settings):
-        return c, None
-    train = c.pulses(move.scenario, model)
-    return None if train is None else (Settings(ts_over_tf=c.ts_over_tf), train)
-
-
-def score_pairs(
-    controllers: Sequence[Controller],
-    moves: Sequence[Any],
-    *,
-    measures: Measures = DEFAULT_MEASURES,
-    weights: CostWeights = DEFAULT_WEIGHTS,
-    bounds: Bounds = DEFAULT_BOUNDS,
-    while_running: Callable[[], None] | None = None,
-) -> list[Score | None]:
-    """Score ``controllers[i]`` on ``moves[i]`` for every i in one compiled, multi-threaded call.
-
-    Parameters
-    ----------
-    controllers : sequence
-        One controller per move (V-F settings, a pulse source or a baseline).
-    moves : sequence
-        :class:`Move` objects, or anything with their attributes (the envs' episodes);
-        moves sharing a command array share it in the batch.
-    measures : Measures
-        Windows and bands of the measures.
-    weights : CostWeights
-        Weights of the cost.
-    bounds : Bounds
-        Bounds of the constraints.
-    while_running : callable or None
-        Work of the caller's to do while the compiled call runs (the vector env's next
-        draws): on this thread, beside the call on a worker thread when this thread may
-        use two or more numba threads (the call then takes one fewer), else after it. It
-        must not touch the moves being scored.
-
-    Returns
-    -------
-    list of Score or None
-        One :class:`~vfgym.scoring.Score` per pair (its ``metrics`` hold the measures),
-        or ``None`` where a pulse source cannot run the move (a moving reference).
-
-    Raises
-    ------
-    ValueError
-        If the two sequences differ in length.
-    """
-    if len(controllers) != len(moves):
-        raise ValueError(f"{len(controllers)} controllers for {len(moves)} moves")
-    slots: dict[int, int] = {}
-    cmds: list[np.ndarray] = []
-    ext_parts: list[np.ndarray] = [np.zeros(0, np.int8)]
-    prm, cmd_idx, ext_idx, rows = [], [], [], []
-    for r, (c, mv) in enumerate(zip(controllers, moves, strict=True)):
-        run = _as_run(c, mv)
-        if run is None:
-            continue
-        settings, train = run
-        j = slots.setdefault(id(mv.command), len(cmds))
-        if j == len(cmds):
-            cmds.append(mv.command)
-        e = 0
-        if train is not None:
-            ext_parts.append(train)
-            e = len(ext_parts) - 1
-        cmd = mv.command
-        prm.append(pack(settings, mv.plant, measures, float(cmd[-1]), cmd.size, e > 0))
-        cmd_idx.append(j)
-        ext_idx.append(e)
-        rows.append(r)
-    out: list[Score | None] = [None] * len(moves)
-    if not rows:
-        if while_running is not None:
-            while_running()
-        return out
-    acc = K.new_acc(len(rows))
-    announce_compile("evaluate", "the batched simulation kernel", K.run_batch)
-    keeps_torch_threads(_run_beside)(
-        K.run_batch,
-        while_running,
-        np.concatenate(cmds),
-        np.concatenate([[0], np.cumsum([c.size for c in cmds])]).astype(np.int64),
-        np.array(cmd_idx, np.int64),
-        np.concatenate(ext_parts),
-        np.concatenate([[0], np.cumsum([x.size for x in ext_parts])]).astype(np.int64),
-        np.array(ext_idx, np.int64),
-        np.stack(prm),
-        acc,
-    )
-    for k, r in enumerate(rows):
-        mv = moves[r]
-        m = from_acc(acc[k], mv.plant, measures, float(mv.command[-1]), mv.command_end_s)
-        out[r] = score(m, mv.scenario, mv.plant, measures, weights, bounds)
-    return out
-
-
-def _run_beside(run: Callable[..., None], beside: Callable[[], None] | None, *args: Any) -> None:
-    """``run(*args)`` (a compiled call, which releases the GIL) with ``beside()`` on this
-    thread: at once on a worker thread when this thread may use two or more numba
-    threads, else one after the other. Python stays on this thread; the caller guards
-    torch's thread count around the whole (the first query of numba's threads starts
-    them), and the worker calls nothing of torch's."""
-    if beside is None:
-        run(*args)
-        return
-    n = numba.get_num_threads()
-    if n < 2:
-        run(*args)
-        beside()
-        return
-    failed: list[BaseException] = []
-
-    def work() -> None:
-        numba.set_num_threads(n - 1)  # numba's thread count is per thread
-        try:
-            run(*args)
-        except BaseException as e:  # re-raised on this thread below
-            failed.append(e)
-
-    worker = threading.Thread(target=work, name="vfgym-batch")
-    worker.start()
-    try:
-        beside()
-    finally:
-        _join(worker)
-    if failed:
-        raise failed[0]
-
-
-def _join(worker: threading.Thread) -> None:
-    """Wait for the thread even through Ctrl-C, then raise the interrupt: a compiled call
-    cannot be stopped, and the caller may run the next one (or read its arrays) at once."""
-    interrupted: KeyboardInterrupt | None = None
-    while worker.is_alive():
-        try:
-            worker.join()
-        except KeyboardInterrupt as e:
-            interrupted = e
-    if interrupted is not None:
-        raise interrupted
-
-
 def evaluate(
     settings: Any,
     scenarios: str | Scenario | Sequence[str | Scenario] = "paper-step",
     *,
-    axis: Axis = PAPER_AXIS,
-    plant: Plant | None = None,
-    measures: Measures | None = None,
+    axis: Axis | str | PathLike[str] = PAPER_AXIS,
     weights: CostWeights = DEFAULT_WEIGHTS,
     bounds: Bounds = DEFAULT_BOUNDS,
     keep_traces: bool = False,
@@ -413,10 +195,13 @@ def evaluate(
     plants: Sequence[PlantVariant] | int = (),
     plant_seed: int | None = None,
 ) -> Evaluation:
-    """Score every controller on every scenario through one batched kernel call.
+    """Score every controller on every scenario, on the axis's modelled plant and on each
+    true plant asked for, through one batched kernel call.
 
     The one scoring path, ``params → simulate → trace → metrics → cost``: the Gymnasium
-    envs' rewards, the Optuna objective and the reports all call it.
+    envs' rewards, the Optuna objective and the reports all call it. Every controller,
+    fixed settings, a tuner or a scheduler alike, runs on the same (move, plant) triples:
+    the axis's plant, as modelled, and the true plants of ``plants``.
 
     Parameters
     ----------
@@ -431,33 +216,28 @@ def evaluate(
         Names, :class:`~vfgym.Scenario` objects, or a set spec resolved on the axis
         (:meth:`vfgym.Axis.scenario_set`: ``train`` / ``test``, its move sets; ``named``;
         a move's name; a list).
-    axis : Axis
-        The problem: its plant, measures, moves and uncertainty; ``plants`` as a count
-        draws within its uncertainty. Default: the paper's axis
-        (:data:`vfgym.PAPER_AXIS`: 16 train and 32 test moves).
-    plant : Plant or None
-        On the paper's axis, another base plant (each scenario applies its load to it);
-        ``None``: the axis's.
-    measures : Measures or None
-        On the paper's axis, other windows and bands; ``None``: the axis's.
+    axis : Axis, str or os.PathLike
+        The problem: its plant, measures, moves and uncertainty (an axis file's path is
+        loaded). Default: the paper's axis (:data:`vfgym.PAPER_AXIS`: 16 train and 32 test
+        moves). Another machine is another axis: ``dataclasses.replace(vfgym.PAPER_AXIS,
+        plant=...)`` runs the paper's moves on it.
     weights : CostWeights
         Weights of the cost.
     bounds : Bounds
         Bounds of the constraints.
     keep_traces : bool
-        Also return per-tick traces (simulated one by one; the measures are the batch's,
-        and equal the traces' own).
+        Also return per-tick traces on the modelled plant (simulated one by one; the
+        measures are the batch's, and equal the traces' own).
     decimation : int
         Keep every ``decimation``-th tick in the traces.
     while_running : callable or None
         Work of the caller's to do while the compiled call runs (a sweep writes the
         trials being simulated): as :func:`score_pairs` runs it.
     plants : sequence of PlantVariant, or int
-        True plants within an axis's uncertainty
-        (:func:`vfgym.axis.draw_plants`): every pair is also scored on each,
-        in the same batched call, into :attr:`Evaluation.across`. A count draws that many
-        within the axis's uncertainty from ``plant_seed`` (an exactly known axis: the ±5 %
-        inertia plants). Empty: the modelled plant only.
+        True plants within the axis's uncertainty (:func:`vfgym.axis.draw_plants`): every
+        triple is also scored on each, into :attr:`Evaluation.across`. A count draws that
+        many within the axis's uncertainty from ``plant_seed`` (an exactly known axis: the
+        ±5 % inertia plants). Empty: the modelled plant only.
     plant_seed : int or None
         The seed ``plants`` were (or are) drawn from, recorded with them (default for a
         count: :data:`vfgym.axis.VERDICT_PLANT_SEED`).
@@ -465,79 +245,76 @@ def evaluate(
     Returns
     -------
     Evaluation
-        Measures, constraints, objectives and cost of every (controller, scenario) pair.
+        Measures, constraints, objectives and cost of every (controller, scenario) pair,
+        and of every triple on the true plants.
 
     Raises
     ------
     ValueError
-        If a controller or a scenario is not known or not allowed.
+        If a controller, a scenario or the axis is not known or not allowed.
     """
     ctrls = _check_controllers(settings)
-    plant, measures = plant_on(axis, plant, measures)
+    axis = as_axis(axis)
     spec: Any = scenarios if isinstance(scenarios, (str, Scenario)) else list(scenarios)
     scens = axis.scenario_set(spec)
-    variants: tuple[PlantVariant, ...]
-    if isinstance(plants, int):
-        if plant_seed is None:
-            plant_seed = VERDICT_PLANT_SEED
-        unc = axis.uncertainty
-        variants = draw_plants(unc, plant.motor, plants, plant_seed)
-        plant_seed = None if unc.exact else plant_seed
-    else:
-        variants = tuple(plants)
-    moves = [Move.of(sc, plant) for sc in scens]
-    nc, ns = len(ctrls), len(scens)
-    true_moves = [Move.of(sc, plant, v) for v in variants for sc in scens]
-    all_moves = moves + true_moves
-    on = [NOMINAL] * ns + [v for v in variants for _ in scens]
-    # a tuner is asked once a move; a scheduler runs each move itself (None: no settings)
+    variants, plant_seed = _true_plants(axis, plants, plant_seed)
+    on = (NOMINAL, *variants)
+    nc, npl, ns = len(ctrls), len(on), len(scens)
+    moves = [[Move.of(sc, axis.plant, v) for sc in scens] for v in on]
+    # a tuner is asked once a move; a scheduler runs each (move, plant) itself
     chosen = [[None if isinstance(c, Scheduler) else _choose(c, sc) for sc in scens] for c in ctrls]
-    batched = [ci for ci, c in enumerate(ctrls) if not isinstance(c, Scheduler)]
-    flat = score_pairs(
-        [chosen[ci][k % ns] for ci in batched for k in range(len(all_moves))],
-        [mv for _ in batched for mv in all_moves],
-        measures=measures,
-        weights=weights,
-        bounds=bounds,
-        while_running=while_running,
-    )
-    per = len(all_moves)
-    rows: list[list[Any]] = [[] for _ in ctrls]
-    for j, ci in enumerate(batched):
-        rows[ci] = flat[j * per : (j + 1) * per]
+    triples = [(c, p, s) for c in range(nc) for p in range(npl) for s in range(ns)]
+    batched = [t for t in triples if not isinstance(ctrls[t[0]], Scheduler)]
+    scores: dict[tuple[int, int, int], Score | None] = dict(zip(batched, score_pairs(
+        [chosen[c][s] for c, _, s in batched], [moves[p][s] for _, p, s in batched],
+        measures=axis.measures, weights=weights, bounds=bounds, while_running=while_running,
+    ), strict=True))  # fmt: skip
     for ci, c in enumerate(ctrls):
         if isinstance(c, Scheduler):
-            rows[ci] = score_scheduled(c, all_moves, on, measures, weights, bounds)
-    results = [r for row in rows for r in row[:ns]]
-    across = None
-    if variants:
-        from vfgym.scoring._plants import across_arrays
-
-        across = across_arrays([row[ns:] for row in rows], variants, plant_seed, ns)
+            own = [t for t in triples if t[0] == ci]
+            ran = score_scheduled(c, [moves[p][s] for _, p, s in own], [on[p] for _, p, _ in own],
+                                  axis.measures, weights, bounds)  # fmt: skip
+            scores.update(zip(own, ran, strict=True))
     nan_m = dict.fromkeys(METRIC_NAMES, math.nan)
     metrics = [[dict(nan_m) for _ in range(ns)] for _ in range(nc)]
-    cost = np.full((nc, ns), np.nan)
-    cons = np.full((nc, ns, len(CONSTRAINTS)), np.nan)
+    cost = np.full((nc, npl, ns), np.nan)
+    cons = np.full((nc, npl, ns, len(CONSTRAINTS)), np.nan)
     objs = np.full((nc, ns, len(OBJECTIVES)), np.nan)
-    traces: list[list[Trace | None]] | None = (
-        [[None] * ns for _ in range(nc)] if keep_traces else None
-    )
-    for r, res in enumerate(results):
-        ci, si = divmod(r, ns)
-        if res is None:
+    for (c, p, s), res in scores.items():
+        if res is None:  # a pulse source on a moving reference
             continue
-        cost[ci, si], cons[ci, si], objs[ci, si] = res.cost, res.constraints, res.objectives
-        metrics[ci][si] = res.metrics
-        if traces is not None and chosen[ci][si] is not None:  # (a scheduler's: none)
-            run = _as_run(chosen[ci][si], moves[si])
-            assert run is not None  # (it was scored)
-            s, ext = run
-            traces[ci][si] = simulate(
-                moves[si].command,
-                s,
-                moves[si].plant,
-                pulses=ext,
-                measures=measures,
+        cost[c, p, s], cons[c, p, s] = res.cost, res.constraints
+        if p == 0:
+            objs[c, s], metrics[c][s] = res.objectives, res.metrics
+    across = AcrossPlants(variants, plant_seed, cost[:, 1:], cons[:, 1:]) if variants else None
+    traces = _traces(chosen, moves[0], axis, decimation) if keep_traces else None
+    return Evaluation(ctrls, scens, metrics, cost[:, 0], cons[:, 0], objs, traces, across, chosen)
+
+
+def _true_plants(
+    axis: Axis, plants: Sequence[PlantVariant] | int, seed: int | None
+) -> tuple[tuple[PlantVariant, ...], int | None]:
+    """The true plants of ``plants`` (a count drawn within the axis's uncertainty) and the
+    seed to record with them (``None`` for a fixed set such as the ±5 % line)."""
+    if not isinstance(plants, int):
+        return tuple(plants), seed
+    seed = VERDICT_PLANT_SEED if seed is None else seed
+    drawn = draw_plants(axis.uncertainty, axis.plant.motor, plants, seed)
+    return drawn, None if axis.uncertainty.exact else seed
+
+
+def _traces(
+    chosen: list[list[Any]], moves: list[Move], axis: Axis, decimation: int
+) -> list[list[Trace | None]]:
+    """Per-tick traces of each controller's run on each move, as modelled (none for a
+    scheduler, or a pulse source that cannot run the move)."""
+    out: list[list[Trace | None]] = []
+    for row in chosen:
+        out.append([])
+        for c, mv in zip(row, moves, strict=True):
+            run = None if c is None else as_run(c, mv)
+            out[-1].append(None if run is None else simulate(
+                mv.command, run[0], mv.plant, pulses=run[1], measures=axis.measures,
                 decimation=decimation,
-            )
-    return Evaluation(ctrls, scens, metrics, cost, cons, objs, traces, across, chosen)
+            ))  # fmt: skip
+    return out

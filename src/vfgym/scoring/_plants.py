@@ -1,6 +1,6 @@
-"""Results across true plants: the same (controller, move) pairs on plants drawn within an
-axis's uncertainty (:mod:`vfgym.axis`), as :func:`vfgym.evaluate` returns them
-with ``plants=``."""
+"""Results across true plants (the same (controller, move) pairs on plants drawn within an
+axis's uncertainty, as :func:`vfgym.evaluate` returns them with ``plants=``) and the robust
+rule a tuner ranks by: feasible on the modelled plant and on every true plant."""
 
 from __future__ import annotations
 
@@ -11,9 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from vfgym.axis import PlantVariant
-from vfgym.moves.baselines import Baseline, Controller, FixedFrequency, SCurveSource
-from vfgym.moves.scenarios import Scenario
-from vfgym.params import DEFAULT_MEASURES, PAPER_PLANT, Measures, Plant, Settings
+from vfgym.moves.baselines import Controller
+from vfgym.params import DEFAULT_MEASURES, Measures
+from vfgym.scoring._batch import Move, on_plant, score_pairs
 from vfgym.scoring._cost import (
     CONSTRAINTS,
     DEFAULT_BOUNDS,
@@ -22,7 +22,6 @@ from vfgym.scoring._cost import (
     CostWeights,
     Score,
 )
-from vfgym.scoring._evaluate import Move, on_plant, score_pairs
 
 
 @dataclass(frozen=True)
@@ -107,77 +106,29 @@ class AcrossPlants:
         )
 
 
-def score_across(
-    controllers: Sequence[Sequence[Controller | None]],
-    scenarios: Sequence[Scenario],
-    plants: Sequence[PlantVariant],
-    *,
-    plant: Plant = PAPER_PLANT,
-    measures: Measures = DEFAULT_MEASURES,
-    weights: CostWeights = DEFAULT_WEIGHTS,
-    bounds: Bounds = DEFAULT_BOUNDS,
-    seed: int | None = None,
-) -> AcrossPlants:
-    """Per-move controllers scored on true plants, in one batched call.
-
-    What a verdict judges every tuner with (fixed settings, a baseline, per-move settings
-    a model chose): the controller each ran on each move, on each true plant.
+def robust_constraints(nominal: np.ndarray, on_plants: np.ndarray, axis: int = 0) -> np.ndarray:
+    """The robust rule, the one place it is written: a run is feasible only if it is
+    feasible on the modelled plant and on every true plant, so its constraints are the worst
+    of each over them. What a robust tuner ranks by (:func:`score_robust`, a sweep's
+    aggregate through :attr:`vfgym.Evaluation.robust_constraints`); its cost stays the
+    modelled plant's.
 
     Parameters
     ----------
-    controllers : sequence of sequence
-        ``controllers[c][s]``: controller ``c``'s choice on move ``s`` (settings, a pulse
-        source, a baseline or its name; ``None``, or anything else, e.g. a scheduler's
-        own run: not scored, NaN).
-    scenarios : sequence of Scenario
-        The moves.
-    plants : sequence of PlantVariant
-        The true plants, relative to the modelled one.
-    plant, measures, weights, bounds : Plant, Measures, CostWeights, Bounds
-        The axis's modelled plant, measures and scoring.
-    seed : int or None
-        The seed ``plants`` were drawn from, recorded with them.
+    nominal : numpy.ndarray
+        The constraints on the modelled plant (last axis: :data:`CONSTRAINTS`).
+    on_plants : numpy.ndarray
+        The same on the true plants, with one more axis for the plants at ``axis``; NaN
+        where a plant was not run (ignored, as a run that cannot happen breaks nothing).
+    axis : int
+        The plants' axis of ``on_plants``.
 
     Returns
     -------
-    AcrossPlants
-        Cost and constraints of every (controller, plant, move).
+    numpy.ndarray
+        Shaped as ``nominal``.
     """
-    kinds = (Settings, FixedFrequency, SCurveSource, Baseline)
-    variants, scens = tuple(plants), list(scenarios)
-    moves = [Move.of(sc, plant, v) for v in variants for sc in scens]
-    ctrls: list[Controller] = []
-    on: list[Move] = []
-    at: list[tuple[int, int]] = []
-    for ci, row in enumerate(controllers):
-        for k, mv in enumerate(moves):
-            c = row[k % len(scens)]
-            c = Baseline(c) if isinstance(c, str) else c
-            if isinstance(c, kinds):
-                ctrls.append(c)
-                on.append(mv)
-                at.append((ci, k))
-    scored = score_pairs(ctrls, on, measures=measures, weights=weights, bounds=bounds)
-    rows: list[list[Score | None]] = [[None] * len(moves) for _ in controllers]
-    for (ci, k), res in zip(at, scored, strict=True):
-        rows[ci][k] = res
-    return across_arrays(rows, variants, seed, len(scens))
-
-
-def across_arrays(
-    rows: list[list[Score | None]], plants: tuple[PlantVariant, ...], seed: int | None, ns: int
-) -> AcrossPlants:
-    """Each controller's scores on the true plants (``rows[c]`` plant-major: plant ``p``,
-    move ``s`` at ``p * ns + s``), as arrays."""
-    nc, npl = len(rows), len(plants)
-    cost = np.full((nc, npl, ns), np.nan)
-    cons = np.full((nc, npl, ns, len(CONSTRAINTS)), np.nan)
-    for ci, row in enumerate(rows):
-        for k, res in enumerate(row):
-            if res is not None:
-                pi, si = divmod(k, ns)
-                cost[ci, pi, si], cons[ci, pi, si] = res.cost, res.constraints
-    return AcrossPlants(plants, seed, cost, cons)
+    return np.fmax(nominal, np.fmax.reduce(on_plants, axis=axis))
 
 
 def worst_on(
@@ -215,14 +166,9 @@ def worst_on(
         weights=weights,
         bounds=bounds,
     )
-    n, out = len(variants), []
-    for k in range(len(moves)):
-        worst = np.full(len(CONSTRAINTS), np.nan)
-        for r in scored[k * n : (k + 1) * n]:
-            if r is not None:
-                worst = np.fmax(worst, r.constraints)
-        out.append(worst)
-    return out
+    n, nan = len(variants), np.full(len(CONSTRAINTS), np.nan)
+    each = np.array([nan if r is None else r.constraints for r in scored]).reshape(-1, n, len(nan))
+    return list(np.fmax.reduce(each, axis=1)) if n else [nan.copy() for _ in moves]
 
 
 def score_robust(
@@ -272,7 +218,7 @@ def score_robust(
     for i, w in zip(todo, worst, strict=True):
         r = out[i]
         assert r is not None  # (todo: scored pairs)
-        out[i] = r._replace(constraints=np.fmax(r.constraints, w))
+        out[i] = r._replace(constraints=robust_constraints(r.constraints, w[np.newaxis]))
     return out
 
 
