@@ -25,6 +25,7 @@ from vfgym.permove import PRETRAINED
 
 HAS_SB3 = importlib.util.find_spec("stable_baselines3") is not None
 REPO = Path(__file__).resolve().parents[2]
+LU = REPO / "experiments" / "axes" / "loads-uncertain.yaml"
 GOOD = {"value_rad": 0.7, "error_limit_rad": 0.7, "k": 350.0, "ts_over_tf": 0.25}
 
 
@@ -160,6 +161,14 @@ CASES = [
     (["evaluate"], "nothing to evaluate"),
     (["evaluate", "--adaptive", "missing.json"], "--adaptive missing.json: no such file"),
     (["evaluate", "--adaptive", str(PRETRAINED)], "states no uncertainty"),
+    (
+        ["evaluate", "--adaptive", "good.yaml", "--axis", str(LU)],
+        "--adaptive good.yaml: not a vfgym settings model",
+    ),  # a settings file, not a model
+    (
+        ["evaluate", "--settings", "good.yaml", "--plants", "1000000"],
+        "--plants='1000000' is out of range: allowed whole numbers in [1, 1000]",
+    ),
     # plot
     (["plot", "scurve", "--short-rad", "-1"], "--short-rad='-1' is out of range"),
     (["plot", "scurve", "--short-rad", "nan"], "--short-rad='nan' is out of range"),
@@ -363,6 +372,26 @@ def test_a_bug_keeps_its_traceback_and_asks_to_report_it(ws, capsys, monkeypatch
 
 def _sweep_quietly(*args):
     return main([*SWEEP, "--no-plots", "--runs-dir", "runs", *args])
+
+
+def test_an_evaluation_name_in_use_by_another_job_is_kept_unless_forced(ws, capsys):
+    """``evaluate --name`` never replaces another job's run folder silently: the same job
+    again is fine, another is refused in one line (the folder as it was), ``--force``
+    replaces it."""
+    job = ["evaluate", "--settings", "good.yaml", "--scenarios", "short-move", "--against",
+           "paper", "--bootstrap", "10", "--name", "e"]  # fmt: skip
+    assert main(job) == 0
+    run = ws / "runs" / "evaluate" / "e"
+    assert main(job) == 0  # the same job again
+    before = {p.name: p.read_bytes() for p in run.iterdir()}
+    capsys.readouterr()
+    other = [*job[:-2], "--scenarios", "paper-step", "--name", "e"]
+    assert main(other) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--name='e' is in use" in err[0] and "--force" in err[0]
+    assert {p.name: p.read_bytes() for p in run.iterdir()} == before
+    assert main([*other, "--force"]) == 0
+    assert yaml.safe_load((run / "config.yaml").read_text())["scenario_names"] == ["paper-step"]
 
 
 def test_a_refused_sweep_leaves_its_run_folder_as_it_was(ws, capsys):

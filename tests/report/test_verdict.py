@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import yaml
 
-from vfgym import Settings, cli, evaluate
+from vfgym import PAPER_SETTINGS, Scenario, Settings, cli, evaluate
 from vfgym.axis import PAPER_AXIS, load_axis
 from vfgym.commands._common import load_settings
 from vfgym.moves.distribution import scenario_set
@@ -33,7 +33,7 @@ MOVES = scenario_set("test", 12, 0) + scenario_set("paper-sine")  # a pulse sour
 
 @pytest.fixture(scope="module")
 def held_out():
-    return held_out_verdict(TUNED, MOVES)
+    return held_out_verdict(TUNED, MOVES, axis=PAPER_AXIS)
 
 
 def test_the_verdict_numbers_are_compare_s_on_the_same_moves(held_out):
@@ -102,7 +102,7 @@ def test_a_setting_that_loses_on_most_moves_is_told_so_plainly(held_out):
         held_out
     )
     poor = Settings(value_rad=3.0, error_limit_rad=3.0, k=900.0, ts_over_tf=0.1)
-    v = held_out_verdict(poor, MOVES[:6], baselines=("paper", "scurve"))
+    v = held_out_verdict(poor, MOVES[:6], axis=PAPER_AXIS, baselines=("paper", "scurve"))
     assert [r.label for r in v.losing_to()] == ["paper", "scurve"]
     last = format_verdict(v, axis_file="belt.yaml").splitlines()[-1]
     w = v.row("paper").versus
@@ -120,12 +120,12 @@ def test_a_setting_that_loses_on_most_moves_is_told_so_plainly(held_out):
 def test_moves_tuned_on_are_named_whatever_their_name():
     moves = scenario_set("test", 3, 0)
     renamed = [dataclasses.replace(moves[1], name="mine")]
-    v = held_out_verdict(TUNED, moves, baselines="paper", tuned_on=renamed)
+    v = held_out_verdict(TUNED, moves, axis=PAPER_AXIS, baselines="paper", tuned_on=renamed)
     assert v.seen == (moves[1].name,)
     assert "(1 of them also tuned on)" in format_verdict(v)
-    assert held_out_verdict(TUNED, moves, baselines="paper", tuned_on=moves[:1]).seen == (
-        moves[0].name,
-    )
+    assert held_out_verdict(
+        TUNED, moves, axis=PAPER_AXIS, baselines="paper", tuned_on=moves[:1]
+    ).seen == (moves[0].name,)
 
 
 def test_a_verdict_needs_a_tuned_candidate_and_a_baseline():
@@ -140,10 +140,10 @@ def test_the_axis_verdict_is_on_the_axis_test_moves():
     v = axis_verdict(TUNED, axis)
     assert v.report.scenarios == axis.scenarios("test")
     assert v.title == "the 32 test moves of axis vertical"
-    ev = evaluate(TUNED, axis.scenarios("test"), plant=axis.plant, measures=axis.measures)
+    ev = evaluate(TUNED, axis.scenarios("test"), axis=axis)
     assert v.rows[0].cost.mean == pytest.approx(float(ev.cost[0].mean()), rel=1e-12)
     # no axis: the paper's, whose test moves are the random test set
-    assert axis_verdict(TUNED).report.scenarios == scenario_set("test", 32, 0)
+    assert axis_verdict(TUNED, PAPER_AXIS).report.scenarios == scenario_set("test", 32, 0)
     assert PAPER_AXIS.scenarios("test") == scenario_set("test", 32, 0)
 
 
@@ -158,7 +158,7 @@ def test_a_sweep_ends_with_the_held_out_verdict(tmp_path, capsys):
     out = capsys.readouterr().out
     run = tmp_path / "sweep" / "s"
     axis = load_axis(path)
-    best = load_settings(str(run / "best.yaml"))
+    best = load_settings(str(run / "best.yaml"), axis)
     want = format_verdict(axis_verdict(best, axis, tuned_on=axis.scenarios("train")), path)
     assert out.rstrip().endswith(want)  # the report ends with it, as printed
     assert (run / "report.txt").read_text().rstrip().endswith(want)
@@ -167,9 +167,35 @@ def test_a_sweep_ends_with_the_held_out_verdict(tmp_path, capsys):
     )
     summary = yaml.safe_load((run / "summary.yaml").read_text())
     rows = {r["controller"]: r for r in summary["verdict"]["controllers"]}
-    ev = evaluate([best, "paper"], axis.scenarios("test"), plant=axis.plant,
-                  measures=axis.measures)  # fmt: skip
+    ev = evaluate([best, "paper"], axis.scenarios("test"), axis=axis)
     assert rows["tuned"]["feasible"] == int(ev.feasible[0].sum())
     assert rows["paper"]["wins"] == int((ev.cost[0] < ev.cost[1]).sum())
     assert summary["verdict"]["seen_in_tuning"] == []
     assert not math.isnan(rows["tuned"]["cost"]["mean"])
+
+
+def test_a_verdict_says_why_it_will_surprise_moves_outside_the_tuning_and_limits_broken():
+    """Tuned on short steps only, a setting whose error limit winds up breaks the limits on
+    long held-out steps: the verdict names the test moves that lie outside the moves tuned
+    on (what lies outside, against the range tuned on), and the moves it breaks a limit on
+    with the limit, the worst first; a move inside the range is not named."""
+    short = [Scenario(name=f"short-{i}", profile="step", distance_rad=d, duration_s=0.15)
+             for i, d in enumerate((0.5, 1.0, 2.0, 3.0))]  # fmt: skip
+    test = [Scenario(name=f"long-{i}", profile="step", distance_rad=d, duration_s=0.4)
+            for i, d in enumerate((1.5, 40.0, 60.0))]  # fmt: skip
+    winds_up = Settings(value_rad=0.5, error_limit_rad=2.0, k=60.0)
+    v = held_out_verdict(winds_up, test, axis=PAPER_AXIS, baselines="paper", tuned_on=short,
+                         across=False)  # fmt: skip
+    assert [name for name, _ in v.outside] == ["long-1", "long-2"]
+    assert dict(v.outside)["long-1"] == "distance 40 rad (tuned on 0.5 to 3)"
+    assert [name for name, _ in v.worst] == ["long-2", "long-1", "long-0"]  # worst first
+    assert "acceleration" in dict(v.worst)["long-1"] and "overshoot" in dict(v.worst)["long-1"]
+    text = format_verdict(v)
+    assert "warning: tuned breaks a limit on 3/3 test moves, worst long-2: acceleration" in text
+    assert "warning: 2/3 test moves lie outside the moves tuned on" in text
+    assert v.to_dict()["outside_tuning"] == dict(v.outside)
+    # the paper's settings hold every limit there, and nothing tuned on: nothing to say
+    quiet = held_out_verdict(PAPER_SETTINGS, test, axis=PAPER_AXIS, baselines="scurve",
+                             across=False)  # fmt: skip
+    assert quiet.outside == () and quiet.worst == ()
+    assert "warning" not in format_verdict(quiet)

@@ -10,9 +10,16 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from vfgym.axis import Axis
 
 AGENTS_HINT = 'pip install -c constraints.txt -e ".[agents]"'
+MAX_PLANTS = 1000
+"""The most true plants ``--plants`` draws: every controller runs every move on each, so
+1000 plants on the 32 test moves are already 32 000 runs a controller (minutes each on two
+cores for the baselines, hours for a scheduler)."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -88,7 +95,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=SEED, default=0, help="bootstrap seed (default: 0)")
     p.add_argument(
         "--plants",
-        type=positive_int,
+        type=whole(1, MAX_PLANTS),
         metavar="N",
         help="true plants drawn within the axis's uncertainty on which every controller is "
         f"also judged (default: {VERDICT_PLANTS}; an axis without uncertainty: the ±5 %% "
@@ -101,8 +108,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="S",
         help=f"seed of the drawn plants (default: {VERDICT_PLANT_SEED})",
     )
-    p.add_argument("--name", help="run folder name (default: a timestamp)")
+    p.add_argument(
+        "--name",
+        help="run folder name (default: a timestamp); an earlier evaluation of another job "
+        "under the same name is refused unless --force",
+    )
     p.add_argument("--runs-dir", default="runs", help="root of run folders (default: runs)")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an earlier evaluation of another job under the same --name",
+    )
     add_axis_option(p)
     p.set_defaults(func=run)
 
@@ -116,12 +132,12 @@ def _labels(paths: list[str], taken: set[str]) -> list[str]:
     return out
 
 
-def load_policy(model_path: str, axis: str | None = None, command: str = "evaluate") -> Any:
+def load_policy(model_path: str, axis: Axis, command: str = "evaluate") -> Any:
     """A tuner that picks settings per scenario: a settings model (``.json``,
     :func:`vfgym.permove.load_tuner`, no torch needed) or a trained VFTune-v0 agent
     (``.zip``, :func:`vfgym.agents.load_tuner`); or a VFServo-v0 agent's scheduled move
-    (:func:`vfgym.agents.scheduler_policy`); on an axis file if given, its warnings one
-    line each on stderr. Without the agents extra an agent is a one-line ``ValueError``."""
+    (:func:`vfgym.agents.scheduler_policy`); used on ``axis``, its warnings one line each
+    on stderr. Without the agents extra an agent is a one-line ``ValueError``."""
     from vfgym.commands._common import warn_line
 
     p = Path(model_path)
@@ -147,7 +163,7 @@ def load_policy(model_path: str, axis: str | None = None, command: str = "evalua
     return load_tuner(str(p), axis, warn=warn_line(command))
 
 
-def adaptive_scheduler(model_path: str, axis: Any) -> Any:
+def adaptive_scheduler(model_path: str, axis: Axis) -> Any:
     """``--adaptive``: the axis's settings model run as a
     :class:`vfgym.permove.EstimatingScheduler`; a one-line ``ValueError`` for a missing
     file or an axis without uncertainty."""
@@ -155,39 +171,76 @@ def adaptive_scheduler(model_path: str, axis: Any) -> Any:
 
     if not Path(model_path).is_file():
         raise ValueError(f"--adaptive {model_path}: no such file")
+    try:
+        model = load_settings_model(model_path)
+    except ValueError as exc:  # its message names --model
+        raise ValueError(
+            f"--adaptive {model_path}: {str(exc).split(': ', 1)[-1]}; --adaptive takes the "
+            "axis's settings model (vfgym fit's runs/fit/NAME/settings_model.json)"
+        ) from None
     if axis.uncertainty.exact:
         raise ValueError(
             f"--adaptive {model_path} is not allowed on axis {axis.name}: it states no "
             "uncertainty, so there is no plant to tell (give --axis FILE with an "
             "uncertainty: block)"
         )
-    return EstimatingScheduler(axis, load_settings_model(model_path))
+    return EstimatingScheduler(axis, model)
 
 
 def run(args: argparse.Namespace) -> int:
-    from dataclasses import asdict
-
-    from vfgym._validate import check_name, check_output_path
     from vfgym.axis import AXIS_FILE, VERDICT_PLANTS, write_axis
-    from vfgym.commands._common import axis_from_args, load_settings
+    from vfgym.commands._common import axis_from_args
     from vfgym.io.runs import new_run_dir, record_command, write_yaml
-    from vfgym.moves.baselines import BASELINE_NAMES
-    from vfgym.report import (
-        Candidate,
-        baseline_candidates,
-        compare,
-        format_across,
-        format_table,
-        write_report,
+    from vfgym.report import compare, format_across, format_table, write_report
+
+    _check_args(args)
+    on = axis_from_args(args)  # the problem: the paper's axis without --axis
+    if on.uncertainty.exact and args.plants is not None:
+        raise ValueError(
+            f"--plants={args.plants} is ignored: axis {on.name} states no uncertainty (give "
+            "an axis file with an uncertainty: block, or leave --plants out for the ±5 % "
+            "inertia sensitivity line)"
+        )
+    base = _baselines(args.against)
+    cands = _candidates(args, on, {b.label for b in base})
+    plants = VERDICT_PLANTS if args.plants is None else args.plants
+    config = _config(args, on, cands, base, plants)
+    _check_name_free(args, config)  # before any work: a name in use is refused at once
+    report = compare(
+        cands,
+        base,
+        args.scenarios,
+        axis=on,
+        count=32 if args.count is None and args.first_seed is not None else args.count,
+        first_seed=args.first_seed,
+        resamples=args.bootstrap,
+        seed=args.seed,
+        plants=plants,
+        plant_seed=args.plant_seed,
     )
-    from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS
-    from vfgym.space import settings_to_dict
+    report.scenario_spec = args.scenarios
+    run_dir = new_run_dir(args.runs_dir, "evaluate", args.name)
+    write_yaml(
+        run_dir / "config.yaml", config | {"scenario_names": [s.name for s in report.scenarios]}
+    )
+    record_command(run_dir)
+    write_axis(on, run_dir / AXIS_FILE)
+    paths = write_report(report, run_dir)
+    print(format_table(report), end="")
+    assert report.across is not None  # (compare was given the plants)
+    print("\n" + "\n".join(format_across([c.label for c in report.columns], report.across)))
+    print(f"\nwrote {run_dir}/ ({', '.join(paths)}, config.yaml, {AXIS_FILE}, command.txt)")
+    return 0
+
+
+def _check_args(args: argparse.Namespace) -> None:
+    """What the options must hold before anything is loaded or run."""
+    from vfgym._validate import check_name, check_output_path
 
     if not args.settings and not args.model and not args.adaptive:
         raise ValueError(
             "nothing to evaluate: give --settings FILE.yaml, --model MODEL or --adaptive MODEL"
         )
-    on = axis_from_args(args)  # the problem: the paper's axis without --axis
     for opt, v in (("--count", args.count), ("--first-seed", args.first_seed)):
         if args.axis and v is not None:
             raise ValueError(
@@ -203,85 +256,86 @@ def run(args: argparse.Namespace) -> int:
         shown=args.runs_dir,
         root=args.runs_dir,
     )
-    against = args.against.strip()
+
+
+def _baselines(against: str) -> list[Any]:
+    """The baselines of ``--against`` (``all``, ``none`` or a comma list)."""
+    from vfgym.moves.baselines import BASELINE_NAMES
+    from vfgym.report import baseline_candidates
+
+    against = against.strip()
     if against in ("all", ""):
         against = ",".join(BASELINE_NAMES)
-    base = [] if against == "none" else baseline_candidates(against)
-    settings = [load_settings(f, on) for f in args.settings]
-    taken = {b.label for b in base}
-    s_labels = _labels(args.settings, taken)
-    m_labels = [
-        f"{'agent' if m.endswith('.zip') else 'model'}:{lab}"
-        for m, lab in zip(args.model, _labels(args.model, taken), strict=True)
-    ]
-    policies = [load_policy(m, args.axis) for m in args.model]
-    if on.uncertainty.exact and args.plants is not None:
-        raise ValueError(
-            f"--plants={args.plants} is ignored: axis {on.name} states no uncertainty (give "
-            "an axis file with an uncertainty: block, or leave --plants out for the ±5 % "
-            "inertia sensitivity line)"
-        )
+    return [] if against == "none" else baseline_candidates(against)
+
+
+def _candidates(args: argparse.Namespace, axis: Axis, taken: set[str]) -> list[Any]:
+    """The controllers evaluated: settings files, models and adaptive schedulers, each
+    loaded for ``axis`` and labelled apart from the baselines' ``taken`` labels."""
+    from vfgym.commands._common import load_settings
+    from vfgym.report import Candidate
+
     cands = [
-        Candidate(lab, s, source=f)
-        for lab, s, f in zip(s_labels, settings, args.settings, strict=True)
+        Candidate(lab, load_settings(f, axis), source=f)
+        for lab, f in zip(_labels(args.settings, taken), args.settings, strict=True)
     ]
     cands += [
-        Candidate(lab, policy=pol, source=m)
-        for lab, pol, m in zip(m_labels, policies, args.model, strict=True)
-    ]
-    a_labels = [f"adaptive:{lab}" for lab in _labels(args.adaptive, taken)]
+        Candidate(f"{'agent' if m.endswith('.zip') else 'model'}:{lab}",
+                  policy=load_policy(m, axis), source=m)
+        for lab, m in zip(_labels(args.model, taken), args.model, strict=True)
+    ]  # fmt: skip
     cands += [
-        Candidate(lab, policy=adaptive_scheduler(m, on), source=m)
-        for lab, m in zip(a_labels, args.adaptive, strict=True)
+        Candidate(f"adaptive:{lab}", policy=adaptive_scheduler(m, axis), source=m)
+        for lab, m in zip(_labels(args.adaptive, taken), args.adaptive, strict=True)
     ]
-    plants = VERDICT_PLANTS if args.plants is None else args.plants
-    report = compare(
-        cands,
-        base,
-        args.scenarios,
-        axis=on,
-        count=32 if args.count is None and args.first_seed is not None else args.count,
-        first_seed=args.first_seed,
-        resamples=args.bootstrap,
-        seed=args.seed,
-        plants=plants,
-        plant_seed=args.plant_seed,
-    )
-    scenarios = report.scenarios
-    report.scenario_spec = args.scenarios
-    run_dir = new_run_dir(args.runs_dir, "evaluate", args.name)
-    write_yaml(
-        run_dir / "config.yaml",
-        {
-            "kind": "evaluate",
-            "settings": [
-                {"file": f, "label": lab, "settings": settings_to_dict(s)}
-                for f, lab, s in zip(args.settings, s_labels, settings, strict=True)
-            ],
-            "models": [
-                {"file": m, "label": lab}
-                for m, lab in zip(
-                    [*args.model, *args.adaptive], [*m_labels, *a_labels], strict=True
-                )
-            ],
-            "against": [b.label for b in base],
-            "scenarios": args.scenarios,
-            "count": args.count,
-            "first_seed": args.first_seed,
-            "scenario_names": [s.name for s in scenarios],
-            "bootstrap": {"resamples": args.bootstrap, "seed": args.seed, "level": 0.95},
-            "plants": {"count": plants, "seed": args.plant_seed},
-            "plant": f"the axis's ({AXIS_FILE}; each scenario adds its load)",
-            "axis": {"file": args.axis, "name": on.name},
-            "weights": asdict(DEFAULT_WEIGHTS),
-            "bounds": asdict(DEFAULT_BOUNDS),
-        },
-    )
-    record_command(run_dir)
-    write_axis(on, run_dir / AXIS_FILE)
-    paths = write_report(report, run_dir)
-    print(format_table(report), end="")
-    assert report.across is not None  # (compare was given the plants)
-    print("\n" + "\n".join(format_across([c.label for c in report.columns], report.across)))
-    print(f"\nwrote {run_dir}/ ({', '.join(paths)}, config.yaml, {AXIS_FILE}, command.txt)")
-    return 0
+    return cands
+
+
+def _config(
+    args: argparse.Namespace, axis: Axis, cands: list[Any], base: list[Any], plants: int
+) -> dict[str, Any]:
+    """What the evaluation is (``config.yaml``, less the scenario names it resolved to):
+    an earlier run folder of the same name holds the same job or another."""
+    from dataclasses import asdict
+
+    from vfgym.axis import AXIS_FILE
+    from vfgym.scoring import DEFAULT_BOUNDS, DEFAULT_WEIGHTS
+    from vfgym.space import settings_to_dict
+
+    fixed = [c for c in cands if c.controller is not None]
+    return {
+        "kind": "evaluate",
+        "settings": [
+            {"file": c.source, "label": c.label, "settings": settings_to_dict(c.controller)}
+            for c in fixed
+        ],
+        "models": [{"file": c.source, "label": c.label} for c in cands if c.controller is None],
+        "against": [b.label for b in base],
+        "scenarios": args.scenarios,
+        "count": args.count,
+        "first_seed": args.first_seed,
+        "bootstrap": {"resamples": args.bootstrap, "seed": args.seed, "level": 0.95},
+        "plants": {"count": plants, "seed": args.plant_seed},
+        "plant": f"the axis's ({AXIS_FILE}; each scenario adds its load)",
+        "axis": {"file": args.axis, "name": axis.name},
+        "weights": asdict(DEFAULT_WEIGHTS),
+        "bounds": asdict(DEFAULT_BOUNDS),
+    }
+
+
+def _check_name_free(args: argparse.Namespace, config: dict[str, Any]) -> None:
+    """``--name``'s run folder may be made or reused: one that holds an evaluation of
+    another job (its ``config.yaml`` differs) is refused unless ``--force``."""
+    from vfgym.io.runs import read_yaml
+
+    if args.name is not None and not args.force:
+        old = Path(args.runs_dir) / "evaluate" / args.name / "config.yaml"
+        data = read_yaml(old) if old.is_file() else None
+        if isinstance(data, dict):
+            data.pop("scenario_names", None)
+        if old.is_file() and data != config:
+            raise ValueError(
+                f"--name={args.name!r} is in use: {old.parent} holds an evaluation of "
+                "another job (other controllers, moves, plants or axis); give another "
+                "--name, or --force to replace it"
+            )

@@ -8,6 +8,8 @@ tuners (the settings models of :mod:`vfgym.permove`) describe a move with the sa
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -111,10 +113,100 @@ def scenario_features(sc: Scenario, base: Plant, plant: Plant | None = None) -> 
     return np.array([clip_feature(x) for x in out], dtype=np.float64)
 
 
+def peak_speed_rad_s(sc: Scenario, plant: Plant) -> float:
+    """The highest speed the move's command asks for (rad/s): its cruise speed, or for a
+    move too short to reach it, the peak of a triangle at the profile's acceleration
+    (``sqrt(|move| · acceleration)``); a sine's peak ``2π·f·amplitude``."""
+    if sc.tracking:
+        return 2.0 * math.pi * sc.freq_hz * abs(sc.distance_rad)
+    reach = math.sqrt(abs(main_move(sc, plant)) * sc.accel(plant))
+    return min(sc.speed(plant), reach)
+
+
+SPAN_QUANTITIES = ("distance_rad", "speed_rad_s", "inertia_ratio", "load_torque_nm")
+"""What :class:`MoveSpan` spans: the move's size, the speed it asks for, and its load."""
+
+
+@dataclass(frozen=True)
+class MoveSpan:
+    """The range of what a set of moves asks of a plant: what a setting tuned on them has
+    been tried on. A move outside it (a longer or faster move, a heavier load) is one the
+    tuning never saw: its result there is an extrapolation.
+
+    Parameters
+    ----------
+    lows, highs : tuple of float
+        Per quantity of :data:`SPAN_QUANTITIES`: the least and the most over the moves.
+    """
+
+    lows: tuple[float, ...]
+    highs: tuple[float, ...]
+
+    @staticmethod
+    def quantities(sc: Scenario, base: Plant) -> tuple[float, ...]:
+        """A move's quantities of :data:`SPAN_QUANTITIES` on the axis's plant ``base``."""
+        plant = sc.plant(base)
+        m = plant.motor
+        return (abs(main_move(sc, plant)), peak_speed_rad_s(sc, plant), m.inertia_ratio,
+                m.load_torque_nm)  # fmt: skip
+
+    @classmethod
+    def of(cls, scenarios: Sequence[Scenario], base: Plant) -> MoveSpan:
+        """The span of ``scenarios`` on the axis's plant ``base``.
+
+        Parameters
+        ----------
+        scenarios : sequence of Scenario
+            The moves (at least one).
+        base : Plant
+            The axis's plant; each move adds its load.
+
+        Returns
+        -------
+        MoveSpan
+            Their lows and highs.
+        """
+        q = np.array([cls.quantities(sc, base) for sc in scenarios], dtype=np.float64)
+        return cls(tuple(q.min(axis=0).tolist()), tuple(q.max(axis=0).tolist()))
+
+    def outside(self, sc: Scenario, base: Plant, margin: float = 0.05) -> list[str]:
+        """What of a move lies outside the span, one phrase per quantity (empty: inside).
+
+        Parameters
+        ----------
+        sc : Scenario
+            The move.
+        base : Plant
+            The axis's plant.
+        margin : float
+            Allowed beyond each end, as a share of the end's size (a 6.28 rad span takes
+            a 6.5 rad move as inside at 5 %).
+
+        Returns
+        -------
+        list of str
+            E.g. ``distance 45.2 rad (tuned on 0.2 to 6.28)``.
+        """
+        units = {"distance_rad": "rad", "speed_rad_s": "rad/s", "inertia_ratio": "rotor "
+                 "inertias of load", "load_torque_nm": "N·m load torque"}  # fmt: skip
+        out = []
+        q = self.quantities(sc, base)
+        for name, x, lo, hi in zip(SPAN_QUANTITIES, q, self.lows, self.highs, strict=True):
+            if lo - margin * abs(lo) - 1e-12 <= x <= hi + margin * abs(hi) + 1e-12:
+                continue
+            what = name.rsplit("_", 1)[0] if name.endswith(("_rad", "_s")) else name
+            what = {"speed_rad": "speed", "load_torque_nm": "load"}.get(what, what)
+            out.append(f"{what} {x:.3g} {units[name]} (tuned on {lo:.3g} to {hi:.3g})")
+        return out
+
+
 __all__ = [
     "OBS_BOUND",
     "SCENARIO_FEATURES",
+    "SPAN_QUANTITIES",
+    "MoveSpan",
     "clip_feature",
     "main_move",
+    "peak_speed_rad_s",
     "scenario_features",
 ]

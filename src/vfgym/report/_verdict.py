@@ -20,17 +20,17 @@ from typing import Any
 import numpy as np
 
 from vfgym.axis import (
-    PAPER_AXIS,
     VERDICT_PLANT_SEED,
     VERDICT_PLANTS,
     Axis,
 )
+from vfgym.moves.features import MoveSpan
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
-from vfgym.report._comparison import Candidate, Report, baseline_candidates, compare
+from vfgym.report._comparison import Candidate, Column, Report, baseline_candidates, compare
 from vfgym.report._stats import Spread, WinLoss
 from vfgym.report._tables import _grid
-from vfgym.scoring import AcrossPlants
+from vfgym.scoring import CONSTRAINTS, AcrossPlants
 
 VERDICT_BASELINES = ("paper", "rule-of-thumb", "scurve")
 """What a tuned setting is judged against: the paper's settings, the rule of thumb (the
@@ -85,6 +85,13 @@ class Verdict:
         Every row's controllers on true plants: drawn within the axis's uncertainty (from
         a recorded seed), or, where it states none, at ±5 % inertia (the sensitivity
         line); in the order of :attr:`rows`.
+    outside : tuple of (str, str)
+        Test moves outside the range of the moves tuned on (distance, speed, load:
+        :class:`vfgym.moves.features.MoveSpan`), each with what lies outside; empty when
+        every test move is inside, or nothing was tuned on.
+    worst : tuple of (str, str)
+        The tuned setting's infeasible test moves, the worst first, each with the limits
+        it breaks there (e.g. ``acceleration 17.8x the limit``).
     """
 
     report: Report
@@ -93,6 +100,8 @@ class Verdict:
     seen: tuple[str, ...] = ()
     title: str = ""
     across: AcrossPlants | None = None
+    outside: tuple[tuple[str, str], ...] = ()
+    worst: tuple[tuple[str, str], ...] = ()
 
     def row(self, label: str) -> VerdictRow:
         """A controller's row by label.
@@ -165,6 +174,8 @@ class Verdict:
             "title": self.title,
             "moves": [s.name for s in self.report.scenarios],
             "seen_in_tuning": list(self.seen),
+            "outside_tuning": {name: why for name, why in self.outside},
+            "infeasible": {name: why for name, why in self.worst},
             "controllers": rows,
         }
         if self.across is not None:
@@ -233,7 +244,54 @@ def verdict(
     known = {_content(sc) for sc in tuned_on}
     seen = tuple(sc.name for sc in report.scenarios if _content(sc) in known)
     across = report.across_of([r.label for r in rows])
-    return Verdict(report, tuned, tuple(rows), seen, title, across)
+    plant = report.axis.plant
+    span = MoveSpan.of(tuned_on, plant) if tuned_on else None
+    outside = tuple(
+        (sc.name, "; ".join(o))
+        for sc in report.scenarios
+        if span is not None and (o := span.outside(sc, plant))
+    )
+    return Verdict(report, tuned, tuple(rows), seen, title, across, outside,
+                   _worst(report.column(tuned), report.scenarios))  # fmt: skip
+
+
+def _worst(col: Column, scenarios: Sequence[Scenario]) -> tuple[tuple[str, str], ...]:
+    """A column's infeasible moves, the worst break first, each with its broken limits."""
+    found = []
+    for sc, cons, m in zip(scenarios, col.constraints, col.metrics, strict=True):
+        if np.isnan(cons).all() or bool(np.all(cons <= 0.0)):
+            continue
+        phrases = [breaks_phrase(name, float(c), m) for name, c in zip(CONSTRAINTS, cons,
+                   strict=True) if c > 0.0]  # fmt: skip
+        found.append((float(np.nanmax(cons)), sc.name, ", ".join(phrases)))
+    found.sort(key=lambda t: -t[0])
+    return tuple((name, why) for _, name, why in found)
+
+
+def breaks_phrase(name: str, value: float, m: dict[str, Any]) -> str:
+    """A broken constraint in words, with the measure behind it.
+
+    Parameters
+    ----------
+    name : str
+        A constraint of :data:`vfgym.scoring.CONSTRAINTS`.
+    value : float
+        Its value (> 0: broken).
+    m : dict
+        The run's measures.
+
+    Returns
+    -------
+    str
+        E.g. ``acceleration 17.8x the limit``, ``overshoot 6410 counts``.
+    """
+    if name == "accel":
+        return f"acceleration {m['accel_ratio_pulse']:.3g}x the limit"
+    if name == "torque":
+        return f"{1e3 * m['torque_limit_time_s']:.3g} ms at the torque limit"
+    if name == "overshoot":
+        return f"overshoot {m['overshoot_counts']:.0f} counts"
+    return f"not arrived ({value:.3g} windows beyond the in-position window at the end)"
 
 
 def _content(sc: Scenario) -> Scenario:
@@ -245,7 +303,7 @@ def held_out_verdict(
     settings: Settings,
     scenarios: Sequence[Scenario],
     *,
-    axis: Axis = PAPER_AXIS,
+    axis: Axis,
     baselines: str | Sequence[str] = VERDICT_BASELINES,
     label: str = "tuned",
     tuned_on: Sequence[Scenario] = (),
@@ -264,7 +322,7 @@ def held_out_verdict(
     scenarios : sequence of Scenario
         The test moves.
     axis : Axis
-        The axis (its plant, measures and uncertainty; default: the paper's).
+        The axis (its plant, measures and uncertainty).
     baselines : str or sequence of str
         Baseline names (default :data:`VERDICT_BASELINES`).
     label : str
@@ -298,7 +356,7 @@ def held_out_verdict(
 
 def axis_verdict(
     settings: Settings,
-    axis: Axis = PAPER_AXIS,
+    axis: Axis,
     tuned_on: Sequence[Scenario] = (),
     label: str = "tuned",
 ) -> Verdict:
@@ -310,9 +368,8 @@ def axis_verdict(
     settings : Settings
         The tuned setting.
     axis : Axis
-        The axis tuned on (default: the paper's, :data:`vfgym.axis.PAPER_AXIS`,
-        whose test moves are the 32 draws ``test-0`` … ``test-31`` of the default random
-        distribution).
+        The axis tuned on (the paper's, :data:`vfgym.axis.PAPER_AXIS`, has for test moves
+        the 32 draws ``test-0`` … ``test-31`` of the default random distribution).
     tuned_on : sequence of Scenario
         The moves tuned on (to note any test move among them).
     label : str
@@ -406,10 +463,31 @@ def format_verdict(v: Verdict, axis_file: str | None = None, per_move: bool = Fa
         )
     if v.across is not None:
         lines += format_across([r.label for r in v.rows], v.across)
+    lines += _surprise_lines(v)
     losing = v.losing_to()
     if losing:
         lines.append(_losing_line(v, losing, axis_file, per_move))
     return "\n".join(lines)
+
+
+def _surprise_lines(v: Verdict, most: int = 3) -> list[str]:
+    """Where a verdict may surprise: the moves it breaks a limit on, and the test moves
+    outside what was tuned on (at most ``most`` of each named)."""
+    lines = []
+    n = len(v.report.scenarios)
+    if v.worst:
+        named = "; ".join(f"{name}: {why}" for name, why in v.worst[:most])
+        lines.append(
+            f"warning: {v.tuned} breaks a limit on {len(v.worst)}/{n} test moves, worst {named}"
+        )
+    if v.outside:
+        named = "; ".join(f"{name}: {why}" for name, why in v.outside[:most])
+        more = f" and {len(v.outside) - most} more" if len(v.outside) > most else ""
+        lines.append(
+            f"warning: {len(v.outside)}/{n} test moves lie outside the moves tuned on, so "
+            f"the tuned setting's result there is an extrapolation: {named}{more}"
+        )
+    return lines
 
 
 def format_across(labels: Sequence[str], a: AcrossPlants) -> list[str]:
