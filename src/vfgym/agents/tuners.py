@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from vfgym.axis import PAPER_AXIS, Axis, load_axis, machine_digest
+from vfgym.axis import LOADS_AXIS, Axis, load_axis, machine_digest
 from vfgym.moves.features import scenario_features
 from vfgym.permove import Tuner, default_warn, outside_ranges
 from vfgym.permove import load_tuner as load_settings_tuner
@@ -28,7 +28,7 @@ AGENT_DRAWS = 512
 
 
 def agent_ranges(
-    env_kwargs: dict[str, Any], own: Axis | None, draws: int = AGENT_DRAWS
+    env_kwargs: dict[str, Any], draws: int = AGENT_DRAWS
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The feature ranges of an agent's training moves: ``draws`` moves drawn as its
     training env drew them (its split, seed range and axis).
@@ -36,9 +36,7 @@ def agent_ranges(
     Parameters
     ----------
     env_kwargs : dict
-        The agent's env arguments (``scenario``, ``split``, ``seed_range``, ``plant``).
-    own : Axis or None
-        Its training axis (``None``: the paper's).
+        The agent's env arguments (``scenario``, ``split``, ``seed_range``, ``axis``).
     draws : int
         Moves drawn.
 
@@ -50,9 +48,9 @@ def agent_ranges(
     """
     from vfgym.envs import EnvConfig
 
-    keys = ("scenario", "split", "seed_range", "plant")
+    keys = ("scenario", "split", "seed_range", "axis")
     kw = {k: env_kwargs[k] for k in keys if k in env_kwargs}
-    src = EnvConfig(axis=own, **kw).scenario_source()
+    src = EnvConfig(**kw).scenario_source()
     lo, _ = src.seed_range
     moves = [src.fixed] if src.fixed is not None else [src.seeded(lo + i) for i in range(draws)]
     x = np.array([scenario_features(sc, src.base, sc.plant(src.base)) for sc in moves])
@@ -102,7 +100,7 @@ def _agent_tuner(path: Path, ax: Axis | None, warn: Callable[[str], None]) -> An
         raise ValueError(f"--model {path}: no such file")
     env_kwargs = (run_config(path).get("hyperparams") or {}).get("env_kwargs") or {}
     own_file = env_kwargs.get("axis")
-    own = load_axis(own_file) if own_file and Path(own_file).is_file() else PAPER_AXIS
+    own = load_axis(own_file) if own_file and Path(own_file).is_file() else LOADS_AXIS
     source = f"agent {path}"
     if ax is not None and machine_digest(own) != machine_digest(ax):
         warn(
@@ -114,7 +112,7 @@ def _agent_tuner(path: Path, ax: Axis | None, warn: Callable[[str], None]) -> An
     if agent is not None:  # a VFServo-v0 agent schedules each move itself
         return scheduler_policy(agent, axis, source)
     policy = policy_settings(path, ax)
-    ranges = agent_ranges(env_kwargs, None if own is PAPER_AXIS else own)
+    ranges = agent_ranges(env_kwargs)
     return Tuner(source, axis, own.name, policy, outside_ranges(ranges, axis), warn)
 
 
