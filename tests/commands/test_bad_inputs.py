@@ -78,6 +78,9 @@ BAD_FILES = {
     "plots.yaml": "plots: 'yes'\n",
     "workers.yaml": "workers: '2'\n",
     "str.yaml": "value_rad: '1.5'\n",
+    # a limit in the wrong unit, on an axis whose listed moves it would make too short
+    "slip.yaml": "plant: {motor: {accel_limit_rad_s2: 30}}\nmoves: {train: [{name: a, "
+    "profile: step, distance_rad: 6.0, duration_s: 0.3}]}\n",
 }
 
 # (argv, a piece of the one line that must name the problem); paths are relative to `ws`
@@ -126,6 +129,7 @@ CASES = [
     (["simulate", "--axis", "ns70.yaml"], "sample_ticks='70' must be one of the whole numbers"),
     (["simulate", "--axis", "yes.yaml"], "follows_load='yes' must be true or false"),
     (["simulate", "--axis", "steady.yaml"], "steady_window_s=0.5 is out of range"),
+    (["simulate", "--axis", "slip.yaml"], "accel_limit_rad_s2=30 is out of range: the motor's"),
     # issue 21: one strictness: a string is not a number, a bool is true or false
     ([*SWEEP, "--config", "plots.yaml"], "plots='yes' must be true or false"),
     ([*SWEEP, "--config", "workers.yaml"], "workers='2' must be one of the whole numbers"),

@@ -77,6 +77,7 @@ class Axis:
             if not isinstance(getattr(self, key), kind):
                 raise ValueError(f"{key}={getattr(self, key)!r} must be a vfgym {kind.__name__}")
         self.uncertainty.check_motor(self.plant.motor)
+        check_limit(self.plant)  # first: a units slip would read as moves too short
         listed = _listed(self)
         for key, sc in listed.items():
             check_arrives(sc, self.plant, key)
@@ -86,7 +87,6 @@ class Axis:
             if (ms := self.moves.of(split)).random is not None
         }
         check_measures(self.measures, self.plant, listed, drawn)
-        check_limit(self.plant)
 
     def design_plants(self) -> tuple[PlantVariant, ...]:
         """The true plants a tuner must stay feasible on: the corners of the axis's
