@@ -125,6 +125,10 @@ def peak_speed_rad_s(sc: Scenario, plant: Plant) -> float:
 
 SPAN_QUANTITIES = ("distance_rad", "speed_rad_s", "inertia_ratio", "load_torque_nm")
 """What :class:`MoveSpan` spans: the move's size, the speed it asks for, and its load."""
+SPAN_MARGINS = (0.25, 0.10, 0.10, 0.10)
+"""How far beyond each end of a span a move still counts as inside, as a share of the
+end's size, per quantity: a move 25 % longer than the longest tuned on cruises at the same
+top speed (its result is the same kind), one 6x longer may not."""
 
 
 @dataclass(frozen=True)
@@ -169,8 +173,9 @@ class MoveSpan:
         q = np.array([cls.quantities(sc, base) for sc in scenarios], dtype=np.float64)
         return cls(tuple(q.min(axis=0).tolist()), tuple(q.max(axis=0).tolist()))
 
-    def outside(self, sc: Scenario, base: Plant, margin: float = 0.05) -> list[str]:
-        """What of a move lies outside the span, one phrase per quantity (empty: inside).
+    def outside(self, sc: Scenario, base: Plant) -> list[str]:
+        """What of a move lies outside the span, beyond :data:`SPAN_MARGINS`, one phrase
+        per quantity (empty: inside).
 
         Parameters
         ----------
@@ -178,9 +183,6 @@ class MoveSpan:
             The move.
         base : Plant
             The axis's plant.
-        margin : float
-            Allowed beyond each end, as a share of the end's size (a 6.28 rad span takes
-            a 6.5 rad move as inside at 5 %).
 
         Returns
         -------
@@ -191,7 +193,8 @@ class MoveSpan:
                  "inertias of load", "load_torque_nm": "N·m load torque"}  # fmt: skip
         out = []
         q = self.quantities(sc, base)
-        for name, x, lo, hi in zip(SPAN_QUANTITIES, q, self.lows, self.highs, strict=True):
+        ends = zip(SPAN_QUANTITIES, SPAN_MARGINS, q, self.lows, self.highs, strict=True)
+        for name, margin, x, lo, hi in ends:
             if lo - margin * abs(lo) - 1e-12 <= x <= hi + margin * abs(hi) + 1e-12:
                 continue
             what = name.rsplit("_", 1)[0] if name.endswith(("_rad", "_s")) else name
@@ -203,6 +206,7 @@ class MoveSpan:
 __all__ = [
     "OBS_BOUND",
     "SCENARIO_FEATURES",
+    "SPAN_MARGINS",
     "SPAN_QUANTITIES",
     "MoveSpan",
     "clip_feature",
