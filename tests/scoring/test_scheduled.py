@@ -74,3 +74,31 @@ class Broken(Scheduler):
 def test_a_scheduler_without_measures_is_one_line():
     with pytest.raises(ValueError, match="returned no measure"):
         evaluate(Broken(), ["short-move"])
+
+
+def test_a_progress_bar_changes_no_number_and_counts_every_run(monkeypatch):
+    """``progress=True`` splits the batch into calls of PROGRESS_CHUNK pairs and ticks
+    per scheduler run: the same numbers, every (controller, move, plant) triple counted."""
+    import tqdm as tqdm_module
+
+    from vfgym.scoring import _evaluate
+
+    seen = []
+
+    class Counted(tqdm_module.tqdm):
+        def update(self, n=1):
+            seen.append(n)
+            return super().update(n)
+
+    monkeypatch.setattr(_evaluate, "tqdm", Counted)
+    monkeypatch.setattr(_evaluate, "PROGRESS_CHUNK", 5)
+    ctrls = [HELD, "paper", Hold(HELD)]
+    triples = len(ctrls) * len(MOVES) * (1 + len(PLANTS))
+    quiet = evaluate(ctrls, MOVES, plants=PLANTS)
+    assert seen[0] == 2 * len(MOVES) * (1 + len(PLANTS))  # the fixed ones: one batched call
+    assert sum(seen) == triples
+    seen.clear()
+    shown = evaluate(ctrls, MOVES, plants=PLANTS, progress=True)
+    assert sum(seen) == triples and max(seen) == 5
+    np.testing.assert_array_equal(shown.cost, quiet.cost)
+    np.testing.assert_array_equal(shown.across.cost, quiet.across.cost)

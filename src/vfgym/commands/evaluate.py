@@ -217,6 +217,7 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
         plants=plants,
         plant_seed=args.plant_seed,
+        progress=True,  # (on a terminal)
     )
     report.scenario_spec = args.scenarios
     run_dir = new_run_dir(args.runs_dir, "evaluate", args.name)

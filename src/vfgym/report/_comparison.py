@@ -347,6 +347,7 @@ def compare(
     seed: int = 0,
     plants: Sequence[PlantVariant] | int = (),
     plant_seed: int | None = None,
+    progress: bool = False,
 ) -> Report:
     """Score tuned candidates and baselines on the same scenarios.
 
@@ -382,6 +383,8 @@ def compare(
         to draw within the axis's uncertainty, as :func:`vfgym.evaluate` takes them.
     plant_seed : int or None
         Their seed, as :func:`vfgym.evaluate` takes it.
+    progress : bool
+        A progress bar over the runs, as :func:`vfgym.evaluate` shows it.
 
     Returns
     -------
@@ -422,6 +425,7 @@ def compare(
         bounds=bounds,
         plants=plants,
         plant_seed=plant_seed,
+        progress=progress,
     )
     columns = [
         _column_from_rows(

@@ -17,6 +17,7 @@ from os import PathLike
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
 from vfgym.axis import (
     NOMINAL,
@@ -50,6 +51,11 @@ from vfgym.scoring._cost import (
 )
 from vfgym.scoring._plants import AcrossPlants, robust_constraints
 from vfgym.scoring._scheduled import Scheduler, score_scheduled
+
+PROGRESS_CHUNK = 512
+"""Pairs per batched kernel call while a progress bar shows (two cores run 512 moves in
+a few seconds; fewer calls would leave the bar still, more would cost the batch's
+parallelism)."""
 
 
 @dataclass
@@ -194,6 +200,7 @@ def evaluate(
     while_running: Callable[[], None] | None = None,
     plants: Sequence[PlantVariant] | int = (),
     plant_seed: int | None = None,
+    progress: bool = False,
 ) -> Evaluation:
     """Score every controller on every scenario, on the axis's modelled plant and on each
     true plant asked for, through one batched kernel call.
@@ -241,6 +248,10 @@ def evaluate(
     plant_seed : int or None
         The seed ``plants`` were (or are) drawn from, recorded with them (default for a
         count: :data:`vfgym.axis.VERDICT_PLANT_SEED`).
+    progress : bool
+        Show a progress bar over the triples on stderr (a terminal's; tqdm hides it
+        elsewhere): the fixed controllers' batch then runs in calls of
+        :data:`PROGRESS_CHUNK` pairs, a scheduler's triples one by one.
 
     Returns
     -------
@@ -265,16 +276,26 @@ def evaluate(
     chosen = [[None if isinstance(c, Scheduler) else _choose(c, sc) for sc in scens] for c in ctrls]
     triples = [(c, p, s) for c in range(nc) for p in range(npl) for s in range(ns)]
     batched = [t for t in triples if not isinstance(ctrls[t[0]], Scheduler)]
-    scores: dict[tuple[int, int, int], Score | None] = dict(zip(batched, score_pairs(
-        [chosen[c][s] for c, _, s in batched], [moves[p][s] for _, p, s in batched],
-        measures=axis.measures, weights=weights, bounds=bounds, while_running=while_running,
-    ), strict=True))  # fmt: skip
-    for ci, c in enumerate(ctrls):
-        if isinstance(c, Scheduler):
-            own = [t for t in triples if t[0] == ci]
-            ran = score_scheduled(c, [moves[p][s] for _, p, s in own], [on[p] for _, p, _ in own],
-                                  axis.measures, weights, bounds)  # fmt: skip
-            scores.update(zip(own, ran, strict=True))
+    bar = tqdm(total=len(triples), unit="run", desc="evaluate", disable=None if progress else True,
+               dynamic_ncols=True, leave=False)  # fmt: skip
+    step = PROGRESS_CHUNK if progress else max(1, len(batched))
+    scores: dict[tuple[int, int, int], Score | None] = {}
+    for at in range(0, len(batched), step):
+        part = batched[at : at + step]
+        scores.update(zip(part, score_pairs(
+            [chosen[c][s] for c, _, s in part], [moves[p][s] for _, p, s in part],
+            measures=axis.measures, weights=weights, bounds=bounds,
+            while_running=while_running if at == 0 else None,
+        ), strict=True))  # fmt: skip
+        bar.update(len(part))
+    if not batched and while_running is not None:  # (only schedulers: the caller's work)
+        while_running()
+    for c, p, s in triples:
+        if isinstance(ctrls[c], Scheduler):
+            (scores[c, p, s],) = score_scheduled(ctrls[c], [moves[p][s]], [on[p]], axis.measures,
+                                                 weights, bounds)  # fmt: skip
+            bar.update(1)
+    bar.close()
     nan_m = dict.fromkeys(METRIC_NAMES, math.nan)
     metrics = [[dict(nan_m) for _ in range(ns)] for _ in range(nc)]
     cost = np.full((nc, npl, ns), np.nan)
