@@ -51,14 +51,15 @@ ISSUES_HINT = (
 
 class Parser(argparse.ArgumentParser):
     """argparse's parser with one-line usage errors (exit status 2), reported by the
-    sub-command they concern."""
+    sub-command they concern; :attr:`subcommands` holds the sub-commands' parsers by name
+    (:func:`build_parser` fills it)."""
+
+    subcommands: dict[str, argparse.ArgumentParser]
 
     def parse_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override]
         ns, extras = self.parse_known_args(args, namespace)
         if extras:
-            sub: dict[str, argparse.ArgumentParser] = {}
-            if self._subparsers:
-                sub = dict(self._subparsers._group_actions[0].choices or {})  # type: ignore[call-overload]
+            sub = getattr(self, "subcommands", {})
             owner = sub.get(getattr(ns, "command", None) or "", self)
             owner.error(f"unrecognized arguments: {' '.join(extras)}")
         return ns
@@ -81,8 +82,9 @@ def _version() -> str:
         return "unknown (not installed)"
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The parser with every sub-command found in :mod:`vfgym.commands`."""
+def build_parser() -> Parser:
+    """The parser with every sub-command found in :mod:`vfgym.commands` (by name in its
+    :attr:`Parser.subcommands`)."""
     parser = Parser(
         prog="vfgym",
         description="Simulate, tune and evaluate a V-F transformation pulse-train "
@@ -96,6 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
     for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
         if not info.name.startswith("_"):
             importlib.import_module(f"vfgym.commands.{info.name}").add_parser(sub)
+    parser.subcommands = dict(sub.choices)
     return parser
 
 

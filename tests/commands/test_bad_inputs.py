@@ -274,7 +274,7 @@ def test_bad_input_is_one_line_with_status_2(ws, capsys, argv, needle):
 def test_the_corpus_covers_every_subcommand():
     from vfgym.cli import build_parser
 
-    commands = set(build_parser()._subparsers._group_actions[0].choices)
+    commands = set(build_parser().subcommands)
     covered = {argv[0] for argv, _ in CASES}
     assert commands <= covered
     assert len(CASES) >= 40

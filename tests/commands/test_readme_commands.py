@@ -665,7 +665,7 @@ def readme_commands(text: str) -> set[str]:
     names the command, it is not a command line)."""
     from vfgym.cli import build_parser
 
-    subs = "|".join(build_parser()._subparsers._group_actions[0].choices)
+    subs = "|".join(build_parser().subcommands)
     fence = re.compile(r"^```[^\n]*\n(.*?)^```", flags=re.S | re.M)
     items = [ln for block in fence.findall(text) for ln in block.splitlines()]
     items += re.findall(r"`([^`]+)`", fence.sub("", text))

@@ -1,28 +1,38 @@
-"""mkdocs hooks (mkdocs.yml ``hooks:``): reference pages written from the code at build time.
+"""The reference pages' tables written from the code, into the pages themselves, so that
+they read in the repository as on the site:
 
-Two markers, each alone on its line in a page:
-
-- ``<!-- vfgym:help -->``: ``vfgym --help`` and every sub-command's ``--help``, as the
-  installed command prints them (80 columns; a reST role in a description shown as the
-  bare name), one section each;
-- ``<!-- vfgym:axis-keys -->``: the axis file's keys, a table per dataclass (field, type,
+- ``docs/reference/commands.md``, between ``<!-- vfgym:help:begin -->`` and
+  ``<!-- vfgym:help:end -->``: ``vfgym --help`` and every sub-command's ``--help``, as
+  the installed command prints them (80 columns; a reST role in a description shown as
+  the bare name), one section each;
+- ``docs/reference/axis.md``, between ``<!-- vfgym:axis-keys:begin -->`` and
+  ``<!-- vfgym:axis-keys:end -->``: the axis file's keys, a table per dataclass (field,
   default, the docstring's description of it).
 
-So the pages cannot fall behind the command line or the dataclasses.
+    python docs/_reference.py            # rewrite the blocks from the code
+    python docs/_reference.py --check    # exit 1 (and show the difference) if a page differs
+
+``tests/test_docs.py`` runs the check, so the pages cannot fall behind the command line or
+the dataclasses.
 """
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import dataclasses
+import difflib
 import inspect
 import io
 import os
 import re
+import sys
+from pathlib import Path
 from typing import Any
 
-HELP = "<!-- vfgym:help -->"
-AXIS_KEYS = "<!-- vfgym:axis-keys -->"
+DOCS = Path(__file__).resolve().parent
+BLOCKS = {"help": DOCS / "reference" / "commands.md", "axis-keys": DOCS / "reference" / "axis.md"}
+"""Each generated block's name and the page it is in."""
 
 
 def _help_text(argv: list[str]) -> str:
@@ -49,7 +59,7 @@ def help_markdown() -> str:
     """``vfgym --help`` and each sub-command's, as Markdown sections."""
     from vfgym.cli import build_parser
 
-    subs = build_parser()._subparsers._group_actions[0].choices  # type: ignore[union-attr]
+    subs = build_parser().subcommands
     parts = ["## vfgym", "", "```text", _help_text([]), "```", ""]
     for name in sorted(subs):
         parts += [f"## vfgym {name}", "", "```text", _help_text([name]), "```", ""]
@@ -96,8 +106,8 @@ def _cell(text: str) -> str:
 def axis_keys_markdown() -> str:
     """A table of keys for each dataclass an axis file is written in."""
     import vfgym
-    from vfgym.moves.distribution import MoveDistribution
     from vfgym.axis import Uncertainty
+    from vfgym.moves.distribution import MoveDistribution
 
     where = [
         ("plant", vfgym.Plant),
@@ -121,9 +131,42 @@ def axis_keys_markdown() -> str:
     return "\n".join(parts)
 
 
-def on_page_markdown(markdown: str, **kwargs: Any) -> str:
-    if HELP in markdown:
-        markdown = markdown.replace(HELP, help_markdown())
-    if AXIS_KEYS in markdown:
-        markdown = markdown.replace(AXIS_KEYS, axis_keys_markdown())
-    return markdown
+def generated(name: str) -> str:
+    """The text of block ``name`` as the code makes it."""
+    return {"help": help_markdown, "axis-keys": axis_keys_markdown}[name]()
+
+
+def with_block(page: str, name: str, text: str) -> str:
+    """``page`` with block ``name`` replaced by ``text`` (the markers kept)."""
+    begin, end = f"<!-- vfgym:{name}:begin -->", f"<!-- vfgym:{name}:end -->"
+    head, sep, rest = page.partition(begin + "\n")
+    _, sep2, tail = rest.partition(end)
+    if not sep or not sep2:
+        raise ValueError(f"the page has no {begin} ... {end} block")
+    return f"{head}{begin}\n{text.rstrip()}\n{end}{tail}"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Rewrite (or ``--check``) every block; the exit status is 1 where a page differs."""
+    ap = argparse.ArgumentParser(description="write the reference pages' generated blocks")
+    ap.add_argument("--check", action="store_true", help="only compare; exit 1 on a difference")
+    args = ap.parse_args(argv)
+    differ = 0
+    for name, path in BLOCKS.items():
+        old = path.read_text(encoding="utf-8")
+        new = with_block(old, name, generated(name))
+        if new == old:
+            continue
+        differ = 1
+        if args.check:
+            sys.stdout.writelines(difflib.unified_diff(
+                old.splitlines(True), new.splitlines(True), str(path), "from the code", n=1
+            ))  # fmt: skip
+        else:
+            path.write_text(new, encoding="utf-8")
+            print(f"wrote {path}")
+    return differ if args.check else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
