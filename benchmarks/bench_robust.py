@@ -46,7 +46,7 @@ from vfgym.commands._common import load_settings
 from vfgym.moves.baselines import Baseline
 from vfgym.permove.optima import OptimumSearch, move_optima
 from vfgym.permove.supervised import load_settings_model
-from vfgym.scoring import Move, score_across, score_robust
+from vfgym.scoring import Move, score_robust
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -55,14 +55,13 @@ def judge(label: str, per_move: list[Settings], axis, plants, seed: int, optima=
     """Print one tuner's figures on the axis's test moves across the drawn plants."""
     test = axis.scenarios("test")
     variants = draw_plants(axis.uncertainty, axis.plant.motor, plants, seed)
-    a = score_across([per_move, ["paper"] * len(test)], test, variants,
-                     plant=axis.plant, measures=axis.measures, seed=seed)  # fmt: skip
-    s, paper = a.summary(0), a.summary(1)
-    nominal = evaluate(per_move, test, plant=axis.plant, measures=axis.measures)
-    own = np.array([nominal.cost[i, i] for i in range(len(test))])
-    ok = np.array([bool(nominal.feasible[i, i]) for i in range(len(test))])
-    base = evaluate(["paper"], test, plant=axis.plant, measures=axis.measures)
-    wins = int(np.sum(own < base.cost[0]))
+    chosen = {sc.name: s for sc, s in zip(test, per_move, strict=True)}
+    ev = evaluate([lambda sc: chosen[sc.name], "paper"], test, axis=axis, plants=variants,
+                  plant_seed=seed)  # fmt: skip
+    assert ev.across is not None  # (given plants)
+    s, paper = ev.across.summary(0), ev.across.summary(1)
+    own, ok = ev.cost[0], ev.feasible[0]
+    wins = int(np.sum(own < ev.cost[1]))
     print(f"{label}: feasible on {s.feasible}/{s.pairs} (move, plant) pairs "
           f"({100 * s.feasible / s.pairs:.1f} %), {s.moves_feasible}/{s.moves} moves on every "
           f"plant; modelled plant: feasible {ok.sum()}/{len(test)}, mean cost {own.mean():.4f}; "
@@ -79,10 +78,10 @@ def judge(label: str, per_move: list[Settings], axis, plants, seed: int, optima=
         held = score_robust([Baseline("paper")] * len(test),
                             [Move.of(sc, axis.plant) for sc in test], axis.design_plants(),
                             measures=axis.measures)  # fmt: skip
-        can = best < base.cost[0]
+        can = best < ev.cost[1]
         lost = [f"{sc.name} (optimum {b:.3f}, paper {p:.3f}, paper on the design: "
                 f"{'feasible' if h.feasible else 'infeasible'})"
-                for sc, b, p, h, c in zip(test, best, base.cost[0], held, can, strict=True)
+                for sc, b, p, h, c in zip(test, best, ev.cost[1], held, can, strict=True)
                 if not c]  # fmt: skip
         print(
             f"  robust optima beat the paper's settings on {int(can.sum())}/{len(test)} moves"
@@ -115,7 +114,7 @@ def part_fit(axis_file: str, axis, args) -> None:
         t0 = time.perf_counter()
         picks = [m.settings(sc, axis.plant, axis.measures, design) for sc in test]
         dt = time.perf_counter() - t0
-        ev = evaluate(picks, test, plant=axis.plant, measures=axis.measures)
+        ev = evaluate(picks, test, axis=axis)
         own = np.diag(ev.cost)
         print(f"  check {check}: {own.mean() / best:.4f} ({dt:.1f} s)")
 
@@ -132,7 +131,7 @@ def part_sweep(axis_file: str, axis, args) -> None:
         code = cli.main(["sweep", "--config", "experiments/quick.yaml", "--axis", path,
                          "--study", study, "--runs-dir", str(runs), "--no-progress"])  # fmt: skip
         print(f"\n{label}: exit {code}, {time.perf_counter() - t0:.1f} s wall")
-        best = load_settings(str(runs / "sweep" / study / "best.yaml"))
+        best = load_settings(str(runs / "sweep" / study / "best.yaml"), axis)
         judge(label, [best] * len(axis.scenarios("test")), axis, args.plants, args.plant_seed)
 
 
@@ -140,14 +139,14 @@ def part_evaluate(axis, args) -> None:
     test = axis.scenarios("test")
     s = Settings(value_rad=0.882, error_limit_rad=0.872, k=430.9, ts_over_tf=1.0)
     variants = draw_plants(axis.uncertainty, axis.plant.motor, args.plants, args.plant_seed)
-    evaluate([s], test, plant=axis.plant, measures=axis.measures)  # compiled
+    evaluate([s], test, axis=axis)  # compiled
     one, many = [], []
     for _ in range(3):
         t0 = time.perf_counter()
-        evaluate([s], test, plant=axis.plant, measures=axis.measures)
+        evaluate([s], test, axis=axis)
         one.append(time.perf_counter() - t0)
         t0 = time.perf_counter()
-        evaluate([s], test, plant=axis.plant, measures=axis.measures, plants=variants)
+        evaluate([s], test, axis=axis, plants=variants)
         many.append(time.perf_counter() - t0)
     p = len(variants)
     ratio = min(many) / min(one)
@@ -228,7 +227,7 @@ def part_bound(axis, args) -> None:
     for name in args.moves.split(","):
         sc, move = test[name], Move.of(test[name], axis.plant)
         paper = resolve(Baseline("paper"), move.plant)
-        cost = evaluate(["paper"], [sc], plant=axis.plant, measures=axis.measures).cost[0, 0]
+        cost = evaluate(["paper"], [sc], axis=axis).cost[0, 0]
         cands = space.grid(10, laws=("rise", "slew"))
         for f in np.exp(rng.normal(0.0, 0.3, (4000, 4))):  # log-normal draws, 30 %
             x = [getattr(paper, d.name) * g for d, g in zip(space.SPACE, f, strict=True)]

@@ -47,7 +47,7 @@ def one_run(axis: str, how: str, seed: int, args: argparse.Namespace, runs: str)
     rows = {r["controller"]: r for r in summary["verdict"]["controllers"]}
     ax = PAPER_AXIS if axis == "default" else load_axis(axis)
     test = ax.scenarios("test")
-    cost = evaluate(load_settings(str(run / "best.yaml")), test, axis=ax).cost[0]
+    cost = evaluate(load_settings(str(run / "best.yaml"), ax), test, axis=ax).cost[0]
     return {
         "axis": ax.name,
         "aggregate": how,

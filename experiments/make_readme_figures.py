@@ -32,6 +32,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def tuned_candidate(sweep: str | None):
     """(Candidate, description) of the tuned settings."""
+    from vfgym.axis import PAPER_AXIS
     from vfgym.commands._common import load_settings
     from vfgym.moves.baselines import Baseline
     from vfgym.report import Candidate
@@ -46,7 +47,7 @@ def tuned_candidate(sweep: str | None):
     best = d / "best.yaml"
     if best.is_file():
         return (
-            Candidate("tuned", load_settings(str(best)), source=str(best)),
+            Candidate("tuned", load_settings(str(best), PAPER_AXIS), source=str(best)),
             f"tuned = best settings of the sweep `{d}` (`{best.name}`)",
         )
     from vfgym.commands.plot import load_study
