@@ -23,8 +23,7 @@ cores for the baselines, hours for a scheduler)."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from vfgym.axis import VERDICT_PLANT_SEED, VERDICT_PLANTS
-    from vfgym.commands._common import SEED, add_axis_option, positive_int, whole
+    from vfgym.commands._common import add_axis_option
 
     p = sub.add_parser(
         "evaluate",
@@ -59,6 +58,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "settings for that plant (vfgym.permove.EstimatingScheduler; an --axis with an "
         "uncertainty: block); repeat to compare several",
     )
+    _add_moves_options(p)
+    _add_judging_options(p)
+    add_axis_option(p)
+    p.set_defaults(func=run)
+
+
+def _add_moves_options(p: argparse.ArgumentParser) -> None:
+    """The baselines and the moves an evaluation runs on."""
+    from vfgym.commands._common import positive_int, whole
+
     p.add_argument(
         "--against",
         default="paper,rule-of-thumb,fixed-frequency,scurve",
@@ -85,6 +94,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         type=whole(0),
         help="seed of the first random scenario (default: 0; an axis sets its own)",
     )
+
+
+def _add_judging_options(p: argparse.ArgumentParser) -> None:
+    """The bootstrap, the true plants, and where the run folder goes."""
+    from vfgym.axis import VERDICT_PLANT_SEED, VERDICT_PLANTS
+    from vfgym.commands._common import SEED, positive_int, whole
+
     p.add_argument(
         "--bootstrap",
         type=positive_int,
@@ -119,8 +135,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="replace an earlier evaluation of another job under the same --name",
     )
-    add_axis_option(p)
-    p.set_defaults(func=run)
 
 
 def _labels(paths: list[str], taken: set[str]) -> list[str]:
