@@ -36,6 +36,7 @@ from vfgym.plant._simulate import (
     simulate,
     simulate_train,
     step_command,
+    two_mass_coefficients,
     vf_pulses,
 )
 from vfgym.plant.measures import command_end_s
@@ -50,5 +51,6 @@ __all__ = [
     "simulate",
     "simulate_train",
     "step_command",
+    "two_mass_coefficients",
     "vf_pulses",
 ]

@@ -40,7 +40,32 @@ P_SS_START = 26  # first tick of the steady-state window (tick, whole)
 P_ACC_W = 27  # w: pulse-acceleration window (ticks, whole)
 P_ACC_SCALE = 28  # δ/(w·T)²: converts a second difference of counts to rad/s² (rad/s²)
 P_USE_EXT = 29  # pulse source: 1 = the external pulse array, 0 = the V-F controller
-N_PARAMS = 30
+# a compliant transmission (docs/model.md §3.1): the two-mass state (θ, ω, d, ω_L), d = θ − θ_L
+# the spring's twist, over a tick of net torque F held, moving: θ += Σ Z_T·, ω, d, ω_L = Σ Z_·
+P_TWO = 30  # 1: a two-mass plant (the load beyond a spring), 0: rigid (whole)
+P_KS = 31  # K_S: the spring's stiffness (N·m/rad)
+P_CS = 32  # c_S: the spring's damping (N·m·s/rad)
+P_Z_TW = 33  # θ(T) − θ per ω (s)
+P_Z_TD = 34  # θ(T) − θ per d (dimensionless)
+P_Z_TL = 35  # θ(T) − θ per ω_L (s)
+P_Z_TF = 36  # θ(T) − θ per F (rad/(N·m))
+P_Z_WW = 37  # ω(T) per ω (dimensionless)
+P_Z_WD = 38  # ω(T) per d (1/s)
+P_Z_WL = 39  # ω(T) per ω_L (dimensionless)
+P_Z_WF = 40  # ω(T) per F ((rad/s)/(N·m))
+P_Z_DW = 41  # d(T) per ω (s)
+P_Z_DD = 42  # d(T) per d (dimensionless)
+P_Z_DL = 43  # d(T) per ω_L (s)
+P_Z_DF = 44  # d(T) per F (rad/(N·m))
+P_Z_LW = 45  # ω_L(T) per ω (dimensionless)
+P_Z_LD = 46  # ω_L(T) per d (1/s)
+P_Z_LL = 47  # ω_L(T) per ω_L (dimensionless)
+P_Z_LF = 48  # ω_L(T) per F ((rad/s)/(N·m))
+P_Z_HDD = 49  # motor held at rest by friction: d(T) per d (dimensionless)
+P_Z_HDL = 50  # held: d(T) per ω_L (s)
+P_Z_HLD = 51  # held: ω_L(T) per d (1/s)
+P_Z_HLL = 52  # held: ω_L(T) per ω_L (dimensionless)
+N_PARAMS = 53
 
 # --- accumulator row (streamed measures; see vfgym.plant.measures for the definitions) --
 A_OV_MOTOR = 0  # max over at-rest ticks of dir·(θ − P) (rad), ≥ 0
@@ -74,7 +99,15 @@ A_SPEED_MAX = 27  # max |ω| (rad/s)
 A_TICKS = 28  # ticks simulated (whole)
 A_ACC_WINDOW = 29  # w, the pulse-acceleration window (ticks, whole)
 A_ACC_QUANTUM = 30  # that measure's quantum: 0 for the V-F's train, 2δ/(wT)² for counts (rad/s²)
-N_ACC = 31
+# the load's measures (a two-mass plant; θ_L = θ − d; left at their initial values if rigid)
+A_OV_LOAD = 31  # max over at-rest ticks of dir·(θ_L − P) (rad), ≥ 0
+A_LAST_OUT_LOAD = 32  # last tick with |θ_L − target| > window (tick; −1: never)
+A_RESIDUAL = 33  # peak to peak of θ_L after the motor's last tick out of the window (rad)
+A_TRK_SQ_LOAD = 34  # Σ (P − θ_L)² over all ticks (rad²)
+A_TRK_MAX_LOAD = 35  # max |P − θ_L| (rad)
+A_LOAD = 36  # final θ_L (rad)
+A_LOAD_SPEED = 37  # final ω_L (rad/s)
+N_ACC = 38
 
 # --- trace rows (one column per recorded tick) ------------------------------------------
 R_COMMAND = 0  # command P (rad)
@@ -87,7 +120,9 @@ R_PC = 6  # position counter pc (counts)
 R_FEEDBACK = 7  # filtered speed feedback y (counts)
 R_SPEED_COUNT = 8  # latched speed counter output x = B·count (counts)
 R_TRAIN = 9  # pulse train's unquantised position x·δ (rad; docs/model.md §5.1)
-N_ROWS = 10
+R_LOAD = 10  # load angle θ_L (rad; θ on a rigid plant)
+R_LOAD_SPEED = 11  # load speed ω_L (rad/s; ω on a rigid plant)
+N_ROWS = 12
 
 # --- loop state (one float64 row per move; read and written by run_segment) -------------
 S_N = 0  # pulses output n, signed (pulses)
@@ -136,4 +171,12 @@ S_WMX = 42  # running A_SPEED_MAX (rad/s)
 S_D2MX = 43  # max |x_i − 2·x_(i−w) + x_(i−2w)| so far (x: train position; pulses)
 S_DWMX = 44  # max |ω_{i+1} − ω_i| so far, before dividing by T for A_ACC_MOTOR (rad/s)
 S_TICK = 45  # next tick to simulate (tick, whole)
-N_STATE = 46
+S_TWIST = 46  # the spring's twist d = θ − θ_L (rad; 0 on a rigid plant)
+S_WLOAD = 47  # load speed ω_L (rad/s; 0 on a rigid plant)
+S_OVL = 48  # running A_OV_LOAD (rad)
+S_LOL = 49  # running A_LAST_OUT_LOAD (tick; −1: never)
+S_RVHI = 50  # highest θ_L since the motor's last tick out of the window (rad)
+S_RVLO = 51  # lowest θ_L since then (rad)
+S_TSQL = 52  # running A_TRK_SQ_LOAD (rad²)
+S_TMXL = 53  # running A_TRK_MAX_LOAD (rad)
+N_STATE = 54

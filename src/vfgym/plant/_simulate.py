@@ -8,11 +8,13 @@ kernel streamed while it ran.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 
 from vfgym._validate import check_finite_array, check_int, check_real
 from vfgym.params import (
@@ -105,6 +107,67 @@ def motor_coefficients(plant: Plant) -> tuple[float, float, float, float]:
     return math.exp(-x), T * h * inv_j, T * h, T * T * g * inv_j
 
 
+def two_mass_coefficients(plant: Plant) -> np.ndarray:
+    """Exact one-tick zero-order-hold coefficients of the two-mass plant (docs/model.md §3.1).
+
+    With the state (θ, ω, d, ω_L), d = θ − θ_L the spring's twist, and the net torque F on
+    the motor held over the tick,
+
+        J_M·dω/dt = F − b·ω − K_S·d − c_S·(ω − ω_L),   J_L·dω_L/dt = K_S·d + c_S·(ω − ω_L),
+
+    the tick's transition is the matrix exponential of the system augmented with its input
+    (Van Loan's), computed by :func:`scipy.linalg.expm` once per plant; and, for the motor
+    held at rest by friction, that of the load on the spring alone. Both are balanced first
+    (speeds in rad per tick, the torque in rad per tick² of the motor), so that every
+    coefficient, not only the largest, comes out to a few units in its last place.
+
+    Parameters
+    ----------
+    plant : Plant
+        A plant with a transmission: the tick T, J_M (:attr:`Motor.inertia_kgm2`), b,
+        J_L, K_S, c_S.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, 20 entries in the parameter row's order ``P_Z_TW`` … ``P_Z_HLL``
+        (:mod:`vfgym.plant._layout`): θ(T) − θ, ω(T), d(T), ω_L(T) per (ω, d, ω_L, F),
+        then the held motor's d(T), ω_L(T) per (d, ω_L).
+
+    Raises
+    ------
+    ValueError
+        If the plant has no transmission.
+    """
+    tr = plant.transmission
+    if tr is None:
+        raise ValueError("plant.transmission=None: a two-mass plant needs a transmission")
+    m = plant.motor
+    return _two_mass(
+        plant.tick_s, m.inertia_kgm2, m.viscous_nm_s_rad, tr.load_inertia_kgm2,
+        tr.stiffness_nm_rad, tr.damping_nm_s_rad,
+    ).copy()  # fmt: skip
+
+
+@functools.lru_cache(maxsize=256)
+def _two_mass(T: float, jm: float, b: float, jl: float, ks: float, cs: float) -> np.ndarray:
+    a = np.zeros((5, 5))
+    a[0, 1] = 1.0  # θ' = ω
+    a[1, 1:4] = (-(b + cs) / jm, -ks / jm, cs / jm)  # ω'
+    a[1, 4] = 1.0 / jm  # … + F/J_M
+    a[2, 1], a[2, 3] = 1.0, -1.0  # d' = ω − ω_L
+    a[3, 1:4] = (cs / jl, ks / jl, -cs / jl)  # ω_L'
+    # x ↦ S·x with S = (1, T, 1, T, T²/J_M): e^(M) = S⁻¹·e^(S·M·S⁻¹)·S
+    sc = np.array([1.0, T, 1.0, T, T * T / jm])
+    e = scipy.linalg.expm(a * T * sc[:, None] / sc[None, :]) / sc[:, None] * sc[None, :]
+    h = np.array([[0.0, -1.0], [ks / jl, -cs / jl]]) * T
+    sh = sc[2:4]
+    held = scipy.linalg.expm(h * sh[:, None] / sh[None, :]) / sh[:, None] * sh[None, :]
+    out = np.concatenate([e[0:4, 1:5].ravel(), held.ravel()])
+    out.flags.writeable = False
+    return out
+
+
 def pack(
     settings: Settings,
     plant: Plant,
@@ -169,6 +232,11 @@ def pack(
     prm[L.P_ACC_W] = accw
     prm[L.P_ACC_SCALE] = plant.pulse_rad / (accw * T) ** 2
     prm[L.P_USE_EXT] = 1.0 if use_ext else 0.0
+    if plant.transmission is not None:
+        prm[L.P_TWO] = 1.0
+        prm[L.P_KS] = plant.transmission.stiffness_nm_rad
+        prm[L.P_CS] = plant.transmission.damping_nm_s_rad
+        prm[L.P_Z_TW : L.P_Z_HLL + 1] = two_mass_coefficients(plant)
     return prm
 
 
@@ -277,6 +345,11 @@ class Trace:
         The pulse train's unquantised position (rad): the V-F controller's
         (n + sum/value)·δ, of which ``pulse_rad`` is the whole pulses; an external train's
         n·δ (docs/model.md §5.1).
+    load_rad : numpy.ndarray
+        The load's angle θ_L beyond the transmission's spring, at the motor shaft (rad;
+        docs/model.md §3.1); the motor's angle on a rigid plant.
+    load_speed_rad_s : numpy.ndarray
+        The load's speed ω_L (rad/s); the motor's on a rigid plant.
     acc : numpy.ndarray
         The measures streamed over every tick, undecoded (see :attr:`metrics`).
     settings : Settings
@@ -306,6 +379,8 @@ class Trace:
     feedback_counts: np.ndarray
     speed_count: np.ndarray
     train_rad: np.ndarray
+    load_rad: np.ndarray
+    load_speed_rad_s: np.ndarray
     acc: np.ndarray = field(repr=False)
     settings: Settings
     plant: Plant
@@ -420,6 +495,8 @@ def _trace(
         feedback_counts=rec[L.R_FEEDBACK],
         speed_count=rec[L.R_SPEED_COUNT],
         train_rad=rec[L.R_TRAIN],
+        load_rad=rec[L.R_LOAD],
+        load_speed_rad_s=rec[L.R_LOAD_SPEED],
         acc=acc,
         settings=settings,
         plant=plant,

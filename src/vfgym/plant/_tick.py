@@ -11,24 +11,29 @@ order, the order of :mod:`vfgym.plant.reference`. The blocks, in the tick's orde
    and every Ns ticks the latch and filter of the speed counter;
 3. :func:`torque`: the torque command, clipped to the torque–speed curve;
 4. :func:`motor` (with :func:`stop_within_tick`): exact integration over the tick with
-   the torque held;
+   the torque held; on a two-mass plant :func:`motor_two` (docs/model.md §3.1), with the
+   load beyond a spring, its coefficients :func:`two_mass` read from the parameter row;
 5. :func:`encoder`: the encoder count of the new angle;
 
 then the measures streamed from the tick (:func:`ripple_sample` at each servo sample,
 :func:`overshoot`, :func:`in_position`, :func:`steady_state`, :func:`pulse_accel`,
-:func:`tracking`, :func:`pulse_stats`, :func:`peak`) and the trace row
-(:func:`record`). Whole numbers (counts, ticks) are int64 here.
+:func:`tracking`, :func:`pulse_stats`, :func:`peak`, and on a two-mass plant
+:func:`load_tick`) and the trace row (:func:`record`). Whole numbers (counts, ticks) are
+int64 here.
 """
 
 from __future__ import annotations
 
 import math
 
+from vfgym.plant import _layout as L
 from vfgym.plant._jit import jit
 from vfgym.plant._layout import (
     R_COMMAND,
     R_ERROR,
     R_FEEDBACK,
+    R_LOAD,
+    R_LOAD_SPEED,
     R_OMEGA,
     R_PC,
     R_PULSE,
@@ -186,6 +191,57 @@ def motor(theta, omega, net, tc, cww, cwf, ctw, ctf, damp, inv_j, T):
     return stop_within_tick(theta, omega, f, net, tc, damp, inv_j, T)
 
 
+@jit(inline=True)
+def two_mass(prm):
+    """The two-mass plant's coefficients from the parameter row, in the order
+    :func:`motor_two` unpacks them (read once, before a loop)."""
+    return (
+        prm[L.P_KS], prm[L.P_CS],
+        prm[L.P_Z_TW], prm[L.P_Z_TD], prm[L.P_Z_TL], prm[L.P_Z_TF],
+        prm[L.P_Z_WW], prm[L.P_Z_WD], prm[L.P_Z_WL], prm[L.P_Z_WF],
+        prm[L.P_Z_DW], prm[L.P_Z_DD], prm[L.P_Z_DL], prm[L.P_Z_DF],
+        prm[L.P_Z_LW], prm[L.P_Z_LD], prm[L.P_Z_LL], prm[L.P_Z_LF],
+        prm[L.P_Z_HDD], prm[L.P_Z_HDL], prm[L.P_Z_HLD], prm[L.P_Z_HLL],
+    )  # fmt: skip
+
+
+@jit(inline=True)
+def motor_two(theta, omega, d, wl, net, tc, z):
+    """The two-mass plant over the tick under the net torque ``net`` on the motor held
+    (docs/model.md §3.1): motor angle and speed θ, ω, the spring's twist d = θ − θ_L, the
+    load's speed ω_L. Returns (θ, ω, d, ω_L).
+
+    Exact (the zero-order-hold matrix exponential, :func:`vfgym.plant.two_mass_coefficients`)
+    for the Coulomb force F = net − s·τc held, s the sign of ω at the tick's start. A motor at
+    rest breaks away (s = the sign of the torque on it) when that torque, net minus the
+    spring's K_S·d + c_S·(0 − ω_L), exceeds τc, else stays held while the load moves on the
+    spring; a moving motor that friction would turn back within the tick is at rest at its
+    end."""
+    ks, cs = z[0], z[1]
+    s = 0.0
+    if tc != 0.0:
+        if omega > 0.0:
+            s = 1.0
+        elif omega < 0.0:
+            s = -1.0
+        else:
+            pull = net - (ks * d + cs * (0.0 - wl))
+            if pull > tc:
+                s = 1.0
+            elif pull < -tc:
+                s = -1.0
+            else:
+                return theta, omega, z[18] * d + z[19] * wl, z[20] * d + z[21] * wl
+    f = net - s * tc
+    th = theta + (z[2] * omega + z[3] * d + z[4] * wl + z[5] * f)
+    w = z[6] * omega + z[7] * d + z[8] * wl + z[9] * f
+    d1 = z[10] * omega + z[11] * d + z[12] * wl + z[13] * f
+    wl1 = z[14] * omega + z[15] * d + z[16] * wl + z[17] * f
+    if s != 0.0 and s * w <= 0.0:
+        w = 0.0
+    return th, w, d1, wl1
+
+
 # --- 5. encoder ----------------------------------------------------------------------------
 
 
@@ -322,8 +378,30 @@ def pulse_stats(p, i, pulses, min_iv, reversals, first_p, last_p, last_sign):
 
 
 @jit(inline=True)
-def record(rec, j, P, pos, theta, omega, tau, u, pc, y, x, train):
-    """The tick's state into column ``j`` of the trace ``rec``."""
+def load_tick(i, P, p_prev, last_dir, theta, thl, target, win, ov_l, lo_l, rv_hi, rv_lo):
+    """The load's measures on a two-mass plant at tick ``i``, its angle ``thl``: overshoot
+    while the command rests (as :func:`overshoot`), its last tick out of the window, and
+    the highest and lowest θ_L since the motor (θ) was last out of it. Returns (overshoot,
+    last tick out, highest, lowest)."""
+    if p_prev == P and last_dir != 0.0:
+        o = last_dir * (thl - P)
+        if o > ov_l:
+            ov_l = o
+    if abs(thl - target) > win:
+        lo_l = i
+    if abs(theta - target) > win:
+        return ov_l, lo_l, thl, thl
+    if thl > rv_hi:
+        rv_hi = thl
+    if thl < rv_lo:
+        rv_lo = thl
+    return ov_l, lo_l, rv_hi, rv_lo
+
+
+@jit(inline=True)
+def record(rec, j, P, pos, theta, omega, tau, u, pc, y, x, train, thl, wl):
+    """The tick's state into column ``j`` of the trace ``rec`` (``thl``, ``wl``: the
+    load's angle and speed, the motor's on a rigid plant)."""
     rec[R_COMMAND, j] = P
     rec[R_PULSE, j] = pos
     rec[R_THETA, j] = theta
@@ -334,3 +412,5 @@ def record(rec, j, P, pos, theta, omega, tau, u, pc, y, x, train):
     rec[R_FEEDBACK, j] = y
     rec[R_SPEED_COUNT, j] = x
     rec[R_TRAIN, j] = train
+    rec[R_LOAD, j] = thl
+    rec[R_LOAD_SPEED, j] = wl

@@ -161,6 +161,52 @@ class MotorLoad:
             self.omega = f2 * self.inv_j * rem * _h(x1)
 
 
+class TwoMassLoad(MotorLoad):
+    """docs/model.md §3.1: the motor (J_M, b, τc, τ_load) and the load J_L beyond a spring
+    K_S with damping c_S, exact (the parameter row's matrix exponential) for the Coulomb
+    force held; friction's stops and break-aways at the tick's boundaries."""
+
+    def __init__(self, prm: np.ndarray) -> None:
+        super().__init__(prm)
+        self.ks = float(prm[L.P_KS])
+        self.cs = float(prm[L.P_CS])
+        rows = prm[L.P_Z_TW : L.P_Z_LF + 1].reshape(4, 4)  # (θ, ω, d, ω_L) per (ω, d, ω_L, F)
+        self.moving = [[float(v) for v in row] for row in rows]
+        self.held = [
+            [float(v) for v in row] for row in prm[L.P_Z_HDD : L.P_Z_HLL + 1].reshape(2, 2)
+        ]
+        self.twist = 0.0  # d = θ − θ_L
+        self.load_omega = 0.0
+
+    @property
+    def load_theta(self) -> float:
+        return self.theta - self.twist
+
+    def tick(self, tau: float) -> None:
+        net = tau - self.tload
+        w, d, wl = self.omega, self.twist, self.load_omega
+        sign = 0.0
+        if self.tc != 0.0:
+            if w != 0.0:
+                sign = 1.0 if w > 0.0 else -1.0
+            else:  # at rest: the torque on the motor, net minus the spring's, against τc
+                pull = net - (self.ks * d + self.cs * (0.0 - wl))
+                if abs(pull) <= self.tc:  # held: the load moves on the spring alone
+                    (hdd, hdl), (hld, hll) = self.held
+                    self.twist = hdd * d + hdl * wl
+                    self.load_omega = hld * d + hll * wl
+                    return
+                sign = 1.0 if pull > 0.0 else -1.0
+        f = net - sign * self.tc
+        (tw, td, tl, tf), (ww, wd, wlc, wf), (dw, dd, dl, df), (lw, ld, ll, lf) = self.moving
+        self.theta = self.theta + (tw * w + td * d + tl * wl + tf * f)
+        w_new = ww * w + wd * d + wlc * wl + wf * f
+        self.twist = dw * w + dd * d + dl * wl + df * f
+        self.load_omega = lw * w + ld * d + ll * wl + lf * f
+        # friction would turn the motor back within the tick: it is at rest at the tick's end
+        self.omega = 0.0 if sign != 0.0 and sign * w_new <= 0.0 else w_new
+
+
 class Encoder:
     """Quadrature encoder decoded ×4: count = floor(θ / q)."""
 
@@ -179,7 +225,8 @@ def reference_run(
     """Simulate one move; returns (accumulator row, trace rows at every tick)."""
     vf = VFController(prm)
     servo = DigitalServo(prm)
-    motor = MotorLoad(prm)
+    two = prm[L.P_TWO] != 0.0
+    motor = TwoMassLoad(prm) if two else MotorLoad(prm)
     enc = Encoder(prm)
     use_ext = prm[L.P_USE_EXT] != 0.0
     T = float(prm[L.P_TICK_S])
@@ -212,6 +259,12 @@ def reference_run(
     c_seen = 0
     p_prev = 0.0
     last_dir = 0.0
+    # the load's (two-mass): overshoot, last tick out, θ_L since the motor was last out,
+    # tracking
+    ov_l = 0.0
+    last_out_l = -1
+    since_motor_out: list[float] = [0.0]
+    trk_l = [0.0, 0.0]
     for i, P in enumerate(cmd.tolist()):
         p = int(ext[i]) if use_ext else vf.tick(P)
         n += p
@@ -240,6 +293,21 @@ def reference_run(
         elif last_dir != 0.0:
             ov_m = max(ov_m, last_dir * (theta - P))
             ov_p = max(ov_p, last_dir * (pos - P))
+        if isinstance(motor, TwoMassLoad):
+            thl = motor.load_theta
+            if p_prev == P and last_dir != 0.0:
+                ov_l = max(ov_l, last_dir * (thl - P))
+            if abs(thl - target) > win:
+                last_out_l = i
+            if abs(theta - target) > win:
+                since_motor_out = []
+            since_motor_out.append(thl)
+            d_l = P - thl
+            trk_l[0] += d_l * d_l
+            trk_l[1] = max(trk_l[1], abs(d_l))
+            load_row = [thl, motor.load_omega]
+        else:
+            load_row = [theta, omega]
         p_prev = P
         if abs(theta - target) > win:
             last_out_m = i
@@ -265,7 +333,9 @@ def reference_run(
         tq_mx = max(tq_mx, abs(tau))
         pc_mx = max(pc_mx, abs(servo.pc))
         w_mx = max(w_mx, abs(omega))
-        rows.append([P, pos, theta, omega, tau, servo.u, servo.pc, servo.y, servo.x, x * delta])
+        rows.append(
+            [P, pos, theta, omega, tau, servo.u, servo.pc, servo.y, servo.x, x * delta, *load_row]
+        )
 
     a[L.A_OV_MOTOR], a[L.A_OV_PULSE] = ov_m, ov_p
     a[L.A_LAST_OUT_MOTOR], a[L.A_LAST_OUT_PULSE] = last_out_m, last_out_p
@@ -286,6 +356,14 @@ def reference_run(
     a[L.A_TICKS] = len(cmd)
     a[L.A_ACC_WINDOW] = w
     a[L.A_ACC_QUANTUM] = 2.0 * acc_scale if use_ext else 0.0
+    if isinstance(motor, TwoMassLoad):
+        a[L.A_OV_LOAD], a[L.A_LAST_OUT_LOAD] = ov_l, last_out_l
+        a[L.A_RESIDUAL] = max(since_motor_out) - min(since_motor_out)
+        a[L.A_TRK_SQ_LOAD], a[L.A_TRK_MAX_LOAD] = trk_l
+        a[L.A_LOAD], a[L.A_LOAD_SPEED] = motor.load_theta, motor.load_omega
+    else:  # the kernel's initial values, and the load turning with the motor
+        a[L.A_LAST_OUT_LOAD] = -1
+        a[L.A_LOAD], a[L.A_LOAD_SPEED] = motor.theta, motor.omega
     return a, np.array(rows, dtype=np.float64).T.reshape(L.N_ROWS, len(cmd))
 
 
