@@ -269,6 +269,19 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
 
 
 @jit
+def run_segment_rigid(cmd, ext, prm, st, ring, i1, rec, dec):
+    """:func:`run_segment` of a rigid plant: what a caller in Python that knows its plant
+    calls, so that a first use compiles only its own loop."""
+    segment(cmd, ext, prm, st, ring, i1, rec, dec, False)
+
+
+@jit
+def run_segment_two(cmd, ext, prm, st, ring, i1, rec, dec):
+    """:func:`run_segment` of a two-mass plant (``P_TWO``), as :func:`run_segment_rigid`."""
+    segment(cmd, ext, prm, st, ring, i1, rec, dec, True)
+
+
+@jit
 def segment(cmd, ext, prm, st, ring, i1, rec, dec, two):
     """:func:`run_segment`'s loop; ``two`` (a literal at each call, so numba compiles one
     loop for each value, the other's branches dropped): the two-mass plant.

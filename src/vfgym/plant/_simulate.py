@@ -273,6 +273,12 @@ def check_pulses(pulses: np.ndarray, n_ticks: int) -> np.ndarray:
     return np.ascontiguousarray(arr, dtype=np.int8)
 
 
+def segment_kernel(prm: np.ndarray) -> Any:
+    """The compiled segment loop of the plant a parameter row states: ``run_segment``'s
+    rigid or two-mass loop, so that a first simulation compiles only its own."""
+    return K.run_segment_two if prm[L.P_TWO] != 0.0 else K.run_segment_rigid
+
+
 def run_move(
     cmd: np.ndarray, ext: np.ndarray, prm: np.ndarray, rec: np.ndarray, dec: int = 1
 ) -> np.ndarray:
@@ -301,11 +307,12 @@ def run_move(
     numpy.ndarray
         The accumulator row the measures are decoded from (:mod:`vfgym.plant.measures`).
     """
-    announce_compile("simulate", "the simulation kernel", K.run_segment)
+    loop = segment_kernel(prm)
+    announce_compile("simulate", "the simulation kernel", loop)
     st = np.empty(L.N_STATE, dtype=np.float64)
     ring = np.empty(K.ring_size.py_func(prm), dtype=np.float64)
     K.init_state.py_func(prm, st, ring)
-    K.run_segment(cmd, ext, prm, st, ring, cmd.shape[0], rec, dec)
+    loop(cmd, ext, prm, st, ring, cmd.shape[0], rec, dec)
     acc = K.new_acc()
     K.finish.py_func(st, acc, cmd.shape[0], prm)
     return acc
@@ -581,7 +588,8 @@ def simulate_train(
     cmd = np.zeros(n_ticks, dtype=np.float64)
     prm = pack(settings, plant, measures, 0.0, n_ticks, True)
     rec = np.empty((L.N_ROWS, n_ticks // dec), dtype=np.float64)
-    announce_compile("simulate", "the simulation kernel", K.run_segment)
+    loop = segment_kernel(prm)
+    announce_compile("simulate", "the simulation kernel", loop)
     st = np.empty(L.N_STATE, dtype=np.float64)
     ring = np.empty(K.ring_size.py_func(prm), dtype=np.float64)
     K.init_state.py_func(prm, st, ring)
@@ -589,7 +597,7 @@ def simulate_train(
     st[L.S_NSLEFT] = plant.servo.sample_ticks - phase
     st[L.S_PC] = held
     st[L.S_U] = held
-    K.run_segment(cmd, ext, prm, st, ring, n_ticks, rec, dec)
+    loop(cmd, ext, prm, st, ring, n_ticks, rec, dec)
     acc = K.new_acc()
     K.finish.py_func(st, acc, n_ticks, prm)
     return _trace(cmd, rec, acc, settings, plant, measures, dec, True)
