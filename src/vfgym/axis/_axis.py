@@ -75,7 +75,7 @@ class Axis:
         ):
             if not isinstance(getattr(self, key), kind):
                 raise ValueError(f"{key}={getattr(self, key)!r} must be a vfgym {kind.__name__}")
-        self.uncertainty.check_motor(self.plant.motor)
+        self.uncertainty.check_plant(self.plant)
         listed = _listed(self)
         for key, sc in listed.items():
             check_arrives(sc, self.plant, key)
