@@ -335,6 +335,9 @@ class Transmission:
         K_S, the spring's stiffness (N·m/rad), > 0.
     damping_nm_s_rad : float
         c_S, the spring's damping (N·m·s/rad), ≥ 0.
+    load_coulomb_nm : float
+        τc_L, Coulomb friction on the load (N·m, ≥ 0): a carriage's guide, a screw's nut
+        (:attr:`Motor.coulomb_nm` stays the motor side's: its bearings, a gearbox).
     travel_mm_per_rad : float or None
         A linear axis's travel per motor radian (mm/rad), > 0: the load's residual
         vibration is then also given in µm.
@@ -348,6 +351,7 @@ class Transmission:
     load_inertia_kgm2: float
     stiffness_nm_rad: float
     damping_nm_s_rad: float = 0.0
+    load_coulomb_nm: float = 0.0
     travel_mm_per_rad: float | None = None
 
     def __post_init__(self) -> None:
@@ -355,6 +359,7 @@ class Transmission:
             ("load_inertia_kgm2", MAX_ROTOR_INERTIA_KGM2, True),
             ("stiffness_nm_rad", None, True),
             ("damping_nm_s_rad", None, False),
+            ("load_coulomb_nm", None, False),
         ):
             _set(self, name, check_real(name, getattr(self, name), 0.0, hi, lo_open=lo_open))
         if self.travel_mm_per_rad is not None:
@@ -368,6 +373,7 @@ class Transmission:
         motor_inertia_kgm2: float,
         resonance_hz: float,
         damping_ratio: float = 0.0,
+        load_coulomb_nm: float = 0.0,
         travel_mm_per_rad: float | None = None,
     ) -> Transmission:
         """The transmission of a resonance f_r (seen from the motor) and damping ratio ζ:
@@ -383,7 +389,7 @@ class Transmission:
             f_r (Hz), > 0.
         damping_ratio : float
             ζ, in [0, 1].
-        travel_mm_per_rad : float or None
+        load_coulomb_nm, travel_mm_per_rad : float, float or None
             As in the class.
 
         Returns
@@ -395,7 +401,7 @@ class Transmission:
         w = 2.0 * math.pi * check_real("resonance_hz", resonance_hz, 0.0, lo_open=True)
         zeta = check_real("damping_ratio", damping_ratio, 0.0, 1.0)
         mu = jm * jl / (jm + jl)
-        return cls(jl, w * w * mu, 2.0 * zeta * mu * w, travel_mm_per_rad)
+        return cls(jl, w * w * mu, 2.0 * zeta * mu * w, load_coulomb_nm, travel_mm_per_rad)
 
     def resonance_hz(self, motor_inertia_kgm2: float) -> float:
         """The resonance seen from the motor, (1/2π)·√(K_S·(J_M + J_L)/(J_M·J_L)) (Hz), for
@@ -459,6 +465,14 @@ class Plant:
         if tr is not None:
             if not isinstance(tr, Transmission):
                 raise ValueError(f"transmission={tr!r} must be a vfgym.Transmission or None")
+            m = self.motor
+            held = m.coulomb_nm + tr.load_coulomb_nm + abs(m.load_torque_nm)
+            if held >= m.peak_torque_nm:
+                raise ValueError(
+                    f"transmission.load_coulomb_nm={tr.load_coulomb_nm!r} is out of range: with "
+                    f"the motor's friction and load torque ({held:g} N·m) it must stay below "
+                    f"peak_torque_nm={m.peak_torque_nm:g}, else the motor cannot move its load"
+                )
             most = self.tick_hz / RESONANCE_TICKS_MIN
             if tr.resonance_hz(self.motor.inertia_kgm2) > most:
                 raise ValueError(

@@ -31,7 +31,11 @@ def _moves(seed: int, count: int, compliant: float = 0.0):
             jm = plant.motor.inertia_kgm2
             plant = plant.replace(
                 transmission=Transmission.from_resonance(
-                    jm * rng.uniform(0.2, 5.0), jm, rng.uniform(20.0, 500.0), rng.uniform(0.0, 0.3)
+                    jm * rng.uniform(0.2, 5.0),
+                    jm,
+                    rng.uniform(20.0, 500.0),
+                    rng.uniform(0.0, 0.3),
+                    load_coulomb_nm=float(rng.choice([0.0, 0.005, 0.02])),
                 )
             )
         cmd = sc.command(plant)
@@ -131,13 +135,15 @@ def test_a_tick_in_which_friction_stops_the_motor_takes_the_scalar_step():
 def test_a_two_mass_lane_held_by_friction_ends_where_the_kernel_ends():
     """The friction scenario on a two-mass plant, in a block beside rigid lanes: its motor
     is held by friction while its load rings, breaks away and stops, all in the lanes' one
-    pass (no scalar step), bit for bit."""
+    pass (no scalar step), bit for bit; and a lane whose load is held by its own friction."""
     sc = get_scenario("friction")
     rigid = sc.plant()
     jm = rigid.motor.inertia_kgm2
     two = rigid.replace(transmission=Transmission.from_resonance(2 * jm, jm, 200.0, 0.02))
+    tr = Transmission.from_resonance(2 * jm, jm, 200.0, 0.02, load_coulomb_nm=0.01)
+    both = rigid.replace(transmission=tr)
     prms, cmds = [], []
-    for plant in (two, rigid, two):
+    for plant in (two, rigid, both):
         cmd = sc.command(plant)
         prms.append(pack(Settings(), plant, DEFAULT_MEASURES, float(cmd[-1]), cmd.size))
         cmds.append(cmd)
@@ -165,3 +171,5 @@ def test_a_two_mass_lane_held_by_friction_ends_where_the_kernel_ends():
     held = (w[1:] == 0.0) & (w[:-1] == 0.0) & (twist[1:] != twist[:-1])
     breaks = (w[:-1] == 0.0) & (w[1:] != 0.0)
     assert held.sum() > 100 and breaks.sum() >= 2
+    wl = simulate(CMD[2, : int(ST[2, L.S_TICK])], Settings(), both).load_speed_rad_s
+    assert ((wl[1:] == 0.0) & (wl[:-1] == 0.0)).sum() > 100

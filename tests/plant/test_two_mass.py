@@ -50,6 +50,7 @@ def compliant(
     viscous: float = 0.0,
     coulomb: float = 0.0,
     load: float = 0.0,
+    load_coulomb: float = 0.0,
 ) -> Plant:
     """The issue's example by default: the SGME-02A with half its inertia rigidly attached,
     3e-5 kg·m² beyond a 1 N·m/rad spring (about 49 Hz)."""
@@ -58,7 +59,7 @@ def compliant(
         motor=type(motor)(
             inertia_ratio=ratio, viscous_nm_s_rad=viscous, coulomb_nm=coulomb, load_torque_nm=load
         ),
-        transmission=Transmission(jl, ks, cs),
+        transmission=Transmission(jl, ks, cs, load_coulomb_nm=load_coulomb),
     )
 
 
@@ -78,10 +79,20 @@ def system(plant: Plant) -> tuple[np.ndarray, np.ndarray]:
     return a, np.array([0.0, 1.0 / jm, 0.0, 0.0])
 
 
-def step(plant: Plant, x: np.ndarray, f: float, tc: float = 0.0) -> np.ndarray:
+def step(plant: Plant, x: np.ndarray, f: float, tc: float = 0.0, tcl: float = 0.0) -> np.ndarray:
     """One tick of the compiled block on the state (θ, ω, d, ω_L)."""
     z = TK.two_mass.py_func(pack(PAPER_SETTINGS, plant, Measures(), 1.0, 10))
-    return np.array(TK.motor_two(x[0], x[1], x[2], x[3], f, tc, z))
+    return np.array(TK.motor_two(x[0], x[1], x[2], x[3], f, tc, tcl, z))
+
+
+def zoh(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """[e^(AT) | ∫_0^T e^(As) ds B]: expm of the plain system, the inputs' integral by
+    adaptive quadrature."""
+    phi = scipy.linalg.expm(a * T)
+    gamma, _ = scipy.integrate.quad_vec(
+        lambda t: scipy.linalg.expm(a * t) @ b, 0.0, T, epsabs=0.0, epsrel=1e-14
+    )
+    return np.column_stack([phi, gamma])
 
 
 # --- the tick's coefficients ---------------------------------------------------------------
@@ -97,20 +108,23 @@ PLANTS = {
 
 @pytest.mark.parametrize("name", PLANTS)
 def test_coefficients_are_the_plain_matrix_exponential_and_its_input_integral(name):
-    """The parameter row's coefficients (Van Loan's augmented exponential) against expm of
-    the plain 4×4 system and the input's ∫ e^(As) B ds by adaptive quadrature."""
+    """The parameter row's coefficients (Van Loan's augmented exponentials, balanced)
+    against expm of each plain system and its inputs' ∫ e^(As) B ds by quadrature: both
+    masses moving, the motor held (the load on the spring), the load held (the motor
+    against the spring)."""
     plant = PLANTS[name]
     a, b = system(plant)
-    phi = scipy.linalg.expm(a * T)
-    gamma, _ = scipy.integrate.quad_vec(lambda s: scipy.linalg.expm(a * s) @ b, 0.0, T,
-                                        epsabs=0.0, epsrel=1e-14)  # fmt: skip
-    z = two_mass_coefficients(plant).reshape(-1)
-    moving = np.column_stack([phi[:, 1:], gamma])  # rows θ, ω, d, ω_L; per ω, d, ω_L, F
-    np.testing.assert_allclose(z[:16].reshape(4, 4), moving, rtol=1e-12, atol=1e-18)
+    jm, bm = plant.motor.inertia_kgm2, plant.motor.viscous_nm_s_rad
     tr = plant.transmission
-    kl, cl = tr.stiffness_nm_rad / tr.load_inertia_kgm2, tr.damping_nm_s_rad / tr.load_inertia_kgm2
-    held = scipy.linalg.expm(np.array([[0.0, -1.0], [kl, -cl]]) * T)
-    np.testing.assert_allclose(z[16:].reshape(2, 2), held, rtol=1e-12, atol=1e-18)
+    jl, ks, cs = tr.load_inertia_kgm2, tr.stiffness_nm_rad, tr.damping_nm_s_rad
+    z = two_mass_coefficients(plant)
+    both = zoh(a, np.column_stack([b, [0.0, 0.0, 0.0, 1.0 / jl]]))[:, 1:]
+    np.testing.assert_allclose(z[:20].reshape(4, 5), both, rtol=1e-12, atol=1e-18)
+    motor_held = zoh(np.array([[0.0, -1.0], [ks / jl, -cs / jl]]), np.array([[0.0], [1.0 / jl]]))
+    np.testing.assert_allclose(z[20:26].reshape(2, 3), motor_held, rtol=1e-12, atol=1e-18)
+    a_l = np.array([[0.0, 1.0, 0.0], [0.0, -(bm + cs) / jm, -ks / jm], [0.0, 1.0, 0.0]])
+    load_held = zoh(a_l, np.array([[0.0], [1.0 / jm], [0.0]]))[:, 1:]
+    np.testing.assert_allclose(z[26:].reshape(3, 3), load_held, rtol=1e-12, atol=1e-18)
 
 
 @pytest.mark.parametrize("name", PLANTS)
@@ -142,13 +156,15 @@ def crossings(t: np.ndarray, x: np.ndarray) -> np.ndarray:
     return t[i] - x[i] * (t[i + 1] - t[i]) / (x[i + 1] - x[i])
 
 
-def free_run(plant: Plant, x0, seconds: float, tc: float = 0.0, f: float = 0.0) -> np.ndarray:
+def free_run(
+    plant: Plant, x0, seconds: float, tc: float = 0.0, f: float = 0.0, tcl: float = 0.0
+) -> np.ndarray:
     z = TK.two_mass.py_func(pack(PAPER_SETTINGS, plant, Measures(), 1.0, 10))
     n = round(seconds / T)
     out = np.empty((n + 1, 4))
     out[0] = x = tuple(x0)
     for i in range(n):
-        x = TK.motor_two.py_func(*x, f, tc, z)
+        x = TK.motor_two.py_func(*x, f, tc, tcl, z)
         out[i + 1] = x
     return out
 
@@ -205,6 +221,29 @@ def test_held_motor_leaves_the_load_ringing_at_the_antiresonance():
     x = free_run(plant, (0.1, 0.0, 1e-2, 0.0), 0.2, tc=0.05)  # pull 0.01 N·m < 0.05
     assert np.all(x[:, 0] == 0.1) and np.all(x[:, 1] == 0.0)
     assert frequency(x[:, 2]) == pytest.approx(plant.transmission.antiresonance_hz, rel=1e-3)
+
+
+def test_held_load_leaves_the_motor_ringing_against_the_spring():
+    """Coulomb friction holds the load (the spring's pull below τc_L): the load does not
+    move, and the motor rings on the spring at (1/2π)·√(K_S/J_M), within 0.1 %."""
+    plant = compliant(cs=0.0, load_coulomb=0.05)
+    x = free_run(plant, (0.0, 0.0, 1e-2, 0.0), 0.2, tcl=0.05)
+    load = x[:, 0] - x[:, 2]  # θ_L = θ − d: held, to the rounding of the two
+    assert np.abs(load - load[0]).max() < 1e-15 and np.all(x[:, 3] == 0.0)
+    assert np.ptp(x[:, 0]) > 0.015
+    jm = plant.motor.inertia_kgm2
+    assert frequency(x[:, 2]) == pytest.approx(math.sqrt(1.0 / jm) / (2 * math.pi), rel=1e-3)
+
+
+def test_both_held_nothing_moves_and_the_load_breaks_away_beyond_its_friction():
+    plant = compliant(coulomb=0.02, load_coulomb=0.02)
+    x0 = np.array([0.1, 0.0, 0.01, 0.0])  # the spring pulls 0.01 N·m each way
+    np.testing.assert_array_equal(step(plant, x0, 0.0, tc=0.02, tcl=0.02), x0)
+    x = step(plant, np.array([0.1, 0.0, 0.05, 0.0]), 0.05, tc=0.02, tcl=0.02)
+    assert x[3] > 0.0 and x[1] == 0.0 and x[0] == 0.1  # the load toward the motor; it held
+    # friction on the load alone damps the load's ringing to a stop: a held load, at rest
+    x = free_run(compliant(cs=0.0, load_coulomb=0.002), (0.0, 0.0, 0.01, 0.0), 0.5, tcl=0.002)
+    assert np.all(x[-1000:, 3] == 0.0) and np.abs(x[-1, 2]) <= 0.002
 
 
 def test_friction_breaks_away_stops_and_holds():
@@ -338,10 +377,11 @@ def test_the_load_rings_after_the_encoder_reads_in_position():
     viscous=st.sampled_from([0.0, 3e-4]),
     coulomb=st.sampled_from([0.0, 0.01, 0.1]),
     load=st.sampled_from([0.0, 0.05, -0.2]),
+    load_coulomb=st.sampled_from([0.0, 0.01, 0.1]),
     ramp=st.booleans(),
 )
 def test_kernel_matches_reference_bit_for_bit(
-    amp, value, limit, k, a, ratio, jl_ratio, hz, zeta, viscous, coulomb, load, ramp
+    amp, value, limit, k, a, ratio, jl_ratio, hz, zeta, viscous, coulomb, load, load_coulomb, ramp
 ):
     n = 3000
     cmd = amp * (np.minimum(np.arange(n) / 1500.0, 1.0) if ramp else np.ones(n))
@@ -349,7 +389,8 @@ def test_kernel_matches_reference_bit_for_bit(
         inertia_ratio=ratio, viscous_nm_s_rad=viscous, coulomb_nm=coulomb, load_torque_nm=load
     )
     jm = base.motor.inertia_kgm2
-    plant = base.replace(transmission=Transmission.from_resonance(jm * jl_ratio, jm, hz, zeta))
+    tr = Transmission.from_resonance(jm * jl_ratio, jm, hz, zeta, load_coulomb)
+    plant = base.replace(transmission=tr)
     s = Settings(value_rad=value, error_limit_rad=limit, k=k, ts_over_tf=a)
     prm = pack(s, plant, Measures(accel_window_s=50 * T), float(cmd[-1]), n)
     acc, rec = K.new_acc(), np.empty((L.N_ROWS, n))
@@ -359,21 +400,22 @@ def test_kernel_matches_reference_bit_for_bit(
     np.testing.assert_array_equal(acc, acc_ref)
 
 
-def test_kernel_matches_reference_with_external_pulses_and_held_motor():
-    """An external train on a plant with friction: the motor is held, breaks away and stops
+@pytest.mark.parametrize(("coulomb", "load_coulomb"), [(0.03, 0.0), (0.0, 0.02), (0.03, 0.01)])
+def test_kernel_matches_reference_with_external_pulses_and_held_masses(coulomb, load_coulomb):
+    """An external train on a plant with friction: a mass is held, breaks away and stops
     (each of the block's branches taken), bit for bit."""
     rng = np.random.default_rng(3)
     ext = rng.choice(np.array([-1, 0, 1], dtype=np.int8), size=6000, p=[0.25, 0.45, 0.3])
     ext[3000:] = 0  # then at rest, the load ringing
     cmd = np.cumsum(ext) * PAPER_PLANT.pulse_rad
-    plant = compliant(ks=3.0, cs=0.0005, coulomb=0.03)
+    plant = compliant(ks=3.0, cs=0.0005, coulomb=coulomb, load_coulomb=load_coulomb)
     prm = pack(PAPER_SETTINGS, plant, Measures(), float(cmd[-1]), cmd.size, True)
     acc, rec = K.new_acc(), np.empty((L.N_ROWS, cmd.size))
     K.run_one(cmd, ext, prm, acc, rec, 1)
     acc_ref, rec_ref = reference_run(cmd, ext, prm)
     np.testing.assert_array_equal(rec, rec_ref)
     np.testing.assert_array_equal(acc, acc_ref)
-    w = rec[L.R_OMEGA]
+    w = rec[L.R_LOAD_SPEED] if coulomb == 0.0 else rec[L.R_OMEGA]
     held = (w[:-1] == 0.0) & (w[1:] == 0.0)
     assert held.sum() > 100 and np.ptp(rec[L.R_LOAD][3000:] - rec[L.R_THETA][3000:]) > 0.0
 
@@ -388,6 +430,8 @@ def test_kernel_matches_reference_with_external_pulses_and_held_motor():
         (lambda: Transmission(1e-5, -1.0), "stiffness_nm_rad"),
         (lambda: Transmission(1e-5, 1.0, -0.1), "damping_nm_s_rad"),
         (lambda: Transmission(1e-5, 1.0, travel_mm_per_rad=0.0), "travel_mm_per_rad"),
+        (lambda: Transmission(1e-5, 1.0, load_coulomb_nm=-0.1), "load_coulomb_nm"),
+        (lambda: PAPER_PLANT.replace(transmission=Transmission(1e-5, 1.0, 0.0, 2.0)), "load_coul"),
         (lambda: Transmission.from_resonance(1e-5, 1e-5, 50.0, 1.5), "damping_ratio"),
         (lambda: PAPER_PLANT.replace(transmission=Transmission(1e-5, 1e6)), "stiffness_nm_rad"),
         (lambda: PAPER_PLANT.replace(transmission={"stiffness_nm_rad": 1.0}), "transmission"),

@@ -93,6 +93,7 @@ from vfgym.plant._layout import (
     P_STEP,
     P_TARGET,
     P_TC,
+    P_TCL,
     P_TICK_S,
     P_TLOAD,
     P_TPEAK,
@@ -300,7 +301,7 @@ def segment(cmd, ext, prm, st, ring, i1, rec, dec, two):
     tc, tload = prm[P_TC], prm[P_TLOAD]
     target, win, ss_start = prm[P_TARGET], prm[P_WIN_RAD], int(prm[P_SS_START])
     accw = int(prm[P_ACC_W])
-    z = two_mass(prm)
+    z, tcl = two_mass(prm), prm[P_TCL]
     inv_q = 1.0 / q
     n_rec = rec.shape[1] if rec.shape[0] >= N_ROWS else 0
     i0 = int(st[S_TICK])
@@ -350,7 +351,7 @@ def segment(cmd, ext, prm, st, ring, i1, rec, dec, two):
         # 4. motor over the tick, torque held
         omega_old = omega
         if two:
-            theta, omega, d, wl = motor_two(theta, omega, d, wl, tau - tload, tc, z)
+            theta, omega, d, wl = motor_two(theta, omega, d, wl, tau - tload, tc, tcl, z)
         else:
             theta, omega = motor(theta, omega, tau - tload, tc, cww, cwf, ctw, ctf, damp, inv_j, T)
         # 5. encoder

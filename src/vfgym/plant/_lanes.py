@@ -201,47 +201,89 @@ def _tick_source_servo_motor(Z, sampling, friction, two) -> int:
         if two:  # the two-mass tick (vfgym.plant._tick.motor_two as selects)
             lane_two = Z[_at(Z_PRM + L.P_TWO, e)] != 0.0
             slow = slow and not lane_two
+            tcl = Z[_at(Z_PRM + L.P_TCL, e)]
             d = Z[_at(Z_ST + L.S_TWIST, e)]
             wl = Z[_at(Z_ST + L.S_WLOAD, e)]
-            pull = net - (Z[_at(Z_PRM + L.P_KS, e)] * d + Z[_at(Z_PRM + L.P_CS, e)] * (0.0 - wl))
+            spring = Z[_at(Z_PRM + L.P_KS, e)] * d + Z[_at(Z_PRM + L.P_CS, e)] * (omega - wl)
+            pull = net - spring
             s_pull = 1.0 if pull > tc else (-1.0 if pull < -tc else 0.0)
-            at_rest = omega == 0.0
             s_move = 1.0 if omega > 0.0 else -1.0
-            has_f = tc != 0.0
-            s = (s_pull if at_rest else s_move) if has_f else 0.0
-            held = has_f and at_rest and s_pull == 0.0
+            s = (s_pull if omega == 0.0 else s_move) if tc != 0.0 else 0.0
+            m_held = tc != 0.0 and omega == 0.0 and s_pull == 0.0
+            sl_pull = 1.0 if spring > tcl else (-1.0 if spring < -tcl else 0.0)
+            sl_move = 1.0 if wl > 0.0 else -1.0
+            sl = (sl_pull if wl == 0.0 else sl_move) if tcl != 0.0 else 0.0
+            l_held = tcl != 0.0 and wl == 0.0 and sl_pull == 0.0
             f = net - s * tc
-            th2 = theta + (
+            g = 0.0 - sl * tcl
+            # both moving
+            th_b = theta + (
                 Z[_at(Z_PRM + L.P_Z_TW, e)] * omega
                 + Z[_at(Z_PRM + L.P_Z_TD, e)] * d
                 + Z[_at(Z_PRM + L.P_Z_TL, e)] * wl
                 + Z[_at(Z_PRM + L.P_Z_TF, e)] * f
+                + Z[_at(Z_PRM + L.P_Z_TG, e)] * g
             )
-            w2 = (
+            w_b = (
                 Z[_at(Z_PRM + L.P_Z_WW, e)] * omega
                 + Z[_at(Z_PRM + L.P_Z_WD, e)] * d
                 + Z[_at(Z_PRM + L.P_Z_WL, e)] * wl
                 + Z[_at(Z_PRM + L.P_Z_WF, e)] * f
+                + Z[_at(Z_PRM + L.P_Z_WG, e)] * g
             )
-            d2 = (
+            d_b = (
                 Z[_at(Z_PRM + L.P_Z_DW, e)] * omega
                 + Z[_at(Z_PRM + L.P_Z_DD, e)] * d
                 + Z[_at(Z_PRM + L.P_Z_DL, e)] * wl
                 + Z[_at(Z_PRM + L.P_Z_DF, e)] * f
+                + Z[_at(Z_PRM + L.P_Z_DG, e)] * g
             )
-            wl2 = (
+            wl_b = (
                 Z[_at(Z_PRM + L.P_Z_LW, e)] * omega
                 + Z[_at(Z_PRM + L.P_Z_LD, e)] * d
                 + Z[_at(Z_PRM + L.P_Z_LL, e)] * wl
                 + Z[_at(Z_PRM + L.P_Z_LF, e)] * f
+                + Z[_at(Z_PRM + L.P_Z_LG, e)] * g
             )
-            w2 = 0.0 if (s != 0.0 and s * w2 <= 0.0) else w2
-            d_held = Z[_at(Z_PRM + L.P_Z_HDD, e)] * d + Z[_at(Z_PRM + L.P_Z_HDL, e)] * wl
-            wl_held = Z[_at(Z_PRM + L.P_Z_HLD, e)] * d + Z[_at(Z_PRM + L.P_Z_HLL, e)] * wl
-            th2 = theta if held else th2
-            w2 = omega if held else w2
-            Z[_at(Z_ST + L.S_TWIST, e)] = (d_held if held else d2) if lane_two else d
-            Z[_at(Z_ST + L.S_WLOAD, e)] = (wl_held if held else wl2) if lane_two else wl
+            # the motor held: the load moves on the spring alone
+            d_m = (
+                Z[_at(Z_PRM + L.P_Z_MDD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_MDL, e)] * wl
+                + Z[_at(Z_PRM + L.P_Z_MDG, e)] * g
+            )
+            wl_m = (
+                Z[_at(Z_PRM + L.P_Z_MLD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_MLL, e)] * wl
+                + Z[_at(Z_PRM + L.P_Z_MLG, e)] * g
+            )
+            # the load held: the motor moves against the spring
+            th_l = theta + (
+                Z[_at(Z_PRM + L.P_Z_LTW, e)] * omega
+                + Z[_at(Z_PRM + L.P_Z_LTD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_LTF, e)] * f
+            )
+            w_l = (
+                Z[_at(Z_PRM + L.P_Z_LWW, e)] * omega
+                + Z[_at(Z_PRM + L.P_Z_LWD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_LWF, e)] * f
+            )
+            d_l = (
+                Z[_at(Z_PRM + L.P_Z_LDW, e)] * omega
+                + Z[_at(Z_PRM + L.P_Z_LDD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_LDF, e)] * f
+            )
+            # each mode's step, the stops of its moving masses, then the lane's mode
+            w_b = 0.0 if (s != 0.0 and s * w_b <= 0.0) else w_b
+            wl_b = 0.0 if (sl != 0.0 and sl * wl_b <= 0.0) else wl_b
+            wl_m = 0.0 if (sl != 0.0 and sl * wl_m <= 0.0) else wl_m
+            w_l = 0.0 if (s != 0.0 and s * w_l <= 0.0) else w_l
+            both_held = m_held and l_held
+            th2 = theta if m_held else (th_l if l_held else th_b)
+            w2 = omega if m_held else (w_l if l_held else w_b)
+            d2 = d if both_held else (d_m if m_held else (d_l if l_held else d_b))
+            wl2 = wl if l_held else (wl_m if m_held else wl_b)
+            Z[_at(Z_ST + L.S_TWIST, e)] = d2 if lane_two else d
+            Z[_at(Z_ST + L.S_WLOAD, e)] = wl2 if lane_two else wl
             th_rigid = th2 if lane_two else th_rigid
             w_rigid = w2 if lane_two else w_rigid
         Z[_at(Z_SLOW, e)] = 1.0 if slow else 0.0

@@ -110,16 +110,18 @@ def motor_coefficients(plant: Plant) -> tuple[float, float, float, float]:
 def two_mass_coefficients(plant: Plant) -> np.ndarray:
     """Exact one-tick zero-order-hold coefficients of the two-mass plant (docs/model.md §3.1).
 
-    With the state (θ, ω, d, ω_L), d = θ − θ_L the spring's twist, and the net torque F on
-    the motor held over the tick,
+    With the state (θ, ω, d, ω_L), d = θ − θ_L the spring's twist, and the forces F on the
+    motor (net torque less its Coulomb friction) and G on the load (its Coulomb friction)
+    held over the tick,
 
-        J_M·dω/dt = F − b·ω − K_S·d − c_S·(ω − ω_L),   J_L·dω_L/dt = K_S·d + c_S·(ω − ω_L),
+        J_M·dω/dt = F − b·ω − K_S·d − c_S·(ω − ω_L),   J_L·dω_L/dt = G + K_S·d + c_S·(ω − ω_L),
 
-    the tick's transition is the matrix exponential of the system augmented with its input
-    (Van Loan's), computed by :func:`scipy.linalg.expm` once per plant; and, for the motor
-    held at rest by friction, that of the load on the spring alone. Both are balanced first
-    (speeds in rad per tick, the torque in rad per tick² of the motor), so that every
-    coefficient, not only the largest, comes out to a few units in its last place.
+    the tick's transition is the matrix exponential of the system augmented with its inputs
+    (Van Loan's), computed by :func:`scipy.linalg.expm` once per plant; and the same for
+    the motor held at rest by friction (the load moving on the spring) and for the load
+    held (the motor moving against the spring). Each system is balanced first (speeds in
+    rad per tick, forces in rad per tick² of their mass), so that every coefficient, not
+    only the largest, comes out to a few units in its last place.
 
     Parameters
     ----------
@@ -130,9 +132,10 @@ def two_mass_coefficients(plant: Plant) -> np.ndarray:
     Returns
     -------
     numpy.ndarray
-        float64, 20 entries in the parameter row's order ``P_Z_TW`` … ``P_Z_HLL``
-        (:mod:`vfgym.plant._layout`): θ(T) − θ, ω(T), d(T), ω_L(T) per (ω, d, ω_L, F),
-        then the held motor's d(T), ω_L(T) per (d, ω_L).
+        float64, 35 entries in the parameter row's order ``P_Z_TW`` … ``P_Z_LDF``
+        (:mod:`vfgym.plant._layout`): both moving, θ(T) − θ, ω(T), d(T), ω_L(T) per
+        (ω, d, ω_L, F, G); the motor held, d(T), ω_L(T) per (d, ω_L, G); the load held,
+        θ(T) − θ, ω(T), d(T) per (ω, d, F).
 
     Raises
     ------
@@ -149,21 +152,31 @@ def two_mass_coefficients(plant: Plant) -> np.ndarray:
     ).copy()  # fmt: skip
 
 
+def _zoh(a: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """e^(a) of an augmented system, balanced by x ↦ S·x: S⁻¹·e^(S·a·S⁻¹)·S."""
+    return scipy.linalg.expm(a * scale[:, None] / scale[None, :]) / scale[:, None] * scale[None, :]
+
+
 @functools.lru_cache(maxsize=256)
 def _two_mass(T: float, jm: float, b: float, jl: float, ks: float, cs: float) -> np.ndarray:
-    a = np.zeros((5, 5))
+    # both moving: (θ, ω, d, ω_L | F, G)
+    a = np.zeros((6, 6))
     a[0, 1] = 1.0  # θ' = ω
-    a[1, 1:4] = (-(b + cs) / jm, -ks / jm, cs / jm)  # ω'
-    a[1, 4] = 1.0 / jm  # … + F/J_M
+    a[1, 1:5] = (-(b + cs) / jm, -ks / jm, cs / jm, 1.0 / jm)  # ω' … + F/J_M
     a[2, 1], a[2, 3] = 1.0, -1.0  # d' = ω − ω_L
     a[3, 1:4] = (cs / jl, ks / jl, -cs / jl)  # ω_L'
-    # x ↦ S·x with S = (1, T, 1, T, T²/J_M): e^(M) = S⁻¹·e^(S·M·S⁻¹)·S
-    sc = np.array([1.0, T, 1.0, T, T * T / jm])
-    e = scipy.linalg.expm(a * T * sc[:, None] / sc[None, :]) / sc[:, None] * sc[None, :]
-    h = np.array([[0.0, -1.0], [ks / jl, -cs / jl]]) * T
-    sh = sc[2:4]
-    held = scipy.linalg.expm(h * sh[:, None] / sh[None, :]) / sh[:, None] * sh[None, :]
-    out = np.concatenate([e[0:4, 1:5].ravel(), held.ravel()])
+    a[3, 5] = 1.0 / jl  # … + G/J_L
+    both = _zoh(a * T, np.array([1.0, T, 1.0, T, T * T / jm, T * T / jl]))[0:4, 1:6]
+    # the motor held: (d, ω_L | G)
+    a = np.array([[0.0, -1.0, 0.0], [ks / jl, -cs / jl, 1.0 / jl], [0.0, 0.0, 0.0]])
+    motor_held = _zoh(a * T, np.array([1.0, T, T * T / jl]))[0:2, :]
+    # the load held: (θ, ω, d | F)
+    a = np.zeros((4, 4))
+    a[0, 1] = 1.0
+    a[1, 1:4] = (-(b + cs) / jm, -ks / jm, 1.0 / jm)
+    a[2, 1] = 1.0
+    load_held = _zoh(a * T, np.array([1.0, T, 1.0, T * T / jm]))[0:3, 1:4]
+    out = np.concatenate([both.ravel(), motor_held.ravel(), load_held.ravel()])
     out.flags.writeable = False
     return out
 
@@ -236,7 +249,8 @@ def pack(
         prm[L.P_TWO] = 1.0
         prm[L.P_KS] = plant.transmission.stiffness_nm_rad
         prm[L.P_CS] = plant.transmission.damping_nm_s_rad
-        prm[L.P_Z_TW : L.P_Z_HLL + 1] = two_mass_coefficients(plant)
+        prm[L.P_TCL] = plant.transmission.load_coulomb_nm
+        prm[L.P_Z_TW : L.P_Z_LDF + 1] = two_mass_coefficients(plant)
     return prm
 
 

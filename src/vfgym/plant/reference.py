@@ -162,19 +162,24 @@ class MotorLoad:
 
 
 class TwoMassLoad(MotorLoad):
-    """docs/model.md §3.1: the motor (J_M, b, τc, τ_load) and the load J_L beyond a spring
-    K_S with damping c_S, exact (the parameter row's matrix exponential) for the Coulomb
-    force held; friction's stops and break-aways at the tick's boundaries."""
+    """docs/model.md §3.1: the motor (J_M, b, τc, τ_load) and the load J_L (its own Coulomb
+    friction τc_L) beyond a spring K_S with damping c_S, exact (the parameter row's matrix
+    exponentials) for the friction forces held; friction's stops and break-aways at the
+    tick's boundaries."""
 
     def __init__(self, prm: np.ndarray) -> None:
         super().__init__(prm)
         self.ks = float(prm[L.P_KS])
         self.cs = float(prm[L.P_CS])
-        rows = prm[L.P_Z_TW : L.P_Z_LF + 1].reshape(4, 4)  # (θ, ω, d, ω_L) per (ω, d, ω_L, F)
-        self.moving = [[float(v) for v in row] for row in rows]
-        self.held = [
-            [float(v) for v in row] for row in prm[L.P_Z_HDD : L.P_Z_HLL + 1].reshape(2, 2)
-        ]
+        self.tcl = float(prm[L.P_TCL])
+
+        def rows(first: int, last: int, width: int) -> list[list[float]]:
+            return [[float(v) for v in r] for r in prm[first : last + 1].reshape(-1, width)]
+
+        # both moving: (θ, ω, d, ω_L) per (ω, d, ω_L, F, G)
+        self.both = rows(L.P_Z_TW, L.P_Z_LG, 5)
+        self.motor_held = rows(L.P_Z_MDD, L.P_Z_MLG, 3)  # (d, ω_L) per (d, ω_L, G)
+        self.load_held = rows(L.P_Z_LTW, L.P_Z_LDF, 3)  # (θ, ω, d) per (ω, d, F)
         self.twist = 0.0  # d = θ − θ_L
         self.load_omega = 0.0
 
@@ -182,29 +187,51 @@ class TwoMassLoad(MotorLoad):
     def load_theta(self) -> float:
         return self.theta - self.twist
 
+    @staticmethod
+    def friction(speed: float, pull: float, tc: float) -> tuple[float, bool]:
+        """The sign of a mass's Coulomb force (that of its speed, or at rest of the torque
+        pulling it, if beyond ``tc``), and whether it stays held."""
+        if tc == 0.0:
+            return 0.0, False
+        if speed != 0.0:
+            return (1.0 if speed > 0.0 else -1.0), False
+        if abs(pull) <= tc:
+            return 0.0, True
+        return (1.0 if pull > 0.0 else -1.0), False
+
+    @staticmethod
+    def stopped(sign: float, speed: float) -> float:
+        """A moving mass that friction would turn back within the tick is at rest at its end."""
+        return 0.0 if sign != 0.0 and sign * speed <= 0.0 else speed
+
     def tick(self, tau: float) -> None:
         net = tau - self.tload
         w, d, wl = self.omega, self.twist, self.load_omega
-        sign = 0.0
-        if self.tc != 0.0:
-            if w != 0.0:
-                sign = 1.0 if w > 0.0 else -1.0
-            else:  # at rest: the torque on the motor, net minus the spring's, against τc
-                pull = net - (self.ks * d + self.cs * (0.0 - wl))
-                if abs(pull) <= self.tc:  # held: the load moves on the spring alone
-                    (hdd, hdl), (hld, hll) = self.held
-                    self.twist = hdd * d + hdl * wl
-                    self.load_omega = hld * d + hll * wl
-                    return
-                sign = 1.0 if pull > 0.0 else -1.0
-        f = net - sign * self.tc
-        (tw, td, tl, tf), (ww, wd, wlc, wf), (dw, dd, dl, df), (lw, ld, ll, lf) = self.moving
-        self.theta = self.theta + (tw * w + td * d + tl * wl + tf * f)
-        w_new = ww * w + wd * d + wlc * wl + wf * f
-        self.twist = dw * w + dd * d + dl * wl + df * f
-        self.load_omega = lw * w + ld * d + ll * wl + lf * f
-        # friction would turn the motor back within the tick: it is at rest at the tick's end
-        self.omega = 0.0 if sign != 0.0 and sign * w_new <= 0.0 else w_new
+        spring = self.ks * d + self.cs * (w - wl)  # on the load; against the motor
+        s, motor_held = self.friction(w, net - spring, self.tc)
+        sl, load_held = self.friction(wl, spring, self.tcl)
+        f = net - s * self.tc
+        g = 0.0 - sl * self.tcl
+        if motor_held and load_held:
+            return
+        if motor_held:  # the load moves on the spring alone
+            (dd, dl, dg), (ld, ll, lg) = self.motor_held
+            self.twist = dd * d + dl * wl + dg * g
+            self.load_omega = self.stopped(sl, ld * d + ll * wl + lg * g)
+            return
+        if load_held:  # the motor moves against the spring
+            (tw, td, tf), (ww, wd, wf), (dw, dd, df) = self.load_held
+            self.theta = self.theta + (tw * w + td * d + tf * f)
+            self.omega = self.stopped(s, ww * w + wd * d + wf * f)
+            self.twist = dw * w + dd * d + df * f
+            return
+        rows = self.both
+        x = (w, d, wl, f, g)
+        t_row, w_row, d_row, l_row = ([c * v for c, v in zip(r, x, strict=True)] for r in rows)
+        self.theta = self.theta + (t_row[0] + t_row[1] + t_row[2] + t_row[3] + t_row[4])
+        self.omega = self.stopped(s, w_row[0] + w_row[1] + w_row[2] + w_row[3] + w_row[4])
+        self.twist = d_row[0] + d_row[1] + d_row[2] + d_row[3] + d_row[4]
+        self.load_omega = self.stopped(sl, l_row[0] + l_row[1] + l_row[2] + l_row[3] + l_row[4])
 
 
 class Encoder:
