@@ -36,6 +36,8 @@ scenarios = st.one_of(
         st.floats(0.03, 0.12),
     ),
 )
+
+
 def _base(ns: int, lines: int, hz: float | None):
     """The paper's plant with another servo period and encoder; with a transmission (the
     load judged) at ``hz`` unless None."""
@@ -129,8 +131,10 @@ def test_compiled_cost_equals_score_term_by_term_on_random_states(sc, base, meas
         stt[L.S_LOL] = data.draw(st.integers(-1, n - 1), "the load's last tick out")
         stt[L.S_OVL] = data.draw(st.floats(0.0, 3.0) | st.sampled_from([0.0, win]), "its overshoot")
         stt[L.S_TSQL] = data.draw(st.floats(0.0, 100.0 * n), "its squared tracking error")
-        stt[L.S_TWIST] = stt[L.S_THETA] - target - data.draw(
-            st.floats(-3.0, 3.0) | st.sampled_from([0.0, win, -win]), "its final error"
+        stt[L.S_TWIST] = (
+            stt[L.S_THETA]
+            - target
+            - data.draw(st.floats(-3.0, 3.0) | st.sampled_from([0.0, win, -win]), "its final error")
         )
     check_against_score(stt, prm, sc, plant, meas, w, b)
 
