@@ -395,6 +395,7 @@ class Transmission:
         Returns
         -------
         Transmission
+            K_S and c_S from the resonance, the other fields as given.
         """
         jl = check_real("load_inertia_kgm2", load_inertia_kgm2, 0.0, lo_open=True)
         jm = check_real("motor_inertia_kgm2", motor_inertia_kgm2, 0.0, lo_open=True)
@@ -404,8 +405,18 @@ class Transmission:
         return cls(jl, w * w * mu, 2.0 * zeta * mu * w, load_coulomb_nm, travel_mm_per_rad)
 
     def resonance_hz(self, motor_inertia_kgm2: float) -> float:
-        """The resonance seen from the motor, (1/2π)·√(K_S·(J_M + J_L)/(J_M·J_L)) (Hz), for
-        J_M = ``motor_inertia_kgm2``."""
+        """The resonance seen from the motor, (1/2π)·√(K_S·(J_M + J_L)/(J_M·J_L)).
+
+        Parameters
+        ----------
+        motor_inertia_kgm2 : float
+            J_M (kg·m²), > 0.
+
+        Returns
+        -------
+        float
+            The undamped resonance (Hz).
+        """
         jm, jl = motor_inertia_kgm2, self.load_inertia_kgm2
         return math.sqrt(self.stiffness_nm_rad * (jm + jl) / (jm * jl)) / (2.0 * math.pi)
 
