@@ -261,8 +261,8 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
     move's own tick number; ``prm`` may change between segments (online tuning).
 
     A rigid and a two-mass plant (``P_TWO``) each run their own compiled loop
-    (:func:`segment`, specialised on its literal ``two``): the rigid loop holds nothing of
-    the two-mass plant."""
+    (:func:`segment`, specialised on its literal ``two``): the rigid loop's tick does
+    nothing of the two-mass plant's."""
     if prm[P_TWO] != 0.0:
         segment(cmd, ext, prm, st, ring, i1, rec, dec, True)
     else:
