@@ -12,7 +12,7 @@ in counts (quadrature ×4).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from vfgym._limits import (
@@ -498,6 +498,14 @@ class Plant:
                 f"{self.tick_hz:g}: allowed whole numbers in [1, {most}] (a sample period "
                 f"Ts of at most {MAX_SAMPLE_S * 1e3:g} ms)"
             )
+
+    def __repr__(self) -> str:
+        # the dataclass's own repr, without ``transmission`` when there is none: a rigid
+        # plant reads as it did before transmissions, so digests of it (the per-move
+        # optima's moves-key) stay
+        shown = (f for f in fields(self) if f.name != "transmission" or self.transmission)
+        parts = ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in shown)
+        return f"{type(self).__qualname__}({parts})"
 
     @property
     def tick_s(self) -> float:

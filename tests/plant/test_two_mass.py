@@ -452,3 +452,17 @@ def test_drive_follows_the_whole_load():
     assert PAPER_PLANT.with_motor(inertia_ratio=0.5).torque_per_count_nm == (
         PAPER_PLANT.servo.torque_per_count_nm * 1.5
     )
+
+
+def test_a_rigid_plants_repr_is_as_before_transmissions_and_a_compliant_ones_names_it():
+    """Digests of a plant (the per-move optima's moves-key) read its repr: a rigid plant's
+    must not change with the new field, a compliant one's must differ."""
+    rigid = repr(PAPER_PLANT)
+    assert "transmission" not in rigid and rigid.startswith("Plant(tick_hz=140000.0, ")
+    assert rigid.endswith("encoder_lines=2048, accel_limit_rad_s2=140000.0))")
+    two = repr(compliant())
+    assert "transmission=Transmission(load_inertia_kgm2=3e-05" in two
+    from vfgym.axis import PlantVariant
+
+    assert "stiffness" not in repr(PlantVariant(inertia=1.1))
+    assert "stiffness=0.9" in repr(PlantVariant(stiffness=0.9))

@@ -244,6 +244,17 @@ class PlantVariant:
     stiffness: float = 1.0
     damping: float = 1.0
 
+    def __repr__(self) -> str:
+        # the dataclass's own repr, without the transmission's factors at 1: a variant of
+        # a rigid axis reads as it did before them, so digests of it stay
+        shown = (
+            f
+            for f in fields(self)
+            if f.name not in ("stiffness", "damping") or getattr(self, f.name) != 1.0
+        )
+        parts = ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in shown)
+        return f"{type(self).__qualname__}({parts})"
+
     @property
     def nominal(self) -> bool:
         """True for the modelled plant itself."""
