@@ -113,6 +113,7 @@ def axis_keys_markdown() -> str:
         ("plant", vfgym.Plant),
         ("plant: motor", vfgym.Motor),
         ("plant: servo", vfgym.Servo),
+        ("plant: transmission", vfgym.Transmission),
         ("measures", vfgym.Measures),
         ("moves: train / test, each move", vfgym.Scenario),
         ("moves: train / test, random", MoveDistribution),

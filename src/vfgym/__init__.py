@@ -35,6 +35,7 @@ from vfgym.params import (
     Plant,
     Servo,
     Settings,
+    Transmission,
     paper_k,
 )
 from vfgym.permove import load_tuner
@@ -67,6 +68,7 @@ __all__ = [
     "Servo",
     "Settings",
     "Trace",
+    "Transmission",
     "baselines",
     "envs",
     "evaluate",

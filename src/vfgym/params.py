@@ -12,7 +12,7 @@ in counts (quadrature ×4).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from vfgym._limits import (
@@ -315,6 +315,117 @@ class Servo:
         _set(self, "follows_load", check_bool("follows_load", self.follows_load))
 
 
+RESONANCE_TICKS_MIN = 10.0
+"""A transmission's resonance spans at least this many ticks (its frequency ≤ f/10), so
+that the tick resolves it and Coulomb friction's events, at tick boundaries, stay within a
+tenth of its period (docs/model.md §3.1)."""
+
+
+@dataclass(frozen=True)
+class Transmission:
+    """A compliant transmission (belt, screw, coupling): the load J_L beyond a spring K_S
+    with damping c_S, all referred to the motor shaft: a two-mass plant whose encoder reads
+    the motor (docs/model.md §3.1). :meth:`from_resonance` takes a resonance instead.
+
+    Parameters
+    ----------
+    load_inertia_kgm2 : float
+        J_L, the load beyond the spring (kg·m²), in (0, 1].
+    stiffness_nm_rad : float
+        K_S, the spring's stiffness (N·m/rad), > 0.
+    damping_nm_s_rad : float
+        c_S, the spring's damping (N·m·s/rad), ≥ 0.
+    load_coulomb_nm : float
+        τc_L, Coulomb friction on the load (N·m, ≥ 0): a carriage's guide, a screw's nut
+        (:attr:`Motor.coulomb_nm` stays the motor side's: its bearings, a gearbox).
+    travel_mm_per_rad : float or None
+        A linear axis's travel per motor radian (mm/rad), > 0: the load's residual
+        vibration is then also given in µm.
+
+    Raises
+    ------
+    ValueError
+        If a value is out of its range (the message names the parameter and the range).
+    """
+
+    load_inertia_kgm2: float
+    stiffness_nm_rad: float
+    damping_nm_s_rad: float = 0.0
+    load_coulomb_nm: float = 0.0
+    travel_mm_per_rad: float | None = None
+
+    def __post_init__(self) -> None:
+        for name, hi, lo_open in (
+            ("load_inertia_kgm2", MAX_ROTOR_INERTIA_KGM2, True),
+            ("stiffness_nm_rad", None, True),
+            ("damping_nm_s_rad", None, False),
+            ("load_coulomb_nm", None, False),
+        ):
+            _set(self, name, check_real(name, getattr(self, name), 0.0, hi, lo_open=lo_open))
+        if self.travel_mm_per_rad is not None:
+            mm = check_real("travel_mm_per_rad", self.travel_mm_per_rad, 0.0, lo_open=True)
+            _set(self, "travel_mm_per_rad", mm)
+
+    @classmethod
+    def from_resonance(
+        cls,
+        load_inertia_kgm2: float,
+        motor_inertia_kgm2: float,
+        resonance_hz: float,
+        damping_ratio: float = 0.0,
+        load_coulomb_nm: float = 0.0,
+        travel_mm_per_rad: float | None = None,
+    ) -> Transmission:
+        """The transmission of a resonance f_r (seen from the motor) and damping ratio ζ:
+        K_S = ω_r²·μ, c_S = 2ζ·μ·ω_r, ω_r = 2π·f_r, μ = J_M·J_L/(J_M + J_L).
+
+        Parameters
+        ----------
+        load_inertia_kgm2 : float
+            J_L (kg·m²), in (0, 1].
+        motor_inertia_kgm2 : float
+            J_M, what turns rigidly with the rotor (:attr:`Motor.inertia_kgm2`), > 0.
+        resonance_hz : float
+            f_r (Hz), > 0.
+        damping_ratio : float
+            ζ, in [0, 1].
+        load_coulomb_nm, travel_mm_per_rad : float, float or None
+            As in the class.
+
+        Returns
+        -------
+        Transmission
+            K_S and c_S from the resonance, the other fields as given.
+        """
+        jl = check_real("load_inertia_kgm2", load_inertia_kgm2, 0.0, lo_open=True)
+        jm = check_real("motor_inertia_kgm2", motor_inertia_kgm2, 0.0, lo_open=True)
+        w = 2.0 * math.pi * check_real("resonance_hz", resonance_hz, 0.0, lo_open=True)
+        zeta = check_real("damping_ratio", damping_ratio, 0.0, 1.0)
+        mu = jm * jl / (jm + jl)
+        return cls(jl, w * w * mu, 2.0 * zeta * mu * w, load_coulomb_nm, travel_mm_per_rad)
+
+    def resonance_hz(self, motor_inertia_kgm2: float) -> float:
+        """The resonance seen from the motor, (1/2π)·√(K_S·(J_M + J_L)/(J_M·J_L)).
+
+        Parameters
+        ----------
+        motor_inertia_kgm2 : float
+            J_M (kg·m²), > 0.
+
+        Returns
+        -------
+        float
+            The undamped resonance (Hz).
+        """
+        jm, jl = motor_inertia_kgm2, self.load_inertia_kgm2
+        return math.sqrt(self.stiffness_nm_rad * (jm + jl) / (jm * jl)) / (2.0 * math.pi)
+
+    @property
+    def antiresonance_hz(self) -> float:
+        """The anti-resonance (1/2π)·√(K_S/J_L) (Hz): the load ringing on a motor held still."""
+        return math.sqrt(self.stiffness_nm_rad / self.load_inertia_kgm2) / (2.0 * math.pi)
+
+
 @dataclass(frozen=True)
 class Plant:
     """Everything physical: time base, pulse equivalent, servo, motor (docs/model.md).
@@ -329,20 +440,26 @@ class Plant:
     servo : Servo
         The digital servo.
     motor : Motor
-        The motor, its load and encoder.
+        The motor, its load and encoder: with a transmission, what turns rigidly with the
+        rotor.
+    transmission : Transmission or None
+        A compliant load beyond the motor (a two-mass plant, docs/model.md §3.1), or
+        ``None`` (default): the load turns rigidly with the motor.
 
     Raises
     ------
     ValueError
-        If a value is out of its range, the servo's sample period Ts exceeds 10 ms
-        , or ``servo`` / ``motor`` is not a :class:`Servo` /
-        :class:`Motor`.
+        If a value is out of its range, the servo's sample period Ts exceeds 10 ms,
+        ``servo`` / ``motor`` / ``transmission`` is not a :class:`Servo` /
+        :class:`Motor` / :class:`Transmission`, or the transmission's resonance is above
+        f/10 (:data:`RESONANCE_TICKS_MIN`).
     """
 
     tick_hz: float = PAPER_TICK_HZ
     pulse_rad: float = PAPER_PULSE_RAD
     servo: Servo = field(default_factory=Servo)
     motor: Motor = field(default_factory=Motor)
+    transmission: Transmission | None = None
 
     def __post_init__(self) -> None:
         _set(self, "tick_hz", check_real("tick_hz", self.tick_hz, *TICK_HZ_RANGE))
@@ -355,6 +472,25 @@ class Plant:
             raise ValueError(f"servo={self.servo!r} must be a vfgym.Servo")
         if not isinstance(self.motor, Motor):
             raise ValueError(f"motor={self.motor!r} must be a vfgym.Motor")
+        tr = self.transmission
+        if tr is not None:
+            if not isinstance(tr, Transmission):
+                raise ValueError(f"transmission={tr!r} must be a vfgym.Transmission or None")
+            m = self.motor
+            held = m.coulomb_nm + tr.load_coulomb_nm + abs(m.load_torque_nm)
+            if held >= m.peak_torque_nm:
+                raise ValueError(
+                    f"transmission.load_coulomb_nm={tr.load_coulomb_nm!r} is out of range: with "
+                    f"the motor's friction and load torque ({held:g} N·m) it must stay below "
+                    f"peak_torque_nm={m.peak_torque_nm:g}, else the motor cannot move its load"
+                )
+            most = self.tick_hz / RESONANCE_TICKS_MIN
+            if tr.resonance_hz(self.motor.inertia_kgm2) > most:
+                raise ValueError(
+                    f"transmission.stiffness_nm_rad={tr.stiffness_nm_rad!r} is out of range: "
+                    f"its resonance ({tr.resonance_hz(self.motor.inertia_kgm2):.6g} Hz) must "
+                    f"be at most f/{RESONANCE_TICKS_MIN:g} = {most:.6g} Hz"
+                )
         if self.sample_s > MAX_SAMPLE_S:
             most = math.floor(MAX_SAMPLE_S * self.tick_hz + 1e-9)
             raise ValueError(
@@ -362,6 +498,14 @@ class Plant:
                 f"{self.tick_hz:g}: allowed whole numbers in [1, {most}] (a sample period "
                 f"Ts of at most {MAX_SAMPLE_S * 1e3:g} ms)"
             )
+
+    def __repr__(self) -> str:
+        # the dataclass's own repr, without ``transmission`` when there is none: a rigid
+        # plant reads as it did before transmissions, so digests of it (the per-move
+        # optima's moves-key) stay
+        shown = (f for f in fields(self) if f.name != "transmission" or self.transmission)
+        parts = ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in shown)
+        return f"{type(self).__qualname__}({parts})"
 
     @property
     def tick_s(self) -> float:
@@ -381,11 +525,27 @@ class Plant:
     @property
     def torque_per_count_nm(self) -> float:
         """K3 in force on this plant (N·m per count): the servo's K3 times
-        (1 + inertia_ratio) when it follows its load (:class:`Servo`), else as tuned."""
+        (1 + inertia_ratio) when it follows its load (:class:`Servo`), else as tuned; with
+        a transmission, times the whole inertia over the rotor's, (J_M + J_L)/J_rotor."""
         sv = self.servo
         if not sv.follows_load:
             return sv.torque_per_count_nm
+        if self.transmission is not None:  # the drive is set for the whole load
+            return sv.torque_per_count_nm * (self.inertia_kgm2 / self.motor.rotor_inertia_kgm2)
         return sv.torque_per_count_nm * (1.0 + self.motor.inertia_ratio)
+
+    @property
+    def inertia_kgm2(self) -> float:
+        """The whole inertia the motor moves (kg·m²): :attr:`Motor.inertia_kgm2`, plus the
+        transmission's load J_L where one is stated."""
+        tr = self.transmission
+        return self.motor.inertia_kgm2 + (0.0 if tr is None else tr.load_inertia_kgm2)
+
+    @property
+    def resonance_hz(self) -> float | None:
+        """The transmission's resonance seen from the motor (Hz); ``None`` for a rigid load."""
+        tr = self.transmission
+        return None if tr is None else tr.resonance_hz(self.motor.inertia_kgm2)
 
     @property
     def servo_kv(self) -> float:

@@ -137,6 +137,91 @@ README_RUNS: dict[str, list[Run]] = {
             trim="trials",
         ),
     ],
+    # the compliant axis (docs/guide/compliant.md, docs/results/compliant.md)
+    "vfgym sweep --config experiments/quick.yaml --axis experiments/axes/belt-compliant.yaml "
+    "--study belt-compliant": [
+        Run(
+            "belt-compliant",
+            [
+                "sweep",
+                "--config",
+                "experiments/quick.yaml",
+                "--axis",
+                "experiments/axes/belt-compliant.yaml",
+                "--study",
+                "belt-compliant",
+                *SWEEP_TRIM,
+            ],
+            writes=("runs/sweep/belt-compliant/best.yaml",),
+            trim="trials",
+        ),
+    ],
+    "vfgym evaluate --settings runs/sweep/belt-compliant/best.yaml --axis "
+    "experiments/axes/belt-compliant.yaml": [
+        Run(
+            "eval-belt-compliant",
+            [
+                "evaluate",
+                "--settings",
+                "runs/sweep/belt-compliant/best.yaml",
+                "--axis",
+                "experiments/axes/belt-compliant.yaml",
+                "--bootstrap",
+                "200",
+            ],
+            ("belt-compliant",),
+            trim="evaluate",
+        ),
+    ],
+    "vfgym fit --axis experiments/axes/belt-compliant.yaml": [
+        Run(
+            "fit-belt-compliant",
+            ["fit", "--axis", "experiments/axes/belt-compliant.yaml", *FIT_TRIM],
+            writes=("runs/fit/belt-compliant/settings_model.json",),
+            trim="fit",
+        ),
+    ],
+    "vfgym predict --model runs/fit/belt-compliant/settings_model.json --axis "
+    "experiments/axes/belt-compliant.yaml --scenario test-10 --refine 150": [
+        Run(
+            "predict-fit-belt-compliant-refine",
+            [
+                "predict",
+                "--model",
+                "runs/fit/belt-compliant/settings_model.json",
+                "--axis",
+                "experiments/axes/belt-compliant.yaml",
+                "--scenario",
+                "test-10",
+                "--refine",
+                "150",
+                "--refine",
+                "3",
+            ],
+            ("fit-belt-compliant",),
+            trim="refine",
+        ),
+    ],
+    "vfgym sweep --config experiments/quick.yaml --axis "
+    "experiments/axes/belt-compliant-uncertain.yaml --trials 30 --study belt-compliant-uncertain": [
+        Run(
+            "belt-compliant-uncertain",
+            [
+                "sweep",
+                "--config",
+                "experiments/quick.yaml",
+                "--axis",
+                "experiments/axes/belt-compliant-uncertain.yaml",
+                "--trials",
+                "30",
+                "--study",
+                "belt-compliant-uncertain",
+                *SWEEP_TRIM,
+            ],
+            writes=("runs/sweep/belt-compliant-uncertain/best.yaml",),
+            trim="trials",
+        ),
+    ],
     "vfgym sweep --axis experiments/axes/loads-uncertain.yaml --trials 60 --study lu60": [
         Run(
             "lu60",

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from vfgym import PAPER_PLANT, Measures
+from vfgym import PAPER_PLANT, Measures, Transmission
 from vfgym.moves.distribution import random_scenario
 from vfgym.moves.scenarios import SCENARIOS, Scenario
 from vfgym.plant import _kernel as K
@@ -36,10 +36,23 @@ scenarios = st.one_of(
         st.floats(0.03, 0.12),
     ),
 )
+
+
+def _base(ns: int, lines: int, hz: float | None):
+    """The paper's plant with another servo period and encoder; with a transmission (the
+    load judged) at ``hz`` unless None."""
+    plant = PAPER_PLANT.with_servo(sample_ticks=ns).with_motor(encoder_lines=lines)
+    if hz is None:
+        return plant
+    jm = plant.motor.inertia_kgm2
+    return plant.replace(transmission=Transmission.from_resonance(jm, jm, hz, 0.05))
+
+
 bases = st.builds(
-    lambda ns, lines: PAPER_PLANT.with_servo(sample_ticks=ns).with_motor(encoder_lines=lines),
+    _base,
     st.sampled_from([35, 70, 140]),
     st.sampled_from([2048, 4096]),
+    st.sampled_from([None, None, 150.0, 400.0]),
 )
 measures = st.one_of(
     st.builds(
@@ -114,6 +127,15 @@ def test_compiled_cost_equals_score_term_by_term_on_random_states(sc, base, meas
     stt[L.S_THETA] = target + data.draw(
         st.floats(-3.0, 3.0) | st.sampled_from([0.0, win, -win]), "final error"
     )
+    if plant.transmission is not None:  # the load's measures, which the cost judges
+        stt[L.S_LOL] = data.draw(st.integers(-1, n - 1), "the load's last tick out")
+        stt[L.S_OVL] = data.draw(st.floats(0.0, 3.0) | st.sampled_from([0.0, win]), "its overshoot")
+        stt[L.S_TSQL] = data.draw(st.floats(0.0, 100.0 * n), "its squared tracking error")
+        stt[L.S_TWIST] = (
+            stt[L.S_THETA]
+            - target
+            - data.draw(st.floats(-3.0, 3.0) | st.sampled_from([0.0, win, -win]), "its final error")
+        )
     check_against_score(stt, prm, sc, plant, meas, w, b)
 
 
@@ -153,8 +175,30 @@ def test_the_compiled_constants_are_read_from_the_scoring_inputs():
         CC.K_B_OV: b.overshoot_windows,
         CC.K_B_TQ: b.torque_limit_time_s,
         CC.K_ACC_TOL: y.accel_tolerance,
+        CC.K_LOAD: 0.0,
     }
     assert y.accel_tolerance == pytest.approx(0.007)
     assert sorted(expect) == list(range(CC.N_CONST))
     for slot, value in expect.items():
         assert k[slot] == value, slot
+
+
+def test_the_compiled_cost_judges_the_load_where_a_transmission_is_stated():
+    """On a compliant plant the load rings after the motor is in position: the compiled
+    cost, as ``score``, reads the load's move time, not the motor's, and differs from what
+    the motor's would give."""
+    sc = SCENARIOS["short-move"]
+    plant = _base(70, 2048, 100.0)
+    cmd = sc.command(plant)
+    prm = pack(from_action(np.zeros(len(SPACE))), plant, Measures(), float(cmd[-1]), cmd.size)
+    stt = np.zeros(L.N_STATE)
+    K.init_state(prm, stt, np.zeros(K.ring_size(prm)))
+    ring = np.zeros(K.ring_size(prm))
+    K.run_segment(cmd, np.zeros(0, np.int8), prm, stt, ring, cmd.size, np.zeros((L.N_ROWS, 0)), 1)
+    y = yardsticks(sc, plant, Measures())
+    assert y.load and stt[L.S_LOL] > stt[L.S_LOM]
+    k = CC.constants(y, cmd.size, CostWeights(), Bounds())
+    assert k[CC.K_LOAD] == 1.0
+    main = CC.cost_terms(stt, prm, k)[0]
+    assert main == (stt[L.S_LOL] + 1.0) * plant.tick_s / y.ideal_time_s
+    check_against_score(stt, prm, sc, plant, Measures(), CostWeights(), Bounds())

@@ -76,7 +76,7 @@ class Axis:
         ):
             if not isinstance(getattr(self, key), kind):
                 raise ValueError(f"{key}={getattr(self, key)!r} must be a vfgym {kind.__name__}")
-        self.uncertainty.check_motor(self.plant.motor)
+        self.uncertainty.check_plant(self.plant)
         check_limit(self.plant)  # first: a units slip would read as moves too short
         listed = _listed(self)
         for key, sc in listed.items():

@@ -138,6 +138,8 @@ def axis_to_dict(axis: Axis) -> dict[str, Any]:
             "pulse_rad": axis.plant.pulse_rad,
             "servo": asdict(axis.plant.servo),
             "motor": {"preset": preset, **asdict(motor)},
+            # written only when stated, so a rigid axis keeps its digest
+            **({} if (tr := axis.plant.transmission) is None else {"transmission": asdict(tr)}),
         },
         "measures": asdict(axis.measures),
         "moves": {s: move_set(axis.moves.of(s)) for s in SPLITS},

@@ -13,7 +13,7 @@ from typing import Any
 from vfgym.axis._move_sets import MoveSet
 from vfgym.moves.distribution import MoveDistribution
 from vfgym.moves.scenarios import SCENARIOS, Scenario
-from vfgym.params import MOTOR_PRESETS, PAPER_PLANT, SGME_02A, Motor, Plant, Servo
+from vfgym.params import MOTOR_PRESETS, PAPER_PLANT, SGME_02A, Motor, Plant, Servo, Transmission
 
 
 def from_mapping(cls: type, data: Any, key: str, **given: Any) -> Any:
@@ -55,6 +55,34 @@ def read_motor(data: Any, key: str) -> Motor:
     return from_mapping(Motor, asdict(MOTOR_PRESETS[preset]) | data, key)
 
 
+RESONANCE_KEYS = ("load_inertia_kgm2", "resonance_hz", "damping_ratio", "travel_mm_per_rad")
+"""A transmission given by its resonance instead (:meth:`vfgym.Transmission.from_resonance`)."""
+
+
+def read_transmission(data: Any, motor: Motor, key: str) -> Transmission:
+    """A transmission: :class:`vfgym.Transmission`'s fields, or its load inertia with a
+    resonance (Hz, seen from the motor) and a damping ratio, converted on ``motor``'s
+    inertia (what turns rigidly with the rotor)."""
+    if not isinstance(data, dict) or not {"resonance_hz", "damping_ratio"} & set(data):
+        return from_mapping(Transmission, data, key)
+    for k, v in data.items():
+        if k not in RESONANCE_KEYS:
+            raise ValueError(
+                f"{key}.{k}={v!r} is not allowed with resonance_hz: give "
+                f"{', '.join(RESONANCE_KEYS)}, or vfgym.Transmission's fields "
+                "(stiffness_nm_rad, damping_nm_s_rad) instead"
+            )
+    for k in ("load_inertia_kgm2", "resonance_hz"):
+        if k not in data:
+            raise ValueError(
+                f"{key}.{k} is missing: a resonance needs load_inertia_kgm2 and resonance_hz"
+            )
+    try:
+        return Transmission.from_resonance(motor_inertia_kgm2=motor.inertia_kgm2, **data)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{key}.{exc}") from None
+
+
 def read_plant(data: Any) -> Plant:
     if data is None:
         return PAPER_PLANT
@@ -63,7 +91,9 @@ def read_plant(data: Any) -> Plant:
     data = dict(data)
     servo = from_mapping(Servo, data.pop("servo", {}) or {}, "plant.servo")
     motor = read_motor(data.pop("motor", {}) or {}, "plant.motor")
-    return from_mapping(Plant, data, "plant", servo=servo, motor=motor)
+    tr = data.pop("transmission", None)
+    tr = None if tr is None else read_transmission(tr, motor, "plant.transmission")
+    return from_mapping(Plant, data, "plant", servo=servo, motor=motor, transmission=tr)
 
 
 def read_scenario(item: Any, key: str) -> Scenario:

@@ -92,6 +92,11 @@ class Uncertainty:
         The axis's true constant load torque (N·m), either sign.
     torque_per_count : tuple of float or None
         Factors on the drive's gain K3 as set, each in [0.05, 20].
+    stiffness : tuple of float or None
+        Factors on the transmission's stiffness K_S, each in [0.05, 20] (a compliant
+        axis only: a belt's tension, a screw's nut position).
+    damping : tuple of float or None
+        Factors on the transmission's damping c_S, each in [0.05, 20].
 
     Raises
     ------
@@ -105,6 +110,8 @@ class Uncertainty:
     viscous_nm_s_rad: tuple[float, float] | None = None
     load_torque_nm: tuple[float, float] | None = None
     torque_per_count: tuple[float, float] | None = None
+    stiffness: tuple[float, float] | None = None
+    damping: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         lo_f, hi_f = FACTOR_RANGE
@@ -114,6 +121,8 @@ class Uncertainty:
             ("viscous_nm_s_rad", 0.0, None),
             ("load_torque_nm", None, None),
             ("torque_per_count", lo_f, hi_f),
+            ("stiffness", lo_f, hi_f),
+            ("damping", lo_f, hi_f),
         ):
             object.__setattr__(self, name, _pair(name, getattr(self, name), lo, hi, lo_open=False))
 
@@ -160,6 +169,42 @@ class Uncertainty:
                     f"range: allowed [0, {most:g}] (the peak torque at the knee speed)"
                 )
 
+    def check_plant(self, plant: Plant) -> None:
+        """:meth:`check_motor` on the plant's motor, and the transmission's ranges: stated
+        only where the plant has a transmission, and its resonance within f/10 at every
+        corner (inertia and stiffness).
+
+        Parameters
+        ----------
+        plant : Plant
+            The axis's modelled plant.
+
+        Raises
+        ------
+        ValueError
+            Naming the key, as :meth:`check_motor`; or ``stiffness`` / ``damping`` on a
+            plant without a transmission, or a corner whose resonance is too high.
+        """
+        self.check_motor(plant.motor)
+        if plant.transmission is None:
+            for key in ("stiffness", "damping"):
+                if getattr(self, key) is not None:
+                    raise ValueError(
+                        f"uncertainty.{key}={list(getattr(self, key))!r} is not allowed: the "
+                        "plant states no transmission (plant.transmission)"
+                    )
+            return
+        for inertia in self.inertia or (1.0,):
+            for stiffness in self.stiffness or (1.0,):
+                try:
+                    PlantVariant(inertia=inertia, stiffness=stiffness).apply(plant)
+                except ValueError as exc:
+                    key = "stiffness" if self.stiffness else "inertia"
+                    raise ValueError(
+                        f"uncertainty.{key}={list(getattr(self, key))!r} is out of range: at "
+                        f"inertia ×{inertia:g}, stiffness ×{stiffness:g}, {exc}"
+                    ) from None
+
     def to_dict(self) -> dict[str, list[float]]:
         """The ranges as an axis file's ``uncertainty:`` mapping."""
         return {k: [float(a), float(b)] for k, (a, b) in self.ranges().items()}
@@ -185,6 +230,10 @@ class PlantVariant:
         True load torque minus the modelled (N·m).
     torque_per_count : float
         Factor on the drive's gain K3 in force on the modelled plant.
+    stiffness : float
+        Factor on the transmission's stiffness K_S (a compliant plant only).
+    damping : float
+        Factor on the transmission's damping c_S (a compliant plant only).
     """
 
     inertia: float = 1.0
@@ -192,6 +241,19 @@ class PlantVariant:
     viscous_offset_nm_s_rad: float = 0.0
     load_offset_nm: float = 0.0
     torque_per_count: float = 1.0
+    stiffness: float = 1.0
+    damping: float = 1.0
+
+    def __repr__(self) -> str:
+        # the dataclass's own repr, without the transmission's factors at 1: a variant of
+        # a rigid axis reads as it did before them, so digests of it stay
+        shown = (
+            f
+            for f in fields(self)
+            if f.name not in ("stiffness", "damping") or getattr(self, f.name) != 1.0
+        )
+        parts = ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in shown)
+        return f"{type(self).__qualname__}({parts})"
 
     @property
     def nominal(self) -> bool:
@@ -203,7 +265,8 @@ class PlantVariant:
 
         The drive keeps the K3 set for the modelled plant (times :attr:`torque_per_count`),
         so the true plant's servo no longer follows its load; the inertia factor scales the
-        rotor's inertia, which scales the total with the load ratio unchanged.
+        rotor's inertia, which scales the total with the load ratio unchanged, and the
+        transmission's load inertia (where one is stated) with it.
 
         Parameters
         ----------
@@ -214,9 +277,28 @@ class PlantVariant:
         -------
         Plant
             The true plant (``plant`` itself for :data:`NOMINAL`).
+
+        Raises
+        ------
+        ValueError
+            A stiffness or damping factor on a plant without a transmission, or a true
+            plant whose resonance is above f/10 (:class:`vfgym.Plant`).
         """
         if self.nominal:
             return plant
+        tr = plant.transmission
+        if tr is None and (self.stiffness != 1.0 or self.damping != 1.0):
+            raise ValueError(
+                f"stiffness={self.stiffness!r}, damping={self.damping!r} is not allowed: "
+                "the plant states no transmission"
+            )
+        if tr is not None:
+            tr = replace(
+                tr,
+                load_inertia_kgm2=tr.load_inertia_kgm2 * self.inertia,
+                stiffness_nm_rad=tr.stiffness_nm_rad * self.stiffness,
+                damping_nm_s_rad=tr.damping_nm_s_rad * self.damping,
+            )
         m = plant.motor
         motor = replace(
             m,
@@ -230,7 +312,7 @@ class PlantVariant:
             follows_load=False,
             torque_per_count_nm=plant.torque_per_count_nm * self.torque_per_count,
         )
-        return replace(plant, motor=motor, servo=servo)
+        return replace(plant, motor=motor, servo=servo, transmission=tr)
 
     def label(self) -> str:
         """A short description for tables: the factors and offsets that differ."""
@@ -239,6 +321,10 @@ class PlantVariant:
             parts.append(f"J×{self.inertia:.3g}")
         if self.torque_per_count != 1.0:
             parts.append(f"K3×{self.torque_per_count:.3g}")
+        if self.stiffness != 1.0:
+            parts.append(f"K_S×{self.stiffness:.3g}")
+        if self.damping != 1.0:
+            parts.append(f"c_S×{self.damping:.3g}")
         for name, v in (
             ("τc", self.coulomb_offset_nm),
             ("b", self.viscous_offset_nm_s_rad),
@@ -266,6 +352,8 @@ def _variant(unc: Uncertainty, motor: Motor, u: np.ndarray) -> PlantVariant:
         ),
         load_offset_nm=at.get("load_torque_nm", motor.load_torque_nm) - motor.load_torque_nm,
         torque_per_count=at.get("torque_per_count", 1.0),
+        stiffness=at.get("stiffness", 1.0),
+        damping=at.get("damping", 1.0),
     )
 
 

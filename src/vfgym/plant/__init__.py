@@ -19,6 +19,8 @@ _tick
     inlined into the kernel's loop.
 _kernel, _lanes
     The compiled loop, for one move (and a batch over threads) and for SIMD lanes of moves.
+_two_mass
+    The two-mass plant's one-tick coefficients (a compliant transmission).
 _simulate
     The public entry points (:func:`simulate`, :func:`simulate_train`, :func:`vf_pulses`).
 measures
@@ -38,6 +40,7 @@ from vfgym.plant._simulate import (
     step_command,
     vf_pulses,
 )
+from vfgym.plant._two_mass import two_mass_coefficients
 from vfgym.plant.measures import command_end_s
 
 __all__ = [
@@ -50,5 +53,6 @@ __all__ = [
     "simulate",
     "simulate_train",
     "step_command",
+    "two_mass_coefficients",
     "vf_pulses",
 ]

@@ -13,6 +13,7 @@ The equations are those of ``docs/model.md`` §1–§3; their order within a tic
    latched (x = B·count), filtered (y += A·(x − y)) and reset;
 3. torque τ = K3·(pc − y), clipped to the torque–speed curve;
 4. motor: exact integration over the tick for τ held constant (viscous, Coulomb, load);
+   on a two-mass plant (``P_TWO``), the motor and the load beyond its spring (§3.1);
 5. encoder: count = floor(θ / q).
 
 Measures are streamed into the state row as the loop goes (no trace is needed) and
@@ -34,17 +35,22 @@ from vfgym.plant._layout import (
     A_ACC_QUANTUM,
     A_ACC_WINDOW,
     A_FIRST_PULSE,
+    A_LAST_OUT_LOAD,
     A_LAST_OUT_MOTOR,
     A_LAST_OUT_PULSE,
     A_LAST_PULSE,
+    A_LOAD,
+    A_LOAD_SPEED,
     A_MIN_INTERVAL,
     A_N,
     A_OMEGA,
+    A_OV_LOAD,
     A_OV_MOTOR,
     A_OV_PULSE,
     A_PC,
     A_PC_MAX,
     A_PULSES,
+    A_RESIDUAL,
     A_REVERSALS,
     A_RIPPLE_N,
     A_RIPPLE_SQ,
@@ -56,8 +62,10 @@ from vfgym.plant._layout import (
     A_THETA,
     A_TICKS,
     A_TORQUE_MAX,
+    A_TRK_MAX_LOAD,
     A_TRK_MAX_MOTOR,
     A_TRK_MAX_PULSE,
+    A_TRK_SQ_LOAD,
     A_TRK_SQ_MOTOR,
     A_TRK_SQ_PULSE,
     N_ACC,
@@ -85,9 +93,11 @@ from vfgym.plant._layout import (
     P_STEP,
     P_TARGET,
     P_TC,
+    P_TCL,
     P_TICK_S,
     P_TLOAD,
     P_TPEAK,
+    P_TWO,
     P_USE_EXT,
     P_VALUE,
     P_WIN_RAD,
@@ -102,6 +112,7 @@ from vfgym.plant._layout import (
     S_LASTDIR,
     S_LASTP,
     S_LASTSIGN,
+    S_LOL,
     S_LOM,
     S_LOP,
     S_MINIV,
@@ -109,6 +120,7 @@ from vfgym.plant._layout import (
     S_NSAMP,
     S_NSLEFT,
     S_OMEGA,
+    S_OVL,
     S_OVM,
     S_OVP,
     S_PC,
@@ -118,6 +130,8 @@ from vfgym.plant._layout import (
     S_REV,
     S_RIPN,
     S_RIPSQ,
+    S_RVHI,
+    S_RVLO,
     S_SAT,
     S_SC,
     S_SSM,
@@ -128,14 +142,18 @@ from vfgym.plant._layout import (
     S_THETA,
     S_THS0,
     S_TICK,
+    S_TMXL,
     S_TMXM,
     S_TMXP,
     S_TQMX,
+    S_TSQL,
     S_TSQM,
     S_TSQP,
+    S_TWIST,
     S_U,
     S_V1,
     S_V2,
+    S_WLOAD,
     S_WMX,
     S_X,
     S_Y,
@@ -143,7 +161,9 @@ from vfgym.plant._layout import (
 from vfgym.plant._tick import (
     encoder,
     in_position,
+    load_tick,
     motor,
+    motor_two,
     overshoot,
     peak,
     pulse_accel,
@@ -156,6 +176,7 @@ from vfgym.plant._tick import (
     torque,
     tracking,
     train_position,
+    two_mass,
     vf_tick,
 )
 
@@ -221,6 +242,14 @@ def init_state(prm, st, ring):
     st[S_D2MX] = 0.0
     st[S_DWMX] = 0.0
     st[S_TICK] = 0
+    st[S_TWIST] = 0.0
+    st[S_WLOAD] = 0.0
+    st[S_OVL] = 0.0
+    st[S_LOL] = -1
+    st[S_RVHI] = 0.0
+    st[S_RVLO] = 0.0
+    st[S_TSQL] = 0.0
+    st[S_TMXL] = 0.0
     ring[:] = 0
 
 
@@ -230,6 +259,33 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
     streaming its measures into ``st`` and writing every ``dec``-th tick's state into
     ``rec`` (shape (N_ROWS, m), m = 0 for none). ``cmd`` and ``ext`` are indexed by the
     move's own tick number; ``prm`` may change between segments (online tuning).
+
+    A rigid and a two-mass plant (``P_TWO``) each run their own compiled loop
+    (:func:`segment`, specialised on its literal ``two``): the rigid loop's tick does
+    nothing of the two-mass plant's."""
+    if prm[P_TWO] != 0.0:
+        segment(cmd, ext, prm, st, ring, i1, rec, dec, True)
+    else:
+        segment(cmd, ext, prm, st, ring, i1, rec, dec, False)
+
+
+@jit
+def run_segment_rigid(cmd, ext, prm, st, ring, i1, rec, dec):
+    """:func:`run_segment` of a rigid plant: what a caller in Python that knows its plant
+    calls, so that a first use compiles only its own loop."""
+    segment(cmd, ext, prm, st, ring, i1, rec, dec, False)
+
+
+@jit
+def run_segment_two(cmd, ext, prm, st, ring, i1, rec, dec):
+    """:func:`run_segment` of a two-mass plant (``P_TWO``), as :func:`run_segment_rigid`."""
+    segment(cmd, ext, prm, st, ring, i1, rec, dec, True)
+
+
+@jit
+def segment(cmd, ext, prm, st, ring, i1, rec, dec, two):
+    """:func:`run_segment`'s loop; ``two`` (a literal at each call, so numba compiles one
+    loop for each value, the other's branches dropped): the two-mass plant.
 
     The loop state is held in locals (registers) between the state row's loads and
     stores, one line per block; each tick runs the blocks of :mod:`vfgym.plant._tick`."""
@@ -245,6 +301,7 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
     tc, tload = prm[P_TC], prm[P_TLOAD]
     target, win, ss_start = prm[P_TARGET], prm[P_WIN_RAD], int(prm[P_SS_START])
     accw = int(prm[P_ACC_W])
+    z, tcl = two_mass(prm), prm[P_TCL]
     inv_q = 1.0 / q
     n_rec = rec.shape[1] if rec.shape[0] >= N_ROWS else 0
     i0 = int(st[S_TICK])
@@ -266,6 +323,8 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
     first_p, last_p, last_sign = int(st[S_FIRSTP]), int(st[S_LASTP]), int(st[S_LASTSIGN])
     tq_mx, pc_mx, w_mx = st[S_TQMX], int(st[S_PCMX]), st[S_WMX]
     d2_max, dw_max = st[S_D2MX], st[S_DWMX]
+    d, wl, ov_l, lo_l = st[S_TWIST], st[S_WLOAD], st[S_OVL], int(st[S_LOL])
+    rv_hi, rv_lo, trk_sq_l, trk_mx_l = st[S_RVHI], st[S_RVLO], st[S_TSQL], st[S_TMXL]
 
     for i in range(i0, i1):
         P = cmd[i]
@@ -291,12 +350,21 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
         tau, sat = torque(u, omega, sat, K3, tpeak, wknee, wmax, slope)
         # 4. motor over the tick, torque held
         omega_old = omega
-        theta, omega = motor(theta, omega, tau - tload, tc, cww, cwf, ctw, ctf, damp, inv_j, T)
+        if two:
+            theta, omega, d, wl = motor_two(theta, omega, d, wl, tau - tload, tc, tcl, z)
+        else:
+            theta, omega = motor(theta, omega, tau - tload, tc, cww, cwf, ctw, ctf, damp, inv_j, T)
         # 5. encoder
         c = encoder(theta, q, inv_q, st)
         # streamed measures
         pos = n * delta
         last_dir, ov_m, ov_p = overshoot(P, p_prev, last_dir, theta, pos, ov_m, ov_p)
+        if two:
+            thl = theta - d
+            ov_l, lo_l, rv_hi, rv_lo = load_tick(
+                i, P, p_prev, last_dir, theta, thl, target, win, ov_l, lo_l, rv_hi, rv_lo
+            )
+            trk_sq_l, trk_mx_l = tracking(P - thl, trk_sq_l, trk_mx_l)
         p_prev = P
         last_out_m, last_out_p = in_position(i, theta, pos, target, win, last_out_m, last_out_p)
         ss_m, ss_p, ss_n = steady_state(i, ss_start, theta, pos, target, ss_m, ss_p, ss_n)
@@ -317,7 +385,12 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
             if rec_left == 0:
                 rec_left = dec
                 if rec_j < n_rec:
-                    record(rec, rec_j, P, pos, theta, omega, tau, u, pc, y, x, xt * delta)
+                    if two:
+                        record(rec, rec_j, P, pos, theta, omega, tau, u, pc, y, x, xt * delta,
+                               theta - d, wl)  # fmt: skip
+                    else:
+                        record(rec, rec_j, P, pos, theta, omega, tau, u, pc, y, x, xt * delta,
+                               theta, omega)  # fmt: skip
                     rec_j += 1
 
     st[S_N], st[S_SUM], st[S_EPREV] = n, s, e_prev
@@ -334,6 +407,8 @@ def run_segment(cmd, ext, prm, st, ring, i1, rec, dec):
     st[S_FIRSTP], st[S_LASTP], st[S_LASTSIGN] = first_p, last_p, last_sign
     st[S_TQMX], st[S_PCMX], st[S_WMX] = tq_mx, pc_mx, w_mx
     st[S_D2MX], st[S_DWMX] = d2_max, dw_max
+    st[S_TWIST], st[S_WLOAD], st[S_OVL], st[S_LOL] = d, wl, ov_l, lo_l
+    st[S_RVHI], st[S_RVLO], st[S_TSQL], st[S_TMXL] = rv_hi, rv_lo, trk_sq_l, trk_mx_l
     st[S_TICK] = i1
 
 
@@ -373,6 +448,13 @@ def finish(st, acc, n_ticks, prm):
     acc[A_TICKS] = n_ticks
     acc[A_ACC_WINDOW] = prm[P_ACC_W]
     acc[A_ACC_QUANTUM] = 2.0 * acc_scale if prm[P_USE_EXT] != 0.0 else 0.0
+    acc[A_OV_LOAD] = st[S_OVL]
+    acc[A_LAST_OUT_LOAD] = st[S_LOL]
+    acc[A_RESIDUAL] = st[S_RVHI] - st[S_RVLO]
+    acc[A_TRK_SQ_LOAD] = st[S_TSQL]
+    acc[A_TRK_MAX_LOAD] = st[S_TMXL]
+    acc[A_LOAD] = st[S_THETA] - st[S_TWIST]
+    acc[A_LOAD_SPEED] = st[S_WLOAD] if prm[P_TWO] != 0.0 else st[S_OMEGA]
 
 
 @jit

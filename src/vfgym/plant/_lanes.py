@@ -23,6 +23,11 @@ What makes the loops vectorise, and must stay so:
 * the train-position history for the acceleration measure is kept per block (``H``) and
   its maximum taken after the ticks (a maximum does not depend on the order).
 
+A two-mass plant (a transmission, docs/model.md §3.1) needs no scalar pass: its tick
+(:func:`vfgym.plant._tick.motor_two`) is multiply-adds and selects. A block with any
+two-mass lane runs a loop (literal ``two``) that computes both plants' steps and keeps
+each lane's own, and streams the load's measures of its two-mass lanes.
+
 Whole numbers of the state (counts, ticks) are held as float64, exactly (< 2**53), as
 the kernel's state row holds them.
 """
@@ -76,15 +81,15 @@ def _at(typingctx, row, lane):
 
 
 @_jit
-def _tick_source_servo_motor(Z, sampling, friction) -> int:
+def _tick_source_servo_motor(Z, sampling, friction, two) -> int:
     """Steps 1-4 of the tick (pulse source, servo, torque, motor) in every lane; returns
     how many lanes need the friction stop (left unmoved, flagged in ``Z_SLOW``).
 
-    ``sampling`` and ``friction`` are constants at each call (literal arguments: numba
-    compiles one loop for each pair, with what cannot happen dropped): sampling 0 / 1: no
+    ``sampling``, ``friction`` and ``two`` are constants at each call (literal arguments:
+    numba compiles one loop for each, with what cannot happen dropped): sampling 0 / 1: no
     lane / every lane latches its speed counter this tick (the lanes' sample periods are
     in step), 2: each lane as its counter says; friction False: no lane has Coulomb
-    friction."""
+    friction; two False: no lane is a two-mass plant."""
     nslow = 0
     for e in range(LANES):
         P = Z[_at(Z_CMD, e)]
@@ -191,11 +196,99 @@ def _tick_source_servo_motor(Z, sampling, friction) -> int:
         keeps = w_move * sgn > 0.0
         th_move = theta + (ctw * omega + ctf * f2)
         slow = (not free) and (not stuck) and (not keeps)
+        th_rigid = th_free if free else (th_stuck if stuck else (th_move if keeps else theta))
+        w_rigid = w_free if free else (w_stuck if stuck else (w_move if keeps else omega))
+        if two:  # the two-mass tick (vfgym.plant._tick.motor_two as selects)
+            lane_two = Z[_at(Z_PRM + L.P_TWO, e)] != 0.0
+            slow = slow and not lane_two
+            tcl = Z[_at(Z_PRM + L.P_TCL, e)]
+            d = Z[_at(Z_ST + L.S_TWIST, e)]
+            wl = Z[_at(Z_ST + L.S_WLOAD, e)]
+            spring = Z[_at(Z_PRM + L.P_KS, e)] * d + Z[_at(Z_PRM + L.P_CS, e)] * (omega - wl)
+            pull = net - spring
+            s_pull = 1.0 if pull > tc else (-1.0 if pull < -tc else 0.0)
+            s_move = 1.0 if omega > 0.0 else -1.0
+            s = (s_pull if omega == 0.0 else s_move) if tc != 0.0 else 0.0
+            m_held = tc != 0.0 and omega == 0.0 and s_pull == 0.0
+            sl_pull = 1.0 if spring > tcl else (-1.0 if spring < -tcl else 0.0)
+            sl_move = 1.0 if wl > 0.0 else -1.0
+            sl = (sl_pull if wl == 0.0 else sl_move) if tcl != 0.0 else 0.0
+            l_held = tcl != 0.0 and wl == 0.0 and sl_pull == 0.0
+            f = net - s * tc
+            g = 0.0 - sl * tcl
+            # both moving
+            th_b = theta + (
+                Z[_at(Z_PRM + L.P_Z_TW, e)] * omega
+                + Z[_at(Z_PRM + L.P_Z_TD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_TL, e)] * wl
+                + Z[_at(Z_PRM + L.P_Z_TF, e)] * f
+                + Z[_at(Z_PRM + L.P_Z_TG, e)] * g
+            )
+            w_b = (
+                Z[_at(Z_PRM + L.P_Z_WW, e)] * omega
+                + Z[_at(Z_PRM + L.P_Z_WD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_WL, e)] * wl
+                + Z[_at(Z_PRM + L.P_Z_WF, e)] * f
+                + Z[_at(Z_PRM + L.P_Z_WG, e)] * g
+            )
+            d_b = (
+                Z[_at(Z_PRM + L.P_Z_DW, e)] * omega
+                + Z[_at(Z_PRM + L.P_Z_DD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_DL, e)] * wl
+                + Z[_at(Z_PRM + L.P_Z_DF, e)] * f
+                + Z[_at(Z_PRM + L.P_Z_DG, e)] * g
+            )
+            wl_b = (
+                Z[_at(Z_PRM + L.P_Z_LW, e)] * omega
+                + Z[_at(Z_PRM + L.P_Z_LD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_LL, e)] * wl
+                + Z[_at(Z_PRM + L.P_Z_LF, e)] * f
+                + Z[_at(Z_PRM + L.P_Z_LG, e)] * g
+            )
+            # the motor held: the load moves on the spring alone
+            d_m = (
+                Z[_at(Z_PRM + L.P_Z_MDD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_MDL, e)] * wl
+                + Z[_at(Z_PRM + L.P_Z_MDG, e)] * g
+            )
+            wl_m = (
+                Z[_at(Z_PRM + L.P_Z_MLD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_MLL, e)] * wl
+                + Z[_at(Z_PRM + L.P_Z_MLG, e)] * g
+            )
+            # the load held: the motor moves against the spring
+            th_l = theta + (
+                Z[_at(Z_PRM + L.P_Z_LTW, e)] * omega
+                + Z[_at(Z_PRM + L.P_Z_LTD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_LTF, e)] * f
+            )
+            w_l = (
+                Z[_at(Z_PRM + L.P_Z_LWW, e)] * omega
+                + Z[_at(Z_PRM + L.P_Z_LWD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_LWF, e)] * f
+            )
+            d_l = (
+                Z[_at(Z_PRM + L.P_Z_LDW, e)] * omega
+                + Z[_at(Z_PRM + L.P_Z_LDD, e)] * d
+                + Z[_at(Z_PRM + L.P_Z_LDF, e)] * f
+            )
+            # each mode's step, the stops of its moving masses, then the lane's mode
+            w_b = 0.0 if (s != 0.0 and s * w_b <= 0.0) else w_b
+            wl_b = 0.0 if (sl != 0.0 and sl * wl_b <= 0.0) else wl_b
+            wl_m = 0.0 if (sl != 0.0 and sl * wl_m <= 0.0) else wl_m
+            w_l = 0.0 if (s != 0.0 and s * w_l <= 0.0) else w_l
+            both_held = m_held and l_held
+            th2 = theta if m_held else (th_l if l_held else th_b)
+            w2 = omega if m_held else (w_l if l_held else w_b)
+            d2 = d if both_held else (d_m if m_held else (d_l if l_held else d_b))
+            wl2 = wl if l_held else (wl_m if m_held else wl_b)
+            Z[_at(Z_ST + L.S_TWIST, e)] = d2 if lane_two else d
+            Z[_at(Z_ST + L.S_WLOAD, e)] = wl2 if lane_two else wl
+            th_rigid = th2 if lane_two else th_rigid
+            w_rigid = w2 if lane_two else w_rigid
         Z[_at(Z_SLOW, e)] = 1.0 if slow else 0.0
-        theta = th_free if free else (th_stuck if stuck else (th_move if keeps else theta))
-        omega = w_free if free else (w_stuck if stuck else (w_move if keeps else omega))
-        Z[_at(Z_ST + L.S_THETA, e)] = theta
-        Z[_at(Z_ST + L.S_OMEGA, e)] = omega
+        Z[_at(Z_ST + L.S_THETA, e)] = th_rigid
+        Z[_at(Z_ST + L.S_OMEGA, e)] = w_rigid
         nslow += 1 if slow else 0
     return nslow
 
@@ -224,8 +317,9 @@ def _friction_stops(Z) -> None:
 
 
 @_jit
-def _tick_encoder_measures(Z, k: int) -> None:
-    """Step 5 of tick ``k`` of the block (encoder) and the streamed measures, in every lane."""
+def _tick_encoder_measures(Z, k: int, two) -> None:
+    """Step 5 of tick ``k`` of the block (encoder) and the streamed measures, in every lane
+    (``two``, a literal: the load's measures of the two-mass lanes too)."""
     for e in range(LANES):
         i = Z[_at(Z_ST + L.S_TICK, e)] + k
         P = Z[_at(Z_CMD, e)]
@@ -245,6 +339,30 @@ def _tick_encoder_measures(Z, k: int) -> None:
         ov_p = Z[_at(Z_ST + L.S_OVP, e)]
         Z[_at(Z_ST + L.S_OVM, e)] = o_m if (at_rest and o_m > ov_m) else ov_m
         Z[_at(Z_ST + L.S_OVP, e)] = o_p if (at_rest and o_p > ov_p) else ov_p
+        if two:  # the load's measures (vfgym.plant._tick.load_tick and tracking as selects)
+            lane_two = Z[_at(Z_PRM + L.P_TWO, e)] != 0.0
+            target = Z[_at(Z_PRM + L.P_TARGET, e)]
+            win = Z[_at(Z_PRM + L.P_WIN_RAD, e)]
+            thl = theta - Z[_at(Z_ST + L.S_TWIST, e)]
+            o_l = last_dir * (thl - P)
+            ov_l = Z[_at(Z_ST + L.S_OVL, e)]
+            ov_l = o_l if (at_rest and o_l > ov_l) else ov_l
+            lol = Z[_at(Z_ST + L.S_LOL, e)]
+            lol = i if abs(thl - target) > win else lol
+            hi = Z[_at(Z_ST + L.S_RVHI, e)]
+            lo = Z[_at(Z_ST + L.S_RVLO, e)]
+            out = abs(theta - target) > win
+            hi = thl if (out or thl > hi) else hi
+            lo = thl if (out or thl < lo) else lo
+            dl = P - thl
+            sq = Z[_at(Z_ST + L.S_TSQL, e)]
+            mx = Z[_at(Z_ST + L.S_TMXL, e)]
+            Z[_at(Z_ST + L.S_OVL, e)] = ov_l if lane_two else Z[_at(Z_ST + L.S_OVL, e)]
+            Z[_at(Z_ST + L.S_LOL, e)] = lol if lane_two else Z[_at(Z_ST + L.S_LOL, e)]
+            Z[_at(Z_ST + L.S_RVHI, e)] = hi if lane_two else Z[_at(Z_ST + L.S_RVHI, e)]
+            Z[_at(Z_ST + L.S_RVLO, e)] = lo if lane_two else Z[_at(Z_ST + L.S_RVLO, e)]
+            Z[_at(Z_ST + L.S_TSQL, e)] = sq + dl * dl if lane_two else sq
+            Z[_at(Z_ST + L.S_TMXL, e)] = (abs(dl) if abs(dl) > mx else mx) if lane_two else mx
         new_dir = 1.0 if p_prev < P else -1.0
         Z[_at(Z_ST + L.S_LASTDIR, e)] = new_dir if changed else last_dir
         Z[_at(Z_ST + L.S_PPREV, e)] = P
@@ -327,30 +445,37 @@ def run_block(Z, CB, H, g: int, m: int, w: int) -> None:
     train-position history, row t mod len(H) for block tick t (w: the acceleration window)."""
     R = H.shape[0]
     friction = False
+    two = False
     # the lanes' sample periods in step (same length, same phase): one latch for all
     ns = Z[_at(Z_PRM + L.P_NS, 0)]
     ns_left = Z[_at(Z_ST + L.S_NSLEFT, 0)]
     in_step = True
     for e in range(LANES):
         friction = friction or Z[_at(Z_PRM + L.P_TC, e)] != 0.0
+        two = two or Z[_at(Z_PRM + L.P_TWO, e)] != 0.0
         in_step = in_step and Z[_at(Z_PRM + L.P_NS, e)] == ns
         in_step = in_step and Z[_at(Z_ST + L.S_NSLEFT, e)] == ns_left
     for k in range(m):
         for e in range(LANES):
             Z[_at(Z_CMD, e)] = CB[k, e]
-        if friction:
-            if _tick_source_servo_motor(Z, 2, True) > 0:
+        if two:
+            if _tick_source_servo_motor(Z, 2, True, True) > 0:
                 _friction_stops(Z)
-        elif in_step:
-            ns_left -= 1.0
-            if ns_left == 0.0:
-                ns_left = ns
-                _tick_source_servo_motor(Z, 1, False)
-            else:
-                _tick_source_servo_motor(Z, 0, False)
+            _tick_encoder_measures(Z, k, True)
         else:
-            _tick_source_servo_motor(Z, 2, False)
-        _tick_encoder_measures(Z, k)
+            if friction:
+                if _tick_source_servo_motor(Z, 2, True, False) > 0:
+                    _friction_stops(Z)
+            elif in_step:
+                ns_left -= 1.0
+                if ns_left == 0.0:
+                    ns_left = ns
+                    _tick_source_servo_motor(Z, 1, False, False)
+                else:
+                    _tick_source_servo_motor(Z, 0, False, False)
+            else:
+                _tick_source_servo_motor(Z, 2, False, False)
+            _tick_encoder_measures(Z, k, False)
         row = (g + k) % R
         for e in range(LANES):  # the V-F's train position (TK.train_position, as selects)
             ph = Z[_at(Z_ST + L.S_SUM, e)] / Z[_at(Z_PRM + L.P_VALUE, e)]

@@ -40,7 +40,49 @@ P_SS_START = 26  # first tick of the steady-state window (tick, whole)
 P_ACC_W = 27  # w: pulse-acceleration window (ticks, whole)
 P_ACC_SCALE = 28  # δ/(w·T)²: converts a second difference of counts to rad/s² (rad/s²)
 P_USE_EXT = 29  # pulse source: 1 = the external pulse array, 0 = the V-F controller
-N_PARAMS = 30
+# a compliant transmission (docs/model.md §3.1): the two-mass state (θ, ω, d, ω_L), d = θ − θ_L
+# the spring's twist, over a tick of the Coulomb forces F (motor: net − s·τc) and G (load:
+# −s_L·τc_L) held; θ(T) = θ + Σ Z_T…, ω(T), d(T), ω_L(T) = Σ Z_…, each over (ω, d, ω_L, F, G)
+P_TWO = 30  # 1: a two-mass plant (the load beyond a spring), 0: rigid (whole)
+P_KS = 31  # K_S: the spring's stiffness (N·m/rad)
+P_CS = 32  # c_S: the spring's damping (N·m·s/rad)
+P_TCL = 33  # τc_L: Coulomb friction on the load (N·m, ≥ 0)
+P_Z_TW = 34  # both masses moving: θ(T) − θ per ω (s)
+P_Z_TD = 35  # … per d (dimensionless)
+P_Z_TL = 36  # … per ω_L (s)
+P_Z_TF = 37  # … per F (rad/(N·m))
+P_Z_TG = 38  # … per G (rad/(N·m))
+P_Z_WW = 39  # ω(T) per ω (dimensionless)
+P_Z_WD = 40  # ω(T) per d (1/s)
+P_Z_WL = 41  # ω(T) per ω_L (dimensionless)
+P_Z_WF = 42  # ω(T) per F ((rad/s)/(N·m))
+P_Z_WG = 43  # ω(T) per G ((rad/s)/(N·m))
+P_Z_DW = 44  # d(T) per ω (s)
+P_Z_DD = 45  # d(T) per d (dimensionless)
+P_Z_DL = 46  # d(T) per ω_L (s)
+P_Z_DF = 47  # d(T) per F (rad/(N·m))
+P_Z_DG = 48  # d(T) per G (rad/(N·m))
+P_Z_LW = 49  # ω_L(T) per ω (dimensionless)
+P_Z_LD = 50  # ω_L(T) per d (1/s)
+P_Z_LL = 51  # ω_L(T) per ω_L (dimensionless)
+P_Z_LF = 52  # ω_L(T) per F ((rad/s)/(N·m))
+P_Z_LG = 53  # ω_L(T) per G ((rad/s)/(N·m))
+P_Z_MDD = 54  # motor held at rest by friction, the load moving: d(T) per d (dimensionless)
+P_Z_MDL = 55  # … d(T) per ω_L (s)
+P_Z_MDG = 56  # … d(T) per G (rad/(N·m))
+P_Z_MLD = 57  # … ω_L(T) per d (1/s)
+P_Z_MLL = 58  # … ω_L(T) per ω_L (dimensionless)
+P_Z_MLG = 59  # … ω_L(T) per G ((rad/s)/(N·m))
+P_Z_LTW = 60  # load held at rest by friction, the motor moving: θ(T) − θ per ω (s)
+P_Z_LTD = 61  # … θ(T) − θ per d (dimensionless)
+P_Z_LTF = 62  # … θ(T) − θ per F (rad/(N·m))
+P_Z_LWW = 63  # … ω(T) per ω (dimensionless)
+P_Z_LWD = 64  # … ω(T) per d (1/s)
+P_Z_LWF = 65  # … ω(T) per F ((rad/s)/(N·m))
+P_Z_LDW = 66  # … d(T) per ω (s)
+P_Z_LDD = 67  # … d(T) per d (dimensionless)
+P_Z_LDF = 68  # … d(T) per F (rad/(N·m))
+N_PARAMS = 69
 
 # --- accumulator row (streamed measures; see vfgym.plant.measures for the definitions) --
 A_OV_MOTOR = 0  # max over at-rest ticks of dir·(θ − P) (rad), ≥ 0
@@ -74,7 +116,15 @@ A_SPEED_MAX = 27  # max |ω| (rad/s)
 A_TICKS = 28  # ticks simulated (whole)
 A_ACC_WINDOW = 29  # w, the pulse-acceleration window (ticks, whole)
 A_ACC_QUANTUM = 30  # that measure's quantum: 0 for the V-F's train, 2δ/(wT)² for counts (rad/s²)
-N_ACC = 31
+# the load's measures (a two-mass plant; θ_L = θ − d; left at their initial values if rigid)
+A_OV_LOAD = 31  # max over at-rest ticks of dir·(θ_L − P) (rad), ≥ 0
+A_LAST_OUT_LOAD = 32  # last tick with |θ_L − target| > window (tick; −1: never)
+A_RESIDUAL = 33  # peak to peak of θ_L after the motor's last tick out of the window (rad)
+A_TRK_SQ_LOAD = 34  # Σ (P − θ_L)² over all ticks (rad²)
+A_TRK_MAX_LOAD = 35  # max |P − θ_L| (rad)
+A_LOAD = 36  # final θ_L (rad)
+A_LOAD_SPEED = 37  # final ω_L (rad/s)
+N_ACC = 38
 
 # --- trace rows (one column per recorded tick) ------------------------------------------
 R_COMMAND = 0  # command P (rad)
@@ -87,7 +137,9 @@ R_PC = 6  # position counter pc (counts)
 R_FEEDBACK = 7  # filtered speed feedback y (counts)
 R_SPEED_COUNT = 8  # latched speed counter output x = B·count (counts)
 R_TRAIN = 9  # pulse train's unquantised position x·δ (rad; docs/model.md §5.1)
-N_ROWS = 10
+R_LOAD = 10  # load angle θ_L (rad; θ on a rigid plant)
+R_LOAD_SPEED = 11  # load speed ω_L (rad/s; ω on a rigid plant)
+N_ROWS = 12
 
 # --- loop state (one float64 row per move; read and written by run_segment) -------------
 S_N = 0  # pulses output n, signed (pulses)
@@ -136,4 +188,12 @@ S_WMX = 42  # running A_SPEED_MAX (rad/s)
 S_D2MX = 43  # max |x_i − 2·x_(i−w) + x_(i−2w)| so far (x: train position; pulses)
 S_DWMX = 44  # max |ω_{i+1} − ω_i| so far, before dividing by T for A_ACC_MOTOR (rad/s)
 S_TICK = 45  # next tick to simulate (tick, whole)
-N_STATE = 46
+S_TWIST = 46  # the spring's twist d = θ − θ_L (rad; 0 on a rigid plant)
+S_WLOAD = 47  # load speed ω_L (rad/s; 0 on a rigid plant)
+S_OVL = 48  # running A_OV_LOAD (rad)
+S_LOL = 49  # running A_LAST_OUT_LOAD (tick; −1: never)
+S_RVHI = 50  # highest θ_L since the motor's last tick out of the window (rad)
+S_RVLO = 51  # lowest θ_L since then (rad)
+S_TSQL = 52  # running A_TRK_SQ_LOAD (rad²)
+S_TMXL = 53  # running A_TRK_MAX_LOAD (rad)
+N_STATE = 54

@@ -30,6 +30,7 @@ from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import _tick as TK
 from vfgym.plant._notice import announce_compile
+from vfgym.plant._two_mass import two_mass_coefficients
 from vfgym.plant.measures import accel_window_ticks, command_end_s, from_acc
 
 
@@ -169,6 +170,12 @@ def pack(
     prm[L.P_ACC_W] = accw
     prm[L.P_ACC_SCALE] = plant.pulse_rad / (accw * T) ** 2
     prm[L.P_USE_EXT] = 1.0 if use_ext else 0.0
+    if plant.transmission is not None:
+        prm[L.P_TWO] = 1.0
+        prm[L.P_KS] = plant.transmission.stiffness_nm_rad
+        prm[L.P_CS] = plant.transmission.damping_nm_s_rad
+        prm[L.P_TCL] = plant.transmission.load_coulomb_nm
+        prm[L.P_Z_TW : L.P_Z_LDF + 1] = two_mass_coefficients(plant)
     return prm
 
 
@@ -205,6 +212,12 @@ def check_pulses(pulses: np.ndarray, n_ticks: int) -> np.ndarray:
     return np.ascontiguousarray(arr, dtype=np.int8)
 
 
+def segment_kernel(prm: np.ndarray) -> Any:
+    """The compiled segment loop of the plant a parameter row states: ``run_segment``'s
+    rigid or two-mass loop, so that a first simulation compiles only its own."""
+    return K.run_segment_two if prm[L.P_TWO] != 0.0 else K.run_segment_rigid
+
+
 def run_move(
     cmd: np.ndarray, ext: np.ndarray, prm: np.ndarray, rec: np.ndarray, dec: int = 1
 ) -> np.ndarray:
@@ -233,11 +246,12 @@ def run_move(
     numpy.ndarray
         The accumulator row the measures are decoded from (:mod:`vfgym.plant.measures`).
     """
-    announce_compile("simulate", "the simulation kernel", K.run_segment)
+    loop = segment_kernel(prm)
+    announce_compile("simulate", "the simulation kernel", loop)
     st = np.empty(L.N_STATE, dtype=np.float64)
     ring = np.empty(K.ring_size.py_func(prm), dtype=np.float64)
     K.init_state.py_func(prm, st, ring)
-    K.run_segment(cmd, ext, prm, st, ring, cmd.shape[0], rec, dec)
+    loop(cmd, ext, prm, st, ring, cmd.shape[0], rec, dec)
     acc = K.new_acc()
     K.finish.py_func(st, acc, cmd.shape[0], prm)
     return acc
@@ -277,6 +291,11 @@ class Trace:
         The pulse train's unquantised position (rad): the V-F controller's
         (n + sum/value)·δ, of which ``pulse_rad`` is the whole pulses; an external train's
         n·δ (docs/model.md §5.1).
+    load_rad : numpy.ndarray
+        The load's angle θ_L beyond the transmission's spring, at the motor shaft (rad;
+        docs/model.md §3.1); the motor's angle on a rigid plant.
+    load_speed_rad_s : numpy.ndarray
+        The load's speed ω_L (rad/s); the motor's on a rigid plant.
     acc : numpy.ndarray
         The measures streamed over every tick, undecoded (see :attr:`metrics`).
     settings : Settings
@@ -306,6 +325,8 @@ class Trace:
     feedback_counts: np.ndarray
     speed_count: np.ndarray
     train_rad: np.ndarray
+    load_rad: np.ndarray
+    load_speed_rad_s: np.ndarray
     acc: np.ndarray = field(repr=False)
     settings: Settings
     plant: Plant
@@ -420,6 +441,8 @@ def _trace(
         feedback_counts=rec[L.R_FEEDBACK],
         speed_count=rec[L.R_SPEED_COUNT],
         train_rad=rec[L.R_TRAIN],
+        load_rad=rec[L.R_LOAD],
+        load_speed_rad_s=rec[L.R_LOAD_SPEED],
         acc=acc,
         settings=settings,
         plant=plant,
@@ -504,7 +527,8 @@ def simulate_train(
     cmd = np.zeros(n_ticks, dtype=np.float64)
     prm = pack(settings, plant, measures, 0.0, n_ticks, True)
     rec = np.empty((L.N_ROWS, n_ticks // dec), dtype=np.float64)
-    announce_compile("simulate", "the simulation kernel", K.run_segment)
+    loop = segment_kernel(prm)
+    announce_compile("simulate", "the simulation kernel", loop)
     st = np.empty(L.N_STATE, dtype=np.float64)
     ring = np.empty(K.ring_size.py_func(prm), dtype=np.float64)
     K.init_state.py_func(prm, st, ring)
@@ -512,7 +536,7 @@ def simulate_train(
     st[L.S_NSLEFT] = plant.servo.sample_ticks - phase
     st[L.S_PC] = held
     st[L.S_U] = held
-    K.run_segment(cmd, ext, prm, st, ring, n_ticks, rec, dec)
+    loop(cmd, ext, prm, st, ring, n_ticks, rec, dec)
     acc = K.new_acc()
     K.finish.py_func(st, acc, n_ticks, prm)
     return _trace(cmd, rec, acc, settings, plant, measures, dec, True)

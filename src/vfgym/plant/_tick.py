@@ -11,24 +11,29 @@ order, the order of :mod:`vfgym.plant.reference`. The blocks, in the tick's orde
    and every Ns ticks the latch and filter of the speed counter;
 3. :func:`torque`: the torque command, clipped to the torque–speed curve;
 4. :func:`motor` (with :func:`stop_within_tick`): exact integration over the tick with
-   the torque held;
+   the torque held; on a two-mass plant :func:`motor_two` (docs/model.md §3.1), with the
+   load beyond a spring, its coefficients :func:`two_mass` read from the parameter row;
 5. :func:`encoder`: the encoder count of the new angle;
 
 then the measures streamed from the tick (:func:`ripple_sample` at each servo sample,
 :func:`overshoot`, :func:`in_position`, :func:`steady_state`, :func:`pulse_accel`,
-:func:`tracking`, :func:`pulse_stats`, :func:`peak`) and the trace row
-(:func:`record`). Whole numbers (counts, ticks) are int64 here.
+:func:`tracking`, :func:`pulse_stats`, :func:`peak`, and on a two-mass plant
+:func:`load_tick`) and the trace row (:func:`record`). Whole numbers (counts, ticks) are
+int64 here.
 """
 
 from __future__ import annotations
 
 import math
 
+from vfgym.plant import _layout as L
 from vfgym.plant._jit import jit
 from vfgym.plant._layout import (
     R_COMMAND,
     R_ERROR,
     R_FEEDBACK,
+    R_LOAD,
+    R_LOAD_SPEED,
     R_OMEGA,
     R_PC,
     R_PULSE,
@@ -186,6 +191,94 @@ def motor(theta, omega, net, tc, cww, cwf, ctw, ctf, damp, inv_j, T):
     return stop_within_tick(theta, omega, f, net, tc, damp, inv_j, T)
 
 
+@jit(inline=True)
+def two_mass(prm):
+    """The two-mass plant's constants from the parameter row, in the order
+    :func:`motor_two` reads them (read once, before a loop): K_S, c_S, then the 35
+    coefficients ``P_Z_TW`` … ``P_Z_LDF`` (indices 2 … 36)."""
+    return (
+        prm[L.P_KS], prm[L.P_CS],
+        prm[L.P_Z_TW], prm[L.P_Z_TD], prm[L.P_Z_TL], prm[L.P_Z_TF], prm[L.P_Z_TG],
+        prm[L.P_Z_WW], prm[L.P_Z_WD], prm[L.P_Z_WL], prm[L.P_Z_WF], prm[L.P_Z_WG],
+        prm[L.P_Z_DW], prm[L.P_Z_DD], prm[L.P_Z_DL], prm[L.P_Z_DF], prm[L.P_Z_DG],
+        prm[L.P_Z_LW], prm[L.P_Z_LD], prm[L.P_Z_LL], prm[L.P_Z_LF], prm[L.P_Z_LG],
+        prm[L.P_Z_MDD], prm[L.P_Z_MDL], prm[L.P_Z_MDG], prm[L.P_Z_MLD], prm[L.P_Z_MLL],
+        prm[L.P_Z_MLG], prm[L.P_Z_LTW], prm[L.P_Z_LTD], prm[L.P_Z_LTF], prm[L.P_Z_LWW],
+        prm[L.P_Z_LWD], prm[L.P_Z_LWF], prm[L.P_Z_LDW], prm[L.P_Z_LDD], prm[L.P_Z_LDF],
+    )  # fmt: skip
+
+
+@jit(inline=True)
+def motor_two(theta, omega, d, wl, net, tc, tcl, z):
+    """The two-mass plant over the tick under the net torque ``net`` on the motor held
+    (docs/model.md §3.1): motor angle and speed θ, ω, the spring's twist d = θ − θ_L, the
+    load's speed ω_L; Coulomb friction ``tc`` on the motor, ``tcl`` on the load. Returns
+    (θ, ω, d, ω_L).
+
+    Exact (the zero-order-hold matrix exponentials of :func:`vfgym.plant.two_mass_coefficients`)
+    for the friction forces held over the tick, F = net − s·τc on the motor and
+    G = −s_L·τc_L on the load, each sign that of its mass's speed at the tick's start. A
+    mass at rest breaks away (the sign of the torque on it) when that torque exceeds its
+    friction: net − S on the motor, S on the load, S = K_S·d + c_S·(ω − ω_L) the spring's;
+    else it stays held while the other moves (the held systems' exponentials). A moving
+    mass that friction would turn back within the tick is at rest at the tick's end."""
+    spring = z[0] * d + z[1] * (omega - wl)
+    s = 0.0
+    m_held = False
+    if tc != 0.0:
+        if omega > 0.0:
+            s = 1.0
+        elif omega < 0.0:
+            s = -1.0
+        else:
+            pull = net - spring
+            if pull > tc:
+                s = 1.0
+            elif pull < -tc:
+                s = -1.0
+            else:
+                m_held = True
+    sl = 0.0
+    l_held = False
+    if tcl != 0.0:
+        if wl > 0.0:
+            sl = 1.0
+        elif wl < 0.0:
+            sl = -1.0
+        elif spring > tcl:
+            sl = 1.0
+        elif spring < -tcl:
+            sl = -1.0
+        else:
+            l_held = True
+    f = net - s * tc
+    g = 0.0 - sl * tcl
+    if m_held and l_held:
+        return theta, omega, d, wl
+    if m_held:
+        d1 = z[22] * d + z[23] * wl + z[24] * g
+        wl1 = z[25] * d + z[26] * wl + z[27] * g
+        if sl != 0.0 and sl * wl1 <= 0.0:
+            wl1 = 0.0
+        return theta, omega, d1, wl1
+    if l_held:
+        th = theta + (z[28] * omega + z[29] * d + z[30] * f)
+        w = z[31] * omega + z[32] * d + z[33] * f
+        d1 = z[34] * omega + z[35] * d + z[36] * f
+        if s != 0.0 and s * w <= 0.0:
+            w = 0.0
+        return th, w, d1, wl
+    th = theta + (z[2] * omega + z[3] * d + z[4] * wl + z[5] * f + z[6] * g)
+    w = z[7] * omega + z[8] * d + z[9] * wl + z[10] * f + z[11] * g
+    d1 = z[12] * omega + z[13] * d + z[14] * wl + z[15] * f + z[16] * g
+    wl1 = z[17] * omega + z[18] * d + z[19] * wl + z[20] * f + z[21] * g
+    if s != 0.0 and s * w <= 0.0:
+        w = 0.0
+    if sl != 0.0 and sl * wl1 <= 0.0:
+        wl1 = 0.0
+    return th, w, d1, wl1
+
+
 # --- 5. encoder ----------------------------------------------------------------------------
 
 
@@ -322,8 +415,30 @@ def pulse_stats(p, i, pulses, min_iv, reversals, first_p, last_p, last_sign):
 
 
 @jit(inline=True)
-def record(rec, j, P, pos, theta, omega, tau, u, pc, y, x, train):
-    """The tick's state into column ``j`` of the trace ``rec``."""
+def load_tick(i, P, p_prev, last_dir, theta, thl, target, win, ov_l, lo_l, rv_hi, rv_lo):
+    """The load's measures on a two-mass plant at tick ``i``, its angle ``thl``: overshoot
+    while the command rests (as :func:`overshoot`), its last tick out of the window, and
+    the highest and lowest θ_L since the motor (θ) was last out of it. Returns (overshoot,
+    last tick out, highest, lowest)."""
+    if p_prev == P and last_dir != 0.0:
+        o = last_dir * (thl - P)
+        if o > ov_l:
+            ov_l = o
+    if abs(thl - target) > win:
+        lo_l = i
+    if abs(theta - target) > win:
+        return ov_l, lo_l, thl, thl
+    if thl > rv_hi:
+        rv_hi = thl
+    if thl < rv_lo:
+        rv_lo = thl
+    return ov_l, lo_l, rv_hi, rv_lo
+
+
+@jit(inline=True)
+def record(rec, j, P, pos, theta, omega, tau, u, pc, y, x, train, thl, wl):
+    """The tick's state into column ``j`` of the trace ``rec`` (``thl``, ``wl``: the
+    load's angle and speed, the motor's on a rigid plant)."""
     rec[R_COMMAND, j] = P
     rec[R_PULSE, j] = pos
     rec[R_THETA, j] = theta
@@ -334,3 +449,5 @@ def record(rec, j, P, pos, theta, omega, tau, u, pc, y, x, train):
     rec[R_FEEDBACK, j] = y
     rec[R_SPEED_COUNT, j] = x
     rec[R_TRAIN, j] = train
+    rec[R_LOAD, j] = thl
+    rec[R_LOAD_SPEED, j] = wl

@@ -55,6 +55,26 @@ peak_torque_nm, peak_following_error_counts, peak_speed_rad_s
     max |τ|, max |position counter|, max |ω|.
 final_error_rad, pulse_final_error_rad
     θ − target and n·δ − target after the last tick.
+
+The load's measures (:data:`LOAD_NAMES`), only where the plant states a transmission: the
+load's angle θ_L beyond the spring, at the motor shaft (docs/model.md §3.1), which the
+encoder does not see.
+
+load_overshoot_rad, load_overshoot_counts
+    overshoot_rad's definition on θ_L.
+load_move_time_s, load_settling_time_s, load_settled
+    move_time_s's on θ_L: the last sample at which the load is outside the in-position
+    window, the same window as the motor's.
+load_residual_vibration_rad, load_residual_vibration_counts, load_residual_vibration_um
+    the residual vibration: peak to peak of θ_L from the motor's move time (the first
+    sample after its last outside the window: the encoder reads "in position" from there)
+    to the run's end, in rad, in encoder counts, and in µm of travel where the
+    transmission states ``travel_mm_per_rad`` (else NaN). 0 when the motor never settles
+    (``settled`` false: nothing is residual).
+load_tracking_rms_rad, load_tracking_max_rad
+    RMS and max over all ticks of P − θ_L.
+load_final_error_rad
+    θ_L − target after the last tick.
 """
 
 from __future__ import annotations
@@ -102,6 +122,22 @@ NAMES = (
 )
 
 
+LOAD_NAMES = (
+    "load_overshoot_rad",
+    "load_overshoot_counts",
+    "load_move_time_s",
+    "load_settling_time_s",
+    "load_settled",
+    "load_residual_vibration_rad",
+    "load_residual_vibration_counts",
+    "load_residual_vibration_um",
+    "load_tracking_rms_rad",
+    "load_tracking_max_rad",
+    "load_final_error_rad",
+)
+"""The load's measures, which :func:`from_acc` adds where the plant states a transmission."""
+
+
 def accel_window_ticks(measures: Measures, plant: Plant, external: bool = False) -> int:
     """The pulse-acceleration window w in ticks (docs/model.md §5.1).
 
@@ -141,7 +177,8 @@ def from_acc(
     target_rad: float,
     command_end_time_s: float,
 ) -> dict[str, Any]:
-    """The named measures of one run from the kernel's streamed accumulator row."""
+    """The named measures of one run from the kernel's streamed accumulator row
+    (:data:`NAMES`, and :data:`LOAD_NAMES` where the plant states a transmission)."""
     f = plant.tick_hz
     T = plant.tick_s
     n = int(acc[L.A_TICKS])
@@ -157,7 +194,7 @@ def from_acc(
     min_iv = int(acc[L.A_MIN_INTERVAL])
     ss_n = max(1.0, float(acc[L.A_SS_COUNT]))
     rip_n = float(acc[L.A_RIPPLE_N])
-    return {
+    out = {
         "overshoot_rad": ov,
         "overshoot_pct": 100.0 * ov / abs(target_rad) if target_rad != 0.0 else math.nan,
         "overshoot_counts": ov / q,
@@ -192,6 +229,29 @@ def from_acc(
         "final_error_rad": float(acc[L.A_THETA]) - target_rad,
         "pulse_final_error_rad": float(acc[L.A_N]) * plant.pulse_rad - target_rad,
     }
+    tr = plant.transmission
+    if tr is None:
+        return out
+    ov_l = float(acc[L.A_OV_LOAD])
+    last_out_l = int(acc[L.A_LAST_OUT_LOAD])
+    move_l = (last_out_l + 1) * T
+    resid = float(acc[L.A_RESIDUAL]) if last_out < n - 1 else 0.0
+    out |= {
+        "load_overshoot_rad": ov_l,
+        "load_overshoot_counts": ov_l / q,
+        "load_move_time_s": move_l,
+        "load_settling_time_s": max(0.0, move_l - command_end_time_s),
+        "load_settled": last_out_l < n - 1,
+        "load_residual_vibration_rad": resid,
+        "load_residual_vibration_counts": resid / q,
+        "load_residual_vibration_um": (
+            resid * tr.travel_mm_per_rad * 1e3 if tr.travel_mm_per_rad is not None else math.nan
+        ),
+        "load_tracking_rms_rad": math.sqrt(float(acc[L.A_TRK_SQ_LOAD]) / n),
+        "load_tracking_max_rad": float(acc[L.A_TRK_MAX_LOAD]),
+        "load_final_error_rad": float(acc[L.A_LOAD]) - target_rad,
+    }
+    return out
 
 
 def command_end_s(command: np.ndarray, tick_hz: float) -> float:

@@ -161,6 +161,79 @@ class MotorLoad:
             self.omega = f2 * self.inv_j * rem * _h(x1)
 
 
+class TwoMassLoad(MotorLoad):
+    """docs/model.md §3.1: the motor (J_M, b, τc, τ_load) and the load J_L (its own Coulomb
+    friction τc_L) beyond a spring K_S with damping c_S, exact (the parameter row's matrix
+    exponentials) for the friction forces held; friction's stops and break-aways at the
+    tick's boundaries."""
+
+    def __init__(self, prm: np.ndarray) -> None:
+        super().__init__(prm)
+        self.ks = float(prm[L.P_KS])
+        self.cs = float(prm[L.P_CS])
+        self.tcl = float(prm[L.P_TCL])
+
+        def rows(first: int, last: int, width: int) -> list[list[float]]:
+            return [[float(v) for v in r] for r in prm[first : last + 1].reshape(-1, width)]
+
+        # both moving: (θ, ω, d, ω_L) per (ω, d, ω_L, F, G)
+        self.both = rows(L.P_Z_TW, L.P_Z_LG, 5)
+        self.motor_held = rows(L.P_Z_MDD, L.P_Z_MLG, 3)  # (d, ω_L) per (d, ω_L, G)
+        self.load_held = rows(L.P_Z_LTW, L.P_Z_LDF, 3)  # (θ, ω, d) per (ω, d, F)
+        self.twist = 0.0  # d = θ − θ_L
+        self.load_omega = 0.0
+
+    @property
+    def load_theta(self) -> float:
+        return self.theta - self.twist
+
+    @staticmethod
+    def friction(speed: float, pull: float, tc: float) -> tuple[float, bool]:
+        """The sign of a mass's Coulomb force (that of its speed, or at rest of the torque
+        pulling it, if beyond ``tc``), and whether it stays held."""
+        if tc == 0.0:
+            return 0.0, False
+        if speed != 0.0:
+            return (1.0 if speed > 0.0 else -1.0), False
+        if abs(pull) <= tc:
+            return 0.0, True
+        return (1.0 if pull > 0.0 else -1.0), False
+
+    @staticmethod
+    def stopped(sign: float, speed: float) -> float:
+        """A moving mass that friction would turn back within the tick is at rest at its end."""
+        return 0.0 if sign != 0.0 and sign * speed <= 0.0 else speed
+
+    def tick(self, tau: float) -> None:
+        net = tau - self.tload
+        w, d, wl = self.omega, self.twist, self.load_omega
+        spring = self.ks * d + self.cs * (w - wl)  # on the load; against the motor
+        s, motor_held = self.friction(w, net - spring, self.tc)
+        sl, load_held = self.friction(wl, spring, self.tcl)
+        f = net - s * self.tc
+        g = 0.0 - sl * self.tcl
+        if motor_held and load_held:
+            return
+        if motor_held:  # the load moves on the spring alone
+            (dd, dl, dg), (ld, ll, lg) = self.motor_held
+            self.twist = dd * d + dl * wl + dg * g
+            self.load_omega = self.stopped(sl, ld * d + ll * wl + lg * g)
+            return
+        if load_held:  # the motor moves against the spring
+            (tw, td, tf), (ww, wd, wf), (dw, dd, df) = self.load_held
+            self.theta = self.theta + (tw * w + td * d + tf * f)
+            self.omega = self.stopped(s, ww * w + wd * d + wf * f)
+            self.twist = dw * w + dd * d + df * f
+            return
+        rows = self.both
+        x = (w, d, wl, f, g)
+        t_row, w_row, d_row, l_row = ([c * v for c, v in zip(r, x, strict=True)] for r in rows)
+        self.theta = self.theta + (t_row[0] + t_row[1] + t_row[2] + t_row[3] + t_row[4])
+        self.omega = self.stopped(s, w_row[0] + w_row[1] + w_row[2] + w_row[3] + w_row[4])
+        self.twist = d_row[0] + d_row[1] + d_row[2] + d_row[3] + d_row[4]
+        self.load_omega = self.stopped(sl, l_row[0] + l_row[1] + l_row[2] + l_row[3] + l_row[4])
+
+
 class Encoder:
     """Quadrature encoder decoded ×4: count = floor(θ / q)."""
 
@@ -179,7 +252,8 @@ def reference_run(
     """Simulate one move; returns (accumulator row, trace rows at every tick)."""
     vf = VFController(prm)
     servo = DigitalServo(prm)
-    motor = MotorLoad(prm)
+    two = prm[L.P_TWO] != 0.0
+    motor = TwoMassLoad(prm) if two else MotorLoad(prm)
     enc = Encoder(prm)
     use_ext = prm[L.P_USE_EXT] != 0.0
     T = float(prm[L.P_TICK_S])
@@ -212,6 +286,12 @@ def reference_run(
     c_seen = 0
     p_prev = 0.0
     last_dir = 0.0
+    # the load's (two-mass): overshoot, last tick out, θ_L since the motor was last out,
+    # tracking
+    ov_l = 0.0
+    last_out_l = -1
+    since_motor_out: list[float] = [0.0]
+    trk_l = [0.0, 0.0]
     for i, P in enumerate(cmd.tolist()):
         p = int(ext[i]) if use_ext else vf.tick(P)
         n += p
@@ -240,6 +320,21 @@ def reference_run(
         elif last_dir != 0.0:
             ov_m = max(ov_m, last_dir * (theta - P))
             ov_p = max(ov_p, last_dir * (pos - P))
+        if isinstance(motor, TwoMassLoad):
+            thl = motor.load_theta
+            if p_prev == P and last_dir != 0.0:
+                ov_l = max(ov_l, last_dir * (thl - P))
+            if abs(thl - target) > win:
+                last_out_l = i
+            if abs(theta - target) > win:
+                since_motor_out = []
+            since_motor_out.append(thl)
+            d_l = P - thl
+            trk_l[0] += d_l * d_l
+            trk_l[1] = max(trk_l[1], abs(d_l))
+            load_row = [thl, motor.load_omega]
+        else:
+            load_row = [theta, omega]
         p_prev = P
         if abs(theta - target) > win:
             last_out_m = i
@@ -265,7 +360,9 @@ def reference_run(
         tq_mx = max(tq_mx, abs(tau))
         pc_mx = max(pc_mx, abs(servo.pc))
         w_mx = max(w_mx, abs(omega))
-        rows.append([P, pos, theta, omega, tau, servo.u, servo.pc, servo.y, servo.x, x * delta])
+        rows.append(
+            [P, pos, theta, omega, tau, servo.u, servo.pc, servo.y, servo.x, x * delta, *load_row]
+        )
 
     a[L.A_OV_MOTOR], a[L.A_OV_PULSE] = ov_m, ov_p
     a[L.A_LAST_OUT_MOTOR], a[L.A_LAST_OUT_PULSE] = last_out_m, last_out_p
@@ -286,6 +383,14 @@ def reference_run(
     a[L.A_TICKS] = len(cmd)
     a[L.A_ACC_WINDOW] = w
     a[L.A_ACC_QUANTUM] = 2.0 * acc_scale if use_ext else 0.0
+    if isinstance(motor, TwoMassLoad):
+        a[L.A_OV_LOAD], a[L.A_LAST_OUT_LOAD] = ov_l, last_out_l
+        a[L.A_RESIDUAL] = max(since_motor_out) - min(since_motor_out)
+        a[L.A_TRK_SQ_LOAD], a[L.A_TRK_MAX_LOAD] = trk_l
+        a[L.A_LOAD], a[L.A_LOAD_SPEED] = motor.load_theta, motor.load_omega
+    else:  # the kernel's initial values, and the load turning with the motor
+        a[L.A_LAST_OUT_LOAD] = -1
+        a[L.A_LOAD], a[L.A_LOAD_SPEED] = motor.theta, motor.omega
     return a, np.array(rows, dtype=np.float64).T.reshape(L.N_ROWS, len(cmd))
 
 

@@ -8,6 +8,11 @@ count and the cost's median [IQR] and mean (:meth:`Report.spread`), and per base
 tuned setting's wins / losses / ties on cost and the bootstrap interval of the mean paired
 difference (:meth:`Report.win_loss`). Nothing is computed here that the report does not
 hold, so the verdict's numbers are those of ``vfgym evaluate`` on the same moves.
+
+Where the axis states a transmission (a compliant load, docs/model.md §3.1), the verdict
+also reads the load's measures: each controller's load move time and residual vibration
+(in µm where the transmission states its travel, else in encoder counts), and on how many
+moves the tuned setting's residual vibration is no larger than each baseline's.
 """
 
 from __future__ import annotations
@@ -55,6 +60,14 @@ class VerdictRow:
     versus : WinLoss or None
         The tuned setting against it (:meth:`Report.win_loss`); ``None`` for the tuned
         setting's own row.
+    load_move_time : Spread or None
+        Its load move time (s) over the test moves, where the axis states a transmission.
+    residual : Spread or None
+        Its load's residual vibration, peak to peak after the motor is in position, in
+        :attr:`Verdict.residual_unit`, where the axis states a transmission.
+    residual_no_larger : tuple of int or None
+        (moves on which the tuned setting's residual vibration is no larger than this
+        baseline's, moves both ran); ``None`` for the tuned row and a rigid axis.
     """
 
     label: str
@@ -62,6 +75,9 @@ class VerdictRow:
     applicable: int
     cost: Spread
     versus: WinLoss | None
+    load_move_time: Spread | None = None
+    residual: Spread | None = None
+    residual_no_larger: tuple[int, int] | None = None
 
 
 @dataclass(frozen=True)
@@ -92,6 +108,9 @@ class Verdict:
     worst : tuple of (str, str)
         The tuned setting's infeasible test moves, the worst first, each with the limits
         it breaks there (e.g. ``acceleration 17.8x the limit``).
+    residual_unit : str
+        The unit of the rows' residual vibration, ``µm`` or ``counts``; empty where the
+        axis states no transmission (no load measures).
     """
 
     report: Report
@@ -102,6 +121,7 @@ class Verdict:
     across: AcrossPlants | None = None
     outside: tuple[tuple[str, str], ...] = ()
     worst: tuple[tuple[str, str], ...] = ()
+    residual_unit: str = ""
 
     def row(self, label: str) -> VerdictRow:
         """A controller's row by label.
@@ -168,6 +188,11 @@ class Verdict:
                 w = r.versus
                 d |= {"wins": w.wins, "losses": w.losses, "ties": w.ties}
                 d |= {"not_applicable": w.not_applicable, "cost_diff": spread(w.cost_diff)}
+            if r.load_move_time is not None and r.residual is not None:
+                d |= {"load_move_time_s": spread(r.load_move_time)}
+                d |= {f"residual_vibration_{_UNIT_KEY[self.residual_unit]}": spread(r.residual)}
+            if r.residual_no_larger is not None:
+                d |= {"residual_no_larger": list(r.residual_no_larger)}
             rows.append(d)
         out: dict[str, Any] = {
             "tuned": self.tuned,
@@ -229,18 +254,30 @@ def verdict(
     if not report.tuned or not report.baselines:
         raise ValueError("a verdict needs a tuned candidate and at least one baseline")
     tuned = tuned or report.tuned[0].label
+    unit = _residual_unit(report)
+    key = f"load_residual_vibration_{_UNIT_KEY[unit]}" if unit else ""
     rows = []
     for col in [report.column(tuned), *report.baselines]:
         f = col.feasible
-        rows.append(
-            VerdictRow(
-                label=col.label,
-                feasible=int(np.nansum(f)),
-                applicable=int(np.isfinite(f).sum()),
-                cost=report.spread(col.label, "cost"),
-                versus=None if col.label == tuned else report.win_loss(tuned, col.label),
-            )
+        row = VerdictRow(
+            label=col.label,
+            feasible=int(np.nansum(f)),
+            applicable=int(np.isfinite(f).sum()),
+            cost=report.spread(col.label, "cost"),
+            versus=None if col.label == tuned else report.win_loss(tuned, col.label),
         )
+        if unit:
+            mine, theirs = report.column(tuned).values(key), col.values(key)
+            both = np.isfinite(mine) & np.isfinite(theirs)
+            row = replace(
+                row,
+                load_move_time=report.spread(col.label, "load_move_time_s"),
+                residual=report.spread(col.label, key),
+                residual_no_larger=None
+                if col.label == tuned
+                else (int((mine[both] <= theirs[both]).sum()), int(both.sum())),
+            )
+        rows.append(row)
     known = {_content(sc) for sc in tuned_on}
     seen = tuple(sc.name for sc in report.scenarios if _content(sc) in known)
     across = report.across_of([r.label for r in rows])
@@ -251,8 +288,8 @@ def verdict(
         for sc in report.scenarios
         if span is not None and (o := span.outside(sc, plant))
     )
-    return Verdict(report, tuned, tuple(rows), seen, title, across, outside,
-                   _worst(report.column(tuned), report.scenarios))  # fmt: skip
+    worst = _worst(report.column(tuned), report.scenarios)
+    return Verdict(report, tuned, tuple(rows), seen, title, across, outside, worst, unit)
 
 
 def _worst(col: Column, scenarios: Sequence[Scenario]) -> tuple[tuple[str, str], ...]:
@@ -292,6 +329,19 @@ def breaks_phrase(name: str, value: float, m: dict[str, Any]) -> str:
     if name == "overshoot":
         return f"overshoot {m['overshoot_counts']:.0f} counts"
     return f"not arrived ({value:.3g} windows beyond the in-position window at the end)"
+
+
+_UNIT_KEY = {"µm": "um", "counts": "counts", "": ""}
+"""The residual vibration's measure name by unit (:mod:`vfgym.plant.measures`)."""
+
+
+def _residual_unit(report: Report) -> str:
+    """``µm`` where the report's moves ran on a transmission that states its travel,
+    ``counts`` where it states none, empty on a rigid plant (no load measures)."""
+    metrics = [m for c in report.columns for m in c.metrics if m]
+    if not metrics or "load_residual_vibration_rad" not in metrics[0]:
+        return ""
+    return "counts" if math.isnan(metrics[0]["load_residual_vibration_um"]) else "µm"
 
 
 def _content(sc: Scenario) -> Scenario:
@@ -461,6 +511,8 @@ def format_verdict(v: Verdict, axis_file: str | None = None, per_move: bool = Fa
             "moves: its wins are wins among runs that break a limit or do not arrive (see "
             "the axis file's notes)"
         )
+    if v.residual_unit:
+        lines += format_load(v)
     if v.across is not None:
         lines += format_across([r.label for r in v.rows], v.across)
     lines += _surprise_lines(v)
@@ -488,6 +540,53 @@ def _surprise_lines(v: Verdict, most: int = 3) -> list[str]:
             f"the tuned setting's result there is an extrapolation: {named}{more}"
         )
     return lines
+
+
+def format_load(v: Verdict) -> list[str]:
+    """Lines on the load of a compliant axis (:attr:`Verdict.residual_unit` set): per
+    controller its load move time and residual vibration, and on how many moves the
+    tuned setting's residual vibration is no larger than each baseline's.
+
+    Parameters
+    ----------
+    v : Verdict
+        The verdict.
+
+    Returns
+    -------
+    list of str
+        A title, the table and a closing line; empty for a rigid axis.
+    """
+    if not v.residual_unit:
+        return []
+    u = v.residual_unit
+    rows = [
+        [
+            "controller",
+            "load move time mean (ms)",
+            f"residual vibration median [IQR] ({u})",
+            "mean",
+            f"{v.tuned}'s no larger on",
+        ]
+    ]
+    for r in v.rows:
+        t, x = r.load_move_time, r.residual
+        assert t is not None and x is not None  # set on every row where a unit is
+        le = r.residual_no_larger
+        rows.append(
+            [
+                r.label,
+                _num(1e3 * t.mean),
+                f"{_num(x.median)} [{_num(x.q1)}, {_num(x.q3)}]",
+                _num(x.mean),
+                "" if le is None else f"{le[0]}/{le[1]}",
+            ]
+        )
+    head = (
+        "at the load (the axis states a transmission; the encoder reads the motor): move "
+        "time to the load in position, residual vibration peak to peak after the motor is:"
+    )
+    return [head, *_grid(rows, right={1, 3, 4})]
 
 
 def format_across(labels: Sequence[str], a: AcrossPlants) -> list[str]:

@@ -25,6 +25,11 @@ is the same formula, compiled, on the measures streamed so far
 (:mod:`vfgym.scoring._cost_compiled`). The last one, the *arrival term*, is known only at
 the scenario's end, and is added in one place, :func:`arrival_term`.
 
+Where the plant states a transmission (a compliant load, docs/model.md §3.1), the cost
+judges the load, not the motor: move time, overshoot, tracking error and arrival are the
+load's (``load_…`` measures, :mod:`vfgym.plant.measures`); the encoder on the motor may
+read "in position" while the tool still rings (:attr:`Yardsticks.load`).
+
 Arrival. A point-to-point move *arrives* when the motor is in the in-position window at
 the scenario's end (the measure ``settled``); a moving reference arrives when the motor
 follows it: the RMS tracking error is at most 1/√2 of the reference's own RMS (the error
@@ -159,6 +164,8 @@ class Yardsticks(NamedTuple):
         RMS of the command over the move: the tracking error of a motor that never moves.
     arrival_unit_rad : float
         The point-to-point arrival constraint's unit: the window, or one count if it is 0.
+    load : bool
+        The plant states a transmission: the load's measures are judged, not the motor's.
     """
 
     ideal_time_s: float
@@ -169,6 +176,7 @@ class Yardsticks(NamedTuple):
     tracking_scale_rad: float
     reference_rms_rad: float
     arrival_unit_rad: float
+    load: bool = False
 
 
 _YARDSTICKS: dict[tuple[Scenario, Plant, Measures], Yardsticks] = {}
@@ -215,6 +223,7 @@ def yardsticks(
         # busy machine (its threads waking), and its sum depended on their number
         reference_rms_rad=math.sqrt(float(np.square(cmd).sum()) / cmd.size),
         arrival_unit_rad=window if window > 0.0 else plant.motor.count_rad,
+        load=plant.transmission is not None,
     )
     if len(_YARDSTICKS) >= _YARDSTICKS_KEPT:  # the oldest goes first
         del _YARDSTICKS[next(iter(_YARDSTICKS))]
@@ -287,6 +296,28 @@ class Score(NamedTuple):
         return bool(np.all(self.constraints <= 0.0))
 
 
+def judged(m: dict[str, Any], y: Yardsticks, name: str) -> float:
+    """The measure ``name`` of what the cost judges: the load's (``load_`` + ``name``)
+    where the plant states a transmission (:attr:`Yardsticks.load`), else the motor's.
+
+    Parameters
+    ----------
+    m : dict
+        The run's measures (:mod:`vfgym.plant.measures`).
+    y : Yardsticks
+        The move's yardsticks.
+    name : str
+        A motor measure with a load counterpart: ``move_time_s``, ``overshoot_rad``,
+        ``tracking_rms_rad``, ``final_error_rad``.
+
+    Returns
+    -------
+    float
+        The measure.
+    """
+    return float(m[f"load_{name}" if y.load else name])
+
+
 def arrival_constraint(m: dict[str, Any], y: Yardsticks) -> float:
     """How far a run is from arriving (> 0: it did not; see the module docstring).
 
@@ -307,8 +338,8 @@ def arrival_constraint(m: dict[str, Any], y: Yardsticks) -> float:
     if y.tracking:
         if y.reference_rms_rad <= 0.0:
             return 0.0
-        return m["tracking_rms_rad"] / (FOLLOW_RATIO * y.reference_rms_rad) - 1.0
-    return (abs(m["final_error_rad"]) - y.window_rad) / y.arrival_unit_rad
+        return judged(m, y, "tracking_rms_rad") / (FOLLOW_RATIO * y.reference_rms_rad) - 1.0
+    return (abs(judged(m, y, "final_error_rad")) - y.window_rad) / y.arrival_unit_rad
 
 
 def arrival_term(c_arrival: float, weights: CostWeights) -> float:
@@ -371,15 +402,15 @@ def score(
     ideal, window, limit = y.ideal_time_s, y.window_rad, y.accel_limit_rad_s2
     c_acc = m["peak_accel_pulse_rad_s2"] / limit - 1.0 - y.accel_tolerance
     c_tq = m["torque_limit_time_s"] - bounds.torque_limit_time_s
-    ov_w = m["overshoot_rad"] / window if window > 0.0 else 0.0
+    ov_w = judged(m, y, "overshoot_rad") / window if window > 0.0 else 0.0
     c_ov = ov_w - bounds.overshoot_windows
     c_arr = arrival_constraint(m, y)
     if y.tracking:
-        rms = m["tracking_rms_rad"]
+        rms = judged(m, y, "tracking_rms_rad")
         ratio = rms / y.tracking_scale_rad if y.tracking_scale_rad > 0.0 else 0.0
         main = weights.tracking * ratio
     else:
-        ratio = m["move_time_s"] / ideal
+        ratio = judged(m, y, "move_time_s") / ideal
         main = weights.time * ratio
     terms = CostTerms(
         main=main,

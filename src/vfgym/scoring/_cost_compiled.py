@@ -43,7 +43,8 @@ K_W_TQ = 10  # CostWeights.torque
 K_B_OV = 11  # Bounds.overshoot_windows
 K_B_TQ = 12  # Bounds.torque_limit_time_s
 K_ACC_TOL = 13  # Yardsticks.accel_tolerance
-N_CONST = 14
+K_LOAD = 14  # 1: the load is judged (Yardsticks.load: the plant states a transmission)
+N_CONST = 15
 
 
 def constants(y: Yardsticks, n_ticks: int, weights: CostWeights, bounds: Bounds) -> np.ndarray:
@@ -78,6 +79,7 @@ def constants(y: Yardsticks, n_ticks: int, weights: CostWeights, bounds: Bounds)
     k[K_B_OV] = bounds.overshoot_windows
     k[K_B_TQ] = bounds.torque_limit_time_s
     k[K_ACC_TOL] = y.accel_tolerance
+    k[K_LOAD] = 1.0 if y.load else 0.0
     return k
 
 
@@ -95,9 +97,11 @@ def torque_time(st, prm) -> float:
 
 @_jit
 def overshoot_windows(st, k) -> float:
-    """Overshoot so far in in-position windows (0 for a zero window)."""
+    """Overshoot so far in in-position windows (0 for a zero window), of the motor or,
+    where it is judged, of the load."""
     win = k[K_WIN]
-    return st[L.S_OVM] / win if win > 0.0 else 0.0
+    ov = st[L.S_OVL] if k[K_LOAD] != 0.0 else st[L.S_OVM]
+    return ov / win if win > 0.0 else 0.0
 
 
 @_jit
@@ -106,12 +110,15 @@ def cost_terms(st, prm, k):
     streamed so far; their sum in this order is :func:`running_cost`."""
     T = prm[L.P_TICK_S]
     ideal = k[K_IDEAL]
+    load = k[K_LOAD] != 0.0  # the load's measures are judged, not the motor's
     if k[K_TRACKING] != 0.0:
         main = 0.0
         if k[K_TRK_SCALE] > 0.0:
-            main = k[K_W_TRACK] * (math.sqrt(st[L.S_TSQM] / k[K_TICKS]) / k[K_TRK_SCALE])
+            sq = st[L.S_TSQL] if load else st[L.S_TSQM]
+            main = k[K_W_TRACK] * (math.sqrt(sq / k[K_TICKS]) / k[K_TRK_SCALE])
     else:
-        main = k[K_W_TIME] * (((st[L.S_LOM] + 1.0) * T) / ideal)
+        last_out = st[L.S_LOL] if load else st[L.S_LOM]
+        main = k[K_W_TIME] * (((last_out + 1.0) * T) / ideal)
     return (
         main,
         k[K_W_OV] * overshoot_windows(st, k),
