@@ -29,7 +29,7 @@ ARCHITECTURE_DOC = REPO / "docs" / "architecture.md"
 
 # Lowest first. The reasons are in docs/architecture.md ("Dependency direction").
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("_validate", "_limits", "params", "space", "io"),  # shared vocabulary; io: files in/out
+    ("_validate", "_limits", "mechanics", "params", "space", "io"),  # shared vocabulary; io: files
     ("plant",),  # params -> Trace
     ("moves",),  # what the plant is asked to do
     ("axis",),  # the problem: plant, measures, moves, uncertainty

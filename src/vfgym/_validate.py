@@ -106,6 +106,11 @@ def check_int(
     return n
 
 
+def set_checked(obj: object, name: str, value: Any) -> None:
+    """Store a checked (normalised) value on a frozen dataclass in its ``__post_init__``."""
+    object.__setattr__(obj, name, value)
+
+
 def check_bool(name: str, value: Any) -> bool:
     """Return ``value`` if it is a bool (``True`` / ``False``; no 0, 1 or strings)."""
     if not isinstance(value, (bool, np.bool_)):

@@ -5,10 +5,20 @@ measures and score on a compliant plant."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
-from vfgym import PAPER_PLANT, PAPER_SETTINGS, Settings, Transmission, evaluate, simulate
+from vfgym import (
+    PAPER_AXIS,
+    PAPER_PLANT,
+    PAPER_SETTINGS,
+    Settings,
+    Transmission,
+    evaluate,
+    simulate,
+)
 from vfgym.moves.scenarios import SCENARIOS, Scenario
 from vfgym.scoring import score, yardsticks
 
@@ -48,7 +58,7 @@ def test_a_load_still_ringing_at_the_end_has_not_arrived():
 def test_evaluate_on_a_compliant_plant_is_simulate_then_score():
     moves = [MOVE, Scenario(name="back", profile="trapezoid", distance_rad=-3.0, duration_s=0.1)]
     sets = [PAPER_SETTINGS, Settings(value_rad=0.5, error_limit_rad=0.4, k=1000.0)]
-    ev = evaluate(sets, moves, plant=COMPLIANT)
+    ev = evaluate(sets, moves, axis=replace(PAPER_AXIS, plant=COMPLIANT))
     for i, s in enumerate(sets):
         for j, sc in enumerate(moves):
             plant = sc.plant(COMPLIANT)

@@ -431,7 +431,9 @@ def scheduler_policy(
     return AgentScheduler(agent, make_env(agent.env_id, agent.env_kwargs(axis)), source)
 
 
-def schedule_of(agent: Agent, scenario: Scenario | str, axis: str | None = None) -> dict[str, Any]:
+def schedule_of(
+    agent: Agent, scenario: Scenario | str, axis: str | Axis | None = None
+) -> dict[str, Any]:
     """A VFServo-v0 agent's schedule on one move, as plain data: each control interval's
     start (ms) and the settings in force through it (read back from the observation's
     ``setting_*`` entries, float32), then the scored move's cost and feasibility.
@@ -442,8 +444,8 @@ def schedule_of(agent: Agent, scenario: Scenario | str, axis: str | None = None)
         A VFServo-v0 agent.
     scenario : Scenario or str
         The move.
-    axis : str or None
-        An axis file the move belongs to (default: the agent's).
+    axis : str, Axis or None
+        The axis (or its file) the move belongs to (default: the agent's).
 
     Returns
     -------

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from vfgym.axis import LOADS_AXIS, Axis, load_axis, machine_digest
+from vfgym.axis import LOADS_AXIS, PAPER_AXIS, Axis, load_axis, machine_digest
 from vfgym.moves.features import scenario_features
 from vfgym.permove import Tuner, default_warn, outside_ranges
 from vfgym.permove import load_tuner as load_settings_tuner
@@ -89,8 +89,8 @@ def load_tuner(
     ValueError
         If the file is missing or neither kind of tuner.
     """
-    if path is None or not str(path).endswith(".zip"):
-        return load_settings_tuner(path, axis, warn)
+    if path is None or not str(path).endswith(".zip"):  # a settings model: its own is the paper's
+        return load_settings_tuner(path, PAPER_AXIS if axis is None else axis, warn)
     ax = load_axis(axis) if isinstance(axis, (str, Path)) else axis
     return _agent_tuner(Path(path), ax, warn or default_warn)
 

@@ -467,14 +467,24 @@ def ring_size(prm):
 
 
 @jit
-def run_one(cmd, ext, prm, acc, rec, dec):
+def one_move(cmd, ext, prm, acc, rec, dec, two):
     """Simulate one whole move; stream its measures into ``acc``; write every ``dec``-th
-    tick's state into ``rec`` (shape (N_ROWS, m), m = 0 for none)."""
+    tick's state into ``rec`` (shape (N_ROWS, m), m = 0 for none). ``two``, a literal at
+    each call as :func:`segment`'s: the plant is a two-mass plant (``P_TWO``)."""
     st = np.empty(N_STATE, dtype=np.float64)
     ring = np.empty(ring_size(prm), dtype=np.float64)
     init_state(prm, st, ring)
-    run_segment(cmd, ext, prm, st, ring, cmd.shape[0], rec, dec)
+    segment(cmd, ext, prm, st, ring, cmd.shape[0], rec, dec, two)
     finish(st, acc, cmd.shape[0], prm)
+
+
+@jit
+def run_one(cmd, ext, prm, acc, rec, dec):
+    """:func:`one_move` of a rigid or a two-mass plant, as ``prm`` says."""
+    if prm[P_TWO] != 0.0:
+        one_move(cmd, ext, prm, acc, rec, dec, True)
+    else:
+        one_move(cmd, ext, prm, acc, rec, dec, False)
 
 
 @jit(parallel=True)
@@ -482,7 +492,8 @@ def run_batch(cmd_flat, cmd_off, cmd_idx, ext_flat, ext_off, ext_idx, prm, acc):
     """Run ``prm.shape[0]`` moves in parallel (numba threads over the runs). Run r reads
     command ``cmd_idx[r]``, i.e. ``cmd_flat[cmd_off[j]:cmd_off[j+1]]``, and external pulses
     ``ext_idx[r]`` from ``ext_flat`` likewise (an empty segment when the V-F controller
-    makes the pulses); it writes measures only, into ``acc[r]``."""
+    makes the pulses); it writes measures only, into ``acc[r]``. Rigid and two-mass plants
+    may be mixed (:func:`run_batch_rigid` compiles the rigid loop alone)."""
     rec = np.zeros((N_ROWS, 0), dtype=np.float64)
     for r in numba.prange(prm.shape[0]):
         j = cmd_idx[r]
@@ -490,6 +501,20 @@ def run_batch(cmd_flat, cmd_off, cmd_idx, ext_flat, ext_off, ext_idx, prm, acc):
         cmd = cmd_flat[cmd_off[j] : cmd_off[j + 1]]
         ext = ext_flat[ext_off[e] : ext_off[e + 1]]
         run_one(cmd, ext, prm[r], acc[r], rec, 1)
+
+
+@jit(parallel=True)
+def run_batch_rigid(cmd_flat, cmd_off, cmd_idx, ext_flat, ext_off, ext_idx, prm, acc):
+    """:func:`run_batch` of rigid plants only (no row's ``P_TWO`` set): what a caller that
+    knows its batch calls, so that a first use compiles the rigid loop alone (the two-mass
+    loop nearly doubles the batch's compile time)."""
+    rec = np.zeros((N_ROWS, 0), dtype=np.float64)
+    for r in numba.prange(prm.shape[0]):
+        j = cmd_idx[r]
+        e = ext_idx[r]
+        cmd = cmd_flat[cmd_off[j] : cmd_off[j + 1]]
+        ext = ext_flat[ext_off[e] : ext_off[e + 1]]
+        one_move(cmd, ext, prm[r], acc[r], rec, 1, False)
 
 
 def new_acc(runs: int = 0) -> np.ndarray:

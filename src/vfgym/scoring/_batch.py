@@ -21,6 +21,7 @@ from vfgym.moves.baselines import Controller, resolve
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, Measures, Plant, Settings
 from vfgym.plant import _kernel as K
+from vfgym.plant import _layout as L
 from vfgym.plant import command_end_s, pack
 from vfgym.plant._notice import announce_compile
 from vfgym.plant._threads import keeps_torch_threads
@@ -189,9 +190,12 @@ def score_pairs(
             while_running()
         return out
     acc = K.new_acc(len(rows))
-    announce_compile("evaluate", "the batched simulation kernel", K.run_batch)
+    prm_rows = np.stack(prm)
+    # a batch of rigid plants runs (and on first use compiles) the rigid loop alone
+    run = K.run_batch if bool(np.any(prm_rows[:, L.P_TWO] != 0.0)) else K.run_batch_rigid
+    announce_compile("evaluate", "the batched simulation kernel", run)
     keeps_torch_threads(_run_beside)(
-        K.run_batch,
+        run,
         while_running,
         np.concatenate(cmds),
         np.concatenate([[0], np.cumsum([c.size for c in cmds])]).astype(np.int64),
@@ -199,7 +203,7 @@ def score_pairs(
         np.concatenate(ext_parts),
         np.concatenate([[0], np.cumsum([x.size for x in ext_parts])]).astype(np.int64),
         np.array(ext_idx, np.int64),
-        np.stack(prm),
+        prm_rows,
         acc,
     )
     for k, r in enumerate(rows):
