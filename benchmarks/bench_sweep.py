@@ -79,7 +79,7 @@ def sweep_seconds(
     storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
     study, _ = tuning.create_or_load(storage, "bench", cfg, cfg.scenario_list())
     scenarios = cfg.scenario_list()
-    evaluate(space.Settings(), scenarios[:1], axis=cfg.axis_or_paper())  # compiled
+    evaluate(space.Settings(), scenarios[:1], axis=cfg.axis)  # compiled
     statements = [0]
 
     def count(*_: object) -> None:
@@ -113,7 +113,7 @@ def kernel_seconds(config: Path, settings: list) -> Seconds:
     """Seconds to simulate each setting on the config's moves, one setting a call."""
     cfg = tuning.SweepConfig.resolve(read_yaml(config), {}, source=str(config))
     scenarios = cfg.scenario_list()
-    axis = cfg.axis_or_paper()
+    axis = cfg.axis
     evaluate(settings[0], scenarios, axis=axis)  # compiled
     t, c = time.perf_counter(), time.process_time()
     for s in settings:

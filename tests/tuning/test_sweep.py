@@ -106,7 +106,8 @@ def test_repeated_settings_are_not_simulated_twice():
     other = params | {"k": 1000.0}
     for p in (params, other, params, params):
         study.enqueue_trial(p)
-    obj = tuning.Objective(tuning.SweepConfig().scenario_list(), ("rise",), "cost")
+    cfg = tuning.SweepConfig()
+    obj = tuning.Objective(cfg.scenario_list(), ("rise",), "cost", axis=cfg.axis)
     study.optimize(obj, n_trials=4)
     assert obj.simulated == 2
     t = study.trials
@@ -115,7 +116,7 @@ def test_repeated_settings_are_not_simulated_twice():
     assert stored[2].cached_from == 0 and stored[1].cached_from is None
     # A fresh process (empty cache) finds the result among the study's completed trials.
     study.enqueue_trial(other)
-    fresh = tuning.Objective(obj.scenarios, ("rise",), "cost")
+    fresh = tuning.Objective(obj.scenarios, ("rise",), "cost", axis=cfg.axis)
     study.optimize(fresh, n_trials=1)
     assert fresh.simulated == 0
     assert study.trials[4].value == t[1].value

@@ -15,7 +15,7 @@ from contextlib import nullcontext
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from vfgym import space
-from vfgym.axis import PAPER_AXIS, Axis
+from vfgym.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 from vfgym.scoring import CONSTRAINTS, evaluate
@@ -55,7 +55,7 @@ class Objective:
     axis : Axis
         The problem: the settings run on its plant, are scored with its measures, and
         must also be feasible on its :meth:`~vfgym.axis.Axis.design_plants` (the
-        cost is the modelled plant's).
+        cost is the modelled plant's); :data:`vfgym.axis.PAPER_AXIS` for the paper's.
     aggregate : str
         The cost's aggregate over the scenarios (:func:`vfgym.tuning.aggregate`).
     cvar_alpha : float
@@ -68,7 +68,7 @@ class Objective:
         laws: tuple[str, ...],
         form: str,
         *,
-        axis: Axis = PAPER_AXIS,
+        axis: Axis,
         aggregate: str = DEFAULT_AGGREGATE,
         cvar_alpha: float = DEFAULT_CVAR_ALPHA,
     ) -> None:

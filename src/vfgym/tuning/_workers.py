@@ -14,6 +14,7 @@ from __future__ import annotations
 import copy
 import datetime
 import multiprocessing
+import os
 import signal
 import socket
 import sys
@@ -22,7 +23,7 @@ import time
 import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from multiprocessing.connection import Connection
 from multiprocessing.process import BaseProcess
 from typing import TYPE_CHECKING, Any, NamedTuple
@@ -39,6 +40,7 @@ from vfgym.tuning._study import make_sampler, trial_budget
 
 if TYPE_CHECKING:
     from optuna import Study, Trial
+    from optuna.storages import BaseStorage
     from optuna.trial import FrozenTrial
 
 RETRY = "failed_trial"
@@ -104,12 +106,17 @@ class WorkerReport:
     simulated : int
         Settings it simulated (the others were copied from equal settings).
     stopped : str
-        ``done`` or ``timeout`` (an interrupted worker raises KeyboardInterrupt).
+        ``done`` or ``timeout`` (an interrupted worker raises KeyboardInterrupt); for a
+        worker process that sent no report, ``interrupted`` or ``died``.
+    exit : int or None
+        A worker process's exit status (0 for the one in the calling process); None
+        while it runs.
     """
 
     trials: list[int] = field(default_factory=list)
     simulated: int = 0
     stopped: str = ""
+    exit: int | None = None
 
 
 def run_worker(
@@ -118,6 +125,7 @@ def run_worker(
     study_name: str,
     index: int = 0,
     on_trial: Callable[[Study], object] | None = None,
+    storage: BaseStorage | None = None,
 ) -> WorkerReport:
     """Run trials of ``study_name`` (``study.optimize``) until it holds the trials asked
     for, however many workers share it, or the timeout. An interrupted trial is failed
@@ -135,6 +143,8 @@ def run_worker(
         The worker's index, added to the sampler's seed.
     on_trial : callable or None
         Called with the study after each trial the worker ran.
+    storage : optuna.storages.BaseStorage or None
+        ``spec`` opened already (:func:`open_storage`; default: opened here).
 
     Returns
     -------
@@ -151,10 +161,11 @@ def run_worker(
     rep = WorkerReport()
     scenarios = cfg.scenario_list()
     seed = None if cfg.seed is None else cfg.seed + index
-    axis = cfg.axis_or_paper()
+    axis = cfg.axis
     me = worker_id()
     with DeferredInterrupt() as interrupts:
-        storage = open_storage(spec, cfg.heartbeat, cfg.grace)
+        if storage is None:
+            storage = open_storage(spec, cfg.heartbeat, cfg.grace)
         sampler = make_sampler(cfg, seed, scenarios, storage)
         study = optuna.load_study(study_name=study_name, storage=storage, sampler=sampler)
         objective = Objective(scenarios, cfg.laws, str(cfg.objective), axis=axis,
@@ -402,6 +413,78 @@ def spawn_workers(cfg: SweepConfig, spec: StorageSpec, study: str, n: int) -> li
         send.close()
         workers.append(Worker(process, report))
     return workers
+
+
+def run_processes(
+    cfg: SweepConfig, spec: StorageSpec, study: str, poll: Callable[[], object]
+) -> list[WorkerReport]:
+    """Run ``cfg.workers`` worker processes on the study and follow it until they end
+    (``poll`` called twice a second). On Ctrl-C they finish or give back their trial and
+    the interrupt is raised again once they have ended.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+    spec : StorageSpec
+        Where the study lives.
+    study : str
+        The study.
+    poll : callable
+        Called while the workers run.
+
+    Returns
+    -------
+    list of WorkerReport
+        Each worker's report with its exit status.
+    """
+    workers = spawn_workers(cfg, spec, study, cfg.workers)
+    reports: list[WorkerReport | None] = [None] * len(workers)
+
+    def collect() -> None:  # (read as they come: a report may exceed a pipe's buffer)
+        for i, w in enumerate(workers):
+            if reports[i] is None and w.report.poll():
+                try:
+                    reports[i] = w.report.recv()
+                except (EOFError, OSError):  # died before sending it
+                    reports[i] = WorkerReport()
+
+    interrupted = False
+    try:
+        while any(w.process.is_alive() for w in workers):
+            poll()
+            collect()
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        interrupted = True
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        _stop(workers)
+    collect()
+    out = []
+    for w, rep in zip(workers, reports, strict=True):
+        code = w.process.exitcode
+        if rep is None or not rep.stopped:
+            rep = WorkerReport(stopped="interrupted" if code == 130 else "died")
+        out.append(replace(rep, exit=code))
+    if interrupted:
+        raise KeyboardInterrupt
+    return out
+
+
+def _stop(workers: list[Worker]) -> None:
+    """After a Ctrl-C: give the workers 2 s to finish their trial, then interrupt the
+    ones left, then kill any that has not ended a minute later."""
+    deadline = time.monotonic() + 2.0
+    while time.monotonic() < deadline and any(w.process.is_alive() for w in workers):
+        time.sleep(0.05)
+    for w in workers:
+        if w.process.is_alive() and w.process.pid is not None:
+            os.kill(w.process.pid, signal.SIGINT)
+    for w in workers:
+        w.process.join(timeout=60)
+        if w.process.is_alive():
+            w.process.kill()
+            w.process.join()
 
 
 def _worker_process(cfg: SweepConfig, spec: StorageSpec, study: str, index: int,
