@@ -368,3 +368,31 @@ def test_timeout_stops_starting_trials(tmp_path, capsys):
     summary = yaml.safe_load((tmp_path / "sweep" / "s" / "summary.yaml").read_text())
     assert summary["workers"][0]["stopped"] == "timeout"
     assert f"{len(rows)}/5000 completed trials" in capsys.readouterr().out
+
+
+def test_settings_scored_ahead_are_the_trials_scored_one_by_one(tmp_path, monkeypatch):
+    """The compass's planned points scored ahead, in one batch beside the trials, leave
+    every trial as scoring each alone does: its settings, values, result and generation."""
+    from vfgym.tuning import _objective
+    from vfgym.tuning._compass import CompassSampler
+
+    def trials(name: str) -> list:
+        cfg = tuning.SweepConfig(scenarios="short-move,reversal", trials=30, study=name,
+                                 runs_dir=str(tmp_path), plots=False, progress=False)  # fmt: skip
+        result = tuning.sweep(cfg)
+        assert result.workers[0].simulated == len(result.workers[0].trials)  # (none repeated)
+        return [(t.params, t.values, t.user_attrs["result"], t.system_attrs.get("vfgym:compass"))
+                for t in result.study.get_trials()]  # fmt: skip
+
+    batches: list[int] = []
+    start = _objective._Batch.start
+
+    def counted(cls, objective, settings):
+        batches.append(len(settings))
+        return start(objective, settings)
+
+    monkeypatch.setattr(_objective._Batch, "start", classmethod(counted))
+    ahead = trials("ahead")
+    assert len(batches) >= 3 and sum(batches) >= 15  # most trials were scored ahead
+    monkeypatch.setattr(CompassSampler, "planned", lambda self: [])
+    assert trials("alone") == ahead

@@ -49,10 +49,13 @@ def best_trial(study: Study) -> FrozenTrial | None:
     """
     import optuna
 
+    return best_of(study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,)))
+
+
+def best_of(trials: list[FrozenTrial]) -> FrozenTrial | None:
+    """:func:`best_trial` among ``trials`` (those complete count)."""
     done = [
-        (t, r)
-        for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
-        if (r := stored_result(t)) is not None
+        (t, r) for t in trials if t.state.name == "COMPLETE" and (r := stored_result(t)) is not None
     ]
     if not done:
         return None

@@ -22,6 +22,7 @@ from vfgym._validate import check_output_path
 from vfgym.axis import AXIS_FILE, write_axis
 from vfgym.io.runs import read_yaml, write_text, write_yaml
 from vfgym.moves.scenarios import Scenario
+from vfgym.params import PAPER_SETTINGS
 from vfgym.report import (
     Report,
     Verdict,
@@ -30,12 +31,15 @@ from vfgym.report import (
     format_compact,
     format_verdict,
 )
+from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
+from vfgym.tuning._model import prepare
 from vfgym.tuning._objective import stored_result
 from vfgym.tuning._results import (
     BestRecord,
     FoundReference,
     against_paper,
+    best_of,
     best_record,
     best_trial,
     find_reference,
@@ -359,8 +363,13 @@ def sweep(
         if cfg.aggregate == "mean"
         else None
     )
-    storage, study, created = _open_study(cfg, spec, name, run_dir, scenarios)
-    _record(run_dir, cfg, name, spec, argv)
+    warm = _warm_up(cfg, scenarios) if cfg.workers == 1 else None
+    try:
+        storage, study, created = _open_study(cfg, spec, name, run_dir, scenarios)
+        _record(run_dir, cfg, name, spec, argv)
+    finally:
+        if warm is not None:
+            warm.join()
     before = TrialCounts.of(study)
     budget = trial_budget(cfg)
     if on_start is not None:
@@ -379,8 +388,8 @@ def sweep(
     except KeyboardInterrupt:
         held = _hold_interrupts()
     finally:
+        elapsed = time.monotonic() - t0
         progress.update(study, final=True)
-    elapsed = time.monotonic() - t0
     try:
         return _finish(cfg, study, spec, scenarios, run_dir, reference, created, elapsed,
                        workers, sum(before), interrupted=held is not None)  # fmt: skip
@@ -413,6 +422,25 @@ def _default_study(stem: str, runs_dir: str) -> str:
     return name
 
 
+def _warm_up(cfg: SweepConfig, scenarios: list[Scenario]) -> threading.Thread:
+    """Load the compiled kernel on a thread of its own while the study is opened: numba's
+    cache and the storage's first opening (its imports, its tables) each take a good
+    part of a second, and the first releases the GIL (the worker's own first call then
+    finds the kernel loaded). Then start the compass's model imports (:func:`prepare`)."""
+
+    def load() -> None:
+        try:
+            evaluate(PAPER_SETTINGS, scenarios[:1], axis=cfg.axis)
+        except Exception:  # (the worker's own first call raises it)
+            return
+        if cfg.sampler == "compass":  # its model's imports, beside the first trials
+            prepare()
+
+    thread = threading.Thread(target=load, name="vfgym-warm-up", daemon=True)
+    thread.start()
+    return thread
+
+
 class _Progress:
     """Tells ``tell`` how far the study is, at most twice a second (each read is the
     study's: a storage query a trial would otherwise add), and once at the end."""
@@ -425,8 +453,9 @@ class _Progress:
         if self.tell is None or (not final and time.monotonic() - self.at < 0.5):
             return
         self.at = time.monotonic()
-        complete = TrialCounts.of(study).complete
-        best = best_trial(study)
+        trials = study.get_trials(deepcopy=False)  # (read once)
+        complete = sum(t.state.name == "COMPLETE" for t in trials)
+        best = best_of(trials)
         res = None if best is None else stored_result(best)
         cost, feasible = (None, False) if res is None else (res.cost, res.feasible)
         self.tell(SweepProgress(complete, self.budget, cost, feasible, final))

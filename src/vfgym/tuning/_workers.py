@@ -34,6 +34,7 @@ from vfgym.axis import AxisNote
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
+from vfgym.tuning._model import prepare
 from vfgym.tuning._objective import Objective
 from vfgym.tuning._storage import MAX_RETRY, StorageSpec, open_storage, retry
 from vfgym.tuning._study import make_sampler, trial_budget
@@ -159,6 +160,8 @@ def run_worker(
     warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
     warnings.filterwarnings("ignore", message="Constraints have been set, but CmaEsSampler")
     rep = WorkerReport()
+    if cfg.sampler == "compass":  # its model's imports beside its first trials
+        prepare()
     scenarios = cfg.scenario_list()
     seed = None if cfg.seed is None else cfg.seed + index
     axis = cfg.axis
@@ -171,6 +174,7 @@ def run_worker(
         objective = Objective(scenarios, cfg.laws, str(cfg.objective), axis=axis,
                               aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha)  # fmt: skip
         objective.guard = interrupts.allowed
+        objective.ahead = getattr(sampler, "planned", None)  # (the compass plans ahead)
         evaluate(PAPER_SETTINGS, scenarios[:1], axis=axis)  # the kernel compiled first
         gate = _Budget(study, cfg, spec, interrupts)
         current: list[int] = []  # the trial in a simulation here
@@ -219,6 +223,7 @@ def run_worker(
                 _fail_and_retry(study, copy.deepcopy(study.get_trials(deepcopy=False)[n]))
             raise
         finally:
+            objective.close()
             rep.simulated = objective.simulated
             if ran:
                 trials = study.get_trials(deepcopy=False)
