@@ -174,10 +174,12 @@ def run_worker(
         objective = Objective(scenarios, cfg.laws, str(cfg.objective), axis=axis,
                               aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha)  # fmt: skip
         objective.guard = interrupts.allowed
-        objective.ahead = getattr(sampler, "planned", None)  # (the compass plans ahead)
         evaluate(PAPER_SETTINGS, scenarios[:1], axis=axis)  # the kernel compiled first
         gate = _Budget(study, cfg, spec, interrupts)
         current: list[int] = []  # the trial in a simulation here
+        planned = getattr(sampler, "planned", None)  # (the compass plans ahead)
+        if planned is not None:  # as many as the trials after this one may ask for
+            objective.ahead = lambda: planned()[: max(0, gate.budget - 1 - current[0])]
         ran: list[int] = []
         paused: list[int] = []  # optimize stopped here, to wait outside it (or an interrupt)
 
