@@ -16,10 +16,11 @@ axis's design plants with them, compiled first). The target: the sweep's trials 
 
 ``--repeat N`` runs the sweep and the floor N times each, alternately, and takes the
 fastest of each (on a shared machine one run may be twice another); ``--sql`` runs the
-command once more in this process (``vfgym.cli.main``) counting its SQL statements a
-trial; ``--long N`` runs an ``N``-trial sweep through the command and prints the wall
-time a trial of its first, second and last hundred took (cost per trial growing with the
-study shows in the last against the second).
+sweep once more in this process (``vfgym.tuning.sweep``, the command's own call) and
+counts the SQL statements of its trials, a trial; ``--long N`` runs an ``N``-trial sweep
+through the command and prints the wall time a trial of its first, second and last
+hundred took (cost per trial growing with the study shows in the last against the
+second).
 
     python benchmarks/bench_sweep.py [--config FILE] [--trials N] [--repeat 1] [--sql]
         [--long 1000]
@@ -137,23 +138,32 @@ def kernel_seconds(config: Path, settings: list) -> float:
 
 
 def sql_statements(config: Path, folder: Path, trials: int | None) -> float:
-    """SQL statements a trial of the command run in this process (a little slower)."""
+    """SQL statements a trial of the sweep run in this process (:func:`vfgym.tuning.sweep`,
+    the command's own call), counted from the study's opening to its last trial's end (a
+    little slower)."""
     import sqlalchemy
 
-    from vfgym.cli import main
-
-    count = [0]
+    count, on = [0], [False]
 
     def counted(*_: object) -> None:
-        count[0] += 1
+        count[0] += on[0]
 
+    def start(_: tuning.SweepStart) -> None:
+        on[0] = True
+
+    def stop(p: tuning.SweepProgress) -> None:
+        on[0] = on[0] and not p.final
+
+    over = {"runs_dir": str(folder), "study": "bench", "plots": False, "progress": False}
+    cfg = tuning.SweepConfig.resolve(
+        read_yaml(config), over | ({"trials": trials} if trials else {})
+    )
     sqlalchemy.event.listen(sqlalchemy.engine.Engine, "before_cursor_execute", counted)
     try:
-        main([*command(config, folder, trials), "--no-plots", "--no-progress"])
+        result = tuning.sweep(cfg, on_start=start, on_progress=stop)
     finally:
         sqlalchemy.event.remove(sqlalchemy.engine.Engine, "before_cursor_execute", counted)
-    done = read_yaml(folder / "sweep" / "bench" / "summary.yaml")["trials"]["complete"]
-    return count[0] / max(done, 1)
+    return count[0] / max(result.counts.complete, 1)
 
 
 def block_ms(per_trial: list[float], first: int, last: int) -> float:

@@ -375,27 +375,30 @@ def sweep(
     if on_start is not None:
         names = tuple(s.name for s in scenarios)
         on_start(SweepStart(name, created, before.complete, budget, spec.display, run_dir, names))
-    progress = _Progress(study, budget, on_progress)
+    progress = _Progress(budget, on_progress)
+    handler = _interrupt_handler()
     t0 = time.monotonic()
     workers: list[WorkerReport] = []
-    held = None
+    interrupted = False
     try:
         if cfg.workers == 1:
             rep = run_worker(cfg, spec, name, 0, progress.update, storage=storage)
             workers = [replace(rep, exit=0)]
         else:
             workers = run_processes(cfg, spec, name, lambda: progress.update(study))
-    except KeyboardInterrupt:
-        held = _hold_interrupts()
+    except KeyboardInterrupt:  # the files are written for what the study holds, then
+        interrupted = True  # Ctrl-C is acted on again
+        if handler is not None:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
     finally:
         elapsed = time.monotonic() - t0
         progress.update(study, final=True)
     try:
         return _finish(cfg, study, spec, scenarios, run_dir, reference, created, elapsed,
-                       workers, sum(before), interrupted=held is not None)  # fmt: skip
+                       workers, sum(before), interrupted)  # fmt: skip
     finally:
-        if held is not None:
-            held()
+        if interrupted and handler is not None:
+            signal.signal(signal.SIGINT, handler)
 
 
 def _default_study(stem: str, runs_dir: str) -> str:
@@ -445,8 +448,8 @@ class _Progress:
     """Tells ``tell`` how far the study is, at most twice a second (each read is the
     study's: a storage query a trial would otherwise add), and once at the end."""
 
-    def __init__(self, study: Study, budget: int, tell: Callable[[SweepProgress], object] | None):
-        self.study, self.budget, self.tell = study, budget, tell
+    def __init__(self, budget: int, tell: Callable[[SweepProgress], object] | None) -> None:
+        self.budget, self.tell = budget, tell
         self.at = 0.0
 
     def update(self, study: Study, final: bool = False) -> None:
@@ -461,17 +464,14 @@ class _Progress:
         self.tell(SweepProgress(complete, self.budget, cost, feasible, final))
 
 
-def _hold_interrupts() -> Callable[[], None]:
-    """Ignore Ctrl-C while an interrupted sweep writes its files; the returned call puts
-    the handler back (on the main thread only: elsewhere the handler is left as it is)."""
+def _interrupt_handler() -> Any:
+    """Ctrl-C's handler as the sweep starts, put back after an interrupted sweep has
+    written its files (Ctrl-C is ignored meanwhile); None off the main thread, where the
+    handler cannot be changed."""
     if threading.current_thread() is not threading.main_thread():
-        return lambda: None
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-    def restore() -> None:
-        signal.signal(signal.SIGINT, old)
-
-    return restore
+        return None
+    handler = signal.getsignal(signal.SIGINT)
+    return signal.default_int_handler if handler is None else handler
 
 
 def _check_same_storage(run_dir: Path, display: str) -> None:
