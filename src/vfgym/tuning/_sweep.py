@@ -33,7 +33,6 @@ from vfgym.report import (
 )
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
-from vfgym.tuning._model import prepare
 from vfgym.tuning._objective import stored_result
 from vfgym.tuning._results import (
     BestRecord,
@@ -51,7 +50,13 @@ from vfgym.tuning._results import (
 )
 from vfgym.tuning._storage import StorageSpec, mask_url, open_storage, resolve_storage
 from vfgym.tuning._study import check_sampler, create_or_load, trial_budget
-from vfgym.tuning._workers import RETRY, WorkerReport, run_processes, run_worker
+from vfgym.tuning._workers import (
+    RETRY,
+    WorkerReport,
+    prepare_model,
+    run_processes,
+    run_worker,
+)
 
 if TYPE_CHECKING:
     from optuna import Study
@@ -429,15 +434,15 @@ def _warm_up(cfg: SweepConfig, scenarios: list[Scenario]) -> threading.Thread:
     """Load the compiled kernel on a thread of its own while the study is opened: numba's
     cache and the storage's first opening (its imports, its tables) each take a good
     part of a second, and the first releases the GIL (the worker's own first call then
-    finds the kernel loaded). Then start the compass's model imports (:func:`prepare`)."""
+    finds the kernel loaded). Then start the compass's model imports
+    (:func:`~vfgym.tuning._workers.prepare_model`)."""
 
     def load() -> None:
         try:
             evaluate(PAPER_SETTINGS, scenarios[:1], axis=cfg.axis)
         except Exception:  # (the worker's own first call raises it)
             return
-        if cfg.sampler == "compass":  # its model's imports, beside the first trials
-            prepare()
+        prepare_model(cfg)  # the compass's model imports, beside the first trials
 
     thread = threading.Thread(target=load, name="vfgym-warm-up", daemon=True)
     thread.start()

@@ -154,14 +154,15 @@ def run_worker(
     """
     import optuna
 
+    from vfgym.tuning._compass import CompassSampler
+
     # ERROR: an interrupted trial is reported by the sweep, not as Optuna's warning with a
     # traceback; a failing objective still raises.
     optuna.logging.set_verbosity(optuna.logging.ERROR)
     warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
     warnings.filterwarnings("ignore", message="Constraints have been set, but CmaEsSampler")
     rep = WorkerReport()
-    if cfg.sampler == "compass":  # its model's imports beside its first trials
-        prepare()
+    prepare_model(cfg)
     scenarios = cfg.scenario_list()
     seed = None if cfg.seed is None else cfg.seed + index
     axis = cfg.axis
@@ -186,6 +187,10 @@ def run_worker(
         def run_trial(trial: Trial) -> float | list[float]:
             if ran and on_trial is not None:
                 on_trial(study)  # (the last trial has completed)
+            if isinstance(sampler, CompassSampler) and sampler.storage is storage:
+                # it records its generations through the study's own storage, which knows
+                # the ids of the trials it made
+                sampler.storage = trial.storage
             trial.set_user_attr(WORKER_ATTR, me)
             go = gate.wait(trial.number)
             if go is None:
@@ -234,6 +239,16 @@ def run_worker(
                 if on_trial is not None:
                     on_trial(study)
     return rep
+
+
+def prepare_model(cfg: SweepConfig) -> None:
+    """Start importing the compass's model beside the first trials (:func:`prepare`) of a
+    sweep long enough to reach a model batch (its compass's budget spent); a shorter one
+    imports it only if a batch comes."""
+    from vfgym.tuning._compass import CompassOptions
+
+    if cfg.sampler == "compass" and trial_budget(cfg) >= CompassOptions().compass_trials:
+        prepare()
 
 
 class _Budget:
