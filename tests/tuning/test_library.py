@@ -120,3 +120,27 @@ def test_importing_tuning_and_the_sweep_command_loads_neither_optuna_nor_sklearn
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                          check=True)  # fmt: skip
     assert out.stdout.strip() == "[]"
+
+
+def test_an_interrupted_sweep_keeps_its_trials_and_gives_ctrl_c_back(tmp_path):
+    """Ctrl-C in the middle of a two-worker sweep: the call returns what the study holds,
+    marked interrupted, and Ctrl-C is acted on again afterwards, as before the call."""
+    import signal
+    import threading
+    import time
+
+    before = signal.getsignal(signal.SIGINT)
+    cfg = tuning.SweepConfig(scenarios="short-move", trials=100_000, workers=2, study="i",
+                             runs_dir=str(tmp_path), plots=False, progress=False)  # fmt: skip
+    started = []
+
+    def interrupt(p: tuning.SweepProgress) -> None:
+        if p.complete >= 4 and not started:  # some trials done: Ctrl-C, as from a terminal
+            started.append(time.monotonic())
+            threading.Timer(0.1, os.kill, (os.getpid(), signal.SIGINT)).start()
+
+    result = tuning.sweep(cfg, on_progress=interrupt)
+    assert started and result.interrupted and not result.unfinished
+    assert result.counts.complete >= 4 and result.verdict is None
+    assert (result.run_dir / "summary.yaml").is_file() and result.best is not None
+    assert signal.getsignal(signal.SIGINT) is before
