@@ -355,6 +355,7 @@ def sweep(
         of that name optimises another problem, or a grid reference given is not one.
     """
     cfg = config
+    prepare_model(cfg)  # the compass's model imports, on a thread from now on
     scenarios = cfg.scenario_list()
     check_sampler(cfg)
     name = cfg.study or _default_study(stem, cfg.runs_dir)
@@ -434,15 +435,13 @@ def _warm_up(cfg: SweepConfig, scenarios: list[Scenario]) -> threading.Thread:
     """Load the compiled kernel on a thread of its own while the study is opened: numba's
     cache and the storage's first opening (its imports, its tables) each take a good
     part of a second, and the first releases the GIL (the worker's own first call then
-    finds the kernel loaded). Then start the compass's model imports
-    (:func:`~vfgym.tuning._workers.prepare_model`)."""
+    finds the kernel loaded)."""
 
     def load() -> None:
         try:
             evaluate(PAPER_SETTINGS, scenarios[:1], axis=cfg.axis)
         except Exception:  # (the worker's own first call raises it)
             return
-        prepare_model(cfg)  # the compass's model imports, beside the first trials
 
     thread = threading.Thread(target=load, name="vfgym-warm-up", daemon=True)
     thread.start()
