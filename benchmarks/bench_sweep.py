@@ -15,12 +15,14 @@ axis's design plants with them, compiled first). The target: the sweep's trials 
 1.0x the floor.
 
 ``--repeat N`` runs the sweep and the floor N times each, alternately, and takes the
-fastest of each (on a shared machine one run may be twice another); ``--sql`` runs the
-sweep once more in this process (``vfgym.tuning.sweep``, the command's own call) and
-counts the SQL statements of its trials, a trial; ``--long N`` runs an ``N``-trial sweep
-through the command and prints the wall time a trial of its first, second and last
-hundred took (cost per trial growing with the study shows in the last against the
-second).
+fastest of each (on a shared machine one run may be twice another). ``--sql`` runs the
+sweep once more in this process (``vfgym.tuning.sweep``, the command's own call): the SQL
+statements of its trials, a trial, and their CPU seconds against the floor's (less
+disturbed by other work than wall seconds), of the thread that runs the trials and of
+every thread (with those that score ahead and import beside it). ``--long N`` runs an
+``N``-trial sweep through the command and prints the wall time a trial of its first,
+second and last hundred took (cost per trial growing with the study shows in the last
+against the second).
 
     python benchmarks/bench_sweep.py [--config FILE] [--trials N] [--repeat 1] [--sql]
         [--long 1000]
@@ -41,6 +43,13 @@ from vfgym import evaluate, space, tuning
 from vfgym.io.runs import read_yaml
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+class Seconds(NamedTuple):
+    """Wall seconds and CPU seconds (the process's, every thread)."""
+
+    wall: float
+    cpu: float
 
 
 class Sweep(NamedTuple):
@@ -95,7 +104,7 @@ def sweep_seconds(config: Path, folder: Path, trials: int | None) -> Sweep:
     return Sweep(float(summary["elapsed_s"]), process_s, settings, per_trial)
 
 
-def bare_optuna_seconds(config: Path, folder: Path, trials: int) -> float:
+def bare_optuna_seconds(config: Path, folder: Path, trials: int) -> Seconds:
     """A bare Optuna study of ``trials`` trials on the config's storage, opened as the
     sweep opens it; each trial suggests the four settings and returns 0."""
     import optuna
@@ -119,40 +128,57 @@ def bare_optuna_seconds(config: Path, folder: Path, trials: int) -> float:
                 trial.suggest_categorical(name, d.choices)
         return 0.0
 
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     study.optimize(objective, n_trials=trials)
-    return time.perf_counter() - t
+    return Seconds(time.perf_counter() - t, time.process_time() - c)
 
 
-def kernel_seconds(config: Path, settings: list) -> float:
+def kernel_seconds(config: Path, settings: list) -> Seconds:
     """Seconds to score each setting on the config's moves as a trial scores it (the
     axis's design plants too), one setting a call, compiled first."""
     cfg = tuning.SweepConfig.resolve(read_yaml(config), {}, source=str(config))
     scenarios, axis = cfg.scenario_list(), cfg.axis
     plants = axis.design_plants()
     evaluate(settings[0], scenarios, axis=axis, plants=plants)  # compiled
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     for s in settings:
         evaluate(s, scenarios, axis=axis, plants=plants)
-    return time.perf_counter() - t
+    return Seconds(time.perf_counter() - t, time.process_time() - c)
 
 
-def sql_statements(config: Path, folder: Path, trials: int | None) -> float:
-    """SQL statements a trial of the sweep run in this process (:func:`vfgym.tuning.sweep`,
-    the command's own call), counted from the study's opening to its last trial's end (a
-    little slower)."""
+class InProcess(NamedTuple):
+    """The sweep run in this process: SQL statements a trial, and over its trials the
+    wall seconds, the CPU seconds of every thread and those of the calling thread (the
+    one that runs the trials; the others score ahead and import)."""
+
+    statements: float
+    wall: float
+    cpu: float
+    main_cpu: float
+
+
+def in_process(config: Path, folder: Path, trials: int | None) -> InProcess:
+    """The sweep run in this process (:func:`vfgym.tuning.sweep`, the command's own call),
+    its SQL statements counted and its seconds taken from the study's opening to its last
+    trial's end (a little slower)."""
     import sqlalchemy
 
-    count, on = [0], [False]
+    count, on, marks = [0], [False], []
 
     def counted(*_: object) -> None:
         count[0] += on[0]
 
+    def mark() -> None:
+        marks.append((time.perf_counter(), time.process_time(), time.thread_time()))
+
     def start(_: tuning.SweepStart) -> None:
         on[0] = True
+        mark()
 
     def stop(p: tuning.SweepProgress) -> None:
-        on[0] = on[0] and not p.final
+        if p.final and on[0]:
+            on[0] = False
+            mark()
 
     over = {"runs_dir": str(folder), "study": "bench", "plots": False, "progress": False}
     cfg = tuning.SweepConfig.resolve(
@@ -163,7 +189,8 @@ def sql_statements(config: Path, folder: Path, trials: int | None) -> float:
         result = tuning.sweep(cfg, on_start=start, on_progress=stop)
     finally:
         sqlalchemy.event.remove(sqlalchemy.engine.Engine, "before_cursor_execute", counted)
-    return count[0] / max(result.counts.complete, 1)
+    (w0, c0, m0), (w1, c1, m1) = marks
+    return InProcess(count[0] / max(result.counts.complete, 1), w1 - w0, c1 - c0, m1 - m0)
 
 
 def block_ms(per_trial: list[float], first: int, last: int) -> float:
@@ -189,16 +216,24 @@ def main() -> None:
             kernels.append(kernel_seconds(a.config, sweeps[-1].settings))
         n = len(sweeps[0].settings)
         trials_s = min(s.trials_s for s in sweeps)
-        bare_s, kernel_s = min(bares), min(kernels)
+        bare = Seconds(min(b.wall for b in bares), min(b.cpu for b in bares))
+        kernel = Seconds(min(k.wall for k in kernels), min(k.cpu for k in kernels))
         of = f" (fastest of {len(sweeps)})" if len(sweeps) > 1 else ""
         print(f"vfgym sweep --config {a.config.name}, {n} trials: {trials_s:.2f} s (its report)"
               f"; the whole process {min(s.process_s for s in sweeps):.2f} s{of}")  # fmt: skip
-        print(f"floor: a bare Optuna study of {n} trials on the same storage {bare_s:.2f} s "
-              f"+ the kernel alone on the same settings {kernel_s:.2f} s{of}")  # fmt: skip
-        print(f"sweep / floor: {trials_s / (bare_s + kernel_s):.2f}x (target <= 1.0x)")
+        print(f"floor: a bare Optuna study of {n} trials on the same storage {bare.wall:.2f} s "
+              f"+ the kernel alone on the same settings {kernel.wall:.2f} s{of}")  # fmt: skip
+        print(f"sweep / floor: {trials_s / (bare.wall + kernel.wall):.2f}x (target <= 1.0x)")
         if a.sql:
-            per = sql_statements(a.config, Path(tmp) / "counted", a.trials)
-            print(f"SQL statements a trial: {per:.1f}")
+            run = in_process(a.config, Path(tmp) / "counted", a.trials)
+            print(f"SQL statements a trial: {run.statements:.1f}")
+            print(
+                f"CPU seconds over the trials, the sweep in this process: {run.cpu:.2f} s "
+                f"(the thread running the trials {run.main_cpu:.2f} s; wall {run.wall:.2f} s); "
+                f"the floor's: {bare.cpu:.2f} + {kernel.cpu:.2f} s{of}; sweep / floor: "
+                f"{run.cpu / (bare.cpu + kernel.cpu):.2f}x all threads, "
+                f"{run.main_cpu / (bare.cpu + kernel.cpu):.2f}x the trials' thread"
+            )
         if a.long:
             long = sweep_seconds(a.config, Path(tmp) / "long", a.long)
             done, per_trial = len(long.settings), long.per_trial

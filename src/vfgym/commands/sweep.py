@@ -87,14 +87,16 @@ def run(args: argparse.Namespace) -> int:
     file_data = read_yaml(args.config) if args.config else None
     cfg = tuning.SweepConfig.resolve(file_data, _cli_values(args), source=str(args.config))
     bar = _Bar(cfg)
-    result = tuning.sweep(
-        cfg,
-        stem=Path(args.config).stem if args.config else "sweep",
-        argv=_argv(args),
-        on_start=bar.start,
-        on_progress=bar.update if cfg.progress else None,
-    )
-    bar.close()
+    try:
+        result = tuning.sweep(
+            cfg,
+            stem=Path(args.config).stem if args.config else "sweep",
+            argv=_argv(args),
+            on_start=bar.start,
+            on_progress=bar.update if cfg.progress else None,
+        )
+    finally:
+        bar.close()
     print(result.text(), flush=True)
     if result.interrupted:
         raise Interrupted(

@@ -129,7 +129,7 @@ class SweepStart(NamedTuple):
 
 
 class SweepProgress(NamedTuple):
-    """How far a sweep is, told at most twice a second while it runs and once at the end.
+    """How far a sweep is, told at most once a second while it runs and once at the end.
 
     Attributes
     ----------
@@ -340,7 +340,7 @@ def sweep(
     on_start : callable or None
         Called with a :class:`SweepStart` once the study is open, before the trials.
     on_progress : callable or None
-        Called with a :class:`SweepProgress` at most twice a second while the trials
+        Called with a :class:`SweepProgress` at most once a second while the trials
         run, and once when they end (each call reads the study).
 
     Returns
@@ -448,8 +448,13 @@ def _warm_up(cfg: SweepConfig, scenarios: list[Scenario]) -> threading.Thread:
     return thread
 
 
+PROGRESS_S = 1.0
+"""Seconds between two reads of the study for the progress bar (each is a few storage
+queries, beside the trials' own)."""
+
+
 class _Progress:
-    """Tells ``tell`` how far the study is, at most twice a second (each read is the
+    """Tells ``tell`` how far the study is, at most once a second (each read is the
     study's: a storage query a trial would otherwise add), and once at the end."""
 
     def __init__(self, budget: int, tell: Callable[[SweepProgress], object] | None) -> None:
@@ -457,7 +462,7 @@ class _Progress:
         self.at = 0.0
 
     def update(self, study: Study, final: bool = False) -> None:
-        if self.tell is None or (not final and time.monotonic() - self.at < 0.5):
+        if self.tell is None or (not final and time.monotonic() - self.at < PROGRESS_S):
             return
         self.at = time.monotonic()
         trials = study.get_trials(deepcopy=False)  # (read once)
