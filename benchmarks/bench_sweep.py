@@ -1,32 +1,39 @@
-"""A sweep's overhead: its trials' time against the kernel's for the same settings; prints
-figures, asserts nothing (machines are noisy).
+"""The main job's sweep against the floor Optuna itself sets; prints figures, asserts
+nothing (machines are noisy: compare the ratios, measured in one run).
 
-Runs the main job (``experiments/quick.yaml``: the compass on the default axis's 16 train
-moves, the default SQLite storage, one worker) for ``--trials`` trials in a fresh folder,
-timing the trials (:func:`vfgym.tuning.run_worker`, the study already created, the
-kernel already compiled: what a sweep adds to the simulation), then simulates the
-settings those trials drew again, one setting a call (:func:`vfgym.evaluate` on the same
-moves), and prints both and their ratio. ``--long N`` also runs an ``N``-trial sweep and
-prints the ratio of its trials' time to the first's, and to its own first ``--trials``
-(the same trials, timed in the same run: the ratio least disturbed by a load that
-changes between runs), and the wall time a trial of its first, second and last hundred
-took (cost per trial growing with the study's size shows in the last against the second:
-the first hundred are mostly the compass's polls, the rest mostly model batches).
+The sweep is the command's own path: ``vfgym sweep --config experiments/quick.yaml`` as a
+user runs it (a fresh process; only ``--runs-dir``, ``--study`` and, if given,
+``--trials`` added), timed by its own report (``N/N completed trials ... in X s``, the
+run folder's ``summary.yaml``: from its first trial's start to its last trial's end,
+every worker's start-up inside) and as a whole process. The floor is what a user could
+reach with Optuna alone on the same problem, in this process: a bare study of as many
+trials on the same storage (the config's, opened as the sweep opens it: SQLite in WAL
+mode, the heartbeat), each trial suggesting the four settings and returning at once
+(Optuna's random sampler: the least a sampler costs), plus the kernel alone on the
+sweep's own settings, one setting a call (:func:`vfgym.evaluate` on the same moves, the
+axis's design plants with them, compiled first). The target: the sweep's trials at most
+1.0x the floor.
 
-``--repeat N`` times the short sweep and the kernel N times each, alternately, and takes
-the fastest of each (on a shared machine one run may be twice another); ``--sql`` counts
-the SQL statements of one more short sweep, not timed (what a trial costs the storage,
-whatever the load).
+``--repeat N`` runs the sweep and the floor N times each, alternately, and takes the
+fastest of each (on a shared machine one run may be twice another). ``--sql`` runs the
+sweep once more in this process (``vfgym.tuning.sweep``, the command's own call): the SQL
+statements of its trials, a trial, and their CPU seconds against the floor's (less
+disturbed by other work than wall seconds), of the thread that runs the trials and of
+every thread (with those that score ahead and import beside it). ``--long N`` runs an
+``N``-trial sweep through the command and prints the wall time a trial of its first,
+second and last hundred took (cost per trial growing with the study shows in the last
+against the second).
 
-    python benchmarks/bench_sweep.py [--trials 100] [--long 1000] [--repeat 1] [--sql]
-        [--config FILE] [--dump FILE]
+    python benchmarks/bench_sweep.py [--config FILE] [--trials N] [--repeat 1] [--sql]
+        [--long 1000]
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
-import json
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -39,68 +46,151 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 class Seconds(NamedTuple):
-    """Wall-clock and CPU seconds (the process's, all threads)."""
+    """Wall seconds and CPU seconds (the process's, every thread)."""
 
     wall: float
     cpu: float
 
-    def __str__(self) -> str:
-        return f"{self.wall:.2f} s wall, {self.cpu:.2f} s CPU"
-
-    def over(self, other: Seconds) -> str:
-        """Their ratios, wall and CPU."""
-        return f"{self.wall / other.wall:.1f}x wall, {self.cpu / other.cpu:.1f}x CPU"
-
 
 class Sweep(NamedTuple):
-    """A timed sweep: its seconds, the settings of its completed trials, the wall
-    seconds each trial took, by completion (from the previous completion, or the sweep's
-    start), and the SQL statements it ran."""
+    """A run of the command: its trials' seconds (as its report prints them), the
+    process's wall seconds, the settings of its completed trials, and the wall seconds
+    each trial took by completion (from the previous one's, or the trials' start)."""
 
-    seconds: Seconds
+    trials_s: float
+    process_s: float
     settings: list
     per_trial: list[float]
-    statements: int
 
 
-def sweep_seconds(
-    config: Path, trials: int, folder: Path, dump: str = "", sql: bool = False
-) -> Sweep:
-    """``trials`` trials of the config's sweep in ``folder``, timed (and with ``sql``,
-    the SQL statements of every engine counted: a little slower)."""
+def command(config: Path, folder: Path, trials: int | None) -> list[str]:
+    """``vfgym sweep`` on the config as a user runs it, in ``folder``."""
+    argv = ["sweep", "--config", str(config), "--runs-dir", str(folder), "--study", "bench"]
+    return argv + (["--trials", str(trials)] if trials else [])
+
+
+def study_of(folder: Path):
+    """The sweep's study in ``folder``, opened read-only as ``vfgym plot`` opens it."""
     import optuna
+
+    run = folder / "sweep" / "bench"
+    conf = read_yaml(run / "config.yaml")
+    storage = tuning.open_storage(tuning.find_storage(conf["storage"], run))
+    return optuna.load_study(study_name="bench", storage=storage)
+
+
+def sweep_seconds(config: Path, folder: Path, trials: int | None) -> Sweep:
+    """Run the command in a fresh process and time it."""
+    import optuna
+
+    script = Path(sys.executable).with_name("vfgym")  # the console script, as a user runs it
+    head = [str(script)] if script.is_file() else [sys.executable, "-m", "vfgym.cli"]
+    t = time.perf_counter()
+    subprocess.run(
+        [*head, *command(config, folder, trials)],
+        check=True,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    process_s = time.perf_counter() - t
+    summary = read_yaml(folder / "sweep" / "bench" / "summary.yaml")
+    study = study_of(folder)
+    done = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
+    starts = [tr.datetime_start for tr in done if tr.datetime_start is not None]
+    ends = sorted(tr.datetime_complete for tr in done if tr.datetime_complete is not None)
+    first = min(starts) if starts else datetime.datetime.now()
+    per_trial = [(b - a).total_seconds() for a, b in zip([first, *ends[:-1]], ends, strict=True)]
+    settings = [tuning.trial_settings(tr) for tr in done]
+    return Sweep(float(summary["elapsed_s"]), process_s, settings, per_trial)
+
+
+def bare_optuna_seconds(config: Path, folder: Path, trials: int) -> Seconds:
+    """A bare Optuna study of ``trials`` trials on the config's storage, opened as the
+    sweep opens it; each trial suggests the four settings and returns 0."""
+    import optuna
+
+    cfg = tuning.SweepConfig.resolve(read_yaml(config), {}, source=str(config))
+    folder.mkdir(parents=True, exist_ok=True)
+    storage = tuning.open_storage(
+        tuning.resolve_storage(cfg.storage, folder), cfg.heartbeat, cfg.grace
+    )
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    study = optuna.create_study(
+        storage=storage, study_name="bare", sampler=optuna.samplers.RandomSampler(seed=0)
+    )
+    dists = space.distributions(cfg.laws)
+
+    def objective(trial: optuna.Trial) -> float:
+        for name, d in dists.items():
+            if isinstance(d, optuna.distributions.FloatDistribution):
+                trial.suggest_float(name, d.low, d.high, log=d.log)
+            else:
+                trial.suggest_categorical(name, d.choices)
+        return 0.0
+
+    t, c = time.perf_counter(), time.process_time()
+    study.optimize(objective, n_trials=trials)
+    return Seconds(time.perf_counter() - t, time.process_time() - c)
+
+
+def kernel_seconds(config: Path, settings: list) -> Seconds:
+    """Seconds to score each setting on the config's moves as a trial scores it (the
+    axis's design plants too), one setting a call, compiled first."""
+    cfg = tuning.SweepConfig.resolve(read_yaml(config), {}, source=str(config))
+    scenarios, axis = cfg.scenario_list(), cfg.axis
+    plants = axis.design_plants()
+    evaluate(settings[0], scenarios, axis=axis, plants=plants)  # compiled
+    t, c = time.perf_counter(), time.process_time()
+    for s in settings:
+        evaluate(s, scenarios, axis=axis, plants=plants)
+    return Seconds(time.perf_counter() - t, time.process_time() - c)
+
+
+class InProcess(NamedTuple):
+    """The sweep run in this process: SQL statements a trial, and over its trials the
+    wall seconds, the CPU seconds of every thread and those of the calling thread (the
+    one that runs the trials; the others score ahead and import)."""
+
+    statements: float
+    wall: float
+    cpu: float
+    main_cpu: float
+
+
+def in_process(config: Path, folder: Path, trials: int | None) -> InProcess:
+    """The sweep run in this process (:func:`vfgym.tuning.sweep`, the command's own call),
+    its SQL statements counted and its seconds taken from the study's opening to its last
+    trial's end (a little slower)."""
     import sqlalchemy
 
+    count, on, marks = [0], [False], []
+
+    def counted(*_: object) -> None:
+        count[0] += on[0]
+
+    def mark() -> None:
+        marks.append((time.perf_counter(), time.process_time(), time.thread_time()))
+
+    def start(_: tuning.SweepStart) -> None:
+        on[0] = True
+        mark()
+
+    def stop(p: tuning.SweepProgress) -> None:
+        if p.final and on[0]:
+            on[0] = False
+            mark()
+
+    over = {"runs_dir": str(folder), "study": "bench", "plots": False, "progress": False}
     cfg = tuning.SweepConfig.resolve(
-        read_yaml(config), {"trials": trials, "runs_dir": str(folder)}, source=str(config)
+        read_yaml(config), over | ({"trials": trials} if trials else {})
     )
-    spec = tuning.resolve_storage(cfg.storage, folder / "sweep")
-    (folder / "sweep").mkdir(parents=True, exist_ok=True)
-    storage = tuning.open_storage(spec, cfg.heartbeat, cfg.grace)
-    study, _ = tuning.create_or_load(storage, "bench", cfg, cfg.scenario_list())
-    scenarios = cfg.scenario_list()
-    evaluate(space.Settings(), scenarios[:1], axis=cfg.axis_or_paper())  # compiled
-    statements = [0]
-
-    def count(*_: object) -> None:
-        statements[0] += 1
-
-    start = datetime.datetime.now()
-    if sql:
-        sqlalchemy.event.listen(sqlalchemy.engine.Engine, "before_cursor_execute", count)
-    t, c = time.perf_counter(), time.process_time()
-    tuning.run_worker(cfg, spec, "bench")
-    seconds = Seconds(time.perf_counter() - t, time.process_time() - c)
-    if sql:
-        sqlalchemy.event.remove(sqlalchemy.engine.Engine, "before_cursor_execute", count)
-    if dump:
-        params = [tr.params for tr in study.get_trials(deepcopy=False)]
-        Path(dump).write_text(json.dumps(params, indent=0))
-    done = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
-    ends = sorted(tr.datetime_complete for tr in done if tr.datetime_complete is not None)
-    per_trial = [(b - a).total_seconds() for a, b in zip([start, *ends[:-1]], ends, strict=True)]
-    settings = [tuning.trial_settings(tr) for tr in done]
-    return Sweep(seconds, settings, per_trial, statements[0])
+    sqlalchemy.event.listen(sqlalchemy.engine.Engine, "before_cursor_execute", counted)
+    try:
+        result = tuning.sweep(cfg, on_start=start, on_progress=stop)
+    finally:
+        sqlalchemy.event.remove(sqlalchemy.engine.Engine, "before_cursor_execute", counted)
+    (w0, c0, m0), (w1, c1, m1) = marks
+    return InProcess(count[0] / max(result.counts.complete, 1), w1 - w0, c1 - c0, m1 - m0)
 
 
 def block_ms(per_trial: list[float], first: int, last: int) -> float:
@@ -109,73 +199,54 @@ def block_ms(per_trial: list[float], first: int, last: int) -> float:
     return 1000.0 * sum(part) / max(len(part), 1)
 
 
-def kernel_seconds(config: Path, settings: list) -> Seconds:
-    """Seconds to simulate each setting on the config's moves, one setting a call."""
-    cfg = tuning.SweepConfig.resolve(read_yaml(config), {}, source=str(config))
-    scenarios = cfg.scenario_list()
-    axis = cfg.axis_or_paper()
-    evaluate(settings[0], scenarios, axis=axis)  # compiled
-    t, c = time.perf_counter(), time.process_time()
-    for s in settings:
-        evaluate(s, scenarios, axis=axis)
-    return Seconds(time.perf_counter() - t, time.process_time() - c)
-
-
-def fastest(times: list[Seconds]) -> Seconds:
-    """The least wall and the least CPU time among repeats (the run least disturbed by
-    other jobs: on a shared machine the spread is large)."""
-    return Seconds(min(t.wall for t in times), min(t.cpu for t in times))
-
-
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--config", type=Path, default=ROOT / "experiments" / "quick.yaml")
-    p.add_argument("--trials", type=int, default=100)
+    p.add_argument("--trials", type=int, default=None, help="the config's unless given")
+    p.add_argument("--repeat", type=int, default=1, help="runs of each, alternately (fastest)")
+    p.add_argument("--sql", action="store_true", help="count one more sweep's SQL statements")
     p.add_argument("--long", type=int, default=0, help="also an N-trial sweep (0: not)")
-    p.add_argument("--dump", default="", help="write the trials' parameters to this JSON file")
-    p.add_argument(
-        "--repeat", type=int, default=1, help="time the short sweep and the kernel N times "
-        "each, alternately, and take the fastest of each (the long sweep runs once)",
-    )  # fmt: skip
-    p.add_argument("--sql", action="store_true", help="count one more short sweep's SQL statements")
     a = p.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        sweeps, kernels = [], []
+        sweeps, bares, kernels = [], [], []
         for i in range(max(a.repeat, 1)):
-            dump = a.dump if i == 0 else ""
-            sweeps.append(sweep_seconds(a.config, a.trials, Path(tmp) / f"short{i}", dump))
+            sweeps.append(sweep_seconds(a.config, Path(tmp) / f"sweep{i}", a.trials))
+            n = len(sweeps[-1].settings)
+            bares.append(bare_optuna_seconds(a.config, Path(tmp) / f"bare{i}", n))
             kernels.append(kernel_seconds(a.config, sweeps[-1].settings))
-        settings = sweeps[0].settings
-        sweep_s, kernel_s = fastest([s.seconds for s in sweeps]), fastest(kernels)
+        n = len(sweeps[0].settings)
+        trials_s = min(s.trials_s for s in sweeps)
+        bare = Seconds(min(b.wall for b in bares), min(b.cpu for b in bares))
+        kernel = Seconds(min(k.wall for k in kernels), min(k.cpu for k in kernels))
         of = f" (fastest of {len(sweeps)})" if len(sweeps) > 1 else ""
-        print(f"sweep, {len(settings)} trials ({a.config.name}, sqlite): {sweep_s}{of}")
-        print(f"kernel, the same {len(settings)} settings one a call: {kernel_s}{of}")
-        print(f"sweep / kernel: {sweep_s.over(kernel_s)} (target <= 4x)")
-        if a.sql:  # one more run: counting slows each statement down
-            counted = sweep_seconds(a.config, a.trials, Path(tmp) / "counted", "", True)
-            print(f"SQL statements a trial: {counted.statements / len(counted.settings):.1f}")
+        print(f"vfgym sweep --config {a.config.name}, {n} trials: {trials_s:.2f} s (its report)"
+              f"; the whole process {min(s.process_s for s in sweeps):.2f} s{of}")  # fmt: skip
+        print(f"floor: a bare Optuna study of {n} trials on the same storage {bare.wall:.2f} s "
+              f"+ the kernel alone on the same settings {kernel.wall:.2f} s{of}")  # fmt: skip
+        print(f"sweep / floor: {trials_s / (bare.wall + kernel.wall):.2f}x (target <= 1.0x)")
+        if a.sql:
+            run = in_process(a.config, Path(tmp) / "counted", a.trials)
+            print(f"SQL statements a trial: {run.statements:.1f}")
+            print(
+                f"CPU seconds over the trials, the sweep in this process: {run.cpu:.2f} s "
+                f"(the thread running the trials {run.main_cpu:.2f} s; wall {run.wall:.2f} s); "
+                f"the floor's: {bare.cpu:.2f} + {kernel.cpu:.2f} s{of}; sweep / floor: "
+                f"{run.cpu / (bare.cpu + kernel.cpu):.2f}x all threads, "
+                f"{run.main_cpu / (bare.cpu + kernel.cpu):.2f}x the trials' thread"
+            )
         if a.long:
-            long_s, done, per_trial, _ = sweep_seconds(a.config, a.long, Path(tmp) / "long")
-            print(f"sweep, {len(done)} trials: {long_s}")
-            print(
-                f"{len(done)} / {len(settings)} trials, time: {long_s.over(sweep_s)} "
-                f"(target <= {1.2 * len(done) / len(settings):.1f}x: 12x for 1,000 / 100)"
-            )
-            first = sum(per_trial[: len(settings)])
-            print(
-                f"{len(done)} trials / their first {len(settings)} (the short sweep's trials, "
-                f"timed in the same run): {sum(per_trial) / first:.1f}x wall"
-            )
-            n, k = len(per_trial), min(100, len(per_trial) // 3)
+            long = sweep_seconds(a.config, Path(tmp) / "long", a.long)
+            done, per_trial = len(long.settings), long.per_trial
+            print(f"vfgym sweep, {done} trials: {long.trials_s:.2f} s (its report), "
+                  f"{long.trials_s / trials_s:.1f}x the {n}-trial sweep")  # fmt: skip
+            k = min(100, done // 3)
             if k:
-                blocks = [(0, k), (k, 2 * k), (n - k, n)]
+                blocks = [(0, k), (k, 2 * k), (done - k, done)]
                 ms = [block_ms(per_trial, lo, hi) for lo, hi in blocks]
+                each = [f"{lo}-{hi - 1}: {m:.1f}" for (lo, hi), m in zip(blocks, ms, strict=True)]
                 print(
-                    "wall ms a trial of the long sweep, by completion: "
-                    + ", ".join(
-                        f"{lo}-{hi - 1}: {m:.1f}" for (lo, hi), m in zip(blocks, ms, strict=True)
-                    )
-                    + f"; last / second block: {ms[2] / ms[1]:.2f}x (growth with the study)"
+                    f"wall ms a trial, by completion: {', '.join(each)}; last / second block: "
+                    f"{ms[2] / ms[1]:.2f}x (growth with the study)"
                 )
 
 

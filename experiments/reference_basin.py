@@ -60,7 +60,7 @@ def main() -> None:
     for problem in args.problems.split(";"):
         cfg = problem_config(problem)
         scen = cfg.scenario_list()
-        axis = cfg.axis_or_paper()
+        axis = cfg.axis
         data = problem_reference(args.refs, problem).record
         ref = Settings(**data["settings"])
         ref_cost = float(data["cost"])

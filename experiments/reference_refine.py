@@ -27,7 +27,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from trials_to_reference import problem_config, problem_reference
 
 from vfgym import space, tuning
-from vfgym.params import PAPER_PLANT
 from vfgym.tuning._study import relative_space
 
 POINTS = 7
@@ -45,10 +44,10 @@ def main() -> None:
         found = problem_reference(args.refs, problem)
         ref = float(found[0]["cost"])
         cfg = problem_config(problem, objective="cost")
-        scenarios, axis = cfg.scenario_list(), cfg.load_axis()
-        rel = relative_space(scenarios, PAPER_PLANT if axis is None else axis.plant)
+        scenarios = cfg.scenario_list()
+        rel = relative_space(scenarios, cfg.axis.plant)
         objective = tuning.Objective(
-            scenarios, cfg.laws, "cost", axis=cfg.axis_or_paper(),
+            scenarios, cfg.laws, "cost", axis=cfg.axis,
             aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha,
         )  # fmt: skip
         b = rel.bounds()

@@ -53,8 +53,6 @@ import numpy as np
 import optuna
 
 from vfgym import space, tuning
-from vfgym.axis import axis_digest
-from vfgym.params import PAPER_PLANT
 from vfgym.scoring import CONSTRAINTS
 from vfgym.tuning._results import FoundReference, find_reference, gap_pct
 from vfgym.tuning._study import relative_space
@@ -99,7 +97,7 @@ def grid_command(problem: str, refs: str) -> str:
     """The ``vfgym grid`` command of a problem's reference (the main job's coarse grid:
     experiments/grid-quick.yaml's 7 points, 3 rounds around the best 3)."""
     cfg = problem_config(problem)
-    where = f"--axis {cfg.axis} " if cfg.axis else ""
+    where = f"--axis {cfg.axis_file} " if cfg.axis_file else ""
     return (f"vfgym grid {where}--scenarios {cfg.scenarios} --points 7 --refine 3 --keep 3 "
             f"--runs-dir {refs} --no-progress")  # fmt: skip
 
@@ -116,7 +114,7 @@ def problem_config(problem: str, **kw: object) -> tuning.SweepConfig:
 def problem_reference(refs: str, problem: str) -> FoundReference:
     """The grid reference of a problem in the runs folder ``refs`` (exits if none)."""
     cfg = problem_config(problem)
-    found = find_reference(None, refs, cfg.scenario_list(), ("rise",), axis_digest(cfg.load_axis()))
+    found = find_reference(None, refs, cfg.scenario_list(), ("rise",), cfg.axis_key())
     if found is None:
         raise SystemExit(f"no grid reference for {problem} in {refs}/grid/*/")
     return found
@@ -207,11 +205,10 @@ def run_relative(
     trial, asked :data:`BATCHES` trials at a time; on a fresh study on a file."""
     cfg = problem_config(problem, objective="cost")
     scenarios = cfg.scenario_list()
-    axis = cfg.load_axis()
-    base = PAPER_PLANT if axis is None else axis.plant
+    base = cfg.axis.plant
     rel = relative_space(scenarios, base)
     law = cfg.laws[0]
-    objective = tuning.Objective(scenarios, cfg.laws, "cost", axis=cfg.axis_or_paper(),
+    objective = tuning.Objective(scenarios, cfg.laws, "cost", axis=cfg.axis,
                                  aggregate=cfg.aggregate, cvar_alpha=cfg.cvar_alpha)  # fmt: skip
     starts = [s for _, s in tuning.warm_starts(scenarios, base)]
     scored = objective.score_many(starts)  # (not counted: the study scores them again)

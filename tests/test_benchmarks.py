@@ -37,10 +37,11 @@ def test_bench_envs_runs_to_the_end_on_a_small_budget():
 
 def test_bench_sweep_runs_to_the_end_on_a_small_budget():
     stdout = _run("bench_sweep.py", "--trials", "10", "--long", "12", "--repeat", "2", "--sql")
-    assert "sweep / kernel:" in stdout
+    assert "vfgym sweep --config quick.yaml, 10 trials:" in stdout
+    assert "floor: a bare Optuna study of 10 trials" in stdout and "sweep / floor:" in stdout
     assert "(fastest of 2)" in stdout and "SQL statements a trial:" in stdout
-    assert "12 / 10 trials, time:" in stdout
-    assert "wall ms a trial of the long sweep, by completion: 0-3:" in stdout
+    assert "vfgym sweep, 12 trials:" in stdout
+    assert "wall ms a trial, by completion: 0-3:" in stdout
 
 
 def test_bench_fit_runs_to_the_end_on_a_small_budget(tmp_path):

@@ -107,7 +107,8 @@ def test_repeated_settings_are_not_simulated_twice():
     other = params | {"k": 1000.0}
     for p in (params, other, params, params):
         study.enqueue_trial(p)
-    obj = tuning.Objective(tuning.SweepConfig().scenario_list(), ("rise",), "cost")
+    cfg = tuning.SweepConfig()
+    obj = tuning.Objective(cfg.scenario_list(), ("rise",), "cost", axis=cfg.axis)
     study.optimize(obj, n_trials=4)
     assert obj.simulated == 2
     t = study.trials
@@ -116,7 +117,7 @@ def test_repeated_settings_are_not_simulated_twice():
     assert stored[2].cached_from == 0 and stored[1].cached_from is None
     # A fresh process (empty cache) finds the result among the study's completed trials.
     study.enqueue_trial(other)
-    fresh = tuning.Objective(obj.scenarios, ("rise",), "cost")
+    fresh = tuning.Objective(obj.scenarios, ("rise",), "cost", axis=cfg.axis)
     study.optimize(fresh, n_trials=1)
     assert fresh.simulated == 0
     assert study.trials[4].value == t[1].value
@@ -368,3 +369,31 @@ def test_timeout_stops_starting_trials(tmp_path, capsys):
     summary = yaml.safe_load((tmp_path / "sweep" / "s" / "summary.yaml").read_text())
     assert summary["workers"][0]["stopped"] == "timeout"
     assert f"{len(rows)}/5000 completed trials" in capsys.readouterr().out
+
+
+def test_settings_scored_ahead_are_the_trials_scored_one_by_one(tmp_path, monkeypatch):
+    """The compass's planned points scored ahead, in one batch beside the trials, leave
+    every trial as scoring each alone does: its settings, values, result and generation."""
+    from vfgym.tuning import _objective
+    from vfgym.tuning._compass import CompassSampler
+
+    def trials(name: str) -> list:
+        cfg = tuning.SweepConfig(scenarios="short-move,reversal", trials=30, study=name,
+                                 runs_dir=str(tmp_path), plots=False, progress=False)  # fmt: skip
+        result = tuning.sweep(cfg)
+        assert result.workers[0].simulated == len(result.workers[0].trials)  # (none repeated)
+        return [(t.params, t.values, t.user_attrs["result"], t.system_attrs.get("vfgym:compass"))
+                for t in result.study.get_trials()]  # fmt: skip
+
+    batches: list[int] = []
+    start = _objective._Batch.start
+
+    def counted(cls, objective, settings):
+        batches.append(len(settings))
+        return start(objective, settings)
+
+    monkeypatch.setattr(_objective._Batch, "start", classmethod(counted))
+    ahead = trials("ahead")
+    assert len(batches) >= 3 and sum(batches) >= 15  # most trials were scored ahead
+    monkeypatch.setattr(CompassSampler, "planned", lambda self: [])
+    assert trials("alone") == ahead

@@ -14,18 +14,12 @@ constraint holds on every move (:func:`aggregate`).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from vfgym._validate import check_choice, check_real
-from vfgym.moves.scenarios import Scenario
-from vfgym.params import Settings
-from vfgym.scoring import Evaluation, evaluate
-
-if TYPE_CHECKING:
-    from vfgym.tuning._config import SweepConfig
+from vfgym.scoring import Evaluation
 
 AGGREGATES = ("mean", "cvar", "worst")
 """Aggregates of a setting's per-move costs a sweep may minimise (see the module docstring)."""
@@ -129,15 +123,3 @@ def aggregate(
         feasible=np.all(cons <= 0.0, axis=1),
         objectives=np.nanmean(ev.objectives, axis=1),
     )
-
-
-def describe(cfg: SweepConfig) -> str:
-    """The sweep's aggregate as reports name it: ``mean``, ``worst`` or ``cvar 0.25``."""
-    return f"cvar {cfg.cvar_alpha:g}" if cfg.aggregate == "cvar" else cfg.aggregate
-
-
-def set_cost(settings: Settings, scenarios: Sequence[Scenario], cfg: SweepConfig) -> float:
-    """A setting's cost over the sweep's scenarios on its axis, as the sweep scores it (the
-    paper's settings', to report the tuned ones against)."""
-    ev = evaluate(settings, list(scenarios), axis=cfg.axis_or_paper())
-    return float(aggregate_costs(ev.cost[0], cfg.aggregate, cfg.cvar_alpha))

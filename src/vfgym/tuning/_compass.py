@@ -120,6 +120,21 @@ class CompassSampler(optuna.samplers.BaseSampler):
             params["accel_law"] = s.accel_law
         return params
 
+    def planned(self) -> list[space.Settings]:
+        """The settings this sampler will hand out next, as far as it has planned them
+        (the rest of its generation; another worker's trials may change the plan): what
+        a worker scores ahead (:attr:`vfgym.tuning.Objective.ahead`).
+
+        Returns
+        -------
+        list of Settings
+            In the order they will be asked for.
+        """
+        return [
+            self.relative.settings(self._to_unit(np.asarray(item["x"])), item["law"])
+            for item in self._queue
+        ]
+
     def sample_independent(self, study: Any, trial: Any, name: str, dist: Any) -> Any:
         seed = int(np.random.default_rng([self.seed, trial.number, 7]).integers(2**31))
         return optuna.samplers.RandomSampler(seed=seed).sample_independent(study, trial, name, dist)

@@ -4,7 +4,8 @@ the command line (in that order)."""
 from __future__ import annotations
 
 import re
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass, fields
+from os import PathLike
 from typing import Any
 
 from vfgym._validate import (
@@ -15,7 +16,7 @@ from vfgym._validate import (
     check_real,
     number_from_text,
 )
-from vfgym.axis import PAPER_AXIS, Axis, load_axis
+from vfgym.axis import PAPER_AXIS, Axis, axis_digest, load_axis
 from vfgym.moves.distribution import scenario_set
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import ACCEL_LAWS
@@ -47,15 +48,21 @@ class _Options:
     scenario_count: int = 16
     first_seed: int = 0
     laws: tuple[str, ...] = ("rise",)
-    axis: str | None = None
+    axis: Axis = PAPER_AXIS  # the default axis: the one place it is named as the default
+    axis_file: str | None = None  # the file the axis was read from (records only)
 
     def _check_scenarios(self) -> None:
         s = object.__setattr__
-        if self.axis is not None:
-            s(self, "axis", str(self.axis))
-            load_axis(self.axis)  # a bad axis file fails here, naming itself
+        given: Any = self.axis
+        if isinstance(given, (str, PathLike)):  # a file: loaded here, once
+            s(self, "axis_file", str(given))
+            s(self, "axis", load_axis(str(given)))  # a bad axis file fails here, naming itself
+        if not isinstance(self.axis, Axis):
+            raise ValueError(f"axis={self.axis!r} is not allowed: give an axis file or an Axis")
+        if self.axis_file is not None:
+            s(self, "axis_file", str(self.axis_file))
         if self.scenarios is None:  # an axis is tuned on its train moves
-            s(self, "scenarios", "paper-step" if self.axis is None else "train")
+            s(self, "scenarios", "paper-step" if self.default_axis else "train")
         if isinstance(self.scenarios, (list, tuple)):
             s(self, "scenarios", ",".join(str(x) for x in self.scenarios))
         s(self, "scenarios", str(self.scenarios))
@@ -63,18 +70,24 @@ class _Options:
         s(self, "first_seed", check_int("first_seed", self.first_seed, 0))
         s(self, "laws", _laws(self.laws))
 
+    @property
+    def default_axis(self) -> bool:
+        """Whether the axis is the default one, given by no file: its ``train`` / ``test``
+        draws are then ``scenario_count`` from ``first_seed``, and records name no axis."""
+        return self.axis_file is None and self.axis == PAPER_AXIS
+
     @classmethod
     def resolve(cls, file_data: Any = None, cli: dict[str, Any] | None = None, source: str = ""):
         """A configuration from its defaults, then a config file's values, then the
-        command line's.
+        command line's; an axis file named by either is loaded here, once.
 
         Parameters
         ----------
         file_data : dict or None
-            A config file's mapping (``-`` in keys read as ``_``).
+            A config file's mapping (``-`` in keys read as ``_``); ``axis``: a file.
         cli : dict or None
             Command-line options (``None``: not given), text read as a number for a
-            number field.
+            number field; ``axis``: a file.
         source : str
             Names the file in error messages.
 
@@ -86,9 +99,10 @@ class _Options:
         Raises
         ------
         ValueError
-            If the file is not a mapping, has an unknown key, or a value is out of range.
+            If the file is not a mapping, has an unknown key, a value is out of range, or
+            the command line gives a move-set option an axis file overrides.
         """
-        known = {f.name for f in fields(cls)}  # type: ignore[arg-type]
+        known = {f.name for f in fields(cls)} - {"axis_file"}  # type: ignore[arg-type]
         data: dict[str, Any] = {}
         if file_data is not None:
             if not isinstance(file_data, dict):
@@ -100,41 +114,71 @@ class _Options:
                     f"{source}: unknown key(s) {', '.join(unknown)}; allowed: "
                     f"{', '.join(sorted(known))}"
                 )
+        if data.get("axis", "") is None:  # (``axis: null``: the default axis)
+            del data["axis"]
         numeric = {f.name for f in fields(cls) if re.search(r"\b(int|float)\b", str(f.type))}  # type: ignore[arg-type]
-        for k, v in (cli or {}).items():
-            if v is not None:
-                data[k] = number_from_text(v) if k in numeric else v
+        cli = {k: v for k, v in (cli or {}).items() if v is not None}
+        axis = cli.get("axis", data.get("axis"))
+        for key in ("scenario_count", "first_seed") if axis is not None else ():
+            if key in cli:  # (a config file's stay its default for runs without an axis)
+                raise ValueError(
+                    f"--{key.replace('_', '-')}={cli[key]!r} is ignored with --axis {axis}: "
+                    "the axis file sets its move sets (moves.train, moves.test); leave it out"
+                )
+        for k, v in cli.items():
+            data[k] = number_from_text(v) if k in numeric else v
         return cls(**data)
 
     def to_dict(self) -> dict[str, Any]:
-        """The configuration as plain data (``config.yaml``).
+        """The configuration as plain data (``config.yaml``): the axis as its file's
+        path (``None`` without one; the run folder's ``axis.yaml`` holds the axis).
 
         Returns
         -------
         dict
             Field name to value.
         """
-        return asdict(self) | {"laws": list(self.laws)}  # type: ignore[call-overload]
+        out = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "axis_file"}  # type: ignore[arg-type]
+        return out | {"laws": list(self.laws), "axis": self.axis_file}
 
-    def load_axis(self) -> Axis | None:
-        """The axis file loaded.
+    def command_words(self, command: str) -> list[str]:
+        """A command line that gives this configuration (after ``vfgym``): each option
+        that differs from its default, as ``--name=value``.
 
-        Returns
-        -------
-        Axis or None
-            ``None`` without a file.
-        """
-        return None if self.axis is None else load_axis(self.axis)
-
-    def axis_or_paper(self) -> Axis:
-        """The axis tuned on.
+        Parameters
+        ----------
+        command : str
+            The sub-command (``sweep``, ``grid``).
 
         Returns
         -------
-        Axis
-            The axis file's, or :data:`~vfgym.axis.PAPER_AXIS` without one.
+        list of str
+            The command, then the options (an axis as its file; an axis given as an
+            object has none: the run folder's ``axis.yaml`` holds it).
         """
-        return self.load_axis() or PAPER_AXIS
+        words = [command]
+        for f in fields(self):  # type: ignore[arg-type]
+            value = self.axis_file if f.name == "axis" else getattr(self, f.name)
+            if f.name == "axis_file" or value == f.default or value is None:
+                continue
+            flag = "--" + f.name.replace("_", "-")
+            if isinstance(value, bool):
+                words.append(flag if value else "--no-" + flag[2:])
+            else:
+                words.append(f"{flag}={','.join(value) if isinstance(value, tuple) else value}")
+        return words
+
+    def axis_key(self) -> str | None:
+        """The axis as a study and a grid reference record it, so that neither is taken
+        for another problem's.
+
+        Returns
+        -------
+        str or None
+            :func:`~vfgym.axis.axis_digest` of the axis; ``None`` for the default axis
+            (as studies and references recorded it before axis files).
+        """
+        return None if self.default_axis else axis_digest(self.axis)
 
     def scenario_list(self) -> list[Scenario]:
         """The scenarios the configuration names.
@@ -142,13 +186,12 @@ class _Options:
         Returns
         -------
         list of Scenario
-            An axis's ``train`` / ``test`` move set, else :func:`vfgym.scenario_set` of
-            ``scenarios``, ``scenario_count``, ``first_seed``.
+            The axis's scenario set of ``scenarios``; the default axis's ``train`` /
+            ``test`` draws as ``scenario_count`` and ``first_seed`` say.
         """
-        axis = self.load_axis()
-        if axis is not None:
-            return axis.scenario_set(str(self.scenarios))
-        return scenario_set(str(self.scenarios), self.scenario_count, self.first_seed)
+        if self.default_axis:
+            return scenario_set(str(self.scenarios), self.scenario_count, self.first_seed)
+        return self.axis.scenario_set(str(self.scenarios))
 
 
 @dataclass(frozen=True)
@@ -158,20 +201,25 @@ class SweepConfig(_Options):
     Parameters
     ----------
     scenarios : str
-        A scenario set (:func:`vfgym.scenario_set`; a list is joined with commas); default
-        ``train`` on an axis, else ``paper-step``.
+        A scenario set (:meth:`vfgym.axis.Axis.scenario_set`; a list is joined with
+        commas); default ``train`` on an axis given, else ``paper-step``.
     scenario_count, first_seed : int
-        Random draws of a ``train`` / ``test`` set (≥ 1), and the first one's seed (≥ 0).
+        The default axis's random draws of a ``train`` / ``test`` set (≥ 1), and the
+        first one's seed (≥ 0); another axis's move sets are its own.
     laws : tuple of str
         The acceleration laws searched (:data:`vfgym.params.ACCEL_LAWS`; one: fixed).
-    axis : str or None
-        An axis file (:mod:`vfgym.axis`): its plant, measures and move sets.
+    axis : Axis, str or PathLike
+        The problem (:class:`vfgym.axis.Axis`): its plant, measures, move sets and
+        uncertainty; an axis file is loaded once, here. Default: the paper's axis.
+    axis_file : str or None
+        The file the axis was read from, for the records (set from ``axis`` when that is
+        a file).
     sampler : str
         One of :data:`SAMPLERS`.
     objective : str or None
         ``cost`` or ``pareto``; default: pareto for nsga2, else cost.
     aggregate, cvar_alpha : str, float
-        What the cost form minimises over the scenarios (:mod:`vfgym.tuning._aggregate`).
+        What the cost form minimises over the scenarios (:func:`vfgym.tuning.aggregate`).
     trials : int
         Completed trials the study ends with (all workers together), ≥ 1.
     timeout : float or None
@@ -251,6 +299,16 @@ class SweepConfig(_Options):
         s(self, "plots", check_bool("plots", self.plots))
         s(self, "progress", check_bool("progress", self.progress))
 
+    def aggregate_label(self) -> str:
+        """The aggregate as reports and studies name it.
+
+        Returns
+        -------
+        str
+            ``mean``, ``worst`` or ``cvar 0.25``.
+        """
+        return f"cvar {self.cvar_alpha:g}" if self.aggregate == "cvar" else self.aggregate
+
 
 @dataclass(frozen=True)
 class GridConfig(_Options):
@@ -261,7 +319,7 @@ class GridConfig(_Options):
 
     Parameters
     ----------
-    scenarios, scenario_count, first_seed, laws, axis
+    scenarios, scenario_count, first_seed, laws, axis, axis_file
         As in :class:`SweepConfig`.
     points, refine, keep : int
         Values per dimension (2 to 64), refinement rounds (0 to 10), best distinct points

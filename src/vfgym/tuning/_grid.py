@@ -1,26 +1,31 @@
 """The exhaustive grid, refined around its best points: the near-true optimum a sweep's
-best is reported against."""
+best is reported against. :func:`run_grid` evaluates it; :func:`grid` is ``vfgym grid``
+as one call (its run folder, the reference, the grid's best against the paper's)."""
 
 from __future__ import annotations
 
 import csv
 import io
 import math
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from vfgym import space
-from vfgym.axis import axis_digest
-from vfgym.io.runs import write_text
+from vfgym._validate import check_output_path
+from vfgym.axis import AXIS_FILE, write_axis
+from vfgym.io.runs import record_command, write_text, write_yaml
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
+from vfgym.report import Report, format_compact
 from vfgym.scoring import CONSTRAINTS, evaluate
 from vfgym.tuning._aggregate import aggregate
 from vfgym.tuning._config import GridConfig
+from vfgym.tuning._results import against_paper
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,7 +76,7 @@ class GridResult:
 
 
 def run_grid(
-    cfg: GridConfig, progress: Callable[[int, int, float], None] | None = None
+    cfg: GridConfig, progress: Callable[[int, int, float], object] | None = None
 ) -> GridResult:
     """Evaluate the dense grid and its refinements on the config's axis, one compiled call
     of :func:`vfgym.evaluate` per batch.
@@ -89,7 +94,7 @@ def run_grid(
         Every setting evaluated, and the best.
     """
     scenarios = cfg.scenario_list()
-    axis = cfg.axis_or_paper()
+    axis = cfg.axis
     evaluate(PAPER_SETTINGS, scenarios, axis=axis)  # compile/load once before timing batches
     pts = space.grid(cfg.points, cfg.laws)
     total = len(pts) * (1 + cfg.refine * cfg.keep)
@@ -177,10 +182,162 @@ def grid_reference(cfg: GridConfig, result: GridResult) -> dict[str, Any]:
         "constraints": dict(zip(CONSTRAINTS, [float(x) for x in b.constraints], strict=True)),
         "scenarios": [s.name for s in result.scenarios],
         "laws": list(cfg.laws),
-        "axis": axis_digest(cfg.load_axis()),
+        "axis": cfg.axis_key(),
         "points": cfg.points,
         "refine": cfg.refine,
         "keep": cfg.keep,
         "evaluated": len(result.rows),
         "source": "vfgym grid",
     }
+
+
+class GridStart(NamedTuple):
+    """What :func:`grid` is about to evaluate, told before it starts.
+
+    Attributes
+    ----------
+    name : str
+        The run's name.
+    run_dir : pathlib.Path
+        The run folder.
+    settings : int
+        Settings of the whole-space grid (the refinements add more).
+    scenarios : tuple of str
+        The scenarios' names.
+    """
+
+    name: str
+    run_dir: Path
+    settings: int
+    scenarios: tuple[str, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class GridRun:
+    """What :func:`grid` evaluated and wrote.
+
+    Attributes
+    ----------
+    config : GridConfig
+        The grid.
+    result : GridResult
+        Every setting evaluated, and the best.
+    reference : dict
+        ``reference.yaml``'s mapping (:func:`grid_reference`, with ``elapsed_s``).
+    comparison : Report
+        The grid's best against the paper's settings on the scenarios.
+    run_dir : pathlib.Path
+        The run folder: config.yaml, axis.yaml, command.txt, grid.csv, reference.yaml,
+        report.txt.
+    elapsed_s : float
+        Wall seconds of the evaluation.
+    """
+
+    config: GridConfig
+    result: GridResult
+    reference: dict[str, Any]
+    comparison: Report
+    run_dir: Path
+    elapsed_s: float
+
+    def text(self) -> str:
+        """The report as ``vfgym grid`` prints it (``report.txt``).
+
+        Returns
+        -------
+        str
+            Settings evaluated and their rate, the reference against the paper's cost,
+            its settings, and the table by scenario.
+        """
+        ref, n, elapsed = self.reference, len(self.result.rows), self.elapsed_s
+        s = ref["settings"]
+        runs = n * len(self.result.scenarios)
+        return "\n".join(
+            [
+                f"{n} settings evaluated in {elapsed:.1f} s ({runs / elapsed:.0f} runs/s)",
+                f"reference: cost {ref['cost']:.4f} "
+                f"({'feasible' if ref['feasible'] else 'INFEASIBLE'}) against the paper's "
+                f"{self.comparison.column('paper').mean_cost:.4f}",
+                f"settings: value {s['value_rad']:.6g} rad, error limit "
+                f"{s['error_limit_rad']:.6g} rad, k {s['k']:.6g}, Ts/Tf {s['ts_over_tf']:.4g}, "
+                f"law {s['accel_law']}",
+                "",
+                format_compact(self.comparison),
+            ]
+        )
+
+
+def grid(
+    config: GridConfig,
+    *,
+    argv: Sequence[str] | None = None,
+    on_start: Callable[[GridStart], object] | None = None,
+    on_progress: Callable[[int, int, float], object] | None = None,
+) -> GridRun:
+    """Run ``vfgym grid``: evaluate the grid (:func:`run_grid`) in a run folder,
+    ``RUNS_DIR/grid/NAME/``, and write every setting (``grid.csv``), the best as the
+    reference a sweep on the same problem reports its gap to (``reference.yaml``), and
+    the report.
+
+    Parameters
+    ----------
+    config : GridConfig
+        The grid.
+    argv : sequence of str or None
+        The command line to record in ``command.txt`` (after ``vfgym``); default: the
+        configuration's options.
+    on_start : callable or None
+        Called with a :class:`GridStart` once the run folder is made.
+    on_progress : callable or None
+        As :func:`run_grid`'s ``progress``.
+
+    Returns
+    -------
+    GridRun
+        What was evaluated and written.
+    """
+    cfg = config
+    scenarios = cfg.scenario_list()
+    name = cfg.name or _default_grid_name(cfg)
+    run_dir = Path(cfg.runs_dir) / "grid" / name
+    check_output_path("runs_dir", run_dir, folder=True, shown=cfg.runs_dir, root=cfg.runs_dir)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    write_yaml(run_dir / "config.yaml", {"command": "grid", **cfg.to_dict(), "name": name})
+    write_axis(cfg.axis, run_dir / AXIS_FILE)
+    record_command(run_dir, ["vfgym", *(argv if argv is not None else cfg.command_words("grid"))])
+    if on_start is not None:
+        first = cfg.points ** len(space.SPACE) * len(cfg.laws)
+        on_start(GridStart(name, run_dir, first, tuple(s.name for s in scenarios)))
+    t0 = time.monotonic()
+    result = run_grid(cfg, on_progress)
+    elapsed = time.monotonic() - t0
+    write_grid_csv(result.rows, run_dir / "grid.csv")
+    ref = grid_reference(cfg, result) | {"elapsed_s": round(elapsed, 3)}
+    write_yaml(run_dir / "reference.yaml", ref)
+    comparison = against_paper(result.best.settings, scenarios, "grid", cfg.axis)
+    out = GridRun(cfg, result, ref, comparison, run_dir, elapsed)
+    write_text(run_dir / "report.txt", out.text() + "\n")
+    return out
+
+
+def _default_grid_name(cfg: GridConfig) -> str:
+    """A grid run's default name: the axis (if given) and scenarios, the laws if not the
+    default, the points and rounds (``train16s0-p12-r2k4``).
+
+    Parameters
+    ----------
+    cfg : GridConfig
+        The grid.
+
+    Returns
+    -------
+    str
+        The name.
+    """
+    slug = "".join(c if c.isalnum() or c in "._-" else "_" for c in str(cfg.scenarios))[:60]
+    if not cfg.default_axis:
+        slug = f"{cfg.axis.name}-{slug}"[:60]
+    elif cfg.scenarios in ("train", "test"):
+        slug += f"{cfg.scenario_count}s{cfg.first_seed}"
+    laws = "" if cfg.laws == ("rise",) else "-" + "_".join(cfg.laws)
+    return f"{slug}{laws}-p{cfg.points}-r{cfg.refine}k{cfg.keep}"

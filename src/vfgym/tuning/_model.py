@@ -2,21 +2,46 @@
 and each constraint some trial broke), and batches of points over the whole space chosen
 by the log of expected improvement times probability of feasibility, each believed at its
 predicted values before the next (:class:`vfgym.tuning._gp.Believer`).
+
+The Gaussian processes (:mod:`vfgym.tuning._gp`: scikit-learn's, and scipy's optimiser,
+special functions and distances, over a second to import on a loaded machine) are
+imported by the first model batch: a compass search's polls, and its first trial, wait
+for none of it (:func:`prepare` imports them beside the trials).
 """
 
 from __future__ import annotations
 
+import importlib
 import math
 import os
+import sys
+import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any, NamedTuple, TypeVar
+from typing import TYPE_CHECKING, Any, NamedTuple, TypeVar
 
 import numpy as np
-from scipy.special import log_ndtr
 from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
-from vfgym.tuning._gp import Believer, GaussianProcess, log_expected_improvement
+if TYPE_CHECKING:
+    from vfgym.tuning._gp import GaussianProcess
+
+GP_MODULE = "vfgym.tuning._gp"
+"""The model's module, imported when a batch needs it."""
+
+
+def prepare() -> None:
+    """Import the model's module (:data:`GP_MODULE`) on a thread of its own while the
+    caller goes on, once a process (a model batch that comes first waits for it on the
+    import's lock)."""
+    if GP_MODULE in sys.modules or any(t.name == _IMPORTING for t in threading.enumerate()):
+        return
+    threading.Thread(
+        target=importlib.import_module, args=(GP_MODULE,), name=_IMPORTING, daemon=True
+    ).start()
+
+
+_IMPORTING = "vfgym-import-model"
 
 
 class Observation(NamedTuple):
@@ -100,6 +125,10 @@ class _Fit(NamedTuple):
     def choose(self, n: int, candidates: Any, pending: Sequence[np.ndarray] = ()) -> list:
         """``n`` distinct points of one set of ``candidates()``, each believed at its
         predicted values before the next is chosen, as the ``pending`` points first."""
+        from scipy.special import log_ndtr
+
+        from vfgym.tuning._gp import Believer, log_expected_improvement
+
         c = np.vstack([*pending, candidates()])
         cost, *cons = each(lambda m: Believer(m, c), [self.gp, *self.cgps])
         taken = np.arange(len(c)) < len(pending)
@@ -131,6 +160,8 @@ def _fit(x: np.ndarray, obs: list[Observation], xi: float,
     """Gaussian processes on log cost (on the feasible points once there are three) and on
     the broken constraints (signed log), each from ``starts``' hyperparameters of its name
     (kept unless ``refit``)."""
+    from vfgym.tuning._gp import GaussianProcess
+
     y = np.log(np.maximum([o.cost for o in obs], 1e-12))
     feas = np.array([o.feasible for o in obs])
     cons = np.array([o.constraints for o in obs])

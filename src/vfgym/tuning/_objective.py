@@ -5,17 +5,25 @@ Each attribute written is one transaction of Optuna's RDB storage, so a trial wr
 its result as one user attribute, ``result`` (:data:`PARTS`), and its constraints as one
 system attribute, the list Optuna reads into ``trial.constraints`` (Optuna's
 ``set_constraint`` reads the whole trial before each of its one-key writes).
+
+A sampler that plans its next points (the compass: the rest of a generation) lets the
+objective score them ahead (:attr:`Objective.ahead`), in one batched call on a thread of
+its own while this process writes the trial and asks for the next: the compiled kernel
+releases the GIL. A point scored ahead gives the bits of one scored alone (each move of
+each setting is simulated and scored on its own), and counts as simulated by the trial
+that asks for it.
 """
 
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Callable, Mapping
 from contextlib import nullcontext
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from vfgym import space
-from vfgym.axis import PAPER_AXIS, Axis
+from vfgym.axis import Axis
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 from vfgym.scoring import CONSTRAINTS, evaluate
@@ -55,7 +63,7 @@ class Objective:
     axis : Axis
         The problem: the settings run on its plant, are scored with its measures, and
         must also be feasible on its :meth:`~vfgym.axis.Axis.design_plants` (the
-        cost is the modelled plant's).
+        cost is the modelled plant's); :data:`vfgym.axis.PAPER_AXIS` for the paper's.
     aggregate : str
         The cost's aggregate over the scenarios (:func:`vfgym.tuning.aggregate`).
     cvar_alpha : float
@@ -68,7 +76,7 @@ class Objective:
         laws: tuple[str, ...],
         form: str,
         *,
-        axis: Axis = PAPER_AXIS,
+        axis: Axis,
         aggregate: str = DEFAULT_AGGREGATE,
         cvar_alpha: float = DEFAULT_CVAR_ALPHA,
     ) -> None:
@@ -80,6 +88,10 @@ class Objective:
         self.cache: dict[Settings, Result] = {}
         self.simulated = 0
         self.guard: Callable[[], Any] = nullcontext  # around a simulation (interrupts)
+        # The settings the sampler will ask for next, scored ahead (None: none planned).
+        self.ahead: Callable[[], list[Settings]] | None = None
+        self._batch: _Batch | None = None  # the last batch scored ahead
+        self._ready: dict[Settings, Result] = {}  # its results not asked for yet
         self._study: tuple | None = None  # the study the fields below are of
         self._study_id = 0
         self._found: dict[Settings, Result] = {}  # its completed trials' results
@@ -92,9 +104,10 @@ class Objective:
         res = self.cache.get(settings) or self._completed(trial).get(settings)
         if res is None:
             with self.guard():
-                (res,) = self.score_many([settings])
+                res = self._scored_ahead(settings) or self.score_many([settings])[0]
             self.simulated += 1
             self.cache[settings] = Result(res.values, res.attrs | {"cached_from": trial.number})
+        self._score_ahead()
         result = {k: res.attrs[k] for k in PARTS if k in res.attrs}
         if trial.user_attrs.get(RESULT_ATTR) != result:  # (a retry may hold it already)
             trial.set_user_attr(RESULT_ATTR, result)
@@ -131,6 +144,35 @@ class Objective:
             }
             out.append(Result(cost if self.form == "cost" else objectives, attrs))
         return out
+
+    def close(self) -> None:
+        """Wait for the settings being scored ahead, if any (a compiled call cannot be
+        stopped: the process's next one waits for it)."""
+        if self._batch is not None:
+            self._batch.thread.join()
+
+    def _scored_ahead(self, settings: Settings) -> Result | None:
+        """The settings' result if scored ahead (waiting for its batch), else None; any
+        other batch still running is waited for too (one kernel call at a time)."""
+        batch = self._batch
+        if batch is not None:
+            batch.thread.join()
+            self._ready.update(batch.results)  # (none if it failed: scored here again)
+            self._batch = None
+        return self._ready.pop(settings, None)
+
+    def _score_ahead(self) -> None:
+        """Start scoring the planned settings not scored yet, unless a batch runs."""
+        if self.ahead is None or (self._batch is not None and self._batch.thread.is_alive()):
+            return
+        if self._batch is not None:
+            self._ready.update(self._batch.results)
+            self._batch = None
+        plan = [s for s in dict.fromkeys(self.ahead()) if s not in self.cache]
+        self._ready = {s: r for s, r in self._ready.items() if s in plan}
+        todo = [s for s in plan if s not in self._ready and s not in self._found]
+        if todo:
+            self._batch = _Batch.start(self, todo)
 
     def _seen(self, trial: Trial) -> None:
         """Note the trial as run here (a new study: forget the last one's)."""
@@ -169,6 +211,32 @@ class Objective:
             values = float(t.value) if self.form == "cost" else [float(v) for v in t.values]
             found[key] = Result(values, attrs)
         return found
+
+
+class _Batch(NamedTuple):
+    """Settings scored ahead on a thread of its own, and their results once it ends
+    (empty if it failed)."""
+
+    thread: threading.Thread
+    results: dict[Settings, Result]
+
+    @classmethod
+    def start(cls, objective: Objective, settings: list[Settings]) -> _Batch:
+        results: dict[Settings, Result] = {}
+
+        def score() -> None:
+            import numba
+
+            numba.set_num_threads(max(1, numba.get_num_threads() - 1))  # (this thread's)
+            try:
+                scored = objective.score_many(settings)
+            except Exception:  # (scored again when asked for, where it raises as it will)
+                return
+            results.update(zip(settings, scored, strict=True))
+
+        thread = threading.Thread(target=score, name="vfgym-ahead", daemon=True)
+        thread.start()
+        return cls(thread, results)
 
 
 def set_constraints(trial: Any, values: dict[str, float], study_id: int | None = None) -> None:

@@ -20,7 +20,8 @@ from vfgym.io.runs import read_yaml, write_atomically, write_text
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
 from vfgym.report import Candidate, Report
-from vfgym.scoring import CONSTRAINTS, OBJECTIVES
+from vfgym.scoring import CONSTRAINTS, OBJECTIVES, evaluate
+from vfgym.tuning._aggregate import aggregate_costs
 from vfgym.tuning._config import SweepConfig
 from vfgym.tuning._objective import RESULT_ATTR, stored_result
 from vfgym.tuning._storage import StorageSpec
@@ -48,10 +49,13 @@ def best_trial(study: Study) -> FrozenTrial | None:
     """
     import optuna
 
+    return best_of(study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,)))
+
+
+def best_of(trials: list[FrozenTrial]) -> FrozenTrial | None:
+    """:func:`best_trial` among ``trials`` (those complete count)."""
     done = [
-        (t, r)
-        for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
-        if (r := stored_result(t)) is not None
+        (t, r) for t in trials if t.state.name == "COMPLETE" and (r := stored_result(t)) is not None
     ]
     if not done:
         return None
@@ -165,6 +169,13 @@ def against_paper(best: Settings, scenarios: list[Scenario], label: str, axis: A
         Candidate(label, best, source=label),
     ]
     return report.compare(candidates, [], scenarios, axis=axis)
+
+
+def paper_cost(cfg: SweepConfig, scenarios: list[Scenario]) -> float:
+    """The paper's settings' cost over the sweep's scenarios on its axis, aggregated as the
+    sweep aggregates a trial's: what the tuned cost is reported against."""
+    ev = evaluate(PAPER_SETTINGS, scenarios, axis=cfg.axis)
+    return float(aggregate_costs(ev.cost[0], cfg.aggregate, cfg.cvar_alpha))
 
 
 class FoundReference(NamedTuple):
@@ -303,8 +314,8 @@ def best_record(
         objective=cfg.objective,
         scenarios=[s.name for s in scenarios],
         laws=list(cfg.laws),
-        axis=cfg.axis,
+        axis=cfg.axis_file,
         paper_cost=paper_cost,
         reference=gap,
-        machine=machine_digest(cfg.axis_or_paper()),
+        machine=machine_digest(cfg.axis),
     )

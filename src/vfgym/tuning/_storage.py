@@ -147,10 +147,27 @@ def resolve_storage(text: str, run_dir: Path) -> StorageSpec:
 
 
 def find_storage(text: str, run_dir: Path) -> StorageSpec:
-    """The storage a sweep's ``config.yaml`` recorded (:attr:`StorageSpec.display`) or
-    ``--storage`` names, its file looked for in ``run_dir`` if no longer where recorded (the
-    folder was moved). ValueError naming ``storage`` for a masked password, an unknown URL
-    or a missing file."""
+    """The storage of a sweep's run folder, its file looked for in the folder if no longer
+    where recorded (the folder was moved).
+
+    Parameters
+    ----------
+    text : str
+        What the run folder's ``config.yaml`` recorded (:attr:`StorageSpec.display`), or
+        what ``--storage`` names.
+    run_dir : pathlib.Path
+        The run folder.
+
+    Returns
+    -------
+    StorageSpec
+        The storage, its file found.
+
+    Raises
+    ------
+    ValueError
+        Naming ``storage``, for a masked password, an unknown URL or a missing file.
+    """
     t = str(text).strip()
     if "***" in t:
         raise ValueError(f"storage={t!r}: the password is masked; give the storage URL again")

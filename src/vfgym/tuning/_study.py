@@ -10,12 +10,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from vfgym import space
-from vfgym.axis import axis_digest
 from vfgym.moves.baselines import rule_of_thumb, usable_accel
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_PLANT, PAPER_SETTINGS, Plant, Settings, usable_k
 from vfgym.scoring import OBJECTIVES
-from vfgym.tuning._aggregate import describe
 from vfgym.tuning._config import SweepConfig
 
 if TYPE_CHECKING:
@@ -66,7 +64,7 @@ def make_sampler(
         The study's storage, where the compass records each trial's generation (needed
         by the compass only).
     plant : Plant or None
-        The plant the scenarios run on (default: ``cfg``'s axis's).
+        The plant the scenarios run on (default: the plant of ``cfg.axis``).
 
     Returns
     -------
@@ -89,7 +87,7 @@ def make_sampler(
             if storage is None:
                 raise ValueError("sampler='compass' records its search in the study's storage")
 
-            base = cfg.axis_or_paper().plant if plant is None else plant
+            base = cfg.axis.plant if plant is None else plant
             rel = relative_space(scenarios or cfg.scenario_list(), base)
             return CompassSampler(rel, cfg.laws, seed, storage=storage)
         if cfg.sampler == "tpe":
@@ -243,8 +241,8 @@ def create_or_load(
         "scenarios": [s.name for s in scenarios],
         "laws": list(cfg.laws),
         "objective": cfg.objective,
-        "axis": axis_digest(cfg.load_axis()),  # None: the paper's axis
-        "aggregate": describe(cfg),
+        "axis": cfg.axis_key(),  # None: the default axis
+        "aggregate": cfg.aggregate_label(),
     }
     try:
         study = optuna.create_study(
@@ -256,7 +254,7 @@ def create_or_load(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             study.set_metric_names(["cost"] if cfg.objective == "cost" else list(OBJECTIVES))
-        starts = warm_starts(scenarios, cfg.axis_or_paper().plant)
+        starts = warm_starts(scenarios, cfg.axis.plant)
         for label, settings in starts[:1] if cfg.sampler == "grid" else starts:  # grid: exhaustive
             study.enqueue_trial(baseline_params(cfg.laws, settings), user_attrs={"baseline": label})
         study.set_user_attr(META_KEY, meta)  # last: the study is ready

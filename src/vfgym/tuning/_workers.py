@@ -14,6 +14,7 @@ from __future__ import annotations
 import copy
 import datetime
 import multiprocessing
+import os
 import signal
 import socket
 import sys
@@ -22,7 +23,7 @@ import time
 import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from multiprocessing.connection import Connection
 from multiprocessing.process import BaseProcess
 from typing import TYPE_CHECKING, Any, NamedTuple
@@ -33,12 +34,14 @@ from vfgym.axis import AxisNote
 from vfgym.params import PAPER_SETTINGS
 from vfgym.scoring import evaluate
 from vfgym.tuning._config import SweepConfig
+from vfgym.tuning._model import prepare
 from vfgym.tuning._objective import Objective
 from vfgym.tuning._storage import MAX_RETRY, StorageSpec, open_storage, retry
 from vfgym.tuning._study import make_sampler, trial_budget
 
 if TYPE_CHECKING:
     from optuna import Study, Trial
+    from optuna.storages import BaseStorage
     from optuna.trial import FrozenTrial
 
 RETRY = "failed_trial"
@@ -104,12 +107,17 @@ class WorkerReport:
     simulated : int
         Settings it simulated (the others were copied from equal settings).
     stopped : str
-        ``done`` or ``timeout`` (an interrupted worker raises KeyboardInterrupt).
+        ``done`` or ``timeout`` (an interrupted worker raises KeyboardInterrupt); for a
+        worker process that sent no report, ``interrupted`` or ``died``.
+    exit : int or None
+        A worker process's exit status (0 for the one in the calling process); None
+        while it runs.
     """
 
     trials: list[int] = field(default_factory=list)
     simulated: int = 0
     stopped: str = ""
+    exit: int | None = None
 
 
 def run_worker(
@@ -118,6 +126,7 @@ def run_worker(
     study_name: str,
     index: int = 0,
     on_trial: Callable[[Study], object] | None = None,
+    storage: BaseStorage | None = None,
 ) -> WorkerReport:
     """Run trials of ``study_name`` (``study.optimize``) until it holds the trials asked
     for, however many workers share it, or the timeout. An interrupted trial is failed
@@ -135,6 +144,8 @@ def run_worker(
         The worker's index, added to the sampler's seed.
     on_trial : callable or None
         Called with the study after each trial the worker ran.
+    storage : optuna.storages.BaseStorage or None
+        ``spec`` opened already (:func:`open_storage`; default: opened here).
 
     Returns
     -------
@@ -143,18 +154,22 @@ def run_worker(
     """
     import optuna
 
+    from vfgym.tuning._compass import CompassSampler
+
     # ERROR: an interrupted trial is reported by the sweep, not as Optuna's warning with a
     # traceback; a failing objective still raises.
     optuna.logging.set_verbosity(optuna.logging.ERROR)
     warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
     warnings.filterwarnings("ignore", message="Constraints have been set, but CmaEsSampler")
     rep = WorkerReport()
+    prepare_model(cfg)
     scenarios = cfg.scenario_list()
     seed = None if cfg.seed is None else cfg.seed + index
-    axis = cfg.axis_or_paper()
+    axis = cfg.axis
     me = worker_id()
     with DeferredInterrupt() as interrupts:
-        storage = open_storage(spec, cfg.heartbeat, cfg.grace)
+        if storage is None:
+            storage = open_storage(spec, cfg.heartbeat, cfg.grace)
         sampler = make_sampler(cfg, seed, scenarios, storage)
         study = optuna.load_study(study_name=study_name, storage=storage, sampler=sampler)
         objective = Objective(scenarios, cfg.laws, str(cfg.objective), axis=axis,
@@ -163,12 +178,19 @@ def run_worker(
         evaluate(PAPER_SETTINGS, scenarios[:1], axis=axis)  # the kernel compiled first
         gate = _Budget(study, cfg, spec, interrupts)
         current: list[int] = []  # the trial in a simulation here
+        planned = getattr(sampler, "planned", None)  # (the compass plans ahead)
+        if planned is not None:  # as many as the trials after this one may ask for
+            objective.ahead = lambda: planned()[: max(0, gate.budget - 1 - current[0])]
         ran: list[int] = []
         paused: list[int] = []  # optimize stopped here, to wait outside it (or an interrupt)
 
         def run_trial(trial: Trial) -> float | list[float]:
             if ran and on_trial is not None:
                 on_trial(study)  # (the last trial has completed)
+            if isinstance(sampler, CompassSampler) and sampler.storage is storage:
+                # it records its generations through the study's own storage, which knows
+                # the ids of the trials it made
+                sampler.storage = trial.storage
             trial.set_user_attr(WORKER_ATTR, me)
             go = gate.wait(trial.number)
             if go is None:
@@ -208,6 +230,7 @@ def run_worker(
                 _fail_and_retry(study, copy.deepcopy(study.get_trials(deepcopy=False)[n]))
             raise
         finally:
+            objective.close()
             rep.simulated = objective.simulated
             if ran:
                 trials = study.get_trials(deepcopy=False)
@@ -216,6 +239,16 @@ def run_worker(
                 if on_trial is not None:
                     on_trial(study)
     return rep
+
+
+def prepare_model(cfg: SweepConfig) -> None:
+    """Start importing the compass's model beside the first trials (:func:`prepare`) of a
+    sweep long enough to reach a model batch (its compass's budget spent); a shorter one
+    imports it only if a batch comes."""
+    from vfgym.tuning._compass import CompassOptions
+
+    if cfg.sampler == "compass" and trial_budget(cfg) >= CompassOptions().compass_trials:
+        prepare()
 
 
 class _Budget:
@@ -402,6 +435,78 @@ def spawn_workers(cfg: SweepConfig, spec: StorageSpec, study: str, n: int) -> li
         send.close()
         workers.append(Worker(process, report))
     return workers
+
+
+def run_processes(
+    cfg: SweepConfig, spec: StorageSpec, study: str, poll: Callable[[], object]
+) -> list[WorkerReport]:
+    """Run ``cfg.workers`` worker processes on the study and follow it until they end
+    (``poll`` called twice a second). On Ctrl-C they finish or give back their trial and
+    the interrupt is raised again once they have ended.
+
+    Parameters
+    ----------
+    cfg : SweepConfig
+        The sweep's configuration.
+    spec : StorageSpec
+        Where the study lives.
+    study : str
+        The study.
+    poll : callable
+        Called while the workers run.
+
+    Returns
+    -------
+    list of WorkerReport
+        Each worker's report with its exit status.
+    """
+    workers = spawn_workers(cfg, spec, study, cfg.workers)
+    reports: list[WorkerReport | None] = [None] * len(workers)
+
+    def collect() -> None:  # (read as they come: a report may exceed a pipe's buffer)
+        for i, w in enumerate(workers):
+            if reports[i] is None and w.report.poll():
+                try:
+                    reports[i] = w.report.recv()
+                except (EOFError, OSError):  # died before sending it
+                    reports[i] = WorkerReport()
+
+    interrupted = False
+    try:
+        while any(w.process.is_alive() for w in workers):
+            poll()
+            collect()
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        interrupted = True
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        _stop(workers)
+    collect()
+    out = []
+    for w, rep in zip(workers, reports, strict=True):
+        code = w.process.exitcode
+        if rep is None or not rep.stopped:
+            rep = WorkerReport(stopped="interrupted" if code == 130 else "died")
+        out.append(replace(rep, exit=code))
+    if interrupted:
+        raise KeyboardInterrupt
+    return out
+
+
+def _stop(workers: list[Worker]) -> None:
+    """After a Ctrl-C: give the workers 2 s to finish their trial, then interrupt the
+    ones left, then kill any that has not ended a minute later."""
+    deadline = time.monotonic() + 2.0
+    while time.monotonic() < deadline and any(w.process.is_alive() for w in workers):
+        time.sleep(0.05)
+    for w in workers:
+        if w.process.is_alive() and w.process.pid is not None:
+            os.kill(w.process.pid, signal.SIGINT)
+    for w in workers:
+        w.process.join(timeout=60)
+        if w.process.is_alive():
+            w.process.kill()
+            w.process.join()
 
 
 def _worker_process(cfg: SweepConfig, spec: StorageSpec, study: str, index: int,
