@@ -212,11 +212,11 @@ def test_no_circle_between_parts() -> None:
     assert not cycles, "import circles: " + "; ".join(" -> ".join(c) for c in cycles)
 
 
-def test_no_circle_between_the_tuners_modules() -> None:
-    """No module of ``permove`` or ``agents`` imports, even lazily, a module that imports
-    it back (as ``agents/loaded.py`` and ``agents/training.py`` once did)."""
-    ours = {m: t for m, t in GRAPH.items() if part_of(m) in TUNER_PACKAGES}
-    cycles = module_cycles(ours)
+def test_no_circle_between_modules() -> None:
+    """No module imports, even lazily, a module that imports it back (as
+    ``scoring/_evaluate.py`` and ``_plants.py``, ``tuning/_aggregate.py`` and ``_config.py``,
+    ``agents/loaded.py`` and ``agents/training.py`` once did)."""
+    cycles = module_cycles(GRAPH)
     assert not cycles, "module circles: " + "; ".join(" <-> ".join(c) for c in cycles)
 
 
@@ -239,16 +239,52 @@ def private_reaches(module: str, source: str) -> list[str]:
     return found
 
 
-def test_the_tuners_packages_use_only_public_modules_of_others() -> None:
-    """``permove`` and ``agents`` reach other subpackages through their public modules and
-    names only."""
+PUBLIC_ONLY = (*TUNER_PACKAGES, "commands")
+"""The parts that reach other subpackages through their public modules and names only."""
+
+
+def test_the_tuners_and_the_commands_use_only_public_modules_of_others() -> None:
+    """``permove``, ``agents`` and ``commands`` reach other subpackages through their
+    public modules and names only: a command parses and prints, the library does the work."""
     bad = [
         line
         for m, p in MODULES.items()
-        if part_of(m) in TUNER_PACKAGES
+        if part_of(m) in PUBLIC_ONLY
         for line in private_reaches(m, p.read_text(encoding="utf-8"))
     ]
     assert not bad, "private imports:\n" + "\n".join(bad)
+
+
+COMMAND_FUNCTION_LINES = 80
+"""The longest function ``commands/`` may hold: more is orchestration that belongs in the
+library, where a notebook can call it."""
+
+
+def long_functions(source: str, most: int) -> list[tuple[str, int]]:
+    """The functions (and methods) of ``source`` longer than ``most`` lines."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            n = (node.end_lineno or node.lineno) - node.lineno + 1
+            if n > most:
+                found.append((node.name, n))
+    return found
+
+
+def test_no_long_function_in_the_commands() -> None:
+    bad = [
+        f"{m}.{name}: {n} lines"
+        for m, p in MODULES.items()
+        if part_of(m) == "commands"
+        for name, n in long_functions(p.read_text(encoding="utf-8"), COMMAND_FUNCTION_LINES)
+    ]
+    assert not bad, f"functions over {COMMAND_FUNCTION_LINES} lines:\n" + "\n".join(bad)
+
+
+def test_a_long_function_is_caught() -> None:
+    body = "\n".join(f"    x{i} = {i}" for i in range(81))
+    assert long_functions(f"def f():\n{body}\n", 80) == [("f", 82)]
+    assert long_functions("def g():\n    return 1\n", 80) == []
 
 
 def test_a_private_reach_is_caught() -> None:

@@ -207,7 +207,7 @@ def machine_digest(axis: Axis) -> str:
     return content_digest({k: d[k] for k in ("plant", "measures", "uncertainty") if k in d})
 
 
-def axis_digest(axis: Axis | None) -> str | None:
+def axis_digest(axis: Axis) -> str:
     """A fingerprint of everything the axis holds.
 
     So a study or a grid reference made on one axis is never mistaken for another's with
@@ -215,16 +215,14 @@ def axis_digest(axis: Axis | None) -> str | None:
 
     Parameters
     ----------
-    axis : Axis or None
-        The axis, or ``None`` for none.
+    axis : Axis
+        The axis.
 
     Returns
     -------
-    str or None
-        ``name:hash`` (12 hex digits of the SHA-256 of :func:`axis_to_dict`), or ``None``.
+    str
+        ``name:hash`` (12 hex digits of the SHA-256 of :func:`axis_to_dict`).
     """
-    if axis is None:
-        return None
     return f"{axis.name}:{content_digest(axis_to_dict(axis))}"
 
 

@@ -14,6 +14,10 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from vfgym.axis import Axis
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -90,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _check_same_axis(run_dir: Path, axis: object, axis_file: str) -> None:
+def _check_same_axis(run_dir: Path, axis: Axis, axis_file: str) -> None:
     """A fit continues only on the axis it was started on: an edited axis under the same
     name would silently replace the earlier fit's optima and model."""
     from vfgym.axis import AXIS_FILE, axis_digest, load_axis
@@ -98,7 +102,7 @@ def _check_same_axis(run_dir: Path, axis: object, axis_file: str) -> None:
     old = run_dir / AXIS_FILE
     if not old.is_file():
         return
-    if axis_digest(load_axis(old)) != axis_digest(axis):  # type: ignore[arg-type]
+    if axis_digest(load_axis(old)) != axis_digest(axis):
         raise ValueError(
             f"--name {run_dir.name}: {run_dir} holds a fit of another axis (its {AXIS_FILE} "
             f"differs from {axis_file}): give another --name, or remove that folder to fit "

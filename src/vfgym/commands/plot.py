@@ -87,15 +87,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def load_study(run_dir: str, storage: str | None = None) -> Study:
     """The Optuna study of a sweep run folder. ``config.yaml`` names the study
     (``study_name`` or ``study``) and its ``storage``, found by
-    :func:`vfgym.tuning._storage.find_storage` (a file moved with the folder is found in
+    :func:`vfgym.tuning.find_storage` (a file moved with the folder is found in
     it); a URL whose password was masked in the file needs ``storage`` given again. A
     ``storage`` given is used as it is: a file it names must exist (no fallback to the
     folder's own)."""
     import optuna
 
     from vfgym.io.runs import read_yaml
-    from vfgym.tuning import open_storage
-    from vfgym.tuning._storage import find_storage
+    from vfgym.tuning import find_storage, open_storage
 
     d = Path(run_dir)
     if not d.is_dir():

@@ -129,16 +129,16 @@ def short_sweep(
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     laws = (start.accel_law,)
-    cfg = SweepConfig(laws=laws, seed=seed, plots=False)  # its sampler: the default
+    cfg = SweepConfig(laws=laws, seed=seed, plots=False, axis=axis)  # its sampler: the default
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         # coordinates from the moves on the axis's plant
         storage = optuna.storages.InMemoryStorage()
-        sampler = make_sampler(cfg, cfg.seed, list(scenarios), storage, plant=axis.plant)
+        sampler = make_sampler(cfg, cfg.seed, list(scenarios), storage)
         study = optuna.create_study(storage=storage, direction="minimize", sampler=sampler)
     for s in (start, *also):
         study.enqueue_trial(baseline_params(laws, s))
-    objective = Objective(list(scenarios), laws, "cost", axis=axis)
+    objective = Objective(list(scenarios), laws, "cost", axis=cfg.axis)
     study.optimize(objective, n_trials=trials)
     done = study.trials
     best = best_trial(study)

@@ -44,7 +44,6 @@ def make_sampler(
     seed: int | None,
     scenarios: list[Scenario] | None = None,
     storage: BaseStorage | None = None,
-    plant: Plant | None = None,
 ) -> BaseSampler:
     """The Optuna sampler named by ``cfg.sampler``, seeded.
 
@@ -63,8 +62,6 @@ def make_sampler(
     storage : optuna.storages.BaseStorage or None
         The study's storage, where the compass records each trial's generation (needed
         by the compass only).
-    plant : Plant or None
-        The plant the scenarios run on (default: the plant of ``cfg.axis``).
 
     Returns
     -------
@@ -87,7 +84,7 @@ def make_sampler(
             if storage is None:
                 raise ValueError("sampler='compass' records its search in the study's storage")
 
-            base = cfg.axis.plant if plant is None else plant
+            base = cfg.axis.plant
             rel = relative_space(scenarios or cfg.scenario_list(), base)
             return CompassSampler(rel, cfg.laws, seed, storage=storage)
         if cfg.sampler == "tpe":
