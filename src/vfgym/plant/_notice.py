@@ -46,7 +46,7 @@ def is_compiled(dispatcher: Any) -> bool:
 
 COLD_COMPILE_S = {
     "simulate": 5.1,
-    "evaluate": 22.4,
+    "evaluate": 12.6,
     "servo env": 22.5,
     "vector env": 47.7,
     "vector env, threads": 65.8,
@@ -54,11 +54,12 @@ COLD_COMPILE_S = {
 """CPU seconds a first call compiles for, with numba's cache empty, per entry point
 (measured on a 2-core machine, docs/speed.md, at load ≈ 5–6, so on the high side:
 ``python benchmarks/bench_plant.py --cold``; the vector env's two entries the median of
-three runs); what :func:`announce_compile` tells the user. The compiled callers of the
-kernel (evaluate, the envs) compile its two-mass loop too since the compliant transmission:
-those figures are docs/speed.md's times the ratio measured then, in one sitting, against
-the code before it (docs/results/compliant.md); :func:`vfgym.simulate` compiles its
-plant's loop alone, unchanged."""
+three runs); what :func:`announce_compile` tells the user. The envs' compiled steps
+compile the kernel's two-mass loop too since the compliant transmission: their figures are
+docs/speed.md's times the ratio measured then, in one sitting, against the code before it
+(docs/results/compliant.md); :func:`vfgym.simulate` and a batch of rigid plants in
+:func:`vfgym.evaluate` (``run_batch_rigid``: 9.2 s CPU at load 7–8 against 14.6 s for the
+mixed batch) compile their plant's loop alone, their figures unchanged."""
 
 _ANNOUNCED: set[str] = set()
 
