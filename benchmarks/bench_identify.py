@@ -55,8 +55,8 @@ from vfgym.identify.capture import read_capture
 from vfgym.identify.fit import PARAMS, fit
 from vfgym.identify.model import record_of
 from vfgym.identify.plan import make_plan
-from vfgym.identify.report import Identified, identify_report
-from vfgym.identify.signals import record_capture
+from vfgym.identify.simulated import record_capture
+from vfgym.identify.written import Identified, identify_report
 from vfgym.params import PAPER_SETTINGS
 
 CAPTURE_S = 2.0

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from vfgym.axis import PlantVariant
-from vfgym.identify.signals import record_capture
+from vfgym.identify.simulated import record_capture
 from vfgym.params import Plant
 
 REST_S = 0.5

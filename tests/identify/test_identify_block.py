@@ -19,7 +19,7 @@ from vfgym.identify.covariance import resolution
 from vfgym.identify.fit import QUANTISATION_FLOOR, fit
 from vfgym.identify.model import record_of
 from vfgym.identify.plan import make_plan
-from vfgym.identify.report import MARGIN, identify_report
+from vfgym.identify.written import MARGIN, identify_report
 from vfgym.params import PAPER_SETTINGS
 
 NOMINAL = PAPER_AXIS.plant

@@ -9,9 +9,8 @@ import numpy as np
 import pytest
 
 from vfgym.identify.capture import parse_signal_map, read_capture
-from vfgym.identify.signals import trace_edges, write_edges_vcd
 from vfgym.io.trace_csv import write_trace_csv
-from vfgym.io.vcd import edge_counts, write_vcd
+from vfgym.io.vcd import edge_counts, trace_edges, write_edges, write_vcd
 from vfgym.moves.scenarios import SCENARIOS
 from vfgym.params import PAPER_PLANT, PAPER_SETTINGS
 from vfgym.plant import simulate
@@ -74,7 +73,7 @@ def test_an_export_round_tripped_through_sigrok_reads_the_same(trace, tmp_path):
 def test_sigrok_channel_names_are_mapped_with_signals(trace, tmp_path):
     rng_start = 0.0123456
     edges = trace_edges(trace, start_s=rng_start)
-    path = write_edges_vcd(
+    path = write_edges(
         edges,
         tmp_path / "d.vcd",
         timescale="1 us",
@@ -91,7 +90,7 @@ def test_sigrok_channel_names_are_mapped_with_signals(trace, tmp_path):
 def test_a_1mhz_record_keeps_every_pulse_and_the_count(trace, tmp_path):
     """Rounded to 1 µs the A/B edges of fast counting may share a sample: two steps on."""
     edges = trace_edges(trace, start_s=0.0004321)
-    cap = read_capture(write_edges_vcd(edges, tmp_path / "r.vcd", timescale="1 us"))
+    cap = read_capture(write_edges(edges, tmp_path / "r.vcd", timescale="1 us"))
     assert np.array_equal(cap.pulse_sign, edges.pulse_sign)
     assert np.max(np.abs(cap.pulse_s - edges.pulse_s)) <= 0.5e-6 + 1e-12
     assert cap.count[-1] == edges.count[-1]
@@ -129,7 +128,7 @@ def test_a_sampled_capture_reads_the_count_at_the_middle_of_its_sample(tmp_path)
     pulses[12000:20000:2] = -1
     tr = simulate(np.zeros(pulses.size), PAPER_SETTINGS, plant, pulses=pulses)
     start = 0.0031 + 1e-6 * rng.uniform()
-    cap = read_capture(write_edges_vcd(trace_edges(tr, start_s=start), tmp_path / "s.vcd",
+    cap = read_capture(write_edges(trace_edges(tr, start_s=start), tmp_path / "s.vcd",
                                        timescale="1 us"))  # fmt: skip
     rec = record_of(cap, plant)
     true_phase = (-start / T) % 1.0

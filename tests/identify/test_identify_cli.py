@@ -9,8 +9,8 @@ from capture_synth import capture_vcd, draw_truth
 from vfgym.axis import PAPER_AXIS, load_axis
 from vfgym.cli import main
 from vfgym.identify.plan import make_plan
-from vfgym.identify.signals import trace_edges, train_edges, write_edges_vcd
 from vfgym.io.trace_csv import write_trace_csv
+from vfgym.io.vcd import trace_edges, train_edges, write_edges
 from vfgym.moves.scenarios import SCENARIOS
 from vfgym.params import PAPER_PLANT, PAPER_SETTINGS
 from vfgym.plant import simulate
@@ -76,7 +76,7 @@ def move():
 def _vcd(move, path, **kw):
     start = kw.pop("start_s", 0.01)
     stop = kw.pop("stop_s", None)
-    return write_edges_vcd(trace_edges(move, start_s=start, stop_s=stop), path, **kw)
+    return write_edges(trace_edges(move, start_s=start, stop_s=stop), path, **kw)
 
 
 def _csv(move, path, drop=None, cell=None):
@@ -135,7 +135,7 @@ BAD = {
         ["late.vcd", "starts inside a move"],
     ),
     "no-pulse": (
-        lambda m, d: write_edges_vcd(
+        lambda m, d: write_edges(
             train_edges(np.zeros(1000, np.int8), PAPER_PLANT.tick_hz), d / "idle.vcd"
         ),
         [],

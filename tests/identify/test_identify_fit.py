@@ -14,7 +14,7 @@ from vfgym.identify.capture import read_capture
 from vfgym.identify.fit import PARAMS, QUANTISATION_FLOOR, fit
 from vfgym.identify.model import record_of
 from vfgym.identify.plan import make_plan, moves_pulses
-from vfgym.identify.report import EXPLAINED, identify_report
+from vfgym.identify.written import EXPLAINED, identify_report
 from vfgym.params import PAPER_SETTINGS
 
 NOMINAL = PAPER_AXIS.plant

@@ -98,7 +98,8 @@ def _plan(axis: Any, settings: Any, out: Path) -> int:
     from vfgym._validate import check_output_path
     from vfgym.axis import MoveSet, MoveSets, write_axis
     from vfgym.identify.plan import make_plan
-    from vfgym.identify.signals import record_capture, train_edges, write_edges_vcd
+    from vfgym.identify.simulated import record_capture
+    from vfgym.io.vcd import train_edges, write_edges
 
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out={str(out)!r} is a file: with --plan give a folder")
@@ -119,9 +120,7 @@ def _plan(axis: Any, settings: Any, out: Path) -> int:
         f"{len(plan.moves)} moves, tick_hz {plan.tick_hz!r}; pulse rises at (i+1/2)T, "
         "dir 1 = positive"
     )
-    write_edges_vcd(
-        train_edges(plan.pulses, plan.tick_hz), vcd_path, encoder=False, comment=comment
-    )
+    write_edges(train_edges(plan.pulses, plan.tick_hz), vcd_path, encoder=False, comment=comment)
     # what a 1 MHz capture of the moves on the nominal plant looks like, started before the
     # drive's enable as the procedure asks: a dry run
     record_capture(axis.plant, plan.pulses, dry_path, start_s=DRY_START_S, rest_s=DRY_REST_S)
@@ -167,7 +166,7 @@ def _identify(axis: Any, settings: Any, args: argparse.Namespace) -> int:
     from vfgym.identify.capture import parse_signal_map, read_capture
     from vfgym.identify.fit import QUANTISATION_FLOOR, fit
     from vfgym.identify.model import record_of
-    from vfgym.identify.report import MARGIN, identify_report
+    from vfgym.identify.written import MARGIN, identify_report
 
     out = check_output_path("--out", args.out)
     names = parse_signal_map(args.signals)

@@ -9,8 +9,9 @@ Modules
 -------
 capture
     Reading a capture: VCD (a logic analyser's, or ``vfgym export``'s) or CSV.
-signals
-    Writing pulse/direction and encoder edges as VCD (a plan to replay, a simulated capture).
+simulated
+    A capture simulated on a plant: pulses run with rest before and after, recorded as an
+    analyser does (the VCD is written by :mod:`vfgym.io.vcd`).
 model
     A capture on the simulator's tick grid, the state it starts from, and its simulation
     on candidate plants.
@@ -22,6 +23,6 @@ covariance
     The covariance of the estimates from the encoder count's quantisation.
 plan
     The moves to run for an identification.
-report
-    The identified axis, its uncertainty block, and what the captures cannot show.
+written
+    The identified axis written: its uncertainty block, and what the captures cannot show.
 """

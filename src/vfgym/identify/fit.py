@@ -87,7 +87,7 @@ class Estimate:
     resolution : float
         The change of this quantity alone that moves no sample's simulated count by more
         than the quantisation floor: finer than one reading shows (its units; 0 when not
-        excited). :mod:`vfgym.identify.report` makes it the least half-width of the range.
+        excited). :mod:`vfgym.identify.written` makes it the least half-width of the range.
     """
 
     name: str
