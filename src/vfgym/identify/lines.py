@@ -16,13 +16,17 @@ them:
 What cannot be a signal is taken out first, and its times kept
 (:attr:`Capture.glitches`): a change of ``dir``, ``enc_a`` or ``enc_b`` undone within
 :data:`GLITCH_SAMPLES` samples (on an encoder line, with no change of the other one in
-between: a back-and-forth no motion makes so fast, which leaves the count as it was). A
+between, and within one sample where the other one changes at the same time as either: a
+back-and-forth no motion makes so fast, which leaves the count as it was). Where a glitch
+meets a real edge of its line, the fewest changes are taken out that leave the others
+apart (:func:`_unglitch`): the real edge stays, or moves by at most that much. A
 pulse off the controller's tick grid is the grid's business
 (:func:`vfgym.identify.model.record_of`).
 """
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -126,22 +130,65 @@ class Lines:
 
 
 def _unglitch(t: np.ndarray, other: np.ndarray | None, most: int) -> tuple[np.ndarray, np.ndarray]:
-    """Changes of one line without its glitches (module doc), and the glitches' times."""
+    """Changes of one line without its glitches (module doc), and the glitches' times.
+
+    Changes closer than ``most`` to the next form a cluster; in each, the changes taken
+    out are the fewest that leave the rest farther apart than ``most`` (else as far apart
+    as they can be), taken out in runs of an even number (a level undone) that no change
+    of ``other`` falls inside (a real edge has one between it and the next on its line)."""
     t = np.asarray(t, dtype=np.int64)
+    if t.size < 2:
+        return t, np.zeros(0, dtype=np.int64)
+    close = np.flatnonzero(np.diff(t) <= most)
     keep = np.ones(t.size, dtype=bool)
-    found = []
-    gap = np.diff(t)
-    near = np.flatnonzero(gap <= most)
-    for k in near[np.argsort(gap[near], kind="stable")].tolist():  # the closest pairs first
-        if not (keep[k] and keep[k + 1]):
-            continue  # (a change of a glitch already taken out)
-        a, b = t[k], t[k + 1]
-        if other is None or np.searchsorted(other, b, side="left") <= np.searchsorted(
-            other, a, side="right"
-        ):
-            keep[k] = keep[k + 1] = False
-            found.append(a)
-    return t[keep], np.sort(np.asarray(found, dtype=np.int64))
+    found: list[int] = []
+    k = 0
+    while k < close.size:
+        lo = hi = int(close[k])
+        while k + 1 < close.size and close[k + 1] == hi + 1:
+            k += 1
+            hi = int(close[k])
+        k += 1
+        cluster = t[lo : hi + 2]
+        drop = _glitches_of(cluster, other, most)
+        for j in drop:
+            keep[lo + j] = False
+        found += [int(cluster[j]) for j in drop[::2]]
+    return t[keep], np.asarray(found, dtype=np.int64)
+
+
+CLUSTER_MOST = 12
+"""A cluster of more changes than this is left as it is (no glitch taken out of it)."""
+
+
+def _glitches_of(c: np.ndarray, other: np.ndarray | None, most: int) -> list[int]:
+    """Indices of the changes to take out of one cluster (see :func:`_unglitch`)."""
+    n = c.size
+    if n > CLUSTER_MOST:
+        return []
+
+    def removable(i: int, j: int) -> bool:  # the run c[i..j] inclusive
+        if (j - i + 1) % 2:
+            return False
+        if other is None:
+            return True
+        a, b = c[i], c[j]
+        inside = np.searchsorted(other, b, side="left") - np.searchsorted(other, a, side="right")
+        ends = np.searchsorted(other, b, side="right") - np.searchsorted(other, a, side="left")
+        return inside == 0 and (ends == 0 or b - a <= 1)
+
+    best: tuple[int, int] | None = None
+    choice: list[int] = []
+    for mask in range(1 << n):
+        kept = [i for i in range(n) if mask >> i & 1]
+        bounds = [-1, *kept, n]
+        if not all(b - a == 1 or removable(a + 1, b - 1) for a, b in itertools.pairwise(bounds)):
+            continue
+        near = sum(c[b] - c[a] <= most for a, b in itertools.pairwise(kept))
+        score = (near, n - len(kept))
+        if best is None or score < best:
+            best, choice = score, [i for i in range(n) if not mask >> i & 1]
+    return choice
 
 
 def _level_at(initial: int, changes: np.ndarray, t: np.ndarray) -> np.ndarray:

@@ -212,12 +212,12 @@ def likely_cause(
     """The likely cause of a residual far above the quantisation floor.
 
     Checked in turn: the encoder counts per pulse at rest against the gear; a pulse train
-    that is not the axis's plan; a count that slips between rests (:func:`count_slips`:
-    an edge lost or gained where the motor was slow, or a pulse the drive did not get); a
-    residual whose power sits in one narrow band (a resonance the one-mass model lacks);
-    a residual :data:`HOT_RATIO` times larger (mean square) where the fitted plant is at
-    its torque limit or above the motor's knee speed (its torque–speed curve: another
-    motor); else the motor preset or the encoder's lines in general.
+    that is not the axis's plan; a residual whose power sits in one narrow band (a
+    resonance the one-mass model lacks); a residual :data:`HOT_RATIO` times larger (mean
+    square) where the fitted plant is at its torque limit or above the motor's knee speed
+    (its torque–speed curve: another motor); a count that slips between rests
+    (:func:`count_slips`: an edge lost or gained where the motor was slow, or a pulse the
+    drive did not get); else the motor preset or the encoder's lines in general.
 
     Parameters
     ----------
@@ -248,15 +248,6 @@ def likely_cause(
             "axis file: plant.tick_hz, plant.servo, plant.motor) or of moves this file's "
             "machine does not make"
         )
-    slips = count_slips(fit, records, nominal.tick_hz)
-    if slips:
-        where = ", ".join(f"{d:+.1f} near {t:.4g} s" for t, d in slips[:3])
-        more = f" and {len(slips) - 3} more" if len(slips) > 3 else ""
-        return (
-            f"the count slips between rests ({where}{more}): an encoder edge lost or "
-            "gained where the motor was slow, or a pulse the drive did not get (or got and "
-            "the capture did not show)"
-        )
     res = np.concatenate(fit.residuals)
     spec = np.abs(np.fft.rfft(res - res.mean())) ** 2
     freqs = np.fft.rfftfreq(res.size, SAMPLE_TICKS / nominal.tick_hz)
@@ -280,6 +271,15 @@ def likely_cause(
             "the motor's torque-speed curve or peak torque: the residual sits where the "
             "torque is at its limit or the speed above the knee; a wrong motor preset "
             "(plant.motor.preset)"
+        )
+    slips = count_slips(fit, records, nominal.tick_hz)
+    if slips:
+        where = ", ".join(f"{d:+.1f} near {t:.4g} s" for t, d in slips[:3])
+        more = f" and {len(slips) - 3} more" if len(slips) > 3 else ""
+        return (
+            f"the count slips between rests ({where}{more}): an encoder edge lost or "
+            "gained where the motor was slow, or a pulse the drive did not get (or got and "
+            "the capture did not show)"
         )
     return (
         "a wrong motor preset (plant.motor.preset) or encoder lines "
