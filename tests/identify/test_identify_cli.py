@@ -183,11 +183,13 @@ def test_identify_without_a_capture_or_with_both_is_refused(tmp_path, capsys):
     assert "--capture is not allowed with --plan" in capsys.readouterr().err
 
 
-def _faulty(move, d, **kw):
-    """The move's capture with the faults of :func:`with_faults`."""
-    from vfgym.identify.simulated import with_faults
+def _faulty(d, **kw):
+    """A capture of the plan's first two moves (rest before and after) with faults."""
+    from vfgym.identify.plan import moves_pulses
+    from vfgym.identify.simulated import record_capture, with_faults
 
-    src = _vcd(move, d / "clean.vcd", timescale="1 us")
+    pulses = moves_pulses(make_plan(PAPER_AXIS).moves[:2], PAPER_PLANT)
+    src = record_capture(PAPER_PLANT, pulses, d / "clean.vcd", start_s=0.05, rest_s=0.1)
     with_faults(src, d / "faulty.vcd", np.random.default_rng(3), **kw)
     return d / "faulty.vcd"
 
@@ -200,9 +202,9 @@ UNTRUSTED = {
 
 
 @pytest.mark.parametrize("case", list(UNTRUSTED))
-def test_a_capture_that_cannot_be_trusted_is_refused(move, tmp_path, capsys, case):
+def test_a_capture_that_cannot_be_trusted_is_refused(tmp_path, capsys, case):
     kw, words = UNTRUSTED[case]
-    path = _faulty(move, tmp_path, **kw)
+    path = _faulty(tmp_path, **kw)
     out = tmp_path / "o.yaml"
     assert main(["identify", "--capture", str(path), "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()

@@ -64,6 +64,7 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.scoring import evaluate
 
     if args.out is not None and args.out.strip():
+        check_output_path("--out", args.out)
         refuse_replacing(
             "--out", args.out, force=args.force,
             inputs={"--settings": args.settings, "--axis": args.axis},
@@ -114,6 +115,9 @@ def refuse_replacing(
     ------
     ValueError
         One line naming the option, the file and ``--force``.
+    OSError
+        Naming ``path``, where its folder takes no new file (``/proc``): the write would
+        fail the same way, whether it replaced the file or not.
     """
     if force:
         return
@@ -125,7 +129,20 @@ def refuse_replacing(
                 "command; give another file, or --force to replace it"
             )
     if p.is_file():
+        _takes_a_file(p)
         raise ValueError(
             f"{option}={path!r} is not allowed: the file exists; give another file, or "
             "--force to replace it"
         )
+
+
+def _takes_a_file(p: Path) -> None:
+    """Raise the ``OSError`` a write of ``p`` would meet if its folder takes no new file."""
+    import tempfile
+
+    try:
+        fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name}.")
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror, str(p)) from None
+    os.close(fd)
+    os.unlink(tmp)

@@ -129,11 +129,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from vfgym.axis import PAPER_AXIS
     from vfgym.commands._common import axis_from_args, load_settings
     from vfgym.commands.export import refuse_replacing
     from vfgym.params import PAPER_SETTINGS
 
     out = Path(args.out)
+    if args.gain_prior is not None:
+        from vfgym.identify.prior import gain_prior
+
+        gain_prior(PAPER_AXIS, args.gain_prior)  # checked before any file is read
     if args.plan:
         if args.capture:
             raise ValueError("--capture is not allowed with --plan: the plan comes first")
@@ -148,6 +153,9 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(
                 "--capture FILE is required: the capture of the moves (or give --plan)"
             )
+        from vfgym._validate import check_output_path
+
+        check_output_path("--out", args.out)
         inputs = {"--axis": args.axis, "--settings": args.settings}
         refuse_replacing("--out", args.out, force=args.force, inputs=inputs)
         for c in args.capture:

@@ -143,59 +143,53 @@ def _body(p: Path, body: bytes) -> Iterator[tuple[int, bytes, int]]:
     ``$dumpvars`` … ``$end`` keywords around initial values), so it is split on white
     space here rather than tokenised by pyvcd, about 30× faster on a capture of a
     million edges; a vector or real value (``b…``, ``r…``) of a 1-bit signal is refused.
-    A file that does not end with a line break may have been cut: where its last token
-    is not a valid one, the file is named as truncated."""
+    A file that does not end with a line break was cut short (a VCD writer ends its
+    last line): it is refused as truncated, its last token named."""
     toks = body.split()
-    cut = bool(toks) and not body[-1:].isspace()
+    if toks and not body[-1:].isspace():
+        raise ValueError(
+            f"{p}: the file ends mid-line ({toks[-1].decode(errors='replace')!r}): a "
+            "truncated file; expected the capture as the analyser saved it"
+        )
     time = None
     skip = False
-    for i, tok in enumerate(toks):
-        try:
-            c = tok[0]
-            if c == 35:  # '#'
-                try:
-                    t = int(tok[1:])
-                except ValueError:
-                    raise ValueError(
-                        f"{p}: time stamp {tok.decode(errors='replace')!r} is not a whole "
-                        "number: expected #TIME"
-                    ) from None
-                if time is not None and t < time:
-                    raise ValueError(
-                        f"{p}: time #{t} goes back (after #{time}): expected increasing time stamps"
-                    )
-                time = t
-                yield t, b"", 0  # a stamp with no change still lengthens the capture
-            elif c == 36:  # '$'
-                if tok == b"$comment":
-                    skip = True
-                elif tok == b"$end":
-                    skip = False
-            elif skip:
-                continue
-            elif c in (48, 49, 120, 122, 88, 90):  # 0 1 x z X Z
-                if time is None:
-                    raise ValueError(
-                        f"{p}: a value change comes before any #time: expected #0 first"
-                    )
-                yield time, tok[1:], 1 if c == 49 else 0
-            elif c in (98, 66, 114, 82):  # vector or real: the identifier is the next token
+    for tok in toks:
+        c = tok[0]
+        if c == 35:  # '#'
+            try:
+                t = int(tok[1:])
+            except ValueError:
                 raise ValueError(
-                    f"{p}: holds a vector or real value ({tok.decode(errors='replace')!r}): "
-                    "expected 1-bit signals"
-                )
-            else:
-                raise ValueError(
-                    f"{p}: is not a readable VCD (unexpected {tok.decode(errors='replace')!r} "
-                    "after the header): expected a VCD capture"
-                )
-        except ValueError:
-            if cut and i == len(toks) - 1:
-                raise ValueError(
-                    f"{p}: the file ends mid-line ({tok.decode(errors='replace')!r}): a "
-                    "truncated file; expected the capture as the analyser saved it"
+                    f"{p}: time stamp {tok.decode(errors='replace')!r} is not a whole "
+                    "number: expected #TIME"
                 ) from None
-            raise
+            if time is not None and t < time:
+                raise ValueError(
+                    f"{p}: time #{t} goes back (after #{time}): expected increasing time stamps"
+                )
+            time = t
+            yield t, b"", 0  # a stamp with no change still lengthens the capture
+        elif c == 36:  # '$'
+            if tok == b"$comment":
+                skip = True
+            elif tok == b"$end":
+                skip = False
+        elif skip:
+            continue
+        elif c in (48, 49, 120, 122, 88, 90):  # 0 1 x z X Z
+            if time is None:
+                raise ValueError(f"{p}: a value change comes before any #time: expected #0 first")
+            yield time, tok[1:], 1 if c == 49 else 0
+        elif c in (98, 66, 114, 82):  # vector or real: the identifier is the next token
+            raise ValueError(
+                f"{p}: holds a vector or real value ({tok.decode(errors='replace')!r}): "
+                "expected 1-bit signals"
+            )
+        else:
+            raise ValueError(
+                f"{p}: is not a readable VCD (unexpected {tok.decode(errors='replace')!r} "
+                "after the header): expected a VCD capture"
+            )
 
 
 def _read_vcd(p: Path, data: bytes, names: dict[str, str]) -> Lines:
