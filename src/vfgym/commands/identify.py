@@ -218,9 +218,10 @@ def _plan(axis: Any, settings: Any, out: Path, true_axis: str | None) -> int:
         )
     else:
         held = (
-            f"for {plan.saturated_s * 1e3:.3g} ms, under the {ms:.0f} ms"
+            f"it is at its limit for {plan.saturated_s * 1e3:.3g} ms, under the {ms:.0f} ms "
+            "from which the gain separates"
             if plan.saturated_s > 0
-            else f"never (the velocity reversals ask {plan.peak_torque_share:.0%} of its peak)"
+            else f"the velocity reversals ask {plan.peak_torque_share:.0%} of its peak"
         )
         heavy = (
             f"from about {plan.saturating_inertia:g}x the nominal inertia"
@@ -228,10 +229,11 @@ def _plan(axis: Any, settings: Any, out: Path, true_axis: str | None) -> int:
             else "on no inertia up to 16x the nominal"
         )
         print(
-            f"note: no pulse train holds the nominal plant's torque at its limit ({held}): "
-            f"the moves separate the inertia from the drive's gain {heavy}; on a lighter "
+            f"note: no pulse train holds the nominal plant's torque at its limit: {held}. "
+            f"The moves separate the inertia from the drive's gain {heavy}; on a lighter "
             "axis the capture fixes their ratio, and the identified axis spans the gain's "
-            "prior (--gain-prior, default the nominal file's or +-10 %)"
+            "prior (--gain-prior; else the nominal file's torque_per_count range, else "
+            "+-10 %)"
         )
     print(f"wrote {yaml_path} (the moves: block) and {vcd_path} (pulse/dir to replay)")
     print(

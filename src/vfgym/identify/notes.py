@@ -39,29 +39,33 @@ def _gain_note(fit: Fit, profile: Profile | None, prior_source: str) -> str:
     share = torque_share(fit, fit.plant)
     why = (
         "the torque never reaches its limit"
-        + (f" (the fastest move asks {share:.0%} of it)" if 0.0 < share < 1.0 else "")
+        + (f", the fastest move asking {share:.0%} of it" if 0.0 < share < 1.0 else "")
         if fit.saturated_s == 0.0
         else f"the torque is at its limit for only {fit.saturated_s * 1e3:.0f} ms, under "
         f"the {MIN_SATURATED_S * 1e3:.0f} ms from which the gain separates"
     )
     j = fit.estimate("inertia").value
     text = (
-        f"torque_per_count: not separated from the inertia ({why}): the captures fix the "
+        f"torque_per_count: not separated from the inertia: {why}. The captures fix the "
         f"inertia and every torque over the drive's gain (inertia/gain = {j:.4g} x nominal "
-        "total per K3 as set), so a drive whose gain is g times the one set on an axis "
-        "with g times the inertia and torques makes the same capture"
+        "total per K3 as set): a drive whose gain is g times the one set on an axis with g "
+        "times the inertia and torques makes the same capture"
     )
     if profile is None:
         return text + "; the gain is left as set"
     lo, hi = profile.prior
+    ends = [name for name, again in zip(("low", "high"), profile.refitted, strict=True) if again]
     refit = (
-        " (refitted at an end, where the torque reaches its limit)" if any(profile.refitted) else ""
+        f", fitted anew at the {' and '.join(ends)} end{'s' if len(ends) > 1 else ''} where the "
+        "torque reaches its limit"
+        if ends
+        else ""
     )
     return (
-        text + f"; the estimates' intervals and the uncertainty block span the gain within "
-        f"its prior [{lo:.4g}, {hi:.4g}] x K3 as set ({prior_source}){refit}; to separate "
-        "them, capture moves that hold the torque at its limit for "
-        f"{MIN_SATURATED_S * 1e3:.0f} ms or more (vfgym identify --plan says from which load)"
+        text + f". The estimates' intervals and the uncertainty block span the gain within "
+        f"its prior [{lo:.4g}, {hi:.4g}] x K3 as set, from {prior_source}{refit}. To "
+        "separate them, capture moves that hold the torque at its limit for "
+        f"{MIN_SATURATED_S * 1e3:.0f} ms or more (the plan, --plan, says from which load)"
     )
 
 

@@ -48,7 +48,7 @@ def prior_source(axis: Axis, share: float | None) -> str:
         return "--gain-prior"
     if axis.uncertainty.torque_per_count is not None:
         return "the nominal file's uncertainty.torque_per_count"
-    return "the default; set it with --gain-prior"
+    return "the default (set it with --gain-prior)"
 
 
 def _planned(record: Record, match: PlanMatch, plan_pulses: np.ndarray) -> Record:
