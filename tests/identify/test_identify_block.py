@@ -144,3 +144,14 @@ def test_the_resolution_is_the_floor_over_the_largest_sensitivity():
     r = resolution(jac, QUANTISATION_FLOOR)
     assert r[:2] == pytest.approx([QUANTISATION_FLOOR / 2.0, QUANTISATION_FLOOR / 4.0])
     assert r[2] == np.inf  # no sample responds: nothing resolves it
+
+
+def test_the_gains_prior_comes_from_the_option_the_file_or_the_default():
+    from vfgym.identify.prior import GAIN_PRIOR, gain_prior
+
+    stated = replace(PAPER_AXIS, uncertainty=Uncertainty(torque_per_count=(0.95, 1.08)))
+    assert gain_prior(PAPER_AXIS) == (1.0 - GAIN_PRIOR, 1.0 + GAIN_PRIOR)
+    assert gain_prior(stated) == (0.95, 1.08)
+    assert gain_prior(stated, 0.2) == (0.8, 1.2)
+    with pytest.raises(ValueError, match=r"--gain-prior=1\.5 is out of range"):
+        gain_prior(PAPER_AXIS, 1.5)

@@ -218,6 +218,7 @@ def test_out_never_replaces_a_users_file_unless_forced(tmp_path, capsys):
     nominal = tmp_path / "nominal.yaml"
     nominal.write_text("# my axis, with my comments\nname: mine\n")
     for out, words in ((nominal, "it is the --axis file, an input"), (tmp_path / "x.vcd",
+                       "it is the --capture file"), (tmp_path / "other.yaml",
                        "the file exists")):  # fmt: skip
         out.touch()
         argv = ["identify", "--axis", str(nominal), "--capture", str(tmp_path / "x.vcd")]

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import argparse
 import os
-from collections.abc import Mapping
+from collections.abc import Sequence
 from pathlib import Path
 
 FORMATS = ("vcd", "csv")
@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
         check_output_path("--out", args.out)
         refuse_replacing(
             "--out", args.out, force=args.force,
-            inputs={"--settings": args.settings, "--axis": args.axis},
+            inputs=[("--settings", args.settings), ("--axis", args.axis)],
         )  # fmt: skip
     axis = axis_from_args(args)
     scenario = scenario_from_args(args, axis)
@@ -96,7 +96,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def refuse_replacing(
-    option: str, path: str, *, force: bool, inputs: Mapping[str, str | None] | None = None
+    option: str,
+    path: str,
+    *,
+    force: bool,
+    inputs: Sequence[tuple[str, str | None]] = (),
 ) -> None:
     """Refuse to replace a user's file: ``path`` an existing file, or one of ``inputs``.
 
@@ -108,8 +112,9 @@ def refuse_replacing(
         The file to be written.
     force : bool
         The user said ``--force``: replace it.
-    inputs : mapping of str to str or None, or None
-        The command's input files by option (``--axis``: the file; ``None``: not given).
+    inputs : sequence of (str, str or None)
+        The command's input files with their options (``("--axis", FILE)``; ``None``: not
+        given).
 
     Raises
     ------
@@ -122,7 +127,7 @@ def refuse_replacing(
     if force:
         return
     p = Path(path)
-    for name, other in (inputs or {}).items():
+    for name, other in inputs:
         if other and p.exists() and Path(other).exists() and os.path.samefile(p, other):
             raise ValueError(
                 f"{option}={path!r} is not allowed: it is the {name} file, an input of this "

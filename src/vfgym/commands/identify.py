@@ -156,10 +156,9 @@ def run(args: argparse.Namespace) -> int:
         from vfgym._validate import check_output_path
 
         check_output_path("--out", args.out)
-        inputs = {"--axis": args.axis, "--settings": args.settings}
+        inputs = [("--axis", args.axis), ("--settings", args.settings)]
+        inputs += [("--capture", c) for c in args.capture]
         refuse_replacing("--out", args.out, force=args.force, inputs=inputs)
-        for c in args.capture:
-            refuse_replacing("--out", args.out, force=args.force, inputs={"--capture": c})
     axis = axis_from_args(args)
     settings = load_settings(args.settings) if args.settings else PAPER_SETTINGS
     if args.plan:

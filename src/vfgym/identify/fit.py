@@ -50,6 +50,10 @@ Z95 = 1.959963984540054
 QUANTISATION_FLOOR = 1.0 / math.sqrt(12.0)
 """RMS error (counts) of reading a position as whole counts: the floor of the residual."""
 
+EXPLAINED = 3.0
+"""A fit whose RMS residual exceeds this many quantisation floors does not explain the
+captures."""
+
 
 @dataclass(frozen=True)
 class Estimate:
@@ -419,6 +423,7 @@ def _fit(
 
 
 __all__ = [
+    "EXPLAINED",
     "PARAMS",
     "QUANTISATION_FLOOR",
     "Estimate",

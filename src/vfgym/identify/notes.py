@@ -215,13 +215,14 @@ def likely_cause(
 ) -> str:
     """The likely cause of a residual far above the quantisation floor.
 
-    Checked in turn: the encoder counts per pulse at rest against the gear; a pulse train
-    that is not the axis's plan; a residual whose power sits in one narrow band (a
-    resonance the one-mass model lacks); a residual :data:`HOT_RATIO` times larger (mean
-    square) where the fitted plant is at its torque limit or above the motor's knee speed
-    (its torque–speed curve: another motor); a count that slips between rests
-    (:func:`count_slips`: an edge lost or gained where the motor was slow, or a pulse the
-    drive did not get); else the motor preset or the encoder's lines in general.
+    Checked in turn: the encoder counts per pulse at rest against the gear; a residual
+    whose power sits in one narrow band (a resonance the one-mass model lacks); a
+    residual :data:`HOT_RATIO` times larger (mean square) where the fitted plant is at
+    its torque limit or above the motor's knee speed (its torque–speed curve: another
+    motor); a count that slips between rests (:func:`count_slips`: an edge lost or
+    gained where the motor was slow, or a pulse the drive did not get); a pulse train
+    that is not the axis's plan (another axis's capture); else the motor preset, the
+    encoder's lines or the drive's gain in general.
 
     Parameters
     ----------
@@ -245,12 +246,6 @@ def likely_cause(
         return (
             f"the gear: the capture moves {ratio:.4g} encoder counts per pulse, the "
             f"axis says plant.servo.gear = {gear} (or plant.motor.encoder_lines is wrong)"
-        )
-    if any(m is not None and m.kind == "other" for m in matches):
-        return (
-            "the pulse train is not this axis's plan: a capture of another axis (check the "
-            "axis file: plant.tick_hz, plant.servo, plant.motor) or of moves this file's "
-            "machine does not make"
         )
     res = np.concatenate(fit.residuals)
     spec = np.abs(np.fft.rfft(res - res.mean())) ** 2
@@ -285,9 +280,17 @@ def likely_cause(
             "gained where the motor was slow, or a pulse the drive did not get (or got and "
             "the capture did not show)"
         )
+    if any(m is not None and m.kind == "other" for m in matches):
+        return (
+            "the pulse train is not this axis's plan, and the model does not explain its "
+            "moves: a capture of another axis, or of this one with its drive set for another "
+            "load (plant.servo.torque_per_count_nm, follows_load) or another motor "
+            "(plant.motor.preset)"
+        )
     return (
-        "a wrong motor preset (plant.motor.preset) or encoder lines "
-        "(plant.motor.encoder_lines), or a capture of another axis"
+        "a wrong motor preset (plant.motor.preset), encoder lines "
+        "(plant.motor.encoder_lines) or drive gain (plant.servo.torque_per_count_nm, "
+        "follows_load: a drive set for another load), or a capture of another axis"
     )
 
 

@@ -39,7 +39,7 @@ from dataclasses import dataclass, replace
 
 from vfgym.axis import FACTOR_RANGE, Axis, Uncertainty
 from vfgym.identify.checks import PlanMatch
-from vfgym.identify.fit import PARAMS, QUANTISATION_FLOOR, Estimate, Fit
+from vfgym.identify.fit import EXPLAINED, PARAMS, QUANTISATION_FLOOR, Estimate, Fit
 from vfgym.identify.lines import Capture
 from vfgym.identify.model import Record
 from vfgym.identify.notes import capture_notes, likely_cause, not_excited_notes
@@ -51,10 +51,6 @@ MARGIN = 2.0
 standard errors: a normal estimate falls outside with odds of 1 in 10 000, so the block
 holds all five quantities of an axis whose intervals are right but for a few percent of
 its coverage, as measured in docs/results/identify.md)."""
-
-EXPLAINED = 3.0
-"""A fit whose RMS residual exceeds this many quantisation floors does not explain the
-capture: no axis is written from it."""
 
 IN_USE = ("inertia", "coulomb_nm", "viscous_nm_s_rad", "load_torque_nm")
 """The quantities whose stated ranges describe how the axis varies in use, kept."""
