@@ -271,6 +271,7 @@ def fit(
     *,
     gain: float | None = None,
     near: Fit | None = None,
+    gain_range: tuple[float, float] | None = None,
 ) -> Fit:
     """Fit the captures: the plant near ``nominal`` whose response best matches them.
 
@@ -287,6 +288,11 @@ def fit(
     near : Fit or None
         Start from this fit's optimum (its inertia and torques scaled by ``gain``), its
         servo phases, instead of a search over the inertia.
+    gain_range : tuple of float or None
+        Fit the gain within this range (factors on K3 as set) whatever the time at the
+        torque limit: where a capture saturates too briefly to separate the gain, yet the
+        gain as set does not explain it. The gain's estimate is then not taken as
+        separated: its interval is the range.
 
     Returns
     -------
@@ -301,7 +307,7 @@ def fit(
     from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
     with threadpool_limits(1, user_api="blas"):
-        return _fit(records, nominal, settings, gain, near)
+        return _fit(records, nominal, settings, gain, near, gain_range)
 
 
 def _fit(
@@ -310,11 +316,14 @@ def _fit(
     settings: Settings,
     gain: float | None,
     near: Fit | None,
+    gain_range: tuple[float, float] | None = None,
 ) -> Fit:
     """:func:`fit` itself."""
     scale = Scale(nominal, records)
     if gain is not None:
         scale.z0[4] = math.log(gain)
+    if gain_range is not None:
+        scale.lo[4], scale.hi[4] = math.log(gain_range[0]), math.log(gain_range[1])
     exc = excitation(records, nominal)
     enabled = any(r.enabled for r in records)
     free = np.array(
@@ -363,8 +372,8 @@ def _fit(
         sat = _saturated_s(resp, nominal)
         gain_seen = sat >= MIN_SATURATED_S
         want = free.copy()
-        want[4] = gain_seen and gain is None
-        want[3] = exc.load and (enabled or gain_seen)
+        want[4] = (gain_seen or gain_range is not None) and gain is None
+        want[3] = exc.load and (enabled or gain_seen or (gain_range is not None and free[3]))
         if np.array_equal(want, free):
             break
         evaluations += problem.evaluations  # the next attempt has a problem of its own
@@ -395,6 +404,9 @@ def _fit(
                 if name in ("coulomb_nm", "viscous_nm_s_rad"):
                     lo = max(0.0, lo)
             v, v0 = float(phys[i]), float(nominal_phys[i])
+            if i == 4 and gain_range is not None and _saturated_s(resp, nominal) < MIN_SATURATED_S:
+                estimates.append(Estimate(name, v, gain_range[0], gain_range[1], v0, False))
+                continue
             estimates.append(Estimate(name, v, lo, hi, v0, True, r))
         else:
             lo, hi = wide_range(name, nominal)

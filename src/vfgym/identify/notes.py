@@ -44,12 +44,19 @@ def _gain_note(fit: Fit, profile: Profile | None, prior_source: str) -> str:
         else f"the torque is at its limit for only {fit.saturated_s * 1e3:.0f} ms, under "
         f"the {MIN_SATURATED_S * 1e3:.0f} ms from which the gain separates"
     )
-    j = fit.estimate("inertia").value
+    g = fit.estimate("torque_per_count").value
+    j = fit.estimate("inertia").value / g
     text = (
         f"torque_per_count: not separated from the inertia: {why}. The captures fix the "
         f"inertia and every torque over the drive's gain (inertia/gain = {j:.4g} x nominal "
         "total per K3 as set): a drive whose gain is g times the one set on an axis with g "
         "times the inertia and torques makes the same capture"
+        + (
+            f"; the gain as set does not explain its moments at the limit, the gain within "
+            f"its prior that does, {g:.4g}, is written"
+            if g != 1.0
+            else ""
+        )
     )
     if profile is None:
         return text + "; the gain is left as set"

@@ -5,8 +5,10 @@ edges lost on the encoder), places it on the tick grid, checks that its encoder 
 with its pulses and compares its pulse train with the axis's plan; fits the captures;
 where a train differs from the plan at a few ticks, fits them again with the plan's train
 there and keeps whichever explains the count better (the analyser or the drive may have
-seen the difference: the encoder says which); fits the plants along the gain's prior
-where the captures do not separate the gain; and writes the identified axis with its
+seen the difference: the encoder says which); where the captures do not separate the
+gain and the gain as set does not explain them (a torque at its limit too briefly), fits
+the gain within its prior; fits the plants along the gain's prior where the captures do
+not separate the gain; and writes the identified axis with its
 notes (:func:`~vfgym.identify.written.identify_report`). Whether that axis may be written
 is :attr:`~vfgym.identify.written.Identified.explained`.
 """
@@ -20,7 +22,7 @@ import numpy as np
 
 from vfgym.axis import Axis
 from vfgym.identify.checks import PlanMatch, check_capture, check_direction, plan_match
-from vfgym.identify.fit import fit
+from vfgym.identify.fit import EXPLAINED, QUANTISATION_FLOOR, fit
 from vfgym.identify.lines import Capture
 from vfgym.identify.model import Record, record_of
 from vfgym.identify.plan import make_plan
@@ -117,6 +119,15 @@ def identify_axis(
         if alt.residual_rms_counts < result.residual_rms_counts:
             records, result = other, alt
             matches = [replace(m, fitted="plan") if m.kind == "differs" else m for m in matches]
+    if (
+        not result.estimate("torque_per_count").excited
+        and result.residual_rms_counts > EXPLAINED * QUANTISATION_FLOOR
+    ):
+        # the gain as set does not explain captures whose torque saturates too briefly to
+        # separate the gain: fitted within its prior, the best plant along the line
+        alt = fit(records, plant, settings, near=result, gain_range=prior)
+        if alt.residual_rms_counts < result.residual_rms_counts:
+            result = alt
     profile = along_gain(records, plant, settings, result, prior)
     ident = identify_report(
         axis,
