@@ -33,6 +33,10 @@ SLIP_COUNTS = 2.0
 """The residual at one rest farther than this from the one before (counts): the count
 slipped there (a rest's residual is the count's quantisation, within a count)."""
 
+SLIP_MOST = 64.0
+"""…and no farther than this (counts: 16 lost pulses of a line); a capture whose residual
+jumps by more, or at more than a third of its rests, is not explained at all."""
+
 
 def _gain_note(fit: Fit, profile: Profile | None, prior_source: str) -> str:
     """The gain's line where the captures do not separate it from the inertia."""
@@ -185,7 +189,9 @@ def capture_notes(
 
 
 def count_slips(fit: Fit, records: Sequence[Record], tick_hz: float) -> list[tuple[float, float]]:
-    """Where the fit's residual jumps between rests by more than :data:`SLIP_COUNTS`.
+    """Where the fit's residual jumps between rests by more than :data:`SLIP_COUNTS`
+    (none for a capture whose residual jumps by more than :data:`SLIP_MOST` or at more
+    than a third of its rests: a model that explains nothing).
 
     Parameters
     ----------
@@ -207,10 +213,15 @@ def count_slips(fit: Fit, records: Sequence[Record], tick_hz: float) -> list[tup
         rest = rest[rest >= rec.first_sample] - rec.first_sample
         if rest.size < 2:
             continue
-        level = res[rest]
-        for k in np.flatnonzero(np.abs(np.diff(level)) > SLIP_COUNTS).tolist():
+        jump = np.diff(res[rest])
+        at = np.flatnonzero(np.abs(jump) > SLIP_COUNTS)
+        # a slip is a few counts at a few rests; a model that misses everything jumps
+        # everywhere, and by far more
+        if at.size * 3 > jump.size or np.any(np.abs(jump[at]) > SLIP_MOST):
+            continue
+        for k in at.tolist():
             t = (rest[k + 1] + rec.first_sample + 1) * SAMPLE_TICKS / tick_hz
-            out.append((float(t), float(level[k + 1] - level[k])))
+            out.append((float(t), float(jump[k])))
     return out
 
 
@@ -305,6 +316,7 @@ __all__ = [
     "GEAR_TOLERANCE",
     "HOT_RATIO",
     "SLIP_COUNTS",
+    "SLIP_MOST",
     "capture_notes",
     "count_slips",
     "likely_cause",
