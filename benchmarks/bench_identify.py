@@ -37,8 +37,9 @@ The parts, each printing its goal line:
     and on the true axis, both judged on the true plant's 32 held-out test moves, for each
     of ``--regret-plants`` at each of ``--regret-gains``, the plant's Coulomb friction and
     load torque scaled down (ratio and sign kept) until their static error is 80 % of the
-    in-position window (beyond it no controller makes every move). Goal: the identified
-    axis's fit feasible on every move and its mean cost at most 1.05× the true axis's.
+    in-position window (``--window-share``; beyond it no controller makes every move).
+    Goal: the identified axis's fit feasible on every move and its mean cost at most 1.05×
+    the true axis's.
 
 It asserts nothing (the machine is shared).
 """
@@ -400,15 +401,15 @@ def part_payload(axis: Axis, args: argparse.Namespace) -> None:
 
 
 WINDOW_SHARE = 0.8
-"""``regret``: the static error's share of the in-position window."""
+"""``regret``: the static error's share of the in-position window (``--window-share``)."""
 
 
-def within_window(axis: Axis, drawn: Drawn, gain: float) -> Drawn:
+def within_window(axis: Axis, drawn: Drawn, gain: float, share: float = WINDOW_SHARE) -> Drawn:
     """The plant at ``gain``, its Coulomb friction and load torque scaled down until its
-    static error (|load| + Coulomb)/K3 (K3 as in force) is :data:`WINDOW_SHARE` of the
-    in-position window."""
+    static error (|load| + Coulomb)/K3 (K3 as in force) is ``share`` of the in-position
+    window."""
     t = dict(drawn.truth, torque_per_count=gain)
-    room = WINDOW_SHARE * axis.measures.in_position_counts * axis.plant.torque_per_count_nm * gain
+    room = share * axis.measures.in_position_counts * axis.plant.torque_per_count_nm * gain
     f = min(1.0, room / max(abs(t["load_torque_nm"]) + t["coulomb_nm"], 1e-12))
     t["coulomb_nm"] *= f
     t["load_torque_nm"] *= f
@@ -452,8 +453,9 @@ def part_regret(axis: Axis, args: argparse.Namespace) -> None:
     ratios, good, n = [], 0, 0
     for k in plants:
         for g in gains:
-            d = within_window(axis, draw(axis, args.seed, k), g)
-            run = base / f"plant{k}-gain{g:g}"
+            d = within_window(axis, draw(axis, args.seed, k), g, args.window_share)
+            tag = "" if args.window_share == WINDOW_SHARE else f"-window{args.window_share:g}"
+            run = base / f"plant{k}-gain{g:g}{tag}"
             run.mkdir(parents=True, exist_ok=True)
             o = identify(axis, capture(axis, d, plan.pulses, run / "capture.vcd"))
             if not o.written:
@@ -502,6 +504,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--faults-plants", type=int, default=4)
     ap.add_argument("--regret-plants", default="0,1")
     ap.add_argument("--regret-gains", default="0.9,1.07,1.1")
+    ap.add_argument(
+        "--window-share",
+        type=float,
+        default=WINDOW_SHARE,
+        help="regret: the plants' static error as a share of the in-position window",
+    )
     ap.add_argument(
         "--runs-dir",
         help="where the regret part's fits write (default: a temp folder); a settings model "
