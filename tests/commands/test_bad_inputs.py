@@ -101,6 +101,16 @@ CASES = [
         ["identify", "--axis", "missing.yaml", "--capture", "c.vcd", "--out", "o.yaml"],
         "missing.yaml: no such file",
     ),
+    # identify: never replace a user's file; a prior on the drive's gain in range
+    (["identify", "--capture", "c.vcd", "--out", "afile"], "--out='afile' is not allowed: the"),
+    (
+        ["identify", "--axis", "good.yaml", "--capture", "c.vcd", "--out", "good.yaml"],
+        "it is the --axis file, an input",
+    ),
+    (["identify", "--capture", "afile", "--out", "afile"], "--out='afile' is not allowed"),
+    (["identify", "--capture", "c.vcd", "--out", "o.yaml", "--gain-prior", "2"], "--gain-prior=2"),
+    (["identify", "--capture", "c.vcd", "--out", "o.yaml", "--true-axis", "t.yaml"], "--plan"),
+    (["identify", "--plan", "--out", "afile"], "is a file: with --plan give a folder"),
     # sweep
     ([*SWEEP, "--runs-dir", "afile/runs"], "afile is a file"),
     ([*SWEEP, "--sampler", "grid", "--grid-points", "1"], "grid_points=1 is out of range"),
@@ -197,6 +207,8 @@ CASES = [
     (["export", "--format", "vcd", "--decimation", "2"], "not allowed for vcd"),
     (["export", "--format", "vcd", "--timescale", "7 ns"], "timescale"),
     (["export", "--format", "vcd", "--settings", "bin.yaml"], "bin.yaml"),
+    (["export", "--format", "csv", "--out", "afile"], "--out='afile' is not allowed: the file"),
+    (["export", "--format", "vcd", "--settings", "good.yaml", "--out", "good.yaml"], "an input"),
     # train (checked before anything trains)
     ([*TRAIN, "--algo", "ppo", "--name", "../../x"], "--name='../../x'"),
     ([*TRAIN, "--algo", "ppo", "--hyperparams", "gamma=2"], "gamma=2 is out of range"),

@@ -9,8 +9,8 @@ from capture_synth import capture_vcd, draw_truth
 from vfgym.axis import PAPER_AXIS, load_axis
 from vfgym.cli import main
 from vfgym.identify.plan import make_plan
-from vfgym.identify.signals import trace_edges, train_edges, write_edges_vcd
 from vfgym.io.trace_csv import write_trace_csv
+from vfgym.io.vcd import trace_edges, train_edges, write_edges
 from vfgym.moves.scenarios import SCENARIOS
 from vfgym.params import PAPER_PLANT, PAPER_SETTINGS
 from vfgym.plant import simulate
@@ -20,6 +20,11 @@ def test_plan_then_identify_from_the_command_line(tmp_path, capsys):
     assert main(["identify", "--plan", "--out", str(tmp_path / "plan")]) == 0
     out = capsys.readouterr().out
     assert "identify-step-fwd" in out and "identify-speed3-back" in out
+    assert "identify-reverse" in out and "from about 2x the nominal inertia" in out
+    # the plan's files are the user's now: a second --plan into the folder is refused
+    assert main(["identify", "--plan", "--out", str(tmp_path / "plan")]) == 2
+    err = capsys.readouterr().err
+    assert "identify-moves.yaml' is not allowed: the file exists" in err and "--force" in err
     plan_axis = load_axis(tmp_path / "plan" / "identify-moves.yaml")
     names = [sc.name for sc in plan_axis.scenarios("train")]
     assert names == [sc.name for sc in make_plan(PAPER_AXIS).moves]
@@ -49,11 +54,13 @@ def test_plan_then_identify_from_the_command_line(tmp_path, capsys):
     assert load_axis(tmp_path / "dry.yaml").plant.motor.inertia_kgm2 == pytest.approx(
         PAPER_PLANT.motor.inertia_kgm2, rel=0.005
     )
-    assert main(cmd) == 0  # without it: the axis may have been held since
-    assert "note: load_torque_nm: not excited" in capsys.readouterr().out
+    assert main([*cmd, "--force"]) == 0  # without it: the axis may have been held since
+    out = capsys.readouterr().out
+    assert "note: load_torque_nm: not excited" in out
+    assert "note: torque_per_count: not separated" in out and "inertia/gain = " in out
 
     rng = np.random.default_rng([27_182, 1])
-    truth = draw_truth(PAPER_PLANT, rng, inertia_ratio=(0.0, 4.0))
+    truth = draw_truth(PAPER_PLANT, rng, inertia_ratio=(2.5, 4.0))
     cap = capture_vcd(truth.plant, make_plan(PAPER_AXIS).pulses, tmp_path / "cap.vcd", rng)
     out_axis = tmp_path / "identified.yaml"
     assert main(["identify", "--capture", str(cap), "--out", str(out_axis)]) == 0
@@ -76,7 +83,7 @@ def move():
 def _vcd(move, path, **kw):
     start = kw.pop("start_s", 0.01)
     stop = kw.pop("stop_s", None)
-    return write_edges_vcd(trace_edges(move, start_s=start, stop_s=stop), path, **kw)
+    return write_edges(trace_edges(move, start_s=start, stop_s=stop), path, **kw)
 
 
 def _csv(move, path, drop=None, cell=None):
@@ -135,7 +142,7 @@ BAD = {
         ["late.vcd", "starts inside a move"],
     ),
     "no-pulse": (
-        lambda m, d: write_edges_vcd(
+        lambda m, d: write_edges(
             train_edges(np.zeros(1000, np.int8), PAPER_PLANT.tick_hz), d / "idle.vcd"
         ),
         [],
@@ -174,3 +181,83 @@ def test_identify_without_a_capture_or_with_both_is_refused(tmp_path, capsys):
     code = main(["identify", "--plan", "--capture", "x.vcd", "--out", str(tmp_path)])
     assert code == 2
     assert "--capture is not allowed with --plan" in capsys.readouterr().err
+
+
+def _faulty(d, **kw):
+    """A capture of the plan's first two moves (rest before and after) with faults."""
+    from vfgym.identify.plan import moves_pulses
+    from vfgym.identify.simulated import record_capture, with_faults
+
+    pulses = moves_pulses(make_plan(PAPER_AXIS).moves[:2], PAPER_PLANT)
+    src = record_capture(PAPER_PLANT, pulses, d / "clean.vcd", start_s=0.05, rest_s=0.1)
+    with_faults(src, d / "faulty.vcd", np.random.default_rng(3), **kw)
+    return d / "faulty.vcd"
+
+
+UNTRUSTED = {
+    "encoder-edges-lost": ({"lost": 2}, ["faulty.vcd", "reverses at speed 2 times", "lost"]),
+    "a-and-b-swapped": ({"swap": True}, ["faulty.vcd", "counts against the pulses", "--signals"]),
+    "cut-mid-line": ({"cut_s": 0.05}, ["faulty.vcd", "ends mid-line", "truncated"]),
+}
+
+
+@pytest.mark.parametrize("case", list(UNTRUSTED))
+def test_a_capture_that_cannot_be_trusted_is_refused(tmp_path, capsys, case):
+    kw, words = UNTRUSTED[case]
+    path = _faulty(tmp_path, **kw)
+    out = tmp_path / "o.yaml"
+    assert main(["identify", "--capture", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("vfgym identify: error: "), err
+    for w in words:
+        assert w in err, (w, err)
+    assert not out.exists()
+
+
+def test_out_never_replaces_a_users_file_unless_forced(tmp_path, capsys):
+    nominal = tmp_path / "nominal.yaml"
+    nominal.write_text("# my axis, with my comments\nname: mine\n")
+    for out, words in ((nominal, "it is the --axis file, an input"), (tmp_path / "x.vcd",
+                       "it is the --capture file"), (tmp_path / "other.yaml",
+                       "the file exists")):  # fmt: skip
+        out.touch()
+        argv = ["identify", "--axis", str(nominal), "--capture", str(tmp_path / "x.vcd")]
+        assert main([*argv, "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert words in err and "--force" in err and err.count("\n") == 1
+    assert nominal.read_text().startswith("# my axis, with my comments")
+    # with --force the command goes on (here to the capture, which is empty)
+    assert main([*argv, "--out", str(nominal), "--force"]) == 2
+    assert "x.vcd" in capsys.readouterr().err
+    assert nominal.read_text().startswith("# my axis")
+
+
+def test_a_true_axis_files_capture_round_trips_through_sigrok_csv(tmp_path, capsys):
+    """The documented route to a capture of a "true" axis file: --plan --true-axis; then
+    sigrok-cli's CSV of it (its time column) identifies that file's plant."""
+    import shutil
+    import subprocess
+
+    true = tmp_path / "heavy.yaml"
+    true.write_text(
+        "plant:\n  motor: {preset: SGME-02A, inertia_ratio: 3.0, coulomb_nm: 0.004, "
+        "load_torque_nm: -0.002}\n  servo: {follows_load: false}\n"
+    )
+    plan = tmp_path / "plan"
+    assert main(["identify", "--plan", "--true-axis", str(true), "--out", str(plan)]) == 0
+    capture = plan / "identify-moves-on-heavy.vcd"
+    assert f"wrote {capture}" in capsys.readouterr().out
+    if shutil.which("sigrok-cli") is None:
+        pytest.skip("sigrok-cli is not installed (Debian package sigrok-cli)")
+    csv = tmp_path / "heavy.csv"
+    subprocess.run(["sigrok-cli", "-I", "vcd", "-i", str(capture), "-O", "csv:time=true",
+                    "-o", str(csv)], check=True, capture_output=True, timeout=600)  # fmt: skip
+    out = tmp_path / "identified.yaml"
+    assert main(["identify", "--capture", str(csv), "--from-enable", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "torque_per_count" in text and "not separated" not in text
+    ident = load_axis(out)
+    want = load_axis(true).plant.motor
+    assert ident.plant.motor.inertia_kgm2 == pytest.approx(want.inertia_kgm2, rel=0.02)
+    assert ident.plant.motor.coulomb_nm == pytest.approx(want.coulomb_nm, abs=0.01 * 0.637)
+    assert ident.plant.motor.load_torque_nm == pytest.approx(want.load_torque_nm, abs=0.01 * 0.637)

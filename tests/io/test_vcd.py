@@ -211,3 +211,48 @@ def test_export_cli_bad_input(tmp_path, capsys, argv, needle):
     err = capsys.readouterr().err.strip()
     assert needle in err and "\n" not in err
     assert not out.exists()
+
+
+def test_export_never_replaces_a_named_file_unless_forced(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "mine.vcd"
+    out.write_text("a file of mine\n")
+    argv = ["export", "--format", "vcd", "--scenario", "short-move", "--out", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "the file exists" in err and "--force" in err and err.count("\n") == 1
+    assert out.read_text() == "a file of mine\n"
+    assert main([*argv, "--force"]) == 0
+    assert out.read_text().startswith("$comment")
+    # the default name (no --out): an earlier export is replaced, and the line says so
+    monkeypatch.chdir(tmp_path)
+    args = ["export", "--format", "csv", "--scenario", "short-move"]
+    assert main(args) == 0
+    assert "replacing" not in capsys.readouterr().out
+    assert main(args) == 0
+    assert "(replacing the earlier export)" in capsys.readouterr().out
+
+
+def test_a_pulse_train_and_a_sampled_record_written_by_the_one_writer(tmp_path):
+    """A plan's train alone (no encoder wires), and a record started at an arbitrary instant
+    rounded to 1 µs samples: several edges may share a stamp, none is lost."""
+    from vfgym.io.vcd import trace_edges, train_edges, write_edges
+
+    p = np.zeros(400, np.int8)
+    p[[10, 11, 12, 50, 51, 200]] = [1, 1, 1, -1, -1, 1]
+    text = tmp_path / "t.vcd"
+    write_edges(train_edges(p, F), text, encoder=False, comment="a train")
+    unit, ch, init = parse_vcd(text.read_text())
+    assert set(ch) == {"pulse", "dir"} and init["dir"] == 1
+    rises = [t for t, v in ch["pulse"] if v == 1]
+    np.testing.assert_array_equal(rises, np.rint((np.flatnonzero(p) + 0.5) * 1e9 / F))
+    assert [v for _, v in ch["dir"]] == [0, 1]  # before the first -1 and back before +1
+
+    ev = evaluate("paper", [ZIGZAG], keep_traces=True)
+    tr = ev.traces[0][0]
+    edges = trace_edges(tr, start_s=0.0012345)
+    path = write_edges(edges, tmp_path / "r.vcd", timescale="1 us")
+    unit, ch, init = parse_vcd(path.read_text())
+    assert unit == 1e-6
+    _, decoded = quadrature_decode(ch["enc_a"], ch["enc_b"], init)
+    assert decoded[-1] == edges.count[-1]
+    assert len([v for _, v in ch["pulse"] if v == 1]) == edges.pulse_s.size

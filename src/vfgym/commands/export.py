@@ -3,12 +3,17 @@
 ``--format vcd`` writes the pulse and direction signals and the encoder's A/B channels as a
 Value Change Dump (GTKWave, PulseView; see :mod:`vfgym.io.vcd`); ``--format csv`` writes the
 per-tick trace (every ``--decimation``-th tick; see :data:`vfgym.io.trace_csv.TRACE_FIELDS`).
-Without ``--out`` the file is ``SCENARIO-CONTROLLER.FORMAT`` in the current folder.
+Without ``--out`` the file is ``SCENARIO-CONTROLLER.FORMAT`` in the current folder,
+replaced if an earlier export left it (the line printed says so). A file named with
+``--out`` that exists, or that is an input (``--settings``, ``--axis``), is refused
+unless ``--force``.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+from collections.abc import Sequence
 from pathlib import Path
 
 FORMATS = ("vcd", "csv")
@@ -33,6 +38,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="output file (default: SCENARIO-CONTROLLER.vcd or .csv in the current folder)",
     )
     p.add_argument(
+        "--force",
+        action="store_true",
+        help="replace the --out file if it exists",
+    )
+    p.add_argument(
         "--decimation",
         type=positive_int,
         default=1,
@@ -53,6 +63,12 @@ def run(args: argparse.Namespace) -> int:
     from vfgym.io.vcd import parse_timescale, write_vcd
     from vfgym.scoring import evaluate
 
+    if args.out is not None and args.out.strip():
+        check_output_path("--out", args.out)
+        refuse_replacing(
+            "--out", args.out, force=args.force,
+            inputs=[("--settings", args.settings), ("--axis", args.axis)],
+        )  # fmt: skip
     axis = axis_from_args(args)
     scenario = scenario_from_args(args, axis)
     if args.format == "vcd":
@@ -62,6 +78,7 @@ def run(args: argparse.Namespace) -> int:
     ctrl, label = _controller(args, axis)
     out = args.out if args.out is not None else f"{scenario.name}-{Path(label).stem}.{args.format}"
     out = check_output_path("--out", out)
+    replaced = args.out is None and out.is_file()
     dec = args.decimation if args.format == "csv" else 1
     ev = evaluate(ctrl, [scenario], keep_traces=True, decimation=dec, axis=axis)
     trace = own_trace(ev, scenario)
@@ -72,7 +89,65 @@ def run(args: argparse.Namespace) -> int:
         write_trace_csv(trace, out)
     m = ev.metrics[0][0]
     print(
-        f"wrote {out}: {scenario.name}, {ev.labels()[0]}, {trace.n_ticks} ticks, "
-        f"{m['pulse_count']} pulses"
+        f"wrote {out}{' (replacing the earlier export)' if replaced else ''}: {scenario.name}, "
+        f"{ev.labels()[0]}, {trace.n_ticks} ticks, {m['pulse_count']} pulses"
     )
     return 0
+
+
+def refuse_replacing(
+    option: str,
+    path: str,
+    *,
+    force: bool,
+    inputs: Sequence[tuple[str, str | None]] = (),
+) -> None:
+    """Refuse to replace a user's file: ``path`` an existing file, or one of ``inputs``.
+
+    Parameters
+    ----------
+    option : str
+        The option ``path`` came from (``--out``).
+    path : str
+        The file to be written.
+    force : bool
+        The user said ``--force``: replace it.
+    inputs : sequence of (str, str or None)
+        The command's input files with their options (``("--axis", FILE)``; ``None``: not
+        given).
+
+    Raises
+    ------
+    ValueError
+        One line naming the option, the file and ``--force``.
+    OSError
+        Naming ``path``, where its folder takes no new file (``/proc``): the write would
+        fail the same way, whether it replaced the file or not.
+    """
+    if force:
+        return
+    p = Path(path)
+    for name, other in inputs:
+        if other and p.exists() and Path(other).exists() and os.path.samefile(p, other):
+            raise ValueError(
+                f"{option}={path!r} is not allowed: it is the {name} file, an input of this "
+                "command; give another file, or --force to replace it"
+            )
+    if p.is_file():
+        _takes_a_file(p)
+        raise ValueError(
+            f"{option}={path!r} is not allowed: the file exists; give another file, or "
+            "--force to replace it"
+        )
+
+
+def _takes_a_file(p: Path) -> None:
+    """Raise the ``OSError`` a write of ``p`` would meet if its folder takes no new file."""
+    import tempfile
+
+    try:
+        fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name}.")
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror, str(p)) from None
+    os.close(fd)
+    os.unlink(tmp)

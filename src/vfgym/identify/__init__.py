@@ -8,20 +8,37 @@ their 95 % intervals, written back as an axis with an ``uncertainty:`` block.
 Modules
 -------
 capture
-    Reading a capture: VCD (a logic analyser's, or ``vfgym export``'s) or CSV.
-signals
-    Writing pulse/direction and encoder edges as VCD (a plan to replay, a simulated capture).
+    Reading a capture: VCD (a logic analyser's, or ``vfgym export``'s), or CSV.
+capture_csv
+    sigrok-cli's CSV (with or without its time column) and vfgym's trace CSV.
+lines
+    A capture's lines decoded into pulses and the encoder's count; glitches taken out.
+checks
+    What a capture must be before it is fitted: no lost encoder edge, A and B the right
+    way round; its pulse train against the axis's plan.
 model
     A capture on the simulator's tick grid, the state it starts from, and its simulation
     on candidate plants.
 excite
     What the moves excite: constant-speed segments, directions, torque saturation.
+problem
+    The least squares' scaled coordinates and residuals.
 fit
     The least-squares estimator and its intervals.
 covariance
     The covariance of the estimates from the encoder count's quantisation.
+prior
+    The plants along J/K3 a capture cannot tell apart, within a prior on the drive's gain.
 plan
     The moves to run for an identification.
-report
-    The identified axis, its uncertainty block, and what the captures cannot show.
+simulated
+    A capture simulated on a plant (the VCD written by :mod:`vfgym.io.vcd`), and with the
+    faults a recording may hold.
+notes
+    What the captures cannot show, what in them did not belong, the likely cause of a
+    misfit.
+written
+    The identified axis written: its uncertainty block (the stated ranges kept).
+pipeline
+    ``vfgym identify``'s steps from the captures read to the identified axis.
 """

@@ -1,103 +1,35 @@
 """Reading a logic analyser's capture: pulse/direction edges and the encoder's count.
 
-Two formats, both giving a :class:`Capture` (times in s from the capture's start):
+Three forms, each giving a :class:`~vfgym.identify.lines.Capture` (times in s from the
+capture's start):
 
 VCD
     As a logic analyser saves it (sigrok-cli, PulseView) or ``vfgym export --format vcd``
     writes it: four 1-bit signals, found by name (``pulse``, ``dir``, ``enc_a``,
     ``enc_b``; another name per signal with :func:`parse_signal_map`, e.g. sigrok's
-    ``D0`` … ``D3``). A command pulse is a rising edge of ``pulse``, its sign the level of
-    ``dir`` then (1: positive). The encoder's count is decoded from the A/B levels in
-    Gray order 00 → 10 → 11 → 01 counting up (A leads B), as :mod:`vfgym.io.vcd` writes
-    them; the sample clock must be at least 4× the fastest edge, so that A and B never
-    change in the same sample but for a rare coincidence, which is taken as two steps
-    on in the direction of travel. Tokens are read by pyvcd's reader; sigrok-cli 0.7.2
-    writes a stray ``META ...`` line before the header, which is skipped. The header is read
-    by pyvcd's tokenizer, the value changes by a split on white space (the body's grammar
-    is a handful of token forms, and pyvcd takes ~7 s on a 2 s capture at 1 MHz).
-CSV
-    A header row and one row per controller tick (or finer) with the columns
-    ``time_s``, ``pulse_count`` (signed command pulses so far) and ``encoder_count``
-    (counts so far), as ``vfgym export --format csv`` writes them; other columns are
-    ignored. A row's pulse is taken half a row before its time (the row is the end of
-    the tick in which it happened).
+    ``D0`` … ``D3``), read into each line's level changes and decoded by
+    :func:`vfgym.identify.lines.decode`. sigrok-cli 0.7.2 writes a stray ``META ...``
+    line before the header, which is skipped. The header is read by pyvcd's tokenizer,
+    the value changes by a split on white space (the body's grammar is a handful of token
+    forms, and pyvcd takes ~7 s on a 2 s capture at 1 MHz).
+sigrok-cli's CSV and vfgym's trace CSV
+    By the ``.csv`` suffix, read in :mod:`vfgym.identify.capture_csv`.
 
 Every problem is one ``ValueError`` line naming the file, the signal or column and what
-is expected.
+is expected; a file that ends mid-line is named as truncated.
 """
 
 from __future__ import annotations
 
-import csv
 import io
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from vfgym.identify.capture_csv import CSV_COLUMNS, read_csv
+from vfgym.identify.lines import SIGNALS, Capture, Lines, decode
 from vfgym.io.vcd import parse_timescale
-
-SIGNALS = ("pulse", "dir", "enc_a", "enc_b")
-"""The four signals a VCD capture must hold, by their default names."""
-
-CSV_COLUMNS = ("time_s", "pulse_count", "encoder_count")
-"""The columns a CSV capture must hold."""
-
-_GRAY = {(0, 0): 0, (1, 0): 1, (1, 1): 2, (0, 1): 3}
-
-
-@dataclass(frozen=True)
-class Capture:
-    """One capture's command pulses and encoder count, in time order.
-
-    Attributes
-    ----------
-    source : str
-        The file read.
-    pulse_s : numpy.ndarray
-        Time of each command pulse's rising edge (s from the capture's start).
-    pulse_sign : numpy.ndarray
-        int8, +1 or −1 for each pulse (the ``dir`` level).
-    count_s : numpy.ndarray
-        Time of each change of the encoder's count (s).
-    count : numpy.ndarray
-        int64, the count after each change, relative to the count at the start (0).
-    end_s : float
-        Length of the capture (s): its last time stamp.
-    resolution_s : float
-        Time resolution of the stamps (s): the VCD's timescale, or a CSV's row period.
-    sampled : bool
-        True for a VCD: every edge stands at one of the analyser's samples (multiples of
-        ``resolution_s`` from the start), not at its own instant; a CSV row holds the
-        count at its own time.
-    """
-
-    source: str
-    pulse_s: np.ndarray
-    pulse_sign: np.ndarray
-    count_s: np.ndarray
-    count: np.ndarray
-    end_s: float
-    resolution_s: float
-    sampled: bool = False
-
-    def count_at(self, t_s: np.ndarray) -> np.ndarray:
-        """The encoder count at each time (after every change at or before it).
-
-        Parameters
-        ----------
-        t_s : numpy.ndarray
-            Times (s from the capture's start).
-
-        Returns
-        -------
-        numpy.ndarray
-            int64 counts (0 before the first change).
-        """
-        idx = np.searchsorted(self.count_s, np.asarray(t_s, dtype=np.float64), side="right")
-        padded = np.concatenate([[0], self.count])
-        return padded[idx]
 
 
 def parse_signal_map(text: str | None) -> dict[str, str]:
@@ -142,7 +74,7 @@ def read_capture(path: str | Path, signals: dict[str, str] | None = None) -> Cap
     path : str or Path
         The file.
     signals : dict or None
-        A VCD's signal names (:func:`parse_signal_map`); default the names of
+        An analyser's signal names (:func:`parse_signal_map`); default the names of
         :data:`SIGNALS`.
 
     Returns
@@ -163,7 +95,12 @@ def read_capture(path: str | Path, signals: dict[str, str] | None = None) -> Cap
         raise ValueError(
             f"{p}: cannot be read ({exc.strerror or exc}): expected a VCD or CSV capture"
         ) from None
-    cap = _read_csv(p, data) if p.suffix.lower() == ".csv" else _read_vcd(p, data, signals)
+    names = signals or {s: s for s in SIGNALS}
+    if p.suffix.lower() == ".csv":
+        got = read_csv(p, data, names)
+        cap = got if isinstance(got, Capture) else decode(got)
+    else:
+        cap = decode(_read_vcd(p, data, names))
     if cap.pulse_s.size == 0:
         raise ValueError(
             f"{p}: holds no command pulse: expected the pulse train of the moves (rising "
@@ -205,18 +142,26 @@ def _body(p: Path, body: bytes) -> Iterator[tuple[int, bytes, int]]:
     The body's grammar is small (``#time``, ``0id``/``1id``/``xid``/``zid``, and the
     ``$dumpvars`` … ``$end`` keywords around initial values), so it is split on white
     space here rather than tokenised by pyvcd, about 30× faster on a capture of a
-    million edges; a vector or real value (``b…``, ``r…``) of a 1-bit signal is refused."""
+    million edges; a vector or real value (``b…``, ``r…``) of a 1-bit signal is refused.
+    A file that does not end with a line break was cut short (a VCD writer ends its
+    last line): it is refused as truncated, its last token named."""
+    toks = body.split()
+    if toks and not body[-1:].isspace():
+        raise ValueError(
+            f"{p}: the file ends mid-line ({toks[-1].decode(errors='replace')!r}): a "
+            "truncated file; expected the capture as the analyser saved it"
+        )
     time = None
     skip = False
-    for tok in body.split():
+    for tok in toks:
         c = tok[0]
         if c == 35:  # '#'
             try:
                 t = int(tok[1:])
             except ValueError:
                 raise ValueError(
-                    f"{p}: time stamp {tok.decode(errors='replace')!r} is not a whole number: "
-                    "expected #TIME"
+                    f"{p}: time stamp {tok.decode(errors='replace')!r} is not a whole "
+                    "number: expected #TIME"
                 ) from None
             if time is not None and t < time:
                 raise ValueError(
@@ -247,8 +192,8 @@ def _body(p: Path, body: bytes) -> Iterator[tuple[int, bytes, int]]:
             )
 
 
-def _read_vcd(p: Path, data: bytes, signals: dict[str, str] | None) -> Capture:
-    names = signals or {s: s for s in SIGNALS}
+def _read_vcd(p: Path, data: bytes, names: dict[str, str]) -> Lines:
+    """Each line's level changes in a VCD (see :class:`~vfgym.identify.lines.Lines`)."""
     start = data.find(b"$")
     if start < 0:
         raise ValueError(f"{p}: is not a VCD file (no $ keyword): expected a VCD capture")
@@ -266,144 +211,38 @@ def _read_vcd(p: Path, data: bytes, signals: dict[str, str] | None) -> Capture:
     for r, s in enumerate(SIGNALS):
         role_of.setdefault(ids[names[s]].encode(), []).append(r)
     level = [0, 0, 0, 0]
-    pulse_t: list[int] = []
-    pulse_sign: list[int] = []
-    count_t: list[int] = []
-    count_v: list[int] = []
+    changes: list[list[int]] = [[], [], [], []]
     first: int | None = None
+    initial: tuple[int, int, int, int] = (0, 0, 0, 0)
     time = -1
-    count = 0
-    state = 0
-    last_dir = 0
-    enc_dirty = False
-
-    def end_stamp() -> None:
-        """What the time stamp ``time`` left: the encoder's step, the pulses' signs."""
-        nonlocal state, count, last_dir, enc_dirty
-        _fill_signs(pulse_sign, level[1])
-        if not enc_dirty:
-            return
-        enc_dirty = False
-        new = _GRAY[(level[2], level[3])]
-        step = (new - state) % 4
-        state = new
-        if time == first or step == 0:  # the initial levels: where the count starts
-            return
-        if step == 2:
-            if last_dir == 0:
-                raise ValueError(
-                    f"{p}: enc_a and enc_b changed in the same sample at "
-                    f"{(time - (first or 0)) * unit:.9g} s before any count: expected a "
-                    "sample clock at least 4x the fastest edge"
-                )
-            d = 2 * last_dir
-        else:
-            d = 1 if step == 1 else -1
-            last_dir = d
-        count += d
-        count_t.append(time)
-        count_v.append(count)
-
     for t, ident, v in _body(p, text[offset:]):
         if t != time:
             if first is None:
                 first = t
-            else:
-                end_stamp()
+            elif time == first:
+                initial = (level[0], level[1], level[2], level[3])  # after the first stamp
             time = t
-        roles = role_of.get(ident)
-        if not roles:
-            continue
-        for r in roles:
-            if r == 0 and v == 1 and level[0] == 0 and first is not None and time > first:
-                pulse_t.append(time)
-                pulse_sign.append(0)  # the dir level is read once the stamp ends
-            level[r] = v
-            if r >= 2:
-                enc_dirty = True
+        for r in role_of.get(ident, ()):
+            if v != level[r]:
+                level[r] = v
+                if t != first:
+                    changes[r].append(t)
     if first is None:
         raise ValueError(f"{p}: holds no value change: expected a capture of the moves")
-    end_stamp()
-    sign = np.where(np.asarray(pulse_sign, dtype=np.int8) > 0, 1, -1).astype(np.int8)
-    return Capture(
+    if time == first:
+        initial = (level[0], level[1], level[2], level[3])
+    return Lines(
         source=str(p),
-        pulse_s=(np.asarray(pulse_t, dtype=np.float64) - first) * unit,
-        pulse_sign=sign,
-        count_s=(np.asarray(count_t, dtype=np.float64) - first) * unit,
-        count=np.asarray(count_v, dtype=np.int64),
-        end_s=(time - first) * unit,
-        resolution_s=unit,
-        sampled=True,
-    )
-
-
-def _fill_signs(signs: list[int], dir_level: int) -> None:
-    """Give the pulses of the time stamp just ended (sign 0) the ``dir`` level."""
-    i = len(signs) - 1
-    while i >= 0 and signs[i] == 0:
-        signs[i] = 1 if dir_level else -1
-        i -= 1
-
-
-def _read_csv(p: Path, data: bytes) -> Capture:
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError:
-        raise ValueError(
-            f"{p}: is not a text CSV: expected columns {', '.join(CSV_COLUMNS)}"
-        ) from None
-    rows = csv.reader(io.StringIO(text))
-    header = next(rows, None)
-    if header is None:
-        raise ValueError(f"{p}: is empty: expected a header row {','.join(CSV_COLUMNS)}")
-    header = [h.strip() for h in header]
-    cols = {}
-    for name in CSV_COLUMNS:
-        if name not in header:
-            raise ValueError(
-                f"{p}: column {name!r} is missing: expected a header row with "
-                f"{', '.join(CSV_COLUMNS)} (got {', '.join(header) or 'none'})"
-            )
-        cols[name] = header.index(name)
-    values: list[list[float]] = [[], [], []]
-    for line, row in enumerate(rows, start=2):
-        if not row:
-            continue
-        for j, name in enumerate(CSV_COLUMNS):
-            try:
-                values[j].append(float(row[cols[name]]))
-            except (IndexError, ValueError):
-                cell = row[cols[name]] if cols[name] < len(row) else ""
-                raise ValueError(
-                    f"{p}: line {line}: column {name!r} holds {cell!r}: expected a number"
-                ) from None
-    t, pc, ec = (np.asarray(v, dtype=np.float64) for v in values)
-    if t.size < 2:
-        raise ValueError(f"{p}: holds {t.size} row(s): expected one row per controller tick")
-    if not (np.all(np.isfinite(t)) and np.all(np.diff(t) > 0)):
-        raise ValueError(f"{p}: column 'time_s' is not finite and increasing: expected times (s)")
-    for name, col in (("pulse_count", pc), ("encoder_count", ec)):
-        if not np.all(col == np.round(col)):
-            raise ValueError(f"{p}: column {name!r} holds a fraction: expected whole counts")
-    dt = float(np.median(np.diff(t)))
-    dp = np.diff(pc, prepend=pc[0])
-    if np.any(np.abs(dp) > 1):
-        i = int(np.flatnonzero(np.abs(dp) > 1)[0])
-        raise ValueError(
-            f"{p}: column 'pulse_count' jumps by {int(dp[i])} at time_s={t[i]:.9g}: expected "
-            "one row per controller tick or finer (at most one pulse between rows)"
-        )
-    at = np.flatnonzero(dp)
-    de = np.flatnonzero(np.diff(ec, prepend=ec[0]))
-    t0 = t[0]
-    return Capture(
-        source=str(p),
-        pulse_s=t[at] - t0 - 0.5 * dt,
-        pulse_sign=np.sign(dp[at]).astype(np.int8),
-        count_s=t[de] - t0,
-        count=(ec[de] - ec[0]).astype(np.int64),
-        end_s=float(t[-1] - t0),
-        resolution_s=dt,
+        unit_s=unit,
+        first=first,
+        last=time,
+        initial=initial,
+        changes=(
+            np.asarray(changes[0], dtype=np.int64),
+            np.asarray(changes[1], dtype=np.int64),
+            np.asarray(changes[2], dtype=np.int64),
+            np.asarray(changes[3], dtype=np.int64),
+        ),
     )
 
 

@@ -20,11 +20,13 @@ independent from sample to sample.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from vfgym.identify.model import SAMPLE_TICKS, Record
+from vfgym.identify.problem import PARAMS, Problem, wide_range
 
 HARMONICS = 64
 """Terms of the Fourier series of the quantisation error's covariance."""
@@ -134,4 +136,75 @@ def resolution(jac: np.ndarray, floor: float) -> np.ndarray:
         return floor / most
 
 
-__all__ = ["HARMONICS", "pieces", "quantisation_meat", "resolution"]
+HELD_TORQUES = ("coulomb_nm", "viscous_nm_s_rad", "load_torque_nm")
+"""Quantities held at their nominal value whose range enters the others' covariance (the
+gain's does not: without it the inertia is stated relative to K3 as set, and the
+uncertainty block widens by the gain's range instead)."""
+
+NUISANCE_PHASE_STEP = 5
+"""Step (ticks) of the other servo phases whose effect on the estimate is added to the
+covariance."""
+
+
+def estimate_covariance(problem: Problem, z: np.ndarray, jac: np.ndarray) -> np.ndarray:
+    """The covariance of the free coordinates (see the module doc): the sandwich with the
+    count's quantisation error, plus the spread over the servo's sample phase."""
+    A = jac.T @ jac
+    try:
+        Ainv = np.linalg.inv(A)
+    except np.linalg.LinAlgError:
+        Ainv = np.linalg.pinv(A)
+    nominal = problem.scale.nominal
+    groups, counts, shift = [], [], []
+    start = 0
+    for r, resp in zip(problem.records, problem.simulated(z), strict=True):
+        groups += [piece + start for piece in pieces(r, nominal.tick_hz)]
+        counts.append(r.used(resp.counts))
+        # the tick grid's phase, known to within the record's phase width: the residuals'
+        # change for a shift of the grid by δ is −(ω/q)·δ, δ uniform over that width
+        g = np.zeros(jac.shape[0])
+        g[start : start + counts[-1].size] = -r.used(resp.speed_rad_s) / nominal.motor.count_rad
+        shift.append(jac.T @ g * (r.phase_width_s / math.sqrt(12.0)))
+        start += counts[-1].size
+    meat = quantisation_meat(jac, np.concatenate(counts), groups)
+    meat = meat + sum(np.outer(v, v) for v in shift)
+    cov = Ainv @ meat @ Ainv
+    # the servo's sample clock against the pulses, which no capture records: the
+    # Gauss–Newton step each other phase's residuals would take from the optimum
+    steps = []
+    keep = list(problem.phases)
+    try:
+        for ph in range(0, problem.scale.nominal.servo.sample_ticks, NUISANCE_PHASE_STEP):
+            problem.phases = [(p0 + ph) % problem.scale.nominal.servo.sample_ticks for p0 in keep]
+            if ph:
+                steps.append(-Ainv @ (jac.T @ problem.residuals_of([z])[0]))
+    finally:
+        problem.phases = keep
+    if steps:
+        cov = cov + sum(np.outer(d, d) for d in steps) / len(steps)
+    # a torque held at its nominal value (not excited) may be anywhere in its wide range:
+    # the estimates move with it by −A⁻¹Jᵀ∂r/∂p, over its mean square offset in that range
+    scale = problem.scale
+    for i in np.flatnonzero(~problem.free[: len(PARAMS)]):
+        if PARAMS[i] not in HELD_TORQUES:
+            continue
+        lo, hi = (v / scale.jacobian_diag(z)[i] for v in wide_range(PARAMS[i], nominal))
+        zu, zd = z.copy(), z.copy()
+        zu[i] += scale.steps[i]
+        zd[i] -= scale.steps[i]
+        ru, rd = problem.residuals_of([zu, zd])
+        d = -Ainv @ (jac.T @ ((ru - rd) / (2.0 * scale.steps[i])))
+        mean_square = ((hi - z[i]) ** 3 - (lo - z[i]) ** 3) / (3.0 * (hi - lo))
+        cov = cov + np.outer(d, d) * mean_square
+    return cov
+
+
+__all__ = [
+    "HARMONICS",
+    "HELD_TORQUES",
+    "NUISANCE_PHASE_STEP",
+    "estimate_covariance",
+    "pieces",
+    "quantisation_meat",
+    "resolution",
+]

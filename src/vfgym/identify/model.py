@@ -41,7 +41,7 @@ import math
 import os
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -59,6 +59,15 @@ capture started."""
 SETTLE_S = 0.01
 """A capture must run at least this long after its last pulse (s), so that its last move
 is seen whole."""
+
+OFF_GRID_TICKS = 0.02
+"""A rising edge of ``pulse`` farther than one analyser sample and this (ticks) from the
+grid the other pulses share is a glitch, not a command pulse (a pulse on the grid is
+moved by at most half a sample either way); so taken where they are few
+(:data:`OFF_GRID_MOST`)."""
+
+OFF_GRID_MOST = 0.01
+"""…at most this share of the pulses (more: a pulse clock that is not the axis's tick)."""
 
 QUIET_S = 0.01
 """A capture holds the drive's enable when its encoder is still for this long (s) after
@@ -95,6 +104,9 @@ class Record:
         of the analyser's sample period (None: at the tick's end, a CSV).
     phase_width_s : float
         The width of tick-grid phases the pulses' sampled times leave possible (s).
+    off_grid_s : tuple of float
+        Capture times (s) of the rising edges of ``pulse`` left out as glitches: off the
+        tick grid the other pulses share (:data:`OFF_GRID_TICKS`).
     """
 
     source: str
@@ -107,6 +119,13 @@ class Record:
     sag_counts: int = 0
     read_offset_s: np.ndarray | None = None
     phase_width_s: float = 0.0
+    off_grid_s: tuple[float, ...] = ()
+
+    @property
+    def first_tick(self) -> int:
+        """The capture's first whole tick (0 or 1): record tick j starts at
+        (j + first_tick + phase)·T."""
+        return math.ceil(-self.phase - 1e-9)
 
     @property
     def n_ticks(self) -> int:
@@ -189,6 +208,7 @@ def record_of(capture: Capture, plant: Plant, from_enable: bool | None = None) -
     """
     T = plant.tick_s
     src = capture.source
+    capture, off_grid = _on_grid(capture, T)
     x = capture.pulse_s / T
     ang = 2.0 * math.pi * (x - 0.5)
     phase = math.atan2(float(np.sin(ang).mean()), float(np.cos(ang).mean())) / (2.0 * math.pi)
@@ -257,7 +277,28 @@ def record_of(capture: Capture, plant: Plant, from_enable: bool | None = None) -
         sag_counts=sag,
         read_offset_s=read,
         phase_width_s=width,
+        off_grid_s=off_grid,
     )
+
+
+def _on_grid(capture: Capture, T: float) -> tuple[Capture, tuple[float, ...]]:
+    """The capture without the few pulses off the tick grid the others share, and their
+    times (see :data:`OFF_GRID_TICKS`)."""
+    if not capture.sampled or capture.pulse_s.size < 10:
+        return capture, ()
+    x = capture.pulse_s / T - 0.5
+    ang = 2.0 * math.pi * x
+    phase = math.atan2(float(np.sin(ang).mean()), float(np.cos(ang).mean())) / (2.0 * math.pi)
+    off = x - np.rint(x - phase) - phase
+    off = off - float(np.median(off))
+    bad = np.abs(off) > OFF_GRID_TICKS + capture.resolution_s / T
+    if not np.any(bad) or np.count_nonzero(bad) > OFF_GRID_MOST * bad.size:
+        return capture, ()
+    times = tuple(float(t) for t in capture.pulse_s[bad])
+    keep = ~bad
+    return replace(
+        capture, pulse_s=capture.pulse_s[keep], pulse_sign=capture.pulse_sign[keep]
+    ), times
 
 
 @dataclass(frozen=True)
@@ -407,6 +448,8 @@ def respond_many(
 
 
 __all__ = [
+    "OFF_GRID_MOST",
+    "OFF_GRID_TICKS",
     "QUIET_S",
     "SAMPLE_TICKS",
     "SETTLE_S",

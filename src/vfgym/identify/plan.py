@@ -6,15 +6,19 @@ Every parameter must leave its mark on the encoder's count (:mod:`vfgym.identify
   constant-speed segments at three speeds in both directions (viscous friction, Coulomb
   friction apart from the load torque), their ramps at a quarter of the usable
   acceleration (J/K3);
-- velocity steps at nearly the top speed (``ramp`` moves), forward then back: the
-  shortest acceleration the pulse train can ask for, which saturates the torque where the
-  axis allows it (inertia apart from the drive's gain).
+- velocity steps at nearly the top speed (``ramp`` moves), forward then back, then
+  velocity reversals at that speed (``ramp`` moves one after the other with no rest: from
+  +v to −v in one tick, eight times, back to where they started): the largest change of
+  speed a pulse train can ask for, twice a step's, which holds the torque at its limit
+  wherever the axis allows it (inertia apart from the drive's gain). Where even they do
+  not, :attr:`Plan.saturating_inertia` says from which inertia they would.
 
 The top speed is the lower of the pulse train's δ·f and :data:`MOTOR_SPEED_SHARE` of the
-motor's maximum speed. :func:`plan_pulses` is the pulse train of the moves one after the
-other, each starting where the last ended: the position command of each move quantised
-to whole pulses, at most one a tick (a pulse generator following the profile), after
-:data:`LEAD_S` at rest.
+motor's maximum speed. :func:`moves_pulses` is the pulse train of the moves one after the
+other, each starting where the last ended: the position command of each move followed at
+most at the move's speed (a pulse generator following the profile: the reversals' steps
+become moves at that speed, one leg ending the tick the next begins) and quantised to
+whole pulses, after :data:`LEAD_S` at rest.
 """
 
 from __future__ import annotations
@@ -23,7 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vfgym.axis import Axis
+from vfgym.axis import Axis, PlantVariant
+from vfgym.identify.excite import MIN_SATURATED_S
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import DEFAULT_MEASURES, PAPER_SETTINGS, Plant, Settings
 from vfgym.plant import simulate
@@ -45,6 +50,15 @@ CRUISE_S = 0.18
 
 STEP_S = 0.03
 """Length of each velocity step (s)."""
+
+REVERSE_S = 0.03
+"""Length of each leg of the velocity reversals (s): the first and last are half of it."""
+
+REVERSALS = 8
+"""Velocity reversals in the plan."""
+
+INERTIA_FACTORS = (1.0, 1.25, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0)
+"""Factors on the nominal total inertia tried for :attr:`Plan.saturating_inertia`."""
 
 DWELL_S = 0.05
 """Rest after each move (s), included in its duration."""
@@ -71,6 +85,11 @@ class Plan:
         Time the nominal plant spends at its torque limit during the moves (s).
     peak_torque_share : float
         The largest torque of the nominal plant over its peak torque.
+    saturating_inertia : float or None
+        The least factor on the nominal total inertia (of :data:`INERTIA_FACTORS`) from
+        which the moves hold the torque at its limit for
+        :data:`~vfgym.identify.excite.MIN_SATURATED_S` (1: the nominal plant already
+        does), or ``None`` if none does.
     """
 
     moves: tuple[Scenario, ...]
@@ -79,6 +98,7 @@ class Plan:
     top_speed_rad_s: float
     saturated_s: float
     peak_torque_share: float
+    saturating_inertia: float | None = None
 
     @property
     def duration_s(self) -> float:
@@ -113,7 +133,7 @@ def plan_moves(plant: Plant) -> tuple[Scenario, ...]:
     Returns
     -------
     tuple of Scenario
-        Trapezoids at each speed forward and back, then the velocity steps.
+        Trapezoids at each speed forward and back, the velocity steps, the reversals.
     """
     v_top = top_speed(plant)
     a = RAMP_ACCEL_SHARE * plant.motor.usable_accel_rad_s2
@@ -148,6 +168,24 @@ def plan_moves(plant: Plant) -> tuple[Scenario, ...]:
                 "the shortest acceleration",
             )
         )
+    legs = [0.5] + [1.0] * (REVERSALS - 1) + [0.5]
+    steps = tuple(
+        (round((1.0 if i % 2 == 0 else -1.0) * v * leg * REVERSE_S, 6), leg * REVERSE_S)
+        for i, leg in enumerate(legs)
+    )
+    out.append(
+        Scenario(
+            name="identify-reverse",
+            profile="multi",
+            distance_rad=0.0,
+            duration_s=round(REVERSALS * REVERSE_S + DWELL_S, 4),
+            speed_rad_s=round(v, 6),
+            moves=steps,
+            description=f"{REVERSALS} velocity reversals between {v:+.4g} and {-v:+.4g} rad/s, "
+            f"{REVERSE_S:g} s apart (steps followed at {v:.4g} rad/s): the largest change of "
+            "speed",
+        )
+    )
     return tuple(out)
 
 
@@ -167,28 +205,31 @@ def moves_pulses(moves: tuple[Scenario, ...], plant: Plant, lead_s: float = LEAD
     -------
     numpy.ndarray
         int8, −1, 0, +1 per tick.
-
-    Raises
-    ------
-    ValueError
-        If a move asks for more than one pulse a tick (faster than δ·f).
     """
     parts = [np.zeros(round(lead_s * plant.tick_hz))]
     pos = 0.0
     for sc in moves:
-        c = np.asarray(sc.command(plant), dtype=np.float64)
-        parts.append(pos + c)
-        pos += float(c[-1])
-    parts[0] = np.zeros(parts[0].size)
+        c = pos + np.asarray(sc.command(plant), dtype=np.float64)
+        parts.append(_follow(c, pos, min(sc.speed(plant), top_speed(plant)) / plant.tick_hz))
+        pos = float(parts[-1][-1])
     cmd = np.concatenate(parts)
     n = np.floor(cmd / plant.pulse_rad + 0.5)
-    p = np.diff(n, prepend=0.0)
-    if np.any(np.abs(p) > 1):
-        raise ValueError(
-            "a move asks for more than one pulse a tick: its speed exceeds delta*f "
-            f"= {plant.pulse_top_speed_rad_s:.4g} rad/s"
-        )
-    return p.astype(np.int8)
+    return np.diff(n, prepend=0.0).astype(np.int8)
+
+
+def _follow(cmd: np.ndarray, start: float, most: float) -> np.ndarray:
+    """A position command followed from ``start`` at most ``most`` rad a tick (a pulse
+    generator at its speed: a step becomes a move at that speed)."""
+    if abs(cmd[0] - start) <= most * (1 + 1e-9) and np.all(
+        np.abs(np.diff(cmd)) <= most * (1 + 1e-9)
+    ):
+        return cmd
+    out = np.empty_like(cmd)
+    p = start
+    for k, c in enumerate(cmd.tolist()):
+        p += min(max(c - p, -most), most)
+        out[k] = p
+    return out
 
 
 def make_plan(axis: Axis, settings: Settings = PAPER_SETTINGS) -> Plan:
@@ -209,22 +250,36 @@ def make_plan(axis: Axis, settings: Settings = PAPER_SETTINGS) -> Plan:
     plant = axis.plant
     moves = plan_moves(plant)
     pulses = moves_pulses(moves, plant)
-    tr = simulate(np.zeros(pulses.size), settings, plant, pulses=pulses, measures=DEFAULT_MEASURES)
-    m = tr.metrics
+
+    def run(p: Plant) -> tuple[float, float]:
+        tr = simulate(np.zeros(pulses.size), settings, p, pulses=pulses, measures=DEFAULT_MEASURES)
+        m = tr.metrics
+        return float(m["torque_limit_time_s"]), float(m["peak_torque_nm"]) / p.motor.peak_torque_nm
+
+    sat, share = run(plant)
+    heavy = None
+    for f in INERTIA_FACTORS:
+        if (sat if f == 1.0 else run(PlantVariant(inertia=f).apply(plant))[0]) >= MIN_SATURATED_S:
+            heavy = f
+            break
     return Plan(
         moves=moves,
         pulses=pulses,
         tick_hz=plant.tick_hz,
         top_speed_rad_s=top_speed(plant),
-        saturated_s=float(m["torque_limit_time_s"]),
-        peak_torque_share=float(m["peak_torque_nm"]) / plant.motor.peak_torque_nm,
+        saturated_s=sat,
+        peak_torque_share=share,
+        saturating_inertia=heavy,
     )
 
 
 __all__ = [
     "CRUISE_S",
     "DWELL_S",
+    "INERTIA_FACTORS",
     "LEAD_S",
+    "REVERSALS",
+    "REVERSE_S",
     "SPEED_FRACTIONS",
     "Plan",
     "make_plan",

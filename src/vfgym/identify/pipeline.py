@@ -1,0 +1,144 @@
+"""``vfgym identify``'s steps from the captures read to the identified axis.
+
+:func:`identify_axis` checks each capture (:func:`~vfgym.identify.checks.check_capture`:
+edges lost on the encoder), places it on the tick grid, checks that its encoder counts
+with its pulses and compares its pulse train with the axis's plan; fits the captures;
+where a train differs from the plan at a few ticks, fits them again with the plan's train
+there and keeps whichever explains the count better (the analyser or the drive may have
+seen the difference: the encoder says which); where the captures do not separate the
+gain and the gain as set does not explain them (a torque at its limit too briefly), fits
+the gain within its prior; fits the plants along the gain's prior where the captures do
+not separate the gain; and writes the identified axis with its
+notes (:func:`~vfgym.identify.written.identify_report`). Whether that axis may be written
+is :attr:`~vfgym.identify.written.Identified.explained`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from vfgym.axis import Axis
+from vfgym.identify.checks import PlanMatch, check_capture, check_direction, plan_match
+from vfgym.identify.fit import EXPLAINED, QUANTISATION_FLOOR, fit
+from vfgym.identify.lines import Capture
+from vfgym.identify.model import Record, record_of
+from vfgym.identify.plan import make_plan
+from vfgym.identify.prior import along_gain, gain_prior
+from vfgym.identify.written import Identified, identify_report
+from vfgym.params import Settings
+
+
+def prior_source(axis: Axis, share: float | None) -> str:
+    """Where the gain's prior comes from, for the notes.
+
+    Parameters
+    ----------
+    axis : Axis
+        The nominal axis.
+    share : float or None
+        ``--gain-prior``.
+
+    Returns
+    -------
+    str
+        A few words.
+    """
+    if share is not None:
+        return "--gain-prior"
+    if axis.uncertainty.torque_per_count is not None:
+        return "the nominal file's uncertainty.torque_per_count"
+    return "the default (set it with --gain-prior)"
+
+
+def _planned(record: Record, match: PlanMatch, plan_pulses: np.ndarray) -> Record:
+    """The record with the plan's train at the ticks where its own differs."""
+    first = int(np.flatnonzero(plan_pulses)[0])
+    body = np.asarray(plan_pulses[first:], dtype=np.int8)
+    pulses = record.pulses.copy()
+    at = match.start_tick
+    n = min(body.size, pulses.size - at)
+    pulses[at : at + n] = body[:n]
+    pulses[:at] = 0
+    return replace(record, pulses=pulses)
+
+
+def identify_axis(
+    axis: Axis,
+    captures: Sequence[Capture],
+    settings: Settings,
+    *,
+    from_enable: bool | None = None,
+    gain_share: float | None = None,
+) -> tuple[Identified, list[Record], list[PlanMatch]]:
+    """Identify an axis from its captures (module doc).
+
+    Parameters
+    ----------
+    axis : Axis
+        The nominal axis.
+    captures : sequence of Capture
+        The captures read.
+    settings : Settings
+        The servo's filter ratio in force.
+    from_enable : bool or None
+        As :func:`~vfgym.identify.model.record_of`'s.
+    gain_share : float or None
+        ``--gain-prior`` (:func:`~vfgym.identify.prior.gain_prior`).
+
+    Returns
+    -------
+    tuple
+        The identified axis with its notes, the records fitted and each one's comparison
+        with the plan.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file, for a capture that cannot be fitted (lost encoder
+        edges, the encoder counting against the pulses, or any of
+        :func:`~vfgym.identify.model.record_of`'s).
+    """
+    plant = axis.plant
+    prior = gain_prior(axis, gain_share)
+    for cap in captures:
+        check_capture(cap, plant)
+    records = [record_of(cap, plant, from_enable) for cap in captures]
+    check_direction(records, plant)
+    plan = make_plan(axis, settings)
+    matches = [plan_match(r, plan.pulses, plant.tick_hz) for r in records]
+    result = fit(records, plant, settings)
+    if any(m.kind == "differs" for m in matches):
+        other = [
+            _planned(r, m, plan.pulses) if m.kind == "differs" else r
+            for r, m in zip(records, matches, strict=True)
+        ]
+        alt = fit(other, plant, settings)
+        if alt.residual_rms_counts < result.residual_rms_counts:
+            records, result = other, alt
+            matches = [replace(m, fitted="plan") if m.kind == "differs" else m for m in matches]
+    if (
+        not result.estimate("torque_per_count").excited
+        and result.residual_rms_counts > EXPLAINED * QUANTISATION_FLOOR
+    ):
+        # the gain as set does not explain captures whose torque saturates too briefly to
+        # separate the gain: fitted within its prior, the best plant along the line
+        alt = fit(records, plant, settings, near=result, gain_range=prior)
+        if alt.residual_rms_counts < result.residual_rms_counts:
+            result = alt
+    profile = along_gain(records, plant, settings, result, prior)
+    ident = identify_report(
+        axis,
+        result,
+        records,
+        profile=profile,
+        prior_source=prior_source(axis, gain_share),
+        captures=captures,
+        matches=matches,
+    )
+    return ident, records, matches
+
+
+__all__ = ["identify_axis", "prior_source"]
