@@ -171,7 +171,6 @@ def _plan(axis: Any, settings: Any, out: Path, true_axis: str | None) -> int:
 
     from vfgym._validate import check_output_path
     from vfgym.axis import MoveSet, MoveSets, load_axis, write_axis
-    from vfgym.identify.excite import MIN_SATURATED_S
     from vfgym.identify.plan import make_plan
     from vfgym.identify.simulated import record_capture
     from vfgym.io.vcd import train_edges, write_edges
@@ -209,6 +208,32 @@ def _plan(axis: Any, settings: Any, out: Path, true_axis: str | None) -> int:
             f"  {sc.name:22s} {sc.profile:9s} {sc.distance_rad:+9.4g} rad at "
             f"{sc.speed_rad_s:7.4g} rad/s, {sc.duration_s:.3g} s"
         )
+    _say_saturation(plan)
+    print(f"wrote {yaml_path} (the moves: block) and {vcd_path} (pulse/dir to replay)")
+    print(
+        f"wrote {dry_path}: a 1 MHz capture of the moves on the nominal plant (simulated), "
+        "for a dry run of vfgym identify --from-enable"
+    )
+    if true is not None:
+        on = check_output_path("--out", str(out / f"identify-moves-on-{true.name}.vcd"))
+        record_capture(true.plant, plan.pulses, on, start_s=DRY_START_S, rest_s=DRY_REST_S,
+                       length_s=length, settings=settings)  # fmt: skip
+        print(
+            f"wrote {on}: the same capture of the moves on the plant of {true_axis} "
+            "(simulated), to identify with --axis on the nominal file and --from-enable"
+        )
+    print(
+        "to run them: start the capture with the drive disabled, enable it, start the pulse "
+        "train 0.2 s later, stop 10 ms after the last move; then vfgym identify --from-enable"
+    )
+    return 0
+
+
+def _say_saturation(plan: Any) -> None:
+    """Whether the plan's pulse train holds the nominal plant at its torque limit long
+    enough for the inertia and the drive's gain to separate, and if not, from what."""
+    from vfgym.identify.excite import MIN_SATURATED_S
+
     ms = MIN_SATURATED_S * 1e3
     if plan.saturated_s >= MIN_SATURATED_S:
         print(
@@ -234,24 +259,6 @@ def _plan(axis: Any, settings: Any, out: Path, true_axis: str | None) -> int:
             "prior (--gain-prior; else the nominal file's torque_per_count range, else "
             "+-10 %)"
         )
-    print(f"wrote {yaml_path} (the moves: block) and {vcd_path} (pulse/dir to replay)")
-    print(
-        f"wrote {dry_path}: a 1 MHz capture of the moves on the nominal plant (simulated), "
-        "for a dry run of vfgym identify --from-enable"
-    )
-    if true is not None:
-        on = check_output_path("--out", str(out / f"identify-moves-on-{true.name}.vcd"))
-        record_capture(true.plant, plan.pulses, on, start_s=DRY_START_S, rest_s=DRY_REST_S,
-                       length_s=length, settings=settings)  # fmt: skip
-        print(
-            f"wrote {on}: the same capture of the moves on the plant of {true_axis} "
-            "(simulated), to identify with --axis on the nominal file and --from-enable"
-        )
-    print(
-        "to run them: start the capture with the drive disabled, enable it, start the pulse "
-        "train 0.2 s later, stop 10 ms after the last move; then vfgym identify --from-enable"
-    )
-    return 0
 
 
 def _identify(axis: Any, settings: Any, args: argparse.Namespace) -> int:
