@@ -131,6 +131,23 @@ class ServoConfig(EnvConfig):
         return round(self.settle_time_s * self.plant.tick_hz)
 
 
+MOTOR_STATE = ("motor_angle_rad", "motor_speed_rad_s", "motor_torque_nm")
+"""The simulator's continuous state in every step's ``info`` (for evaluation only: a drive
+measures encoder counts, its speed counter and the torque it commands, which the
+observation holds)."""
+_MOTOR_SLOTS = (L.S_THETA, L.S_OMEGA, L.S_TAU)
+
+
+def motor_state(w: np.ndarray) -> dict[str, float]:
+    """The motor's angle, speed and torque applied in workspace row ``w`` (:data:`MOTOR_STATE`)."""
+    return {k: float(w[B.W_ST + j]) for k, j in zip(MOTOR_STATE, _MOTOR_SLOTS, strict=True)}
+
+
+def motor_state_rows(W: np.ndarray) -> np.ndarray:
+    """:func:`motor_state` of every row of a batch of workspaces, (rows, 3)."""
+    return W[:, [B.W_ST + j for j in _MOTOR_SLOTS]].copy()
+
+
 class ServoCore:
     """VFServo-v0's configuration and the Python half of its step, shared by the single env
     and the vector env so that both compute the same numbers: filling a workspace row at
@@ -172,6 +189,7 @@ class ServoCore:
             B.C_VMAX: ep.plant.pulse_top_speed_rad_s,
             B.C_SHAPE: c.tracking_weight,
             B.C_VIOL: 1.0 if c.terminate_on_violation else 0.0,
+            B.C_K3: (ep.model or ep.plant).torque_per_count_nm,  # as the drive is set
         }
         for k, v in cfg.items():
             w[k] = v
@@ -195,6 +213,7 @@ class ServoCore:
         if violation:
             reward -= c.violation_penalty
         info = _scored_info(ep, s.metrics, s.cost, s.constraints)
+        info.update(motor_state(w))
         info["ended_settled"] = bool(flags & B.SETTLED)
         info["ended_violation"] = violation
         info["control_ticks"] = int(w[B.X_TICK_END])
@@ -230,24 +249,29 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Observation Space
 
-    ``Box(-10, 10, (37,), float32)``, each entry clipped. With P the command on the last
-    tick simulated (0 before the first), θ, ω, τ the motor's angle, speed and torque, D
-    the move's size (its largest move, or amplitude) and W the in-position half-width:
+    ``Box(-10, 10, (37,), float32)``, each entry clipped: what a drive measures (its
+    encoder count, its speed counter, the pulses it was sent, the torque it commands),
+    never the simulator's continuous state, which is in ``info`` for evaluation only. With
+    P the command on the last tick simulated (0 before the first), c·q the motor's
+    position as the encoder counts it (count c, count angle q), x the speed counter's
+    latched output (B counts a count over the sample period of Ns ticks), u the servo's
+    error (counts), K3 the drive's gain as set (the modelled plant's), D the move's size
+    (its largest move, or amplitude) and W the in-position half-width:
 
     | index | name | definition |
     |---|---|---|
-    | 0 | error | (P − θ) / D |
-    | 1 | error_log | sign(P − θ) · log10(1 + \\|P − θ\\| / W) / 4 |
-    | 2 | remaining | (target − θ) / D |
+    | 0 | error | (P − c·q) / D |
+    | 1 | error_log | sign(P − c·q) · log10(1 + \\|P − c·q\\| / W) / 4 |
+    | 2 | remaining | (target − c·q) / D |
     | 3 | command_remaining | (target − P) / D |
     | 4 | command_ahead | (command at the end of the next interval − P) / D |
-    | 5 | speed | ω / (δ·f) |
-    | 6 | accel | mean acceleration over the last interval / motor limit |
-    | 7 | torque | τ / peak torque |
+    | 5 | speed_counter | (x / B) · q / (Ns·T) / (δ·f): the counter's speed over the top speed |
+    | 6 | accel | change of that speed over the last interval / its length / motor limit |
+    | 7 | torque_command | K3 · u / peak torque |
     | 8 | torque_saturation | share of the last interval's ticks at the torque limit |
     | 9 | pulse_error | (P − n·δ) / D, the V-F controller's own error |
-    | 10 | following_error | servo position counter (counts) × count angle / D |
-    | 11 | overshoot_log | log10(1 + overshoot so far / W) / 4 |
+    | 10 | following_error | servo position counter (counts) × q / D |
+    | 11 | overshoot_log | log10(1 + overshoot of c·q so far, seen at the intervals' ends / W) / 4 |
     | 12 | accel_peak | peak pulse-train acceleration so far / motor limit |
     | 13 | progress | ticks simulated / ticks of the move |
     | 14-17 | setting_* | the settings in force, as an action in [-1, 1] |
@@ -399,8 +423,10 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         Returns
         -------
         tuple
-            ``(observation, reward, terminated, truncated, info)``; ``info`` is empty until
-            the episode ends, then holds the scored move's info.
+            ``(observation, reward, terminated, truncated, info)``; ``info`` holds the
+            motor's continuous state (:data:`MOTOR_STATE`: angle, speed, torque applied;
+            for evaluation, not in the observation) and, at the episode's end, the scored
+            move's info.
 
         Raises
         ------
@@ -427,7 +453,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
             self._record.append((np.array(a, dtype=np.float64), int(self._w[B.X_TICK_END])))
         obs = self._obs32.copy()
         if not flags & _ENDED:
-            return obs, reward, False, False, {}
+            return obs, reward, False, False, motor_state(self._w)
         self._ended = True
         reward, info = self.core.finish(self._w, self._ep, flags)
         return obs, reward, bool(flags & B.TERMINATED), bool(flags & B.TRUNCATED), info

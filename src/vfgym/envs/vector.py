@@ -27,7 +27,14 @@ from vfgym.space import settings_to_dict
 
 from . import _batch as B
 from ._common import Episode, scored_info
-from .servo import ServoConfig, ServoCore, raise_bad_action, servo_spaces
+from .servo import (
+    MOTOR_STATE,
+    ServoConfig,
+    ServoCore,
+    motor_state_rows,
+    raise_bad_action,
+    servo_spaces,
+)
 from .tune import ActionMap, TuneConfig, evaluate_pairs, tune_spaces
 
 Infos = dict[str, Any]
@@ -114,6 +121,21 @@ class _BatchVectorEnv(VectorEnv):
     def _observations(self) -> np.ndarray:
         """The current observations, a new (num_envs, n) float32 array."""
         raise NotImplementedError
+
+    def _running_infos(self) -> Infos:
+        """The batched info of the sub-envs the last step advanced whose episode goes on
+        (none here; VFServo-v0: the motor's continuous state)."""
+        return {}
+
+    def running_state(self) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
+        """The state in the info of the sub-envs whose episode goes on after a step.
+
+        Returns
+        -------
+        tuple of (numpy.ndarray, dict) or None
+            The sub-envs' mask and per-key arrays (:meth:`_running_infos`); None here.
+        """
+        return None
 
     _SIMULATE_CHECKS_ACTIONS = False
     """True when :meth:`_simulate` itself refuses a NaN or out-of-box action before it
@@ -262,7 +284,7 @@ class _BatchVectorEnv(VectorEnv):
             for i, info in ends.items():
                 per_env.setdefault(i, []).append(info)
             self._autoreset = term | trunc
-        infos: Infos = {}
+        infos = self._running_infos()
         for i in sorted(per_env):
             for info in per_env[i]:
                 infos = self._add_info(infos, info, i)
@@ -429,8 +451,33 @@ class VFServoVectorEnv(_BatchVectorEnv):
         self._lanes = B.lane_scratch(n, self.core.interval_ticks, self.core.acc_window)
         self._eps: list[Episode | None] = [None] * n
         self._obs = slice(B.W_OBS, B.W_OBS + self.core.n_obs)
+        self._running = np.zeros(n, dtype=np.bool_)  # stepped last, episode going on
+        self._state = np.zeros((n, len(MOTOR_STATE)))
 
     _SIMULATE_CHECKS_ACTIONS = True  # step_batch: every action checked before any step
+
+    def running_state(self) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
+        """The motor's continuous state after the last step, for the sub-envs it advanced
+        whose episode goes on (those that ended have it in their end info); for
+        evaluation only, as a single env's ``info``.
+
+        Returns
+        -------
+        tuple of (numpy.ndarray, dict)
+            The sub-envs' mask, and each of :data:`vfgym.envs.servo.MOTOR_STATE`'s
+            quantities per sub-env.
+        """
+        return self._running, {k: self._state[:, j] for j, k in enumerate(MOTOR_STATE)}
+
+    def _running_infos(self) -> Infos:
+        if not self._running.any():
+            return {}
+        mask, arrays = self.running_state()
+        out: Infos = {}
+        for k, a in arrays.items():
+            out[k] = np.where(mask, a, 0.0)
+            out[f"_{k}"] = mask.copy()
+        return out
 
     @property
     def accel_law(self) -> str:
@@ -466,6 +513,8 @@ class VFServoVectorEnv(_BatchVectorEnv):
         if bad >= 0:
             raise_bad_action(actions[bad], self.core.accel_law, bad)
         flags = self._flags
+        self._running = active & ((flags & B.ENDED) == 0)
+        self._state = motor_state_rows(self._W)
         if active is self._all:  # every sub-env stepped (same-step autoreset, SB3)
             rew = self._W[:, B.X_REWARD].copy()
         else:

@@ -10,7 +10,9 @@ L = value, docs/model.md §1). For each move, offline:
 
 1. the base: the settings model's robust setting (feasible on the axis's design plants);
 2. for each design plant, its *signature*: VFServo-v0's dynamic observations over the
-   hold, the base in force (the same command, so they differ by the plant alone);
+   hold, the base in force (the same command, so they differ by the plant alone): what
+   the drive measures (encoder counts, its speed counter, the torque it commands), never
+   the simulator's continuous state;
 3. for each design plant, a *continuation*: a residual action (in
    :class:`vfgym.space.Relative`'s coordinates) reached by a linear ramp from the end of
    the hold, searched by CMA-ES (``cmaes``) for the least cost on that plant, feasible on
@@ -45,7 +47,8 @@ from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.scoring import Scheduler
 
 N_SIGNATURE = 14
-"""VFServo-v0's dynamic observations before the settings in force (error ... progress)."""
+"""VFServo-v0's dynamic observations before the settings in force (error ... progress):
+what the drive measures (:data:`vfgym.envs.servo.SERVO_FEATURES`)."""
 SCALE = (1.0, 0.0, 1.0, 1.0)
 """Residual scales (value, L/value, k, Ts/Tf): ±1 moves a coordinate half its range; L/value
 held at the base's."""
