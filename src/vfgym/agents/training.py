@@ -27,7 +27,15 @@ from vfgym.io.runs import read_yaml, write_text, write_yaml
 from vfgym.moves.scenarios import Scenario
 
 from .hyperparams import POLICIES, algo_class
-from .loaded import Agent, env_options, make_env, rollout_info, vecnormalize_path
+from .loaded import (
+    SERVO_OBSERVATION,
+    Agent,
+    check_observation,
+    env_options,
+    make_env,
+    rollout_info,
+    vecnormalize_path,
+)
 from .selection import (
     BEST_COSTS,
     MIN_GAIN,
@@ -225,6 +233,7 @@ def check_same_run(
                 f"{run}: holds a run with {key}={prev.get(key)!r}, not {value!r}; "
                 "choose another --name"
             )
+    check_observation(prev, str(run))
     old_kw = (prev.get("hyperparams") or {}).get("env_kwargs") or {}
     if env_kwargs is not None and "hyperparams" in prev and old_kw != env_kwargs:
         keys = sorted(
@@ -292,6 +301,8 @@ def train(
         "threads": torch.get_num_threads(),
         "hyperparams": params,
     }
+    if env_id == "vfgym/VFServo-v0":
+        config["observation"] = SERVO_OBSERVATION
     check_same_run(run, algo, env_id, seed, params.get("env_kwargs") or {})
     write_yaml(run / "config.yaml", config)
 
