@@ -258,6 +258,24 @@ def _residual_base(spec: str, measures: Any = None, plants: Any = ()) -> Any:
     return settings_from_dict(data, source=spec)
 
 
+def acting_kwargs(params: dict[str, Any]) -> dict[str, Any]:
+    """The env arguments a trained agent acts with, validated and deployed: its training
+    env's (``env_kwargs``) with ``eval_env_kwargs`` over them (e.g. a one-decision agent
+    trained without the shield and judged with it).
+
+    Parameters
+    ----------
+    params : dict
+        The run's hyperparameters.
+
+    Returns
+    -------
+    dict
+        The env arguments.
+    """
+    return {**(params.get("env_kwargs") or {}), **(params.get("eval_env_kwargs") or {})}
+
+
 def make_env(env_id: str, env_kwargs: dict[str, Any] | None = None, **kw: Any) -> Any:
     """One (non-vector) environment (``env_kwargs`` through :func:`env_options`)."""
     import gymnasium as gym
@@ -330,8 +348,9 @@ class Agent:
         return self.model.predict(obs, state=state, episode_start=start, deterministic=True)
 
     def env_kwargs(self, axis: str | Axis | None = None) -> dict[str, Any]:
-        """The env arguments it was trained with (``axis`` replacing the trained one)."""
-        kw = dict((self.config.get("hyperparams") or {}).get("env_kwargs") or {})
+        """The env arguments it acts with (:func:`acting_kwargs`: its training env's with
+        ``eval_env_kwargs`` over them; ``axis`` replacing the trained one)."""
+        kw = acting_kwargs(self.config.get("hyperparams") or {})
         if axis is not None:
             kw["axis"] = axis
         return kw
@@ -560,6 +579,7 @@ __all__ = [
     "VECNORMALIZE_FILE",
     "Agent",
     "CheckedBase",
+    "acting_kwargs",
     "agent_policy",
     "check_observation",
     "env_options",

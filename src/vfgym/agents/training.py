@@ -30,6 +30,7 @@ from .hyperparams import POLICIES, algo_class
 from .loaded import (
     SERVO_OBSERVATION,
     Agent,
+    acting_kwargs,
     check_observation,
     env_options,
     make_env,
@@ -105,7 +106,7 @@ def _callbacks(
         def __init__(self, freq: int, scenarios: list[Scenario], plants: list[Any]) -> None:
             super().__init__()
             self.freq, self.scenarios, self.plants = freq, scenarios, plants
-            self.env = make_env(env_id, env_kwargs)
+            self.env = make_env(env_id, acting_kwargs(params))
             self.best, self.best_costs, self.best_ok = best_so_far(run)
             self.next_at = 0
 
@@ -321,6 +322,7 @@ def train(
             "policy",
             "policy_kwargs",
             "env_kwargs",
+            "eval_env_kwargs",
             "action_noise_std",
             "eval_freq",
             "n_eval_scenarios",
