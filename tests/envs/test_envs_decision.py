@@ -152,6 +152,8 @@ def test_told_features_are_the_responses_difference_and_the_nearest_design_plant
         told = 2 * (design[int(np.argmin(d))].inertia - lo) / (hi - lo) - 1
         assert obs[-2] == pytest.approx(told, abs=1e-6)
         assert -1.0 <= obs[-1] <= 1.0 and abs(obs[-1] - (2 * (f - lo) / (hi - lo) - 1)) < 0.3
+        _, _, _, _, info = env.step(np.array([1, 0, -1, 0, -1], np.float32))
+        assert not info["shielded"] and "told_plant" not in info  # telling is not shielding
 
 
 def test_on_an_exact_axis_the_shield_checks_the_modelled_plant():

@@ -382,7 +382,7 @@ class DecisionCore:
         ]
         checked: list[_Held] = []
         told = -1
-        if self.design:
+        if self.shield:
             told = self.told()
             held = self._move_cache(ep)
             for p in [self.design[told], *self.checks[told]]:
