@@ -10,6 +10,7 @@ against the robust per-move base they started from and against an oracle.
     python benchmarks/bench_adaptive.py --runs RUN [RUN ...] --exact --moves 256 --no-oracle
     python benchmarks/bench_adaptive.py --runs RUN [RUN ...] --checkpoints
     python benchmarks/bench_adaptive.py --eval-time 32,256 [--fit-runs RUNS]
+    python benchmarks/bench_adaptive.py --runs RUN [RUN ...] --scheduler --curves
 
 Held-out pairs: the axis's test moves (the first ``--moves``) × ``--plants`` true plants
 drawn within its uncertainty from ``--plant-seed`` (default
@@ -25,7 +26,15 @@ Every tuner is judged in one :func:`vfgym.evaluate` call on those pairs:
   VFTune-v0 agent's is the model's look-up, unchecked);
 * **oracle**: each (move, true plant)'s own optimum, found knowing the true plant
   (:func:`vfgym.permove.optima.move_optima` with ``true_plants``); cached in ``--out``;
+* with ``--scheduler``, :class:`vfgym.permove.adaptive.EstimatingScheduler` on the fit's
+  model (its default options), the hand-written reference; cached in ``--out``;
 * each run's ``best_model.zip`` (a :class:`vfgym.scoring.Scheduler`).
+
+``--curves`` judges each run's checkpoints on the same held-out pairs (for the picture
+only: the runs chose their best model on their validation pairs) and draws
+``learning_curves.png``: the held-out mean cost over the base's against steps, mean over
+seeds (the band: the seeds' range), one line per algorithm, with the base, the scheduler
+and the oracle as reference lines.
 
 ``--exact``: the plant known exactly (runs trained without ``--axis``, on the agents' own
 move distribution); the held-out moves are the first ``--moves`` of that distribution's
@@ -44,9 +53,11 @@ call (which computes each move's base) and the next.
 
 Per seed: the held-out mean cost, the pairs feasible, the ratio to the base, the pairs
 where the agent is cheaper / dearer than the base, and the pairs where it breaks a limit
-the base holds (the shipping rule's pairwise feasibility, held out). Per algorithm: mean ± std over
-seeds, the worst seed's feasibility, and the ratios of the mean to the base and to the
-oracle. Writes ``benchmark.md`` (the tables and each run's command) and
+the base holds (the shipping rule's pairwise feasibility, held out). Per algorithm (as
+rl-baselines3-zoo's ``benchmark.md``): the env, steps, wall time of a run (its TensorBoard
+log's first to last event), mean ± std over seeds, the worst seed's feasibility and
+breaks where the base holds, and the ratios of the mean to the base, the scheduler and
+the oracle. Writes ``benchmark.md`` (the tables and each run's command) and
 ``benchmark.json`` into ``--out``.
 """
 
@@ -136,6 +147,88 @@ def oracle(axis, test, variants, out: Path) -> Judged:
     j = Judged("oracle", [o.cost for o in opt], [bool(o.feasible) for o in opt], how)
     cache.write_text(json.dumps({"key": key, **asdict(j)}))
     return j
+
+
+def scheduler(axis, fit: Path, test, variants, out: Path) -> Judged:
+    """The EstimatingScheduler (default options) on the fit's model, on the pairs (cached
+    in ``out``: its tables take minutes)."""
+    from vfgym.permove import load_settings_model
+    from vfgym.permove.adaptive import AdaptiveOptions, EstimatingScheduler
+
+    cache = out / "scheduler.json"
+    key = {
+        "axis": axis.name,
+        "moves": [s.name for s in test],
+        "fit": str(fit),
+        "plants": [asdict(v) for v in variants],
+        "options": asdict(AdaptiveOptions()),
+    }
+    if cache.is_file():
+        data = json.loads(cache.read_text())
+        if data["key"] == key:
+            return Judged("scheduler", data["cost"], data["feasible"], data["command"])
+    sched = EstimatingScheduler(axis, load_settings_model(fit))
+    ((c, ok),) = judge([sched], axis, test, variants)
+    how = f"vfgym.permove.EstimatingScheduler on {fit}, default options"
+    j = Judged("scheduler", c.tolist(), [bool(x) for x in ok], how)
+    cache.write_text(json.dumps({"key": key, **asdict(j)}))
+    return j
+
+
+def wall_time(folder: Path) -> float:
+    """A run's training time (s): its TensorBoard log's first to last event."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    times = []
+    for d in (folder / "tb").glob("*"):
+        ea = EventAccumulator(str(d))
+        ea.Reload()
+        for tag in ea.Tags()["scalars"]:
+            times += [e.wall_time for e in ea.Scalars(tag)]
+    return max(times) - min(times) if times else float("nan")
+
+
+def curves(runs, axis, test, variants, base: Judged, refs: list[Judged], path: Path) -> str:
+    """Each run's checkpoints judged on the held-out pairs; the learning curves (held-out
+    mean cost over the base's against steps, mean over seeds and their range) with the
+    reference lines, as a picture at ``path``; returns a markdown table of the points."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from vfgym.agents import load_tuner
+
+    series: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+    for folder in runs:
+        algo = run_label(folder)[0]
+        found = (folder / "checkpoints").glob("model_*_steps.zip")
+        ckpts = sorted((int(q.stem.split("_")[1]), q) for q in found)
+        tuners = [load_tuner(q, axis) for _, q in ckpts]
+        scored = judge(tuners, axis, test, variants)
+        steps = np.array([0] + [k for k, _ in ckpts])
+        ratio = np.array([1.0] + [c.mean() / base.mean for c, _ in scored])
+        series.setdefault(algo, []).append((steps, ratio))
+    fig, ax = plt.subplots(figsize=(7, 4))
+    rows = ["| algorithm | steps | held-out cost / base, mean over seeds | seeds' range |",
+            "| --- | --- | --- | --- |"]  # fmt: skip
+    for algo, runs_ in series.items():
+        n = min(len(s) for s, _ in runs_)
+        steps, ys = runs_[0][0][:n], np.array([r[:n] for _, r in runs_])
+        ax.plot(steps, ys.mean(axis=0), marker=".", label=f"{algo} ({len(runs_)} seeds)")
+        ax.fill_between(steps, ys.min(axis=0), ys.max(axis=0), alpha=0.2)
+        points = zip(steps, ys.mean(axis=0), ys.min(axis=0), ys.max(axis=0), strict=True)
+        rows += [f"| {algo} | {k} | {m:.4f} | {lo:.4f}–{hi:.4f} |" for k, m, lo, hi in points]
+    for ref, style in zip([base, *refs], ["-", "--", ":"], strict=False):
+        ax.axhline(ref.mean / base.mean, color="k", ls=style, lw=1, label=ref.label)
+    ax.set_xlabel("steps")
+    ax.set_ylabel("held-out mean cost / base")
+    ax.legend()
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return "\n".join(rows) + "\n"
 
 
 def start_costs(env, moves, plants) -> tuple[np.ndarray, np.ndarray]:
@@ -243,8 +336,15 @@ def fmt(x: float, d: int = 3) -> str:
     return "nan" if not np.isfinite(x) else f"{x:.{d}f}"
 
 
-def report(base: Judged, orc: Judged | None, runs: list[tuple[Path, Judged]], n_pairs: int) -> str:
-    """The markdown tables (``orc`` None: no oracle row or ratio)."""
+def report(
+    base: Judged,
+    orc: Judged | None,
+    runs: list[tuple[Path, Judged]],
+    n_pairs: int,
+    sched: Judged | None = None,
+) -> str:
+    """The markdown tables (``orc`` None: no oracle row or ratio; ``sched`` None: no
+    scheduler row or ratio)."""
     bc, bok = np.array(base.cost), np.array(base.feasible, bool)
     lines = [
         f"Held-out (move, plant) pairs: {n_pairs}.",
@@ -255,10 +355,12 @@ def report(base: Judged, orc: Judged | None, runs: list[tuple[Path, Judged]], n_
         f"| base ({base.command}) | | | {fmt(base.mean)} | {sum(base.feasible)}/{n_pairs} | "
         "1.000 | | |",
     ]
-    if orc is not None:
+    for ref in (r for r in (orc, sched) if r is not None):
+        c, ok = np.array(ref.cost), np.array(ref.feasible, bool)
         lines.append(
-            f"| oracle | | | {fmt(orc.mean)} | {sum(orc.feasible)}/{n_pairs} | "
-            f"{fmt(orc.mean / base.mean)} | | |"
+            f"| {ref.label} | | | {fmt(ref.mean)} | {sum(ref.feasible)}/{n_pairs} | "
+            f"{fmt(ref.mean / base.mean)} | {int(np.sum(c < bc - 1e-9))} / "
+            f"{int(np.sum(c > bc + 1e-9))} | {int(np.sum(bok & ~ok))} |"
         )
     groups: dict[tuple[str, int, str], list[tuple[int, Judged, float]]] = {}
     for folder, j in runs:
@@ -273,18 +375,21 @@ def report(base: Judged, orc: Judged | None, runs: list[tuple[Path, Judged]], n_
     lines += [
         "",
         "| algorithm | env | steps | wall time / run (s) | mean cost ± std over seeds | "
-        "worst seed feasible | / base | / oracle | seeds |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "worst seed feasible | most breaks where the base holds | / base | / scheduler | "
+        "/ oracle | seeds |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for (algo, steps, env), rows in groups.items():
         means = np.array([j.mean for _, j, _ in rows])
         feas = min(sum(j.feasible) for _, j, _ in rows)
+        breaks = max(int(np.sum(bok & ~np.array(j.feasible, bool))) for _, j, _ in rows)
         wall = float(np.mean([w for *_, w in rows]))
         to_orc = "" if orc is None else fmt(means.mean() / orc.mean)
+        to_sched = "" if sched is None else fmt(means.mean() / sched.mean)
         lines.append(
             f"| {algo} | {env} | {steps} | {fmt(wall, 0)} | {fmt(means.mean())} ± "
-            f"{fmt(means.std())} | {feas}/{n_pairs} | {fmt(means.mean() / base.mean)} | "
-            f"{to_orc} | {len(rows)} |"
+            f"{fmt(means.std())} | {feas}/{n_pairs} | {breaks} | "
+            f"{fmt(means.mean() / base.mean)} | {to_sched} | {to_orc} | {len(rows)} |"
         )
     lines += ["", "Commands:", "", "```"]
     lines += [run_label(f)[3] for f, _ in runs] + ["```"]
@@ -326,6 +431,8 @@ def main(argv: list[str] | None = None) -> int:
         help="only score each run's checkpoints on its validation pairs against its start",
     )
     p.add_argument("--fit-runs", default="runs", help="runs dir holding fit/AXIS (default runs)")
+    p.add_argument("--scheduler", action="store_true", help="the EstimatingScheduler's row")
+    p.add_argument("--curves", action="store_true", help="checkpoints held out: the curves")
     p.add_argument("--plants", type=int, default=16)
     p.add_argument("--plant-seed", type=int, default=VERDICT_PLANT_SEED)
     p.add_argument("--moves", type=int, default=32)
@@ -372,11 +479,16 @@ def main(argv: list[str] | None = None) -> int:
     c0, f0 = scored[0]
     base = Judged("base", c0.tolist(), f0.tolist(), how)
     runs = [
-        (f, Judged(f.name, c.tolist(), ok.tolist(), run_label(f)[3], walls.get(f, float("nan"))))
+        (f, Judged(f.name, c.tolist(), ok.tolist(), run_label(f)[3], walls.get(f, wall_time(f))))
         for f, (c, ok) in zip(folders, scored[1:], strict=True)
     ]
     orc = None if args.no_oracle else oracle(axis, test, variants, out)
-    text = report(base, orc, runs, n)
+    sched = scheduler(axis, base_file, test, variants, out) if args.scheduler else None
+    text = report(base, orc, runs, n, sched)
+    if args.curves:
+        refs = [r for r in (sched, orc) if r is not None]
+        text += "\nLearning curves (learning_curves.png), checkpoints held out:\n\n"
+        text += curves(folders, where, test, variants, base, refs, out / "learning_curves.png")
     head = (f"Axis {axis.name} ({args.axis}); {len(test)} test moves x {len(variants)} plants "
             f"(plant seed {args.plant_seed}).\n\n")  # fmt: skip
     if args.exact:
@@ -384,6 +496,7 @@ def main(argv: list[str] | None = None) -> int:
     print(head + text)
     (out / "benchmark.md").write_text(head + text)
     data = {"base": asdict(base), "oracle": None if orc is None else asdict(orc),
+            "scheduler": None if sched is None else asdict(sched),
             "runs": [{"folder": str(f), **asdict(j)} for f, j in runs]}  # fmt: skip
     (out / "benchmark.json").write_text(json.dumps(data))
     return 0

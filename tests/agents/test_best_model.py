@@ -96,12 +96,33 @@ def test_a_run_folder_is_continued_only_on_the_same_problem(tmp_path):
 
     kw = {"axis": "experiments/axes/loads-uncertain.yaml", "residual": True}
     doc = {"algo": "ppo", "env": "vfgym/VFServo-v0", "seed": 0, "hyperparams": {"env_kwargs": kw}}
-    (tmp_path / "config.yaml").write_text(yaml.safe_dump(doc))
+    (tmp_path / "config.yaml").write_text(yaml.safe_dump(doc | {"observation": "drive"}))
     check_same_run(tmp_path, "ppo", "vfgym/VFServo-v0", 0, dict(kw))  # the same: continued
     with pytest.raises(ValueError, match=r"other env_kwargs \(axis: axis='experiments/axes/"):
         check_same_run(tmp_path, "ppo", "vfgym/VFServo-v0", 0, kw | {"axis": "b.yaml"})
     with pytest.raises(ValueError, match="seed=0, not 1"):
         check_same_run(tmp_path, "ppo", "vfgym/VFServo-v0", 1, kw)
+    (tmp_path / "config.yaml").write_text(yaml.safe_dump(doc))  # before the drive's observation
+    with pytest.raises(ValueError, match="continuous angle, speed and torque; it is now what"):
+        check_same_run(tmp_path, "ppo", "vfgym/VFServo-v0", 0, dict(kw))
+
+
+def test_a_servo_agent_trained_on_the_simulators_state_is_refused_in_one_line(tmp_path):
+    """A VFServo-v0 run saved when its observation held the continuous angle, speed and
+    torque (no ``observation: drive`` in its config) is refused, in one line; a VFTune-v0
+    run, whose observation did not change, is not."""
+    import yaml
+
+    from vfgym.agents import load_agent
+
+    (tmp_path / "best_model.zip").write_bytes(b"not read")
+    for env, refused in (("vfgym/VFServo-v0", True), ("vfgym/VFTune-v0", False)):
+        doc = {"algo": "ppo", "env": env, "seed": 0, "hyperparams": {}}
+        (tmp_path / "config.yaml").write_text(yaml.safe_dump(doc))
+        with pytest.raises(ValueError) as err:
+            load_agent(tmp_path / "best_model.zip")
+        message = str(err.value)
+        assert ("train it again" in message) == refused and "\n" not in message
 
 
 def test_a_gain_below_the_least_share_never_replaces_the_best():

@@ -61,12 +61,28 @@ def test_the_first_evaluation_costs_what_the_base_costs_on_each_validation_pair(
     assert len(said) == 1 and "its residual base itself" in said[0]
 
 
+@pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
+def test_the_shipped_vftune_start_is_what_vfgym_predict_gives(algo):
+    """With the shipped hyperparameters a VFTune-v0 agent's base, hence its start, is the
+    shipped settings model as ``vfgym predict`` uses it (its candidates checked on the
+    move), setting for setting, on train and held-out moves."""
+    from vfgym.moves.distribution import random_scenario
+    from vfgym.permove import load_tuner
+
+    env = make_env("vfgym/VFTune-v0", hp.load(algo, "vfgym/VFTune-v0")["env_kwargs"])
+    predict = load_tuner(None)
+    for sc in [random_scenario(3, "train"), *(random_scenario(i, "test") for i in range(4))]:
+        assert env.unwrapped.config.base_settings(sc) == predict(sc), sc.name
+
+
 def test_validation_size_is_larger_on_an_uncertain_axis():
-    params = hp.load("ppo", "vfgym/VFServo-v0")
-    assert validation_size(params) == params["n_eval_scenarios"] == 32
-    assert validation_size(params, str(AXIS)) == params["n_eval_scenarios_uncertain"] == 256
+    params = {"n_eval_scenarios": 32, "n_eval_scenarios_uncertain": 256}
+    assert validation_size(params) == 32
+    assert validation_size(params, str(AXIS)) == 256
     exact = REPO / "experiments" / "axes" / "loads.yaml"
     assert load_axis(exact).uncertainty.exact and validation_size(params, str(exact)) == 32
+    shipped = hp.load("ppo", "vfgym/VFServo-v0")
+    assert validation_size(shipped, str(AXIS)) == shipped["n_eval_scenarios_uncertain"] == 256
     assert validation_size({"n_eval_scenarios": 5}, str(AXIS)) == 5  # no key: the same count
 
 

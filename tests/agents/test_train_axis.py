@@ -52,7 +52,7 @@ def test_train_on_an_axis_starts_from_the_axis_own_model_or_says_how_to_make_it(
     own = _own_model(tmp_path)
     assert main(args) == 0
     cfg = yaml.safe_load((tmp_path / "train" / "m" / "config.yaml").read_text())
-    assert cfg["hyperparams"]["env_kwargs"]["residual_base"] == f"model-lookup:{own}"
+    assert cfg["hyperparams"]["env_kwargs"]["residual_base"] == f"model:{own}"
 
 
 def test_validation_moves_come_from_the_axis_train_set(tmp_path):
@@ -150,3 +150,26 @@ def test_validation_pairs_on_an_uncertain_axis_are_fixed_true_plants():
     assert plants == validation_plants(8, load_axis(axis))  # every evaluation the same
     assert len(set(plants)) == 8 and all(0.8 <= p.inertia <= 1.25 for p in plants)
     assert validation_plants(3) == [NOMINAL] * 3
+
+
+def test_eval_env_kwargs_are_what_validation_and_the_saved_agent_act_with(tmp_path):
+    """``eval_env_kwargs`` over ``env_kwargs``: the validation env and the loaded agent's
+    env take them (a one-decision agent trained without the shield, judged with it), the
+    training env does not; a key the env does not take is refused before training."""
+    from vfgym.agents import hyperparams as hp
+    from vfgym.agents import load_agent, make_env
+    from vfgym.agents.training import train
+
+    kw = {"residual": True, "residual_base": "paper", "decision": "once", "interval_s": 0.001}
+    over = {"n_timesteps": 16, "n_envs": 2, "n_steps": 8, "batch_size": 16, "eval_freq": 8,
+            "n_eval_scenarios": 2, "env_kwargs": kw}  # fmt: skip
+    over["eval_env_kwargs"] = {"shield": True}
+    params = hp.load("ppo", "vfgym/VFServo-v0", HYPERPARAMS_DIR / "ppo.yml", over)
+    train("ppo", "vfgym/VFServo-v0", params, tmp_path, progress=False, log=lambda m: None)
+    agent = load_agent(tmp_path / "best_model.zip")
+    assert agent.env_kwargs()["shield"] is True and "shield" not in kw
+    env = make_env("vfgym/VFServo-v0", agent.env_kwargs()).unwrapped
+    assert env.core.config.shield and env.decision.design  # the shield on, its plant known
+    with pytest.raises(ValueError, match="unknown env_kwargs key"):
+        hp.load("ppo", "vfgym/VFServo-v0", HYPERPARAMS_DIR / "ppo.yml",
+                over | {"eval_env_kwargs": {"sheild": True}})  # fmt: skip

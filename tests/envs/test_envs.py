@@ -31,12 +31,13 @@ from vfgym import (
     evaluate,
     get_scenario,
 )
+from vfgym.axis import PlantVariant, load_axis
 from vfgym.envs import _batch as B
 from vfgym.envs.servo import SERVO_FEATURES, VFServoEnv
 from vfgym.envs.tune import VFTuneEnv
 from vfgym.moves.features import SCENARIO_FEATURES
 from vfgym.plant import _layout as L
-from vfgym.plant import pack
+from vfgym.plant import pack, simulate
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.scoring import CONSTRAINTS, DEFAULT_WEIGHTS
 from vfgym.space import NAMES, from_action, settings_from_dict, to_action
@@ -44,6 +45,7 @@ from vfgym.space import NAMES, from_action, settings_from_dict, to_action
 TUNE, SERVO = vfgym.envs.ENV_IDS
 PAPER_ACTION = to_action(PAPER_SETTINGS)
 SRC = str(Path(__file__).resolve().parents[2] / "src")
+AXES = Path(__file__).resolve().parents[2] / "experiments" / "axes"
 
 
 def run_episode(env: gym.Env, action, seed: int | None = None, **reset_kw):
@@ -223,7 +225,7 @@ def test_servo_observation_at_reset_and_causality_of_actions():
     env = VFServoEnv(scenario="paper-step")
     obs, _ = env.reset()
     f = dict(zip(SERVO_FEATURES, obs, strict=True))
-    assert f["error"] == 0.0 and f["speed"] == 0.0 and f["progress"] == 0.0
+    assert f["error"] == 0.0 and f["speed_counter"] == 0.0 and f["progress"] == 0.0
     assert f["remaining"] == f["command_remaining"] == f["command_ahead"] == 1.0
     assert np.array_equal(obs[14:18], PAPER_ACTION)
     assert f["profile_step"] == 1.0 and f["direction"] == 1.0
@@ -239,6 +241,44 @@ def test_servo_observation_at_reset_and_causality_of_actions():
     assert np.array_equal(traj[0][:20], traj[1][:20])
     assert not np.array_equal(traj[0][20], traj[1][20])
     assert np.array_equal(traj[0][19, 14:18], acts[19])
+
+
+def test_servo_observation_is_what_a_drive_measures_and_info_the_motor_state():
+    """Each interval's observation, from the same move simulated by vfgym.simulate: the
+    motor's position as its encoder count, the speed counter's latched output, the torque
+    command of the drive's gain as set (the modelled plant's, here 1.1 x off on the true
+    plant); the continuous angle, speed and torque in info alone."""
+    axis = load_axis(AXES / "belt-uncertain.yaml")
+    true = PlantVariant(inertia=1.1, torque_per_count=1.1)
+    env = VFServoEnv(axis=axis, interval_s=1e-3, residual=True)  # 0: the paper's settings
+    obs, _ = env.reset(options={"scenario_seed": 3, "plant": true})
+    ep = env.episode
+    tr = simulate(ep.command, env.core.config.initial_settings, ep.plant, measures=axis.measures)
+    p, q = ep.plant, ep.plant.motor.count_rad
+    ns, b = p.servo.sample_ticks, p.servo.speed_gain_b
+    f = dict(zip(SERVO_FEATURES, obs, strict=True))
+    assert f["error"] == 0.0 and f["torque_command"] == 0.0
+    D, k3_set = ep.scale_rad, ep.model.torque_per_count_nm
+    assert k3_set != ep.plant.torque_per_count_nm
+    seen = 0
+    for step in range(40):
+        obs, _, term, trunc, info = env.step(np.zeros(4, np.float32))
+        if term or trunc:
+            break
+        f = dict(zip(SERVO_FEATURES, obs.astype(np.float64), strict=True))
+        i = env.core.interval_ticks * (step + 1) - 1  # the interval's last tick
+        P, theta = tr.command_rad[i], tr.motor_rad[i]
+        count = math.floor(theta / q)
+        assert f["error"] == pytest.approx((P - count * q) / D, rel=1e-6, abs=1e-7)
+        assert f["remaining"] == pytest.approx((ep.target_rad - count * q) / D, rel=1e-6)
+        speed = tr.speed_count[i] / b * q / (ns / p.tick_hz) / p.pulse_top_speed_rad_s
+        assert f["speed_counter"] == pytest.approx(speed, rel=1e-6, abs=1e-9)
+        torque = k3_set * tr.servo_error_counts[i] / p.motor.peak_torque_nm
+        assert f["torque_command"] == pytest.approx(np.clip(torque, -10, 10), rel=1e-6, abs=1e-9)
+        assert info["motor_angle_rad"] == theta and info["motor_speed_rad_s"] == tr.speed_rad_s[i]
+        assert info["motor_torque_nm"] == tr.torque_nm[i]
+        seen += abs(theta - count * q) > 0.0
+    assert seen > 10  # the continuous angle was off the count: the observation did not see it
 
 
 _MAPPING_ENV = VFServoEnv(scenario="paper-step")

@@ -72,7 +72,7 @@ def compare_runs(env_id, n, steps, mode, seed=21, probe=None, **kwargs):
     rng = np.random.default_rng(seed)
     ended = 0
     for _ in range(steps):
-        a = rng.uniform(-1, 1, (n, 4)).astype(np.float32)
+        a = rng.uniform(-1, 1, (n, *native.single_action_space.shape)).astype(np.float32)
         out_native, out_sync = native.step(a), sync.step(a)
         assert_same(out_native, out_sync)
         ended += int(np.sum(out_native[2] | out_native[3]))

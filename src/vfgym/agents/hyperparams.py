@@ -31,6 +31,7 @@ RUN_KEYS: dict[str, tuple[type, ...]] = {
     "policy": (str,),
     "policy_kwargs": (dict,),
     "env_kwargs": (dict,),
+    "eval_env_kwargs": (dict,),
     "action_noise_std": (int, float),
     "eval_freq": (int,),
     "n_eval_scenarios": (int,),
@@ -294,8 +295,9 @@ def validate(
         out[key] = _checked(where, key, value, types)
     if "policy_kwargs" in out:
         out["policy_kwargs"] = _policy_kwargs(where, out["policy_kwargs"] or {})
-    if "env_kwargs" in out:
-        _env_kwargs(where, out["env_kwargs"] or {}, env_id)
+    for key in ("env_kwargs", "eval_env_kwargs"):
+        if key in out:
+            _env_kwargs(where, out[key] or {}, env_id)
     if out.get("policy", POLICIES[algo]) != POLICIES[algo]:
         raise ValueError(
             f"{where}: policy={out['policy']!r} is not allowed for {algo}: give {POLICIES[algo]}"

@@ -98,6 +98,36 @@ def _without_residual_ratio(cfg: dict[str, Any], model_path: Path) -> dict[str, 
     return cfg
 
 
+SERVO_OBSERVATION = "drive"
+"""What a VFServo-v0 run's ``config.yaml`` says its agent observes (``observation:``): what a
+drive measures (encoder counts, its speed counter, the torque it commands). Runs without it
+observed the simulator's continuous angle, speed and torque: their agents are refused."""
+
+
+def check_observation(cfg: dict[str, Any], where: str) -> None:
+    """Refuse, in one line, a VFServo-v0 run trained on the observation VFServo-v0 had
+    before it became what a drive measures (:data:`SERVO_OBSERVATION`).
+
+    Parameters
+    ----------
+    cfg : dict
+        The run's ``config.yaml``.
+    where : str
+        Names the run or model in the message.
+
+    Raises
+    ------
+    ValueError
+        If the run is such a run.
+    """
+    if cfg.get("env") == "vfgym/VFServo-v0" and cfg.get("observation") != SERVO_OBSERVATION:
+        raise ValueError(
+            f"{where}: a VFServo-v0 agent trained when its observation held the simulator's "
+            "continuous angle, speed and torque; it is now what a drive measures (encoder "
+            "counts, speed counter, torque command): train it again"
+        )
+
+
 def load_model(model_path: str | Path) -> tuple[Any, dict[str, Any]]:
     """The saved model and its run config (algo, env, hyperparams; may be empty)."""
     from vfgym.agents.hyperparams import ALGOS, algo_class
@@ -106,6 +136,7 @@ def load_model(model_path: str | Path) -> tuple[Any, dict[str, Any]]:
     if not path.is_file():
         raise ValueError(f"--model {path}: no such file")
     cfg = run_config(path)
+    check_observation(cfg, f"--model {path}")
     algos = [cfg["algo"]] if cfg.get("algo") in ALGOS else list(ALGOS)
     for algo in algos:
         try:
@@ -155,7 +186,7 @@ class CheckedBase:
         True plants the check keeps the settings feasible on (an axis's design).
     """
 
-    def __init__(self, model: Any, measures: Any, size: int = 4096, plants: Any = ()) -> None:
+    def __init__(self, model: Any, measures: Any, size: int = 8192, plants: Any = ()) -> None:
         self.model, self.measures, self.size, self.plants = model, measures, size, plants
         self._seen: dict[tuple[Scenario, Any], Any] = {}
 
@@ -225,6 +256,24 @@ def _residual_base(spec: str, measures: Any = None, plants: Any = ()) -> Any:
     data = read_yaml(spec)
     data = data["settings"] if isinstance(data, dict) and "settings" in data else data
     return settings_from_dict(data, source=spec)
+
+
+def acting_kwargs(params: dict[str, Any]) -> dict[str, Any]:
+    """The env arguments a trained agent acts with, validated and deployed: its training
+    env's (``env_kwargs``) with ``eval_env_kwargs`` over them (e.g. a one-decision agent
+    trained without the shield and judged with it).
+
+    Parameters
+    ----------
+    params : dict
+        The run's hyperparameters.
+
+    Returns
+    -------
+    dict
+        The env arguments.
+    """
+    return {**(params.get("env_kwargs") or {}), **(params.get("eval_env_kwargs") or {})}
 
 
 def make_env(env_id: str, env_kwargs: dict[str, Any] | None = None, **kw: Any) -> Any:
@@ -299,8 +348,9 @@ class Agent:
         return self.model.predict(obs, state=state, episode_start=start, deterministic=True)
 
     def env_kwargs(self, axis: str | Axis | None = None) -> dict[str, Any]:
-        """The env arguments it was trained with (``axis`` replacing the trained one)."""
-        kw = dict((self.config.get("hyperparams") or {}).get("env_kwargs") or {})
+        """The env arguments it acts with (:func:`acting_kwargs`: its training env's with
+        ``eval_env_kwargs`` over them; ``axis`` replacing the trained one)."""
+        kw = acting_kwargs(self.config.get("hyperparams") or {})
         if axis is not None:
             kw["axis"] = axis
         return kw
@@ -436,7 +486,9 @@ def schedule_of(
 ) -> dict[str, Any]:
     """A VFServo-v0 agent's schedule on one move, as plain data: each control interval's
     start (ms) and the settings in force through it (read back from the observation's
-    ``setting_*`` entries, float32), then the scored move's cost and feasibility.
+    ``setting_*`` entries, float32), then the scored move's cost and feasibility. An agent
+    of one decision a move (``decision="once"``) has its decision replayed interval by
+    interval: the base over the hold, the ramp, the correction (the base if shielded).
 
     Parameters
     ----------
@@ -456,7 +508,21 @@ def schedule_of(
     from vfgym.envs.servo import SERVO_FEATURES
     from vfgym.space import from_action, settings_to_dict
 
-    env = make_env(agent.env_id, agent.env_kwargs(axis))
+    kw = agent.env_kwargs(axis)
+    env = make_env(agent.env_id, kw)
+    plan = None
+    config = env.unwrapped.core.config
+    if config.decision == "once":  # its one decision, replayed interval by interval
+        obs, _ = env.reset(options={"scenario": scenario})
+        action = np.asarray(agent.act(obs), dtype=np.float64)
+        *_, info = env.step(action)
+        act = np.zeros(4) if info["shielded"] else action[:4]
+        hold, ramp = config.hold_intervals, info["ramp"]
+
+        def plan(t: int) -> np.ndarray:
+            return np.zeros(4) if t < hold else act * min(1.0, (t - hold + 1) / ramp)
+
+        env = make_env(agent.env_id, {**kw, "decision": "interval", "shield": False})
     law = env.unwrapped.accel_law
     interval_ms = env.unwrapped.core.config.interval_s * 1e3
     first = SERVO_FEATURES.index("setting_value")
@@ -464,7 +530,8 @@ def schedule_of(
     rows: list[dict[str, Any]] = []
     step = 0
     while True:
-        obs, _, terminated, truncated, info = env.step(agent.act(obs))
+        a = agent.act(obs) if plan is None else plan(step)
+        obs, _, terminated, truncated, info = env.step(a)
         s = settings_to_dict(from_action(obs[first : first + 4], law))
         if not rows or rows[-1]["settings"] != s:  # a change of settings starts a row
             rows.append({"from_ms": round(step * interval_ms, 6), "settings": s})
@@ -510,10 +577,13 @@ def servo_agent(model_path: str | Path) -> Any:
 
 __all__ = [
     "BASE_SPECS",
+    "SERVO_OBSERVATION",
     "VECNORMALIZE_FILE",
     "Agent",
     "CheckedBase",
+    "acting_kwargs",
     "agent_policy",
+    "check_observation",
     "env_options",
     "load_agent",
     "load_model",

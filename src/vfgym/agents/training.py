@@ -27,7 +27,16 @@ from vfgym.io.runs import read_yaml, write_text, write_yaml
 from vfgym.moves.scenarios import Scenario
 
 from .hyperparams import POLICIES, algo_class
-from .loaded import Agent, env_options, make_env, rollout_info, vecnormalize_path
+from .loaded import (
+    SERVO_OBSERVATION,
+    Agent,
+    acting_kwargs,
+    check_observation,
+    env_options,
+    make_env,
+    rollout_info,
+    vecnormalize_path,
+)
 from .selection import (
     BEST_COSTS,
     MIN_GAIN,
@@ -97,7 +106,7 @@ def _callbacks(
         def __init__(self, freq: int, scenarios: list[Scenario], plants: list[Any]) -> None:
             super().__init__()
             self.freq, self.scenarios, self.plants = freq, scenarios, plants
-            self.env = make_env(env_id, env_kwargs)
+            self.env = make_env(env_id, acting_kwargs(params))
             self.best, self.best_costs, self.best_ok = best_so_far(run)
             self.next_at = 0
 
@@ -225,6 +234,7 @@ def check_same_run(
                 f"{run}: holds a run with {key}={prev.get(key)!r}, not {value!r}; "
                 "choose another --name"
             )
+    check_observation(prev, str(run))
     old_kw = (prev.get("hyperparams") or {}).get("env_kwargs") or {}
     if env_kwargs is not None and "hyperparams" in prev and old_kw != env_kwargs:
         keys = sorted(
@@ -292,6 +302,8 @@ def train(
         "threads": torch.get_num_threads(),
         "hyperparams": params,
     }
+    if env_id == "vfgym/VFServo-v0":
+        config["observation"] = SERVO_OBSERVATION
     check_same_run(run, algo, env_id, seed, params.get("env_kwargs") or {})
     write_yaml(run / "config.yaml", config)
 
@@ -310,6 +322,7 @@ def train(
             "policy",
             "policy_kwargs",
             "env_kwargs",
+            "eval_env_kwargs",
             "action_noise_std",
             "eval_freq",
             "n_eval_scenarios",

@@ -32,6 +32,8 @@ _ENTRY_POINTS = {
 }
 _LAZY = {
     "EnvConfig": "vfgym.envs._common",
+    "N_SIGNATURE": "vfgym.envs._decision",
+    "check_plants": "vfgym.envs._decision",
     "VFTuneEnv": "vfgym.envs.tune",
     "VFServoEnv": "vfgym.envs.servo",
     "VFTuneVectorEnv": "vfgym.envs.vector",
@@ -63,10 +65,12 @@ register_envs()
 
 __all__ = [
     "ENV_IDS",
+    "N_SIGNATURE",
     "EnvConfig",
     "VFServoEnv",
     "VFServoVectorEnv",
     "VFTuneEnv",
     "VFTuneVectorEnv",
+    "check_plants",
     "register_envs",
 ]

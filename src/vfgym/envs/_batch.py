@@ -72,7 +72,9 @@ C_SCALE = _c + 4  # the move's size (rad): observation scale
 C_VMAX = _c + 5  # pulse train top speed δ·f (rad/s)
 C_SHAPE = _c + 6  # tracking-error shaping weight
 C_VIOL = _c + 7  # 1: end the episode on a constraint violation
-C_DIMS = _c + 8  # 4 × (action index, low, high, log, width) for value, error limit, k,
+C_K3 = _c + 8  # the drive's gain K3 as set, the modelled plant's (N·m/count): the torque
+# command the drive knows is K3 as set times its error (the true K3 may differ)
+C_DIMS = _c + 9  # 4 × (action index, low, high, log, width) for value, error limit, k,
 # Ts/Tf (space_table); for a log dimension low and high are stored as log(low), log(high)
 C_RES = C_DIMS + 20  # 1: residual actions, 0: absolute
 C_RSCALE = C_RES + 1  # residual actions: each offset's scale in unit coordinates (4 slots,
@@ -87,11 +89,12 @@ X_REWARD = _x + 3  # reward of the last interval (before the end-of-episode corr
 X_STEPS = _x + 4  # intervals stepped
 X_TICK_END = _x + 5  # ticks simulated under the agent's control
 X_SET = _x + 6  # the action in force, clipped to [-1, 1] (4 slots)
-X_OMEGA0 = X_SET + 4  # speed, saturated ticks and Σ tracking error² at the interval's start
-X_SAT0 = X_SET + 5
+X_SPEED0 = X_SET + 4  # speed counter's speed (rad/s), saturated ticks and Σ tracking
+X_SAT0 = X_SET + 5  # error² at the interval's start
 X_TSQ0 = X_SET + 6
 X_LANE = X_SET + 7  # 1: the last counts are in the lane block's history, not the ring
-W_ACC = X_SET + 8  # accumulator row of the whole move (written at the episode's end)
+X_OVC = X_SET + 8  # overshoot so far in encoder counts, seen at the intervals' ends (rad)
+W_ACC = X_SET + 9  # accumulator row of the whole move (written at the episode's end)
 W_OBS = W_ACC + L.N_ACC
 
 OBS_DYNAMIC = (
@@ -100,9 +103,9 @@ OBS_DYNAMIC = (
     "remaining",
     "command_remaining",
     "command_ahead",
-    "speed",
+    "speed_counter",
     "accel",
-    "torque",
+    "torque_command",
     "torque_saturation",
     "pulse_error",
     "following_error",
@@ -114,7 +117,9 @@ OBS_DYNAMIC = (
     "setting_k",
     "setting_ts_over_tf",
 )
-"""The VFServo-v0 features the kernel writes each interval (definitions in servo.py)."""
+"""The VFServo-v0 features the kernel writes each interval (definitions in servo.py): what
+a drive measures (encoder counts, its speed counter, the pulses it was sent, the torque it
+commands), never the simulator's continuous angle, speed or torque."""
 N_DYN = len(OBS_DYNAMIC)
 
 
@@ -230,9 +235,20 @@ def apply_action(act, w) -> bool:
 
 
 @_jit
-def write_obs(w, cmd, omega0: float, sat0: float, nt: int) -> None:
-    """The dynamic features after an interval of ``nt`` ticks that started at speed
-    ``omega0`` with ``sat0`` saturated ticks so far."""
+def counter_speed(w) -> float:
+    """The speed the drive's speed counter tells (rad/s): its latched output x = B·count
+    over the last sample period of Ns ticks."""
+    p = W_PRM
+    return (
+        w[W_ST + L.S_X] / w[p + L.P_B] * w[p + L.P_COUNT_RAD] / (w[p + L.P_NS] * w[p + L.P_TICK_S])
+    )
+
+
+@_jit
+def write_obs(w, cmd, speed0: float, sat0: float, nt: int) -> None:
+    """The dynamic features after an interval of ``nt`` ticks that started with the speed
+    counter at ``speed0`` (rad/s) and ``sat0`` saturated ticks so far: what the drive
+    measures, the motor's position as its encoder count."""
     o = W_OBS
     st = W_ST
     n = int(w[C_N])
@@ -243,20 +259,23 @@ def write_obs(w, cmd, omega0: float, sat0: float, nt: int) -> None:
     T = w[W_PRM + L.P_TICK_S]
     P = cmd[i - 1] if i > 0 else 0.0
     ahead = cmd[min(i + int(w[C_I]), n) - 1]
-    theta = w[st + L.S_THETA]
-    e = P - theta
+    pos = w[st + L.S_C] * w[W_PRM + L.P_COUNT_RAD]  # the encoder's count, as an angle
+    e = P - pos
+    speed = counter_speed(w)
+    if i > 0 and cmd[i - 1] == (cmd[i - 2] if i > 1 else 0.0):  # the command at rest
+        w[X_OVC] = max(w[X_OVC], w[st + L.S_LASTDIR] * (pos - P))
     w[o + 0] = _clip(e / D)
     w[o + 1] = _clip(math.copysign(math.log10(1.0 + abs(e) / win), e) / 4.0)
-    w[o + 2] = _clip((target - theta) / D)
+    w[o + 2] = _clip((target - pos) / D)
     w[o + 3] = _clip((target - P) / D)
     w[o + 4] = _clip((ahead - P) / D)
-    w[o + 5] = _clip(w[st + L.S_OMEGA] / w[C_VMAX])
-    w[o + 6] = _clip((w[st + L.S_OMEGA] - omega0) / (nt * T) / w[C_LIMIT]) if nt > 0 else 0.0
-    w[o + 7] = _clip(w[st + L.S_TAU] / w[W_PRM + L.P_TPEAK])
+    w[o + 5] = _clip(speed / w[C_VMAX])
+    w[o + 6] = _clip((speed - speed0) / (nt * T) / w[C_LIMIT]) if nt > 0 else 0.0
+    w[o + 7] = _clip(w[C_K3] * w[st + L.S_U] / w[W_PRM + L.P_TPEAK])
     w[o + 8] = (w[st + L.S_SAT] - sat0) / nt if nt > 0 else 0.0
     w[o + 9] = _clip((P - w[st + L.S_N] * w[W_PRM + L.P_DELTA]) / D)
     w[o + 10] = _clip(w[st + L.S_PC] * w[W_PRM + L.P_COUNT_RAD] / D)
-    w[o + 11] = _clip(math.log10(1.0 + w[st + L.S_OVM] / win) / 4.0)
+    w[o + 11] = _clip(math.log10(1.0 + w[X_OVC] / win) / 4.0)
     w[o + 12] = _clip(w[st + L.S_D2MX] * w[W_PRM + L.P_ACC_SCALE] / w[C_LIMIT])
     w[o + 13] = i / n
     for j in range(4):
@@ -274,6 +293,7 @@ def reset_row(w, ring, cmd) -> None:
     w[X_STEPS] = 0.0
     w[X_TICK_END] = 0.0
     w[X_LANE] = 0.0
+    w[X_OVC] = 0.0
     w[W_ACC : W_ACC + L.N_ACC] = 0.0
     write_obs(w, cmd, 0.0, 0.0, 0)
 
@@ -284,7 +304,7 @@ def begin_step(act, w) -> bool:
     action is bad (nothing changed)."""
     if not apply_action(act, w):
         return False
-    w[X_OMEGA0] = w[W_ST + L.S_OMEGA]
+    w[X_SPEED0] = counter_speed(w)
     w[X_SAT0] = w[W_ST + L.S_SAT]
     w[X_TSQ0] = w[W_ST + L.S_TSQM]
     return True
@@ -308,7 +328,7 @@ def interval_flags(w, cmd, i0: int) -> int:
     w[X_COST] = CC.running_cost(st, prm, cost_k)
     w[X_STEPS] += 1.0
     w[X_TICK_END] = i1
-    write_obs(w, cmd, w[X_OMEGA0], w[X_SAT0], i1 - i0)
+    write_obs(w, cmd, w[X_SPEED0], w[X_SAT0], i1 - i0)
     flags = 0
     if i1 >= w[C_END] and (i1 - 1) - st[L.S_LOM] >= w[C_HOLD]:
         flags = TERMINATED | SETTLED

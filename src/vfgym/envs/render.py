@@ -77,3 +77,34 @@ def move_picture(
     fig.canvas.draw()
     rgba = np.asarray(fig.canvas.buffer_rgba())
     return np.ascontiguousarray(rgba[..., :3], dtype=np.uint8)
+
+
+def replay(
+    w0: np.ndarray, ring_len: int, cmd: np.ndarray, actions: list[np.ndarray], ends: list[int]
+) -> np.ndarray:
+    """Every tick of a VFServo-v0 episode so far, simulated again from its start (the
+    workspace row ``w0`` as its reset left it) with the same settings interval by interval
+    (the kernel is deterministic), as trace rows: ``actions[j]`` in force up to tick
+    ``ends[j]``."""
+    from vfgym.plant import _kernel as K
+    from vfgym.plant import _layout as L
+
+    from . import _batch as B
+
+    w = w0.copy()
+    ring = np.zeros(ring_len)
+    B.reset_row(w, ring, cmd)
+    prm = w[B.W_PRM : B.W_PRM + L.N_PARAMS]
+    st = w[B.W_ST : B.W_ST + L.N_STATE]
+    ext = np.zeros(0, dtype=np.int8)
+    parts = []
+    i0 = 0
+    for act, i1 in zip(actions, ends, strict=True):
+        B.apply_action(act, w)
+        part = np.empty((L.N_ROWS, i1 - i0), dtype=np.float64)
+        K.run_segment(cmd, ext, prm, st, ring, i1, part, 1)
+        parts.append(part)
+        i0 = i1
+    if not parts:
+        return np.zeros((L.N_ROWS, 0))
+    return np.concatenate(parts, axis=1)

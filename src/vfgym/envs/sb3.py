@@ -65,6 +65,11 @@ class SB3VecEnv(VecEnv):
         # a truncation (not a termination) is an ended episode's
         limits = (trunc & ~term).tolist() if ends else [False] * self.num_envs
         infos: list[dict[str, Any]] = [{"TimeLimit.truncated": x} for x in limits]
+        running = self.venv.running_state()
+        if running is not None:  # VFServo-v0: the motor's state, as a single env's info
+            mask, arrays = running
+            for i in np.flatnonzero(mask).tolist():
+                infos[i].update({k: float(a[i]) for k, a in arrays.items()})
         for i, info in ends.items():
             info["TimeLimit.truncated"] = limits[i]
             infos[i] = info

@@ -13,7 +13,6 @@ from vfgym._validate import check_choice, check_real
 from vfgym.moves.features import OBS_BOUND, SCENARIO_FEATURES
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
-from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import pack
 from vfgym.plant._notice import announce_compile
@@ -33,6 +32,7 @@ from ._common import (
     as_action,
 )
 from ._common import scored_info as _scored_info
+from ._decision import N_SIGNATURE, DecisionCore
 
 _step_one = B.step_one
 _BAD_ACTION = B.BAD_ACTION
@@ -41,19 +41,41 @@ _ENDED = B.ENDED
 SERVO_FEATURES = B.OBS_DYNAMIC + SCENARIO_FEATURES
 """Names of VFServo-v0's observation entries, in order."""
 SETTING_FIELDS = B.SETTING_FIELDS
+DECISIONS = ("interval", "once")
+"""VFServo-v0's ``decision`` modes: an action every control interval, or one a move."""
+SERVO_HOLD_S = 0.002
+"""With ``decision="once"``: the base is held 2 ms before the decision (the scheduler's
+hold, :class:`vfgym.permove.adaptive.AdaptiveOptions`)."""
 
 
-def servo_spaces() -> tuple[spaces.Box, spaces.Box]:
-    """(observation space, action space) of VFServo-v0."""
-    obs = spaces.Box(-OBS_BOUND, OBS_BOUND, shape=(len(SERVO_FEATURES),), dtype=np.float32)
-    act = spaces.Box(-1.0, 1.0, shape=(len(SPACE),), dtype=np.float32)
+def servo_spaces(config: ServoConfig | None = None) -> tuple[spaces.Box, spaces.Box]:
+    """(observation space, action space) of VFServo-v0 (of its ``config``: with
+    ``decision="once"`` the observation is the hold's response, the base as an action and
+    the move's features)."""
+    n, m = len(SERVO_FEATURES), len(SPACE)
+    if config is not None and config.decision == "once":  # the correction and its ramp
+        n = config.hold_intervals * N_SIGNATURE + len(SETTING_FIELDS) + len(SCENARIO_FEATURES)
+        if config.tell:  # the response's difference, two estimates of each uncertain quantity
+            axis = config.axis
+            d = 0 if axis is None else len(axis.uncertainty.ranges())
+            n += config.hold_intervals * N_SIGNATURE + 2 * d
+        m += 1
+    obs = spaces.Box(-OBS_BOUND, OBS_BOUND, shape=(n,), dtype=np.float32)
+    act = spaces.Box(-1.0, 1.0, shape=(m,), dtype=np.float32)
     return obs, act
 
 
 def raise_bad_action(action: np.ndarray, accel_law: str, index: int | None = None) -> None:
-    """Raise the search space's own ``ValueError`` for an action the kernel refused."""
+    """Raise the search space's own ``ValueError`` for an action the kernel refused (for
+    a one-decision action, its correction's, else one line of its own)."""
+    a = np.asarray(action, dtype=np.float64)
+    if a.shape == (5,) and np.isfinite(a).all() and B.action_ok(a[:4]):
+        where = "action" if index is None else f"actions[{index}]"
+        raise ValueError(
+            f"{where}={a.tolist()} is not allowed: its ramp entry must be a number in [-1, 1]"
+        )
     try:
-        from_action(action, accel_law)  # raises for NaN / out of the box
+        from_action(a[:4] if a.shape == (5,) else action, accel_law)  # NaN / out of the box
     except ValueError as e:
         if index is None:
             raise
@@ -86,7 +108,24 @@ class ServoConfig(EnvConfig):
     terminate_on_violation : bool
         End the episode on a constraint violation.
     violation_penalty : float
-        The extra negative reward of such an end, ≥ 0.
+        The extra negative reward of such an end, ≥ 0 (with ``decision="once"``: of a
+        move that breaks a limit the base holds on the same plant).
+    decision : str
+        ``"interval"``: an action every control interval; ``"once"``: the base held for
+        ``hold_s``, then one residual correction held for the rest of the move, a one-step
+        episode (:mod:`vfgym.envs._decision`; residual actions only).
+    hold_s : float
+        With ``decision="once"``: how long the base is held before the decision (s), a
+        whole number of control intervals, 1 to 100 of them.
+    tell : bool
+        With ``decision="once"``: the observation also holds what the hold's response
+        tells of the plant (its difference from the modelled plant's response, the
+        nearest design plant's quantities and a blend of the three nearest).
+    shield : bool
+        With ``decision="once"``: check the correction on the axis's design plants whose
+        hold response is nearest the one seen (on an exactly known axis, its plant), and
+        run the base instead where it breaks a limit the base holds there.
+
     Raises
     ------
     ValueError
@@ -99,6 +138,10 @@ class ServoConfig(EnvConfig):
     tracking_weight: float = SERVO_TRACKING_WEIGHT
     terminate_on_violation: bool = False
     violation_penalty: float = SERVO_VIOLATION_PENALTY
+    decision: str = "interval"
+    hold_s: float = SERVO_HOLD_S
+    tell: bool = False
+    shield: bool = False
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -114,6 +157,25 @@ class ServoConfig(EnvConfig):
                 f"terminate_on_violation={self.terminate_on_violation!r} must be a bool"
             )
         s(self, "violation_penalty", check_real("violation_penalty", self.violation_penalty, 0.0))
+        check_choice("decision", self.decision, DECISIONS)
+        s(self, "hold_s", check_real("hold_s", self.hold_s, 0.0, 1.0, lo_open=True))
+        for name in ("tell", "shield"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name}={getattr(self, name)!r} must be a bool")
+        if self.decision == "once":
+            if not self.residual:
+                raise ValueError(
+                    "decision='once' needs residual=True: the decision is a correction of the base"
+                )
+            h = self.hold_s / self.interval_s
+            if abs(h - round(h)) > 1e-9 * max(1.0, h) or not 1 <= round(h) <= 100:
+                raise ValueError(
+                    f"hold_s={self.hold_s!r} is not allowed: a whole number of control "
+                    f"intervals (interval_s={self.interval_s!r}), 1 to 100 of them"
+                )
+        for name in ("tell", "shield"):
+            if getattr(self, name) and self.decision != "once":
+                raise ValueError(f"{name}=True is not allowed here: it needs decision='once'")
 
     def default_base(self) -> Settings:
         """The base of residual actions when ``residual_base`` is None, and the settings
@@ -126,9 +188,31 @@ class ServoConfig(EnvConfig):
         return self.plant.whole_ticks("interval_s", self.interval_s)
 
     @property
+    def hold_intervals(self) -> int:
+        """Control intervals the base is held before a ``decision="once"``."""
+        return round(self.hold_s / self.interval_s)
+
+    @property
     def hold_ticks(self) -> int:
         """Ticks the motor must stay in position to count as settled."""
         return round(self.settle_time_s * self.plant.tick_hz)
+
+
+MOTOR_STATE = ("motor_angle_rad", "motor_speed_rad_s", "motor_torque_nm")
+"""The simulator's continuous state in every step's ``info`` (for evaluation only: a drive
+measures encoder counts, its speed counter and the torque it commands, which the
+observation holds)."""
+_MOTOR_SLOTS = (L.S_THETA, L.S_OMEGA, L.S_TAU)
+
+
+def motor_state(w: np.ndarray) -> dict[str, float]:
+    """The motor's angle, speed and torque applied in workspace row ``w`` (:data:`MOTOR_STATE`)."""
+    return {k: float(w[B.W_ST + j]) for k, j in zip(MOTOR_STATE, _MOTOR_SLOTS, strict=True)}
+
+
+def motor_state_rows(W: np.ndarray) -> np.ndarray:
+    """:func:`motor_state` of every row of a batch of workspaces, (rows, 3)."""
+    return W[:, [B.W_ST + j for j in _MOTOR_SLOTS]].copy()
 
 
 class ServoCore:
@@ -172,6 +256,7 @@ class ServoCore:
             B.C_VMAX: ep.plant.pulse_top_speed_rad_s,
             B.C_SHAPE: c.tracking_weight,
             B.C_VIOL: 1.0 if c.terminate_on_violation else 0.0,
+            B.C_K3: (ep.model or ep.plant).torque_per_count_nm,  # as the drive is set
         }
         for k, v in cfg.items():
             w[k] = v
@@ -195,6 +280,7 @@ class ServoCore:
         if violation:
             reward -= c.violation_penalty
         info = _scored_info(ep, s.metrics, s.cost, s.constraints)
+        info.update(motor_state(w))
         info["ended_settled"] = bool(flags & B.SETTLED)
         info["ended_violation"] = violation
         info["control_ticks"] = int(w[B.X_TICK_END])
@@ -216,6 +302,15 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     the whole move, so online tuning compares like for like with fixed settings from
     :func:`vfgym.evaluate` (a constant action gives exactly ``evaluate``'s cost).
 
+    With ``decision="once"`` (residual actions) an episode is one decision instead
+    (:mod:`vfgym.envs._decision`): the base held for ``hold_s``; the observation, what the
+    drive measured over the hold (features 0-13 of each interval), the base as an action,
+    the move's features (and with ``tell`` what the response tells of the plant); the
+    action, a correction and the length of its ramp (5 entries), held to the move's end;
+    the reward, 10 × the share of the base's cost on the same (move, plant) saved; the
+    episode ends ``terminated``. ``info`` adds ``base_cost``, ``base_feasible``,
+    ``shielded`` and ``ramp``.
+
     ## Action Space
 
     ``Box(-1, 1, (4,), float32)``: value, error limit L, k and Ts/Tf for the next
@@ -230,24 +325,29 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Observation Space
 
-    ``Box(-10, 10, (37,), float32)``, each entry clipped. With P the command on the last
-    tick simulated (0 before the first), θ, ω, τ the motor's angle, speed and torque, D
-    the move's size (its largest move, or amplitude) and W the in-position half-width:
+    ``Box(-10, 10, (37,), float32)``, each entry clipped: what a drive measures (its
+    encoder count, its speed counter, the pulses it was sent, the torque it commands),
+    never the simulator's continuous state, which is in ``info`` for evaluation only. With
+    P the command on the last tick simulated (0 before the first), c·q the motor's
+    position as the encoder counts it (count c, count angle q), x the speed counter's
+    latched output (B counts a count over the sample period of Ns ticks), u the servo's
+    error (counts), K3 the drive's gain as set (the modelled plant's), D the move's size
+    (its largest move, or amplitude) and W the in-position half-width:
 
     | index | name | definition |
     |---|---|---|
-    | 0 | error | (P − θ) / D |
-    | 1 | error_log | sign(P − θ) · log10(1 + \\|P − θ\\| / W) / 4 |
-    | 2 | remaining | (target − θ) / D |
+    | 0 | error | (P − c·q) / D |
+    | 1 | error_log | sign(P − c·q) · log10(1 + \\|P − c·q\\| / W) / 4 |
+    | 2 | remaining | (target − c·q) / D |
     | 3 | command_remaining | (target − P) / D |
     | 4 | command_ahead | (command at the end of the next interval − P) / D |
-    | 5 | speed | ω / (δ·f) |
-    | 6 | accel | mean acceleration over the last interval / motor limit |
-    | 7 | torque | τ / peak torque |
+    | 5 | speed_counter | (x / B) · q / (Ns·T) / (δ·f): the counter's speed over the top speed |
+    | 6 | accel | change of that speed over the last interval / its length / motor limit |
+    | 7 | torque_command | K3 · u / peak torque |
     | 8 | torque_saturation | share of the last interval's ticks at the torque limit |
     | 9 | pulse_error | (P − n·δ) / D, the V-F controller's own error |
-    | 10 | following_error | servo position counter (counts) × count angle / D |
-    | 11 | overshoot_log | log10(1 + overshoot so far / W) / 4 |
+    | 10 | following_error | servo position counter (counts) × q / D |
+    | 11 | overshoot_log | log10(1 + overshoot of c·q so far, seen at the intervals' ends / W) / 4 |
     | 12 | accel_peak | peak pulse-train acceleration so far / motor limit |
     | 13 | progress | ticks simulated / ticks of the move |
     | 14-17 | setting_* | the settings in force, as an action in [-1, 1] |
@@ -290,6 +390,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     accel_law="rise", interval_s=1e-3, settle_time_s=5e-3,
     initial_settings=PAPER_SETTINGS, tracking_weight=0.0, terminate_on_violation=False,
     violation_penalty=5.0, residual=False, residual_scale=0.25, residual_base=None,
+    decision="interval", hold_s=0.002, tell=False, shield=False,
     axis=LOADS_AXIS, weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``; see
     Parameters.
 
@@ -316,7 +417,8 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         in position to end the episode), ``initial_settings`` (the settings in force
         before the first action), ``tracking_weight`` (weight of the tracking-error
         shaping term; 0: none), ``terminate_on_violation`` and ``violation_penalty`` (end
-        on a constraint violation, with this extra negative reward).
+        on a constraint violation, with this extra negative reward), ``decision``,
+        ``hold_s``, ``tell`` and ``shield`` (one decision a move, above).
 
     Raises
     ------
@@ -338,8 +440,16 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         self.core = ServoCore(ServoConfig(scenario, **options))
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
+            if self.core.config.decision == "once":
+                raise ValueError(
+                    f"render_mode={render_mode!r} is not allowed with decision='once': "
+                    "render the per-interval env"
+                )
         self.render_mode = render_mode
-        self.observation_space, self.action_space = servo_spaces()
+        self.observation_space, self.action_space = servo_spaces(self.core.config)
+        once = self.core.config.decision == "once"
+        self.decision: DecisionCore | None = DecisionCore(self.core) if once else None
+        self._once_obs: np.ndarray | None = None
         self._w = np.zeros(self.core.width, dtype=np.float64)
         self._w0 = self._w.copy()
         self._ring = np.zeros(self.core.ring_len, dtype=np.float64)
@@ -380,8 +490,11 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         self._ep = ep
         self._cmd = ep.command
         announce_compile("servo env", "VFServo-v0's step", _step_one)
-        self.core.start(self._w, self._ring, self._cmd, ep)
         self._ended = False
+        if self.decision is not None:
+            self._once_obs = self.decision.reset(ep)
+            return self._once_obs.copy(), {"scenario": ep.scenario.name}
+        self.core.start(self._w, self._ring, self._cmd, ep)
         if self.render_mode is not None:
             self._w0 = self._w.copy()
             self._record = []
@@ -398,8 +511,10 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         Returns
         -------
         tuple
-            ``(observation, reward, terminated, truncated, info)``; ``info`` is empty until
-            the episode ends, then holds the scored move's info.
+            ``(observation, reward, terminated, truncated, info)``; ``info`` holds the
+            motor's continuous state (:data:`MOTOR_STATE`: angle, speed, torque applied;
+            for evaluation, not in the observation) and, at the episode's end, the scored
+            move's info.
 
         Raises
         ------
@@ -413,6 +528,15 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
                 "call reset() before step(): "
                 + ("the episode has ended" if self._ended else "no episode yet")
             )
+        if self.decision is not None:
+            a = np.asarray(action, dtype=np.float64)
+            if a.shape != (5,):
+                raise ValueError(f"action must hold 5 numbers in [-1, 1], got shape {a.shape}")
+            if not B.action_ok(a):
+                raise_bad_action(a, self.core.accel_law)
+            self._ended = True
+            reward, info = self.decision.decide(a)
+            return np.array(self._once_obs, dtype=np.float32), reward, True, False, info
         a = action
         # the fast path takes a 1-D float64 array as it is (the kernel checks its length
         # and values); anything else goes through as_action, so that one kernel compiles
@@ -426,7 +550,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
             self._record.append((np.array(a, dtype=np.float64), int(self._w[B.X_TICK_END])))
         obs = self._obs32.copy()
         if not flags & _ENDED:
-            return obs, reward, False, False, {}
+            return obs, reward, False, False, motor_state(self._w)
         self._ended = True
         reward, info = self.core.finish(self._w, self._ep, flags)
         return obs, reward, bool(flags & B.TERMINATED), bool(flags & B.TRUNCATED), info
@@ -478,26 +602,11 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         )
 
     def _replay(self) -> np.ndarray:
-        """Every tick of the episode so far, simulated again from its start with the same
-        settings interval by interval (the kernel is deterministic), as trace rows."""
-        w = self._w0.copy()
-        ring = np.zeros_like(self._ring)
-        cmd = self._cmd
-        B.reset_row(w, ring, cmd)
-        prm = w[B.W_PRM : B.W_PRM + L.N_PARAMS]
-        st = w[B.W_ST : B.W_ST + L.N_STATE]
-        ext = np.zeros(0, dtype=np.int8)
+        """Every tick of the episode so far as trace rows (:func:`vfgym.envs.render.replay`)."""
+        from .render import replay
+
+        cmd = self._cmd if self._cmd is not None else np.zeros(0)
         ends = [i1 for _, i1 in self._record]
         if self._ended:
             ends[-1] = cmd.size
-        parts = []
-        i0 = 0
-        for (act, _), i1 in zip(self._record, ends, strict=True):
-            B.apply_action(act, w)
-            part = np.empty((L.N_ROWS, i1 - i0), dtype=np.float64)
-            K.run_segment(cmd, ext, prm, st, ring, i1, part, 1)
-            parts.append(part)
-            i0 = i1
-        if not parts:
-            return np.zeros((L.N_ROWS, 0))
-        return np.concatenate(parts, axis=1)
+        return replay(self._w0, len(self._ring), cmd, [a for a, _ in self._record], ends)

@@ -11,6 +11,7 @@ info under ``info["final_obs"]``, ``info["final_info"]``) or ``disabled`` (reset
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Callable
 from typing import Any, ClassVar
 
@@ -27,7 +28,15 @@ from vfgym.space import settings_to_dict
 
 from . import _batch as B
 from ._common import Episode, scored_info
-from .servo import ServoConfig, ServoCore, raise_bad_action, servo_spaces
+from ._decision import DecisionCore
+from .servo import (
+    MOTOR_STATE,
+    ServoConfig,
+    ServoCore,
+    motor_state_rows,
+    raise_bad_action,
+    servo_spaces,
+)
 from .tune import ActionMap, TuneConfig, evaluate_pairs, tune_spaces
 
 Infos = dict[str, Any]
@@ -115,6 +124,21 @@ class _BatchVectorEnv(VectorEnv):
         """The current observations, a new (num_envs, n) float32 array."""
         raise NotImplementedError
 
+    def _running_infos(self) -> Infos:
+        """The batched info of the sub-envs the last step advanced whose episode goes on
+        (none here; VFServo-v0: the motor's continuous state)."""
+        return {}
+
+    def running_state(self) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
+        """The state in the info of the sub-envs whose episode goes on after a step.
+
+        Returns
+        -------
+        tuple of (numpy.ndarray, dict) or None
+            The sub-envs' mask and per-key arrays (:meth:`_running_infos`); None here.
+        """
+        return None
+
     _SIMULATE_CHECKS_ACTIONS = False
     """True when :meth:`_simulate` itself refuses a NaN or out-of-box action before it
     changes anything (VFServo-v0's compiled step), so that a step which resets nothing
@@ -125,9 +149,10 @@ class _BatchVectorEnv(VectorEnv):
         ``ranges``) a NaN or out-of-box action of an active sub-env, raises ``ValueError``
         before anything changes."""
         a = np.asarray(actions)
-        if a.shape != (self.num_envs, 4) or a.dtype.kind not in "fiu":
+        m = (self.single_action_space.shape or (4,))[0]
+        if a.shape != (self.num_envs, m) or a.dtype.kind not in "fiu":
             raise ValueError(
-                f"actions must be a ({self.num_envs}, 4) array of numbers in [-1, 1], "
+                f"actions must be a ({self.num_envs}, {m}) array of numbers in [-1, 1], "
                 f"got shape {a.shape} dtype {a.dtype}"
             )
         if a.dtype not in (np.float32, np.float64) or not a.flags.c_contiguous:
@@ -262,7 +287,7 @@ class _BatchVectorEnv(VectorEnv):
             for i, info in ends.items():
                 per_env.setdefault(i, []).append(info)
             self._autoreset = term | trunc
-        infos: Infos = {}
+        infos = self._running_infos()
         for i in sorted(per_env):
             for info in per_env[i]:
                 infos = self._add_info(infos, info, i)
@@ -419,7 +444,8 @@ class VFServoVectorEnv(_BatchVectorEnv):
         super().__init__(num_envs, autoreset_mode, render_mode)
         self.core = ServoCore(ServoConfig(scenario, **options))
         n = self.num_envs
-        self.single_observation_space, self.single_action_space = servo_spaces()
+        obs_space, self.single_action_space = servo_spaces(self.core.config)
+        self.single_observation_space = obs_space
         self.observation_space = batch_space(self.single_observation_space, n)
         self.action_space = batch_space(self.single_action_space, n)
         self._W = np.zeros((n, self.core.width), dtype=np.float64)
@@ -429,8 +455,39 @@ class VFServoVectorEnv(_BatchVectorEnv):
         self._lanes = B.lane_scratch(n, self.core.interval_ticks, self.core.acc_window)
         self._eps: list[Episode | None] = [None] * n
         self._obs = slice(B.W_OBS, B.W_OBS + self.core.n_obs)
+        self._running = np.zeros(n, dtype=np.bool_)  # stepped last, episode going on
+        self._state = np.zeros((n, len(MOTOR_STATE)))
+        self._decisions: list[DecisionCore] = []
+        if self.core.config.decision == "once":  # one decision a move: each sub-env's own
+            cache: OrderedDict = OrderedDict()  # the shield's hold states, shared
+            self._decisions = [DecisionCore(self.core, cache) for _ in range(n)]
+            self._once_obs: np.ndarray = np.zeros((n, *obs_space.shape), np.float32)
+            self._SIMULATE_CHECKS_ACTIONS = False
 
     _SIMULATE_CHECKS_ACTIONS = True  # step_batch: every action checked before any step
+
+    def running_state(self) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
+        """The motor's continuous state after the last step, for the sub-envs it advanced
+        whose episode goes on (those that ended have it in their end info); for
+        evaluation only, as a single env's ``info``.
+
+        Returns
+        -------
+        tuple of (numpy.ndarray, dict)
+            The sub-envs' mask, and each of :data:`vfgym.envs.servo.MOTOR_STATE`'s
+            quantities per sub-env.
+        """
+        return self._running, {k: self._state[:, j] for j, k in enumerate(MOTOR_STATE)}
+
+    def _running_infos(self) -> Infos:
+        if not self._running.any():
+            return {}
+        mask = self._running
+        out: Infos = {}
+        for j, k in enumerate(MOTOR_STATE):
+            out[k] = np.where(mask, self._state[:, j], 0.0)
+            out[f"_{k}"] = mask.copy()
+        return out
 
     @property
     def accel_law(self) -> str:
@@ -451,21 +508,35 @@ class VFServoVectorEnv(_BatchVectorEnv):
             self._CMD = grown
         self._CMD[i, :n] = ep.command
         self._eps[i] = ep
+        if self._decisions:
+            self._once_obs[i] = self._decisions[i].reset(ep)
+            return {"scenario": ep.scenario.name}
         self.core.start(self._W[i], self._RING[i], self._CMD[i, :n], ep)
         return {"scenario": ep.scenario.name}
 
     def _observations(self) -> np.ndarray:
+        if self._decisions:
+            return self._once_obs.copy()
         return self._W[:, self._obs].astype(np.float32)
 
     def _simulate(
         self, actions: np.ndarray, active: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[int, Infos]]:
+        if self._decisions:  # one decision a move: every stepped episode ends
+            rew = np.zeros(self.num_envs)
+            decided: dict[int, Infos] = {}
+            for i in np.flatnonzero(active).tolist():
+                rew[i], decided[i] = self._decisions[i].decide(np.asarray(actions[i], np.float64))
+            self._running[:] = False
+            return rew, active.copy(), np.zeros(self.num_envs, dtype=np.bool_), decided
         bad = B.step_batch_balanced(
             actions, self._W, self._RING, self._CMD, active, self._flags, self._lanes
         )
         if bad >= 0:
             raise_bad_action(actions[bad], self.core.accel_law, bad)
         flags = self._flags
+        self._running = active & ((flags & B.ENDED) == 0)
+        self._state = motor_state_rows(self._W)
         if active is self._all:  # every sub-env stepped (same-step autoreset, SB3)
             rew = self._W[:, B.X_REWARD].copy()
         else:

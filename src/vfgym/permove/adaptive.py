@@ -10,7 +10,9 @@ L = value, docs/model.md §1). For each move, offline:
 
 1. the base: the settings model's robust setting (feasible on the axis's design plants);
 2. for each design plant, its *signature*: VFServo-v0's dynamic observations over the
-   hold, the base in force (the same command, so they differ by the plant alone);
+   hold, the base in force (the same command, so they differ by the plant alone): what
+   the drive measures (encoder counts, its speed counter, the torque it commands), never
+   the simulator's continuous state;
 3. for each design plant, a *continuation*: a residual action (in
    :class:`vfgym.space.Relative`'s coordinates) reached by a linear ramp from the end of
    the hold, searched by CMA-ES (``cmaes``) for the least cost on that plant, feasible on
@@ -31,21 +33,20 @@ controller.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from vfgym._validate import check_int, check_real
 from vfgym.axis import Axis, PlantVariant
+from vfgym.envs import N_SIGNATURE, check_plants
 from vfgym.envs.servo import VFServoEnv
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.scoring import Scheduler
 
-N_SIGNATURE = 14
-"""VFServo-v0's dynamic observations before the settings in force (error ... progress)."""
 SCALE = (1.0, 0.0, 1.0, 1.0)
 """Residual scales (value, L/value, k, Ts/Tf): ±1 moves a coordinate half its range; L/value
 held at the base's."""
@@ -193,37 +194,12 @@ class EstimatingScheduler(Scheduler):
             hold = max(1, math.ceil(o.hold_ms / o.interval_ms - 1e-9))
             sigs = [_signature(env, p, hold) for p in self.design]
             conts = []
-            span = _spans(self.design)
-            for i, p in enumerate(self.design):
-                d = [_distance(p, q, span) for q in self.design]
-                near = [self.design[j] for j in np.argsort(d, kind="stable")[1 : 1 + o.neighbours]]
-                near += [_between(p, q, j / (2 * o.probes))  # where a plant told as p lies
-                         for q in near for j in range(1, o.probes + 1)]  # fmt: skip
+            for i, p in enumerate(self.design):  # checked where a plant told as p lies
+                near = check_plants(self.design, i, o.neighbours, o.probes)
                 action, ramp, cost = _search(env, hold, p, near, o)
                 conts.append(Continuation(p, sigs[i], action, ramp, cost))
             self._tables[scenario.name] = (env, MoveTable(base, hold, tuple(conts)))
         return self._tables[scenario.name]
-
-
-def _spans(plants: tuple[PlantVariant, ...]) -> dict[str, float]:
-    """Each quantity's range over ``plants`` (the ones that vary)."""
-    out = {}
-    for f in fields(PlantVariant):
-        x = [getattr(p, f.name) for p in plants]
-        if max(x) > min(x):
-            out[f.name] = max(x) - min(x)
-    return out
-
-
-def _distance(a: PlantVariant, b: PlantVariant, span: dict[str, float]) -> float:
-    """Euclidean distance between two plants, each quantity over its range."""
-    return math.sqrt(sum(((getattr(a, k) - getattr(b, k)) / w) ** 2 for k, w in span.items()))
-
-
-def _between(a: PlantVariant, b: PlantVariant, w: float) -> PlantVariant:
-    """The plant a share ``w`` of the way from ``a`` to ``b`` (each quantity)."""
-    x = {f.name: (getattr(a, f.name), getattr(b, f.name)) for f in fields(PlantVariant)}
-    return PlantVariant(**{k: u + w * (v - u) for k, (u, v) in x.items()})
 
 
 def _ramp(action: np.ndarray, ramp: int, hold: int, t: int) -> np.ndarray:
