@@ -246,7 +246,7 @@ class DecisionCore:
         self.checks: list[list[PlantVariant]] = []
         self.shield, self.tell = c.shield, c.tell
         if c.shield or c.tell:  # an exact axis: its plant, which the controller knows
-            exact = c.axis is None or c.axis.uncertainty.exact
+            exact = c.axis.uncertainty.exact
             self.design = (NOMINAL,) if exact else tuple(c.axis.design_plants())
             self.checks = [
                 check_plants(self.design, i, SHIELD_NEIGHBOURS, SHIELD_PROBES)

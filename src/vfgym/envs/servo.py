@@ -56,8 +56,7 @@ def servo_spaces(config: ServoConfig | None = None) -> tuple[spaces.Box, spaces.
     if config is not None and config.decision == "once":  # the correction and its ramp
         n = config.hold_intervals * N_SIGNATURE + len(SETTING_FIELDS) + len(SCENARIO_FEATURES)
         if config.tell:  # the response's difference, two estimates of each uncertain quantity
-            axis = config.axis
-            d = 0 if axis is None else len(axis.uncertainty.ranges())
+            d = len(config.axis.uncertainty.ranges())
             n += config.hold_intervals * N_SIGNATURE + 2 * d
         m += 1
     obs = spaces.Box(-OBS_BOUND, OBS_BOUND, shape=(n,), dtype=np.float32)
