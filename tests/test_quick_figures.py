@@ -53,3 +53,19 @@ def test_the_block_holds_the_runs_numbers(main_job: Path, tmp_path: Path):
             qf.replace_block((ROOT / page).read_text(encoding="utf-8"), block.replace(
                 tuned_mean, tuned_mean + "1"), page), encoding="utf-8")  # fmt: skip
     assert len(qf.check(main_job, tmp_path)) == len(qf.PAGES)
+
+
+def test_the_main_jobs_axis_is_the_paper_machine_within_a_datasheet_tolerance():
+    """The main job tunes the paper's machine (plant, measures, moves as the default axis)
+    with the tolerance a datasheet motor has: inertia ±10 %, the drive's gain ±5 %."""
+    import yaml
+
+    from vfgym.axis import PAPER_AXIS, load_axis
+    from vfgym.tuning import SweepConfig
+
+    cfg = yaml.safe_load((ROOT / "experiments/quick.yaml").read_text(encoding="utf-8"))
+    axis = load_axis(ROOT / cfg["axis"])
+    assert (axis.plant, axis.measures, axis.moves) == (
+        PAPER_AXIS.plant, PAPER_AXIS.measures, PAPER_AXIS.moves)  # fmt: skip
+    assert axis.uncertainty.ranges() == {"inertia": (0.9, 1.1), "torque_per_count": (0.95, 1.05)}
+    assert SweepConfig(axis=str(ROOT / cfg["axis"])).axis == axis
