@@ -93,11 +93,11 @@ def test_evaluate_runs_a_servo_agent_as_a_scheduler(servo_run, tmp_path, capsys)
 def test_load_tuner_gives_a_servo_agent_as_a_scheduler_that_evaluate_judges(servo_run):
     from vfgym import evaluate
     from vfgym.agents import load_tuner
-    from vfgym.axis import NOMINAL, PlantVariant
+    from vfgym.axis import LOADS_AXIS, NOMINAL, PlantVariant
     from vfgym.scoring import Scheduler
 
     run, _ = servo_run
-    sched = load_tuner(run / "best_model.zip")
+    sched = load_tuner(run / "best_model.zip", LOADS_AXIS)  # the axis it was trained on
     assert isinstance(sched, Scheduler) and sched.source.endswith("best_model.zip")
     heavy = PlantVariant(inertia=1.2)
     ev = evaluate(sched, ["short-move", "paper-step"], plants=[heavy])

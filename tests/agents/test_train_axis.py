@@ -88,7 +88,7 @@ def test_cli_train_on_an_axis_then_predict_on_it(tmp_path, capsys):
     assert policy_settings(model)("up") == load_settings(str(out), load_axis(path))
     # as a tuner: quiet on a move like its training draws, one line on a longer one
     seen: list[str] = []
-    tuner = load_tuner(model, warn=seen.append)
+    tuner = load_tuner(model, path, warn=seen.append)
     tuner(load_axis(path).moves.train.random.draw(12345, "train", load_axis(path).plant))
     assert seen == []
     assert tuner("up") == load_settings(str(out), load_axis(path))

@@ -21,7 +21,7 @@ stable-baselines3 is imported when a model is trained or loaded).
   arguments (:func:`env_options`: the residual base).
 """
 
-from vfgym.agents.heldout import HeldOutResult, axis_verdict, heldout_result
+from vfgym.agents.heldout import HeldOutResult, agent_verdict, heldout_result
 from vfgym.agents.hyperparams import ALGOS, HYPERPARAMS_DIR, algo_class
 from vfgym.agents.hyperparams import load as load_hyperparams
 from vfgym.agents.loaded import (
@@ -57,8 +57,8 @@ __all__ = [
     "Tuner",
     "TunerWarning",
     "agent_policy",
+    "agent_verdict",
     "algo_class",
-    "axis_verdict",
     "env_options",
     "heldout_result",
     "load_agent",

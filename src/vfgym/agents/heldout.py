@@ -2,15 +2,19 @@
 drawn in training nor in the choice of ``best_model.zip``) against the paper's settings
 and the base it started from (its residual base, else the shipped per-move settings
 model), through the one scoring path; on an axis also
-the verdict ``vfgym fit`` gives its settings model (:func:`axis_verdict`)."""
+the verdict ``vfgym fit`` gives its settings model (:func:`agent_verdict`)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from os import PathLike
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from vfgym.axis import Axis
+from vfgym.params import Settings
 
 from .loaded import agent_policy, env_options
 
@@ -118,7 +122,9 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
     )
 
 
-def axis_verdict(model_path: str | Path, axis_file: str | Path, sweep_trials: int | None = None):
+def agent_verdict(
+    model_path: str | Path, axis: Axis | str | PathLike[str], sweep_trials: int | None = None
+) -> tuple[Any, Settings]:
     """A trained agent's verdict on its axis's test moves, as ``vfgym fit`` judges its
     settings model (:func:`vfgym.permove.fit.fit_axis`): against the best fixed setting a
     short sweep finds on the axis's train moves (:func:`vfgym.permove.fit.best_fixed`), the
@@ -129,8 +135,8 @@ def axis_verdict(model_path: str | Path, axis_file: str | Path, sweep_trials: in
     ----------
     model_path : str or Path
         The agent (``RUN/best_model.zip``), trained on the axis.
-    axis_file : str or Path
-        The axis file.
+    axis : Axis, str or os.PathLike
+        The axis (or its file).
     sweep_trials : int or None
         Trials of the fixed-setting sweep (default
         :attr:`vfgym.permove.FitConfig.sweep_trials`).
@@ -140,21 +146,19 @@ def axis_verdict(model_path: str | Path, axis_file: str | Path, sweep_trials: in
     tuple of (vfgym.report.Verdict, Settings)
         The verdict, and the best fixed setting it was judged against.
     """
-    from vfgym.axis import VERDICT_PLANTS, load_axis
+    from vfgym.axis import VERDICT_PLANTS, as_axis
     from vfgym.permove import FitConfig, best_fixed
     from vfgym.report import Candidate, baseline_candidates, compare, verdict
 
-    axis = load_axis(axis_file)
+    from .tuners import load_tuner
+
+    axis = as_axis(axis)
     trials = FitConfig().sweep_trials if sweep_trials is None else sweep_trials
     train = axis.scenarios("train")
     fixed = best_fixed(train, axis, trials)
     test = axis.scenarios("test")
     report = compare(
-        [
-            Candidate(
-                "agent", policy=agent_policy(model_path, str(axis_file)), source=str(model_path)
-            )
-        ],
+        [Candidate("agent", policy=load_tuner(model_path, axis), source=str(model_path))],
         [
             Candidate("best-fixed", fixed, source="sweep", role="baseline"),
             *baseline_candidates(("paper", "scurve")),

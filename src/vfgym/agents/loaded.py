@@ -156,10 +156,13 @@ def env_options(env_kwargs: dict[str, Any] | None) -> dict[str, Any]:
     settings file (a mapping of the settings, or one under ``settings:`` as ``best.yaml``)
     or a trained VFTune-v0 agent (its ``.zip``: the settings it picks for each move). A
     model's check keeps the settings feasible on the axis's design plants."""
+    from vfgym.axis import LOADS_AXIS, as_axis
+
     kw = dict(env_kwargs or {})
+    axis = kw["axis"] = as_axis(kw.get("axis", LOADS_AXIS))  # the envs' default axis
     base = kw.get("residual_base")
     if isinstance(base, str):
-        kw["residual_base"] = _residual_base(base, _measures_of(kw), _design_of(kw))
+        kw["residual_base"] = _residual_base(base, axis.measures, axis.design_plants())
     return kw
 
 
@@ -199,26 +202,6 @@ class CheckedBase:
                 del self._seen[next(iter(self._seen))]
             out = self._seen[key] = self.model.settings(scenario, plant, self.measures, self.plants)
         return out
-
-
-def _measures_of(kw: dict[str, Any]) -> Any:
-    from vfgym.params import DEFAULT_MEASURES
-
-    axis = kw.get("axis")
-    if axis is None:
-        return kw.get("measures", DEFAULT_MEASURES)
-    from vfgym.axis import load_axis
-
-    return (load_axis(axis) if isinstance(axis, (str, Path)) else axis).measures
-
-
-def _design_of(kw: dict[str, Any]) -> Any:
-    axis = kw.get("axis")
-    if axis is None:
-        return ()
-    from vfgym.axis import load_axis
-
-    return (load_axis(axis) if isinstance(axis, (str, Path)) else axis).design_plants()
 
 
 def _residual_base(spec: str, measures: Any = None, plants: Any = ()) -> Any:

@@ -12,13 +12,14 @@ from __future__ import annotations
 import csv
 import json
 import math
+from os import PathLike
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from vfgym.axis import LOADS_AXIS, Axis, as_axis
 from vfgym.io.runs import write_text
-from vfgym.moves.distribution import random_scenario
 from vfgym.moves.scenarios import Scenario
 
 VALIDATION_SEED0 = 2**40
@@ -91,7 +92,7 @@ VALIDATION_PLANT_SEED = 2**40
 """Seed of the validation moves' true plants on an axis with uncertainty (one a move)."""
 
 
-def validation_plants(n: int, axis: Any = None) -> list[Any]:
+def validation_plants(n: int, axis: Axis | str | PathLike[str] = LOADS_AXIS) -> list[Any]:
     """The true plant of each validation move: drawn within the axis's uncertainty from
     :data:`VALIDATION_PLANT_SEED` (fixed, so that every evaluation scores the same
     (move, plant) pairs and a model is compared with the best on them), or the modelled
@@ -101,35 +102,31 @@ def validation_plants(n: int, axis: Any = None) -> list[Any]:
     ----------
     n : int
         Validation moves.
-    axis : Axis, str or None
-        The axis (or its file); ``None``: the paper's.
+    axis : Axis, str or os.PathLike
+        The axis (or its file) the envs draw from; default the envs' own,
+        :data:`vfgym.axis.LOADS_AXIS`.
 
     Returns
     -------
     list of PlantVariant
         One per validation move.
     """
-    from vfgym.axis import NOMINAL, PAPER_AXIS, draw_plants, load_axis
+    from vfgym.axis import NOMINAL, draw_plants
 
-    ax = PAPER_AXIS if axis is None else axis
-    ax = load_axis(ax) if isinstance(ax, (str, Path)) else ax
+    ax = as_axis(axis)
     if ax.uncertainty.exact:
         return [NOMINAL] * n
     return list(draw_plants(ax.uncertainty, ax.plant.motor, n, VALIDATION_PLANT_SEED))
 
 
-def validation_scenarios(n: int, axis: Any = None) -> list[Scenario]:
+def validation_scenarios(n: int, axis: Axis | str | PathLike[str] = LOADS_AXIS) -> list[Scenario]:
     """The held-out scenarios the evaluation callback scores (never drawn in training);
     on an axis (an :class:`~vfgym.axis.Axis` or its file), its train move set's."""
-    if axis is None:
-        return [random_scenario(VALIDATION_SEED0 + i, "train") for i in range(n)]
-    from vfgym.axis import load_axis
-
-    axis = load_axis(axis) if isinstance(axis, (str, Path)) else axis
+    axis = as_axis(axis)
     return [axis.moves.train.pick(VALIDATION_SEED0 + i, "train", axis.plant) for i in range(n)]
 
 
-def validation_size(params: dict[str, Any], axis: Any = None) -> int:
+def validation_size(params: dict[str, Any], axis: Axis | str | PathLike[str] = LOADS_AXIS) -> int:
     """How many validation (move, plant) pairs the best model is chosen on: on an axis
     with uncertainty ``n_eval_scenarios_uncertain`` (default ``n_eval_scenarios``), since
     there a model may break a limit on a few true plants only (1 % of them: missed by 32
@@ -139,9 +136,9 @@ def validation_size(params: dict[str, Any], axis: Any = None) -> int:
     ----------
     params : dict
         The run's hyperparameters.
-    axis : Axis, str or None
-        The axis (or its file) the envs draw from; ``None``: the agents' move distribution,
-        its plant exact.
+    axis : Axis, str or os.PathLike
+        The axis (or its file) the envs draw from; default the envs' own,
+        :data:`vfgym.axis.LOADS_AXIS` (its plant exact).
 
     Returns
     -------
@@ -149,12 +146,9 @@ def validation_size(params: dict[str, Any], axis: Any = None) -> int:
         Validation pairs.
     """
     n = int(params.get("n_eval_scenarios", 16))
-    if axis is None:
+    if as_axis(axis).uncertainty.exact:
         return n
-    from vfgym.axis import load_axis
-
-    ax = load_axis(axis) if isinstance(axis, (str, Path)) else axis
-    return n if ax.uncertainty.exact else int(params.get("n_eval_scenarios_uncertain", n))
+    return int(params.get("n_eval_scenarios_uncertain", n))
 
 
 def best_is_start(run: Path) -> bool:

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from vfgym._validate import check_int
+from vfgym.axis import Axis
 from vfgym.io.runs import read_yaml, write_text, write_yaml
 from vfgym.moves.scenarios import Scenario
 
@@ -94,7 +95,7 @@ def _callbacks(
     n_envs: int,
     progress: bool,
     total: int,
-    env_kwargs: dict[str, Any],
+    axis: Axis,
     normalizer: Any,
 ) -> list[Any]:
     from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback
@@ -164,11 +165,11 @@ def _callbacks(
         def _on_training_end(self) -> None:
             self.bar.close()
 
-    n_eval = validation_size(params, env_kwargs.get("axis"))
+    n_eval = validation_size(params, axis)
     evaluator = HeldOutEval(
         params.get("eval_freq", 10_000),
-        validation_scenarios(n_eval, env_kwargs.get("axis")),
-        validation_plants(n_eval, env_kwargs.get("axis")),
+        validation_scenarios(n_eval, axis),
+        validation_plants(n_eval, axis),
     )
     ckpt = CheckpointCallback(
         save_freq=max(1, params.get("checkpoint_freq", 20_000) // n_envs),
@@ -310,7 +311,8 @@ def train(
     n_envs = int(params.get("n_envs", 1))
     total = int(params.get("n_timesteps", 10_000))
     env_kwargs = dict(params.get("env_kwargs") or {})
-    venv = make_sb3_vec_env(env_id, n_envs=n_envs, seed=seed, **env_options(env_kwargs))
+    options = env_options(env_kwargs)  # the axis resolved here, once
+    venv = make_sb3_vec_env(env_id, n_envs=n_envs, seed=seed, **options)
     venv, normalizer = _wrap(venv, params, cls, latest_checkpoint(run))
     kwargs = {
         k: v
@@ -368,7 +370,7 @@ def train(
             start_at_base(model)
     remaining = total - model.num_timesteps
     if remaining > 0:
-        cbs = _callbacks(run, params, env_id, n_envs, progress, total, env_kwargs, normalizer)
+        cbs = _callbacks(run, params, env_id, n_envs, progress, total, options["axis"], normalizer)
         try:
             model.learn(
                 remaining, callback=cbs, reset_num_timesteps=ckpt is None, tb_log_name="run"
@@ -397,20 +399,20 @@ def train(
     result = heldout_result(run / "best_model.zip", params)
     log(result.text())
     write_yaml(run / "heldout.yaml", result.as_dict())
-    if env_kwargs.get("axis"):
-        _axis_verdict(run, env_kwargs["axis"], log)
+    if env_kwargs.get("axis"):  # an axis file: the verdict vfgym fit gives
+        _agent_verdict(run, options["axis"], log)
     return model
 
 
-def _axis_verdict(run: Path, axis_file: str, log: Callable[[str], None]) -> None:
+def _agent_verdict(run: Path, axis: Axis, log: Callable[[str], None]) -> None:
     """On an axis, the verdict ``vfgym fit`` gives a settings model, for the run's best
     model: printed, and written to ``verdict.txt`` and ``summary.yaml`` as fit writes them."""
     from vfgym.report import format_verdict
     from vfgym.space import settings_to_dict
 
-    from .heldout import axis_verdict
+    from .heldout import agent_verdict
 
-    v, fixed = axis_verdict(run / "best_model.zip", axis_file)
+    v, fixed = agent_verdict(run / "best_model.zip", axis)
     text = format_verdict(v, per_move=True)
     write_text(run / "verdict.txt", text + "\n")
     write_yaml(

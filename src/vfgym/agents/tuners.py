@@ -11,12 +11,13 @@ env drew them), and says in one line when it is used outside them.
 from __future__ import annotations
 
 from collections.abc import Callable
+from os import PathLike
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from vfgym.axis import LOADS_AXIS, PAPER_AXIS, Axis, load_axis, machine_digest
+from vfgym.axis import LOADS_AXIS, Axis, as_axis, load_axis, machine_digest
 from vfgym.moves.features import scenario_features
 from vfgym.permove import Tuner, default_warn, outside_ranges
 from vfgym.permove import load_tuner as load_settings_tuner
@@ -58,23 +59,24 @@ def agent_ranges(
 
 
 def load_tuner(
-    path: str | Path | None = None,
-    axis: str | Path | Axis | None = None,
+    path: str | Path | None,
+    axis: Axis | str | PathLike[str],
     warn: Callable[[str], None] | None = None,
 ) -> Any:
-    """The tuner in a file: a settings model (JSON) or a VFTune-v0 agent (``.zip``), each
-    a :class:`Tuner`; or a VFServo-v0 agent (``.zip``), a :class:`vfgym.scoring.Scheduler`
-    (:class:`vfgym.agents.loaded.AgentScheduler`) that changes the settings during the move.
-    :func:`vfgym.evaluate` takes any of them.
+    """The controller in a model file, the one loader of every kind: a settings model
+    (JSON, :func:`vfgym.permove.load_tuner`, no torch needed) or a VFTune-v0 agent
+    (``.zip``), each a :class:`Tuner`; or a VFServo-v0 agent (``.zip``), a
+    :class:`vfgym.scoring.Scheduler` (:class:`vfgym.agents.loaded.AgentScheduler`) that
+    changes the settings during the move. :func:`vfgym.evaluate` takes any of them.
 
     Parameters
     ----------
     path : str, Path or None
         The file; ``None``: the settings model vfgym ships (learnt on the paper's plant
         with varied loads).
-    axis : str, Path, Axis or None
-        The axis (file) of the moves; ``None``: the tuner's own (an agent's training
-        axis, the paper's for a settings model).
+    axis : Axis, str or os.PathLike
+        The axis (or its file) the moves belong to and the controller runs on; a model
+        learnt on another machine says so in a warning.
     warn : callable or None
         Gets each one-line warning (default: :func:`warnings.warn`,
         :class:`vfgym.permove.TunerWarning`).
@@ -89,31 +91,30 @@ def load_tuner(
     ValueError
         If the file is missing or neither kind of tuner.
     """
-    if path is None or not str(path).endswith(".zip"):  # a settings model: its own is the paper's
-        return load_settings_tuner(path, PAPER_AXIS if axis is None else axis, warn)
-    ax = load_axis(axis) if isinstance(axis, (str, Path)) else axis
+    ax = as_axis(axis)
+    if path is None or not str(path).endswith(".zip"):
+        return load_settings_tuner(path, ax, warn)
     return _agent_tuner(Path(path), ax, warn or default_warn)
 
 
-def _agent_tuner(path: Path, ax: Axis | None, warn: Callable[[str], None]) -> Any:
+def _agent_tuner(path: Path, ax: Axis, warn: Callable[[str], None]) -> Any:
     if not path.is_file():
         raise ValueError(f"--model {path}: no such file")
     env_kwargs = (run_config(path).get("hyperparams") or {}).get("env_kwargs") or {}
     own_file = env_kwargs.get("axis")
     own = load_axis(own_file) if own_file and Path(own_file).is_file() else LOADS_AXIS
     source = f"agent {path}"
-    if ax is not None and machine_digest(own) != machine_digest(ax):
+    if machine_digest(own) != machine_digest(ax):
         warn(
             f"{source}: trained on axis {own.name!r}, used on axis {ax.name!r} with another "
             "plant or measures; its observations describe moves it never saw"
         )
-    axis = ax or own
     agent = servo_agent(path)
     if agent is not None:  # a VFServo-v0 agent schedules each move itself
-        return scheduler_policy(agent, axis, source)
+        return scheduler_policy(agent, ax, source)
     policy = policy_settings(path, ax)
     ranges = agent_ranges(env_kwargs)
-    return Tuner(source, axis, own.name, policy, outside_ranges(ranges, axis), warn)
+    return Tuner(source, ax, own.name, policy, outside_ranges(ranges, ax), warn)
 
 
 __all__ = ["AGENT_DRAWS", "agent_ranges", "load_tuner"]

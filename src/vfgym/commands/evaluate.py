@@ -147,34 +147,21 @@ def _labels(paths: list[str], taken: set[str]) -> list[str]:
 
 
 def load_policy(model_path: str, axis: Axis, command: str = "evaluate") -> Any:
-    """A tuner that picks settings per scenario: a settings model (``.json``,
-    :func:`vfgym.permove.load_tuner`, no torch needed) or a trained VFTune-v0 agent
-    (``.zip``, :func:`vfgym.agents.load_tuner`); or a VFServo-v0 agent's scheduled move
-    (:func:`vfgym.agents.scheduler_policy`); used on ``axis``, its warnings one line each
-    on stderr. Without the agents extra an agent is a one-line ``ValueError``."""
+    """``--model FILE`` read by :func:`vfgym.agents.load_tuner` (a settings model needs no
+    torch; an agent, a tuner or a scheduler) on ``axis``, its warnings one line each on
+    stderr. Without the agents extra an agent is a one-line ``ValueError``."""
+    from vfgym.agents import load_tuner
     from vfgym.commands._common import warn_line
 
-    p = Path(model_path)
-    if not p.is_file():
+    if not Path(model_path).is_file():
         raise ValueError(f"{model_path}: no such file")
-    if p.suffix != ".zip":
-        from vfgym.permove import load_tuner as load_settings_tuner
-
-        return load_settings_tuner(str(p), axis, warn=warn_line(command))
     try:
-        from vfgym.agents import load_tuner, servo_agent
-
-        agent = servo_agent(p)
+        return load_tuner(model_path, axis, warn=warn_line(command))
     except ImportError as exc:
         raise ValueError(
             f"--model {model_path}: agent support is not installed ({exc}); install the "
             f"agents extra: {AGENTS_HINT}"
         ) from None
-    if agent is not None:
-        from vfgym.agents import scheduler_policy
-
-        return scheduler_policy(agent, axis)
-    return load_tuner(str(p), axis, warn=warn_line(command))
 
 
 def adaptive_scheduler(model_path: str, axis: Axis) -> Any:
