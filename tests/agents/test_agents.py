@@ -160,7 +160,9 @@ def test_cli_train_then_predict_gives_a_settings_file_evaluate_reads(tmp_path, c
     printed = yaml.safe_load(capsys.readouterr().out)
     s = load_settings(str(out), PAPER_AXIS)
     assert printed["settings"]["k"] == s.k
-    assert policy_settings(run / "best_model.zip")("test-3") == s
+    # without --axis, predict's axis is the default problem's (the paper's), on which the
+    # agent picks for the move named test-3 there
+    assert policy_settings(run / "best_model.zip", PAPER_AXIS)("test-3") == s
 
 
 @pytest.mark.parametrize(

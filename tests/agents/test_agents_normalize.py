@@ -176,10 +176,10 @@ def test_a_residual_vftune_agent_starts_as_the_shipped_model(algo):
     and ``policy_settings`` reads them so (``model-lookup``)."""
     from dataclasses import replace
 
-    from vfgym import PAPER_PLANT
     from vfgym.agents import settings_policy
     from vfgym.agents.hyperparams import algo_class
     from vfgym.agents.training import start_at_base
+    from vfgym.axis import LOADS_AXIS
     from vfgym.permove.supervised import load_settings_model
 
     kw = {"residual": True, "residual_base": "model-lookup"}
@@ -189,10 +189,8 @@ def test_a_residual_vftune_agent_starts_as_the_shipped_model(algo):
     agent = Agent(model, {"hyperparams": {"env_kwargs": kw}}, None, "vfgym/VFTune-v0")
     shipped = replace(load_settings_model(), check=0)
     pick = settings_policy(agent)
-    for name in ("test-0", "test-1", "short-move"):
-        from vfgym.moves.distribution import get_scenario
-
-        assert pick(name) == shipped.settings(get_scenario(name), PAPER_PLANT)
+    for name in ("test-0", "test-1", "short-move"):  # on the envs' axis, as the env names them
+        assert pick(name) == shipped.settings(LOADS_AXIS.scenario(name), LOADS_AXIS.plant)
 
 
 @pytest.mark.parametrize("env_id", ["vfgym/VFServo-v0", "vfgym/VFTune-v0"])
@@ -203,9 +201,9 @@ def test_the_model_base_is_the_shipped_model_checked_on_the_move(env_id):
     move where the two differ the check's is no worse."""
     from dataclasses import replace
 
-    from vfgym import PAPER_PLANT, evaluate
+    from vfgym import evaluate
     from vfgym.agents import env_options
-    from vfgym.moves.distribution import get_scenario
+    from vfgym.axis import LOADS_AXIS as AXIS  # the envs' axis, on which they name the moves
     from vfgym.permove.supervised import load_settings_model
 
     shipped = load_settings_model()
@@ -215,17 +213,17 @@ def test_the_model_base_is_the_shipped_model_checked_on_the_move(env_id):
     env = make_env(env_id, {**kw, **({"interval_s": 0.005} if "Servo" in env_id else {})})
     differ = 0
     for name in ("test-0", "test-5", "test-10", "short-move"):
-        sc = get_scenario(name)
-        checked = shipped.settings(sc, PAPER_PLANT)
-        assert env_options(kw)["residual_base"](sc, PAPER_PLANT) == checked
+        sc = AXIS.scenario(name)
+        checked = shipped.settings(sc, AXIS.plant)
+        assert env_options(kw)["residual_base"](sc, AXIS.plant) == checked
         env.reset(options={"scenario": name})
         while True:
             _, _, term, trunc, info = env.step(np.zeros(4, dtype=np.float32))
             if term or trunc:
                 break
-        assert info["cost"] == evaluate(checked, name).cost[0, 0]
-        plain = evaluate(lookup.settings(sc, PAPER_PLANT), name)
-        if lookup.settings(sc, PAPER_PLANT) != checked:
+        assert info["cost"] == evaluate(checked, sc, axis=AXIS).cost[0, 0]
+        plain = evaluate(lookup.settings(sc, AXIS.plant), sc, axis=AXIS)
+        if lookup.settings(sc, AXIS.plant) != checked:
             differ += 1
             assert (not plain.feasible[0, 0]) or info["cost"] <= plain.cost[0, 0]
     assert differ >= 2  # the check changed the pick on test-5 and test-10 at least
@@ -238,6 +236,7 @@ def test_a_vftune_agent_is_a_residual_base_for_vfservo(tmp_path):
     agent picks for it, so VFServo-v0's zero action costs what those settings cost."""
     from vfgym import evaluate
     from vfgym.agents import env_options, policy_settings
+    from vfgym.axis import LOADS_AXIS
 
     params = hp.load("ppo", "vfgym/VFTune-v0", hp.HYPERPARAMS_DIR / "ppo.yml", TINY)
     train("ppo", "vfgym/VFTune-v0", params, tmp_path, seed=0, progress=False, log=lambda m: None)
@@ -251,6 +250,7 @@ def test_a_vftune_agent_is_a_residual_base_for_vfservo(tmp_path):
             _, _, term, trunc, info = env.step(np.zeros(4, dtype=np.float32))
             if term or trunc:
                 break
-        assert info["cost"] == evaluate(pick(name), name).cost[0, 0]
+        sc = LOADS_AXIS.scenario(name)  # the envs' axis names the move
+        assert info["cost"] == evaluate(pick(name), sc, axis=LOADS_AXIS).cost[0, 0]
     with pytest.raises(ValueError, match="VFTune-v0 agent"):
         env_options({"residual_base": "nowhere.zip"})

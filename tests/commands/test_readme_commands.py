@@ -747,10 +747,13 @@ def readme_commands(text: str) -> set[str]:
     """The ``vfgym`` command lines README.md shows: on a line of a code block, or in an
     inline code span (also across a line end; ``\\|`` read as ``|``), naming a
     sub-command and giving it at least one argument (a bare ``vfgym sweep`` in a sentence
-    names the command, it is not a command line)."""
+    names the command, it is not a command line). The blocks ``docs/_reference.py`` writes
+    (``<!-- vfgym:NAME:begin -->`` ... ``end``: the commands' ``--help``, the axis keys)
+    are the code's own text, kept equal to it by ``tests/test_docs.py``: left out."""
     from vfgym.cli import build_parser
 
     subs = "|".join(build_parser().subcommands)
+    text = re.sub(r"<!-- vfgym:([\w-]+):begin -->.*?<!-- vfgym:\1:end -->", "", text, flags=re.S)
     fence = re.compile(r"^```[^\n]*\n(.*?)^```", flags=re.S | re.M)
     items = [ln for block in fence.findall(text) for ln in block.splitlines()]
     items += re.findall(r"`([^`]+)`", fence.sub("", text))
