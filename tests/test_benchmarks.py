@@ -69,7 +69,7 @@ def test_bench_agents_runs_to_the_end_on_a_few_hundred_steps(tmp_path):
     runs = [str(tmp_path / "train" / f"ppo-{env}-seed0") for env in ("VFTune-v0", "VFServo-v0")]
     out = tmp_path / "combined"
     stdout = _run("bench_agents.py", "--moves", "2", "--combine", *runs, "--out", str(out))
-    for env, base in (("VFTune-v0", "model-lookup"), ("VFServo-v0", "model")):
+    for env, base in (("VFTune-v0", "model"), ("VFServo-v0", "model")):
         row = re.search(rf"\| ppo \| {env} \| {base} \(\d\.\d{{3}}x\) \| 128 \| nan \|", stdout)
         assert row and row.group(0) in (out / "benchmark.md").read_text()
     assert (out / "learning_curves.png").stat().st_size > 1000

@@ -36,7 +36,8 @@ def servo_run(tmp_path_factory):
     run = tmp_path_factory.mktemp("servo") / "run"
     run.mkdir()
     params = hp.load("ppo", "vfgym/VFServo-v0", hp.HYPERPARAMS_DIR / "ppo.yml", TINY)
-    assert params["normalize"] is True and params["env_kwargs"]["residual"] is True
+    norm = params["normalize"]  # rl-zoo3's form: True, or VecNormalize's arguments
+    assert (norm is True or norm["norm_obs"]) and params["env_kwargs"]["residual"] is True
     logs = []
     train("ppo", "vfgym/VFServo-v0", params, run, seed=0, progress=False, log=logs.append)
     return run, logs

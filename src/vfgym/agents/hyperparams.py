@@ -381,6 +381,7 @@ def _env_kwargs(where: str, kwargs: dict[str, Any], env_id: str | None) -> None:
         for f in dataclasses.fields(config):
             if f.default is None or isinstance(f.default, plain):
                 allowed.add(f.name)
+    allowed.add("axis")  # an axis file's path (the envs' default is an Axis object)
     unknown = sorted(set(kwargs) - allowed)
     if unknown:
         raise ValueError(

@@ -505,7 +505,7 @@ def schedule_of(
         def plan(t: int) -> np.ndarray:
             return np.zeros(4) if t < hold else act * min(1.0, (t - hold + 1) / ramp)
 
-        env = make_env(agent.env_id, {**kw, "decision": "interval", "shield": False})
+        env = make_env(agent.env_id, {**kw, "decision": "interval", "tell": False, "shield": False})
     law = env.unwrapped.accel_law
     interval_ms = env.unwrapped.core.config.interval_s * 1e3
     first = SERVO_FEATURES.index("setting_value")
