@@ -84,19 +84,18 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
     HeldOutResult
         The mean costs and win counts.
     """
-    from vfgym.axis import PAPER_AXIS, load_axis
     from vfgym.params import Settings
     from vfgym.permove import load_settings_model
     from vfgym.report import Candidate, compare
 
     n = int(params.get("n_eval_scenarios", HELDOUT_COUNT))
-    axis_file = (params.get("env_kwargs") or {}).get("axis")
-    axis = load_axis(axis_file) if axis_file else PAPER_AXIS
-    scenarios = axis.scenario_set("test")[:n]
     kw = params.get("env_kwargs") or {}
+    options = env_options(kw)  # the axis it trained on, resolved once (the envs' default)
+    axis = options["axis"]
+    scenarios = axis.scenario_set("test")[:n]
     if kw.get("residual"):  # the agent's own start: its residual base, as its env makes it
         label = f"its residual base ({kw.get('residual_base', 'paper')})"
-        base = env_options(kw)["residual_base"]
+        base = options["residual_base"]
         if isinstance(base, Settings):
             start = Candidate("model", base)
         else:  # a per-move base: (move, the base plant) -> settings
@@ -106,7 +105,7 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
         start = Candidate(
             "model", policy=lambda sc: shipped.settings(sc, axis.plant, axis.measures)
         )
-    cands = [Candidate("agent", policy=agent_policy(model_path, axis_file)), start]
+    cands = [Candidate("agent", policy=agent_policy(model_path, axis)), start]
     rep = compare(cands, "paper", scenarios, resamples=1, axis=axis)
     agent, model, paper = (rep.column(c).cost for c in ("agent", "model", "paper"))
     feasible = np.all(rep.column("agent").constraints <= 0.0, axis=1)

@@ -538,7 +538,7 @@ def policy_settings(
     return settings_policy(agent, axis)
 
 
-def agent_policy(model_path: str | Path, axis: str | None = None) -> Any:
+def agent_policy(model_path: str | Path, axis: str | Axis | None = None) -> Any:
     """Any trained agent as a policy :func:`vfgym.report.compare` scores: a VFTune-v0
     agent's settings per move (:func:`policy_settings`), or a VFServo-v0 agent that
     schedules each move interval by interval (a :class:`vfgym.scoring.Scheduler`)."""

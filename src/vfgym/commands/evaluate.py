@@ -150,12 +150,13 @@ def load_policy(model_path: str, axis: Axis, command: str = "evaluate") -> Any:
     """``--model FILE`` read by :func:`vfgym.agents.load_tuner` (a settings model needs no
     torch; an agent, a tuner or a scheduler) on ``axis``, its warnings one line each on
     stderr. Without the agents extra an agent is a one-line ``ValueError``."""
-    from vfgym.agents import load_tuner
     from vfgym.commands._common import warn_line
 
     if not Path(model_path).is_file():
         raise ValueError(f"{model_path}: no such file")
     try:
+        from vfgym.agents import load_tuner
+
         return load_tuner(model_path, axis, warn=warn_line(command))
     except ImportError as exc:
         raise ValueError(
