@@ -201,6 +201,23 @@ def adaptive_scheduler(model_path: str, axis: Axis) -> Any:
     return EstimatingScheduler(axis, model)
 
 
+def fallback_lines(cands: list[Any]) -> list[str]:
+    """One line per ``--adaptive`` scheduler: on how many of its (move, plant) runs it held
+    its robust base to the end, and why (:meth:`vfgym.permove.EstimatingScheduler.fallbacks`)."""
+    from vfgym.permove import EstimatingScheduler
+
+    out = []
+    for c in cands:
+        if isinstance(c.policy, EstimatingScheduler):
+            f = c.policy.fallbacks()
+            out.append(
+                f"{c.label}: held its robust base to the end on {f.held} of {f.runs} (move, "
+                f"plant) runs: {f.response} whose response fit no design plant, {f.shadow} "
+                "whose told plant's continuation breaks a limit just outside the ranges"
+            )
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
     from vfgym.axis import AXIS_FILE, VERDICT_PLANTS, write_axis
     from vfgym.commands._common import axis_from_args
@@ -244,6 +261,8 @@ def run(args: argparse.Namespace) -> int:
     print(format_table(report), end="")
     assert report.across is not None  # (compare was given the plants)
     print("\n" + "\n".join(format_across([c.label for c in report.columns], report.across)))
+    for line in fallback_lines(cands):
+        print(line)
     print(f"\nwrote {run_dir}/ ({', '.join(paths)}, config.yaml, {AXIS_FILE}, command.txt)")
     return 0
 

@@ -42,11 +42,12 @@ checked it. Two checks, both in the move's table:
   gain ×0.95 looks as the nominal plant: the torque the drive commands is its gain as
   set, times its error), so each continuation is also run on the *shadow* plants told as
   its plant (whose responses fit it): the design plants with one quantity (inertia, drive
-  gain, load torque) ``shadow`` and half of that outside its range (a share of the edge
-  for a factor, of the motor's rated torque for the load torque). Where it breaks a
-  limit on one that the base holds, the next cheapest candidate of its search that breaks
-  none there replaces it; if none of the search's does, told that plant, the scheduler
-  holds the base for the rest of the move.
+  gain, load torque) ``shadow``, a half and a quarter of it outside its range (a share
+  of the edge for a factor, of the motor's rated torque for the load torque). Where it
+  breaks a limit on one that the base holds, the cheapest that breaks none there of the
+  search's other candidates and of gentler versions of its own (scaled towards the base,
+  checked on its plants as the search checks) replaces it; if none does, told that plant,
+  the scheduler holds the base for the rest of the move.
 
 Each move's outcome is recorded in :attr:`EstimatingScheduler.runs`
 (:meth:`EstimatingScheduler.fallbacks` counts them). In range the first check fires only
@@ -82,7 +83,12 @@ many (9 levels a quantity for two uncertain quantities, 81 for one, 4 for three 
 RUNNERS_UP = 24
 """Searched candidates (the cheapest feasible first) tried in turn where a shadow plant
 breaks a continuation."""
+GENTLER = (0.75, 0.5, 0.25)
+"""... then the search's cheapest scaled by these (checked on its plants as the search
+checks), the cheapest of all that no shadow plant breaks taken."""
 SHADOWED = ("inertia", "torque_per_count", "load_offset_nm")
+SHADOW_LEVELS = (0.25, 0.5, 1.0)
+"""Shadow plants lie these shares of ``AdaptiveOptions.shadow`` outside each range's edge."""
 """The quantities a shadow plant moves outside their ranges."""
 
 
@@ -115,9 +121,9 @@ class AdaptiveOptions:
         A response fits a design plant within this many times the farthest an in-range
         plant told as it lies (≥ 1).
     shadow : float
-        Shadow plants lie this far and half as far outside each range's edge: a share of
-        the edge for a factor (inertia, drive gain), of the motor's rated torque for the
-        load torque (0, 0.5].
+        Shadow plants lie up to this far outside each range's edge (and a half and a
+        quarter of it): a share of the edge for a factor (inertia, drive gain), of the
+        motor's rated torque for the load torque (0, 0.5].
     """
 
     hold_ms: float = 2.0
@@ -425,8 +431,8 @@ def shadow_plants(
     design: tuple[PlantVariant, ...], rated_torque_nm: float, shadow: float
 ) -> list[PlantVariant]:
     """The design plants each with one quantity of :data:`SHADOWED` just outside its
-    range: ``shadow`` and half as far beyond each edge (a share of the edge for a factor,
-    of ``rated_torque_nm`` for the load torque).
+    range: :data:`SHADOW_LEVELS` shares of ``shadow`` beyond each edge (a share of the edge
+    for a factor, of ``rated_torque_nm`` for the load torque).
 
     Parameters
     ----------
@@ -446,7 +452,7 @@ def shadow_plants(
     out: dict[PlantVariant, None] = {}
     for k in SHADOWED:
         lo, hi = (f(getattr(p, k) for p in design) for f in (min, max))
-        for f in (shadow / 2, shadow):
+        for f in (shadow * j for j in SHADOW_LEVELS):
             if k == "load_offset_nm":
                 vals = (lo - f * rated_torque_nm, hi + f * rated_torque_nm)
             else:
@@ -461,8 +467,9 @@ def _outside(
     env: VFServoEnv, table: MoveTable, cands: list[list[_Found]], axis: Axis, o: AdaptiveOptions
 ) -> MoveTable:
     """``table`` with each continuation's threshold, and where a shadow plant told as its
-    plant breaks it, the cheapest of the search's ``cands`` that breaks none, else the
-    shadows that break it (module doc)."""
+    plant breaks it, the cheapest of the search's ``cands`` and of the gentler versions of
+    its cheapest (:data:`GENTLER`) that breaks none, else the shadows that break it
+    (module doc)."""
     conts, hold = table.continuations, table.hold
     design = tuple(c.plant for c in conts)
     far = np.zeros(len(conts))  # the farthest an in-range plant told as each lies
@@ -486,8 +493,16 @@ def _outside(
         if all(_holds(env, q, c.action, c.ramp, hold) for q in qs):
             out.append(c)
             continue
-        for a, r, cost in found[1 : 1 + RUNNERS_UP]:
-            if np.any(a != 0.0) and all(_holds(env, q, a, r, hold) for q in qs):
+        near = [c.plant, *check_plants(design, conts.index(c), o.neighbours, o.probes)]
+        pool = [(f, True) for f in found[1 : 1 + RUNNERS_UP]]
+        for k in GENTLER:  # the cheapest, scaled down: its cost on its plant, if it holds there
+            a, r = c.action * k, c.ramp
+            info, _ = _episode(env, c.plant, lambda t, a=a, r=r: _ramp(a, r, hold, t))
+            if info["feasible"]:
+                pool.append(((a, r, float(info["cost"])), False))
+        for (a, r, cost), searched in sorted(pool, key=lambda x: x[0][2]):
+            if np.any(a != 0.0) and all(_holds(env, q, a, r, hold) for q in
+                                        [*qs, *(() if searched else near[1:])]):  # fmt: skip
                 out.append(replace(c, action=a, ramp=r, cost=cost, searched_action=c.action,
                                    searched_ramp=c.ramp))  # fmt: skip
                 break
