@@ -55,8 +55,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="MODEL.json",
         help="a settings model of the axis (vfgym fit's) run as a scheduler that holds its "
         "robust setting for 2 ms, tells the true plant from the response and ramps to "
-        "settings for that plant (vfgym.permove.EstimatingScheduler; an --axis with an "
-        "uncertainty: block); repeat to compare several",
+        "settings for that plant, or holds its robust setting to the end where the response "
+        "fits no plant within the axis's ranges (vfgym.permove.EstimatingScheduler; an "
+        "--axis with an uncertainty: block); repeat to compare several",
     )
     _add_moves_options(p)
     _add_judging_options(p)
