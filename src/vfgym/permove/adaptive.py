@@ -42,8 +42,10 @@ checked it. Two checks, both in the move's table:
   gain ×0.95 looks as the nominal plant: the torque the drive commands is its gain as
   set, times its error), so each continuation is also run on the *shadow* plants told as
   its plant (whose responses fit it): the design plants with one quantity (inertia, drive
-  gain, load torque) ``shadow``, a half and a quarter of it outside its range (a share
-  of the edge for a factor, of the motor's rated torque for the load torque). Where it
+  gain, load torque) ``shadow``, a half, a quarter and an eighth of it outside its range
+  (a share of the edge for a factor, of the motor's rated torque for the load torque;
+  a few plants between the edge and the first shadow may break where the base holds:
+  feasibility is not monotone in the plant). Where it
   breaks a limit on one that the base holds, the cheapest that breaks none there of the
   search's other candidates and of gentler versions of its own (scaled towards the base,
   checked on its plants as the search checks) replaces it; if none does, told that plant,
@@ -87,7 +89,7 @@ GENTLER = (0.75, 0.5, 0.25)
 """... then the search's cheapest scaled by these (checked on its plants as the search
 checks), the cheapest of all that no shadow plant breaks taken."""
 SHADOWED = ("inertia", "torque_per_count", "load_offset_nm")
-SHADOW_LEVELS = (0.25, 0.5, 1.0)
+SHADOW_LEVELS = (0.125, 0.25, 0.5, 1.0)
 """Shadow plants lie these shares of ``AdaptiveOptions.shadow`` outside each range's edge."""
 """The quantities a shadow plant moves outside their ranges."""
 
@@ -121,8 +123,8 @@ class AdaptiveOptions:
         A response fits a design plant within this many times the farthest an in-range
         plant told as it lies (≥ 1).
     shadow : float
-        Shadow plants lie up to this far outside each range's edge (and a half and a
-        quarter of it): a share of the edge for a factor (inertia, drive gain), of the
+        Shadow plants lie up to this far outside each range's edge (and a half, a quarter
+        and an eighth of it): a share of the edge for a factor (inertia, drive gain), of the
         motor's rated torque for the load torque (0, 0.5].
     """
 
