@@ -105,3 +105,17 @@ def test_bench_estimating_runs_and_the_scheduler_holds_the_bases_feasibility():
     stdout = _run("bench_estimating.py", *args)
     row = next(ln for ln in stdout.splitlines() if ln.startswith("| estimating scheduler |"))
     assert row.rstrip().endswith("| 0 |"), row  # limits broken where the base holds
+
+
+def test_bench_estimating_outside_runs_and_prints_the_goals():
+    """``--outside`` on one move: a row per plant outside the ranges, the goals' line, and
+    no limit broken outside where the base holds."""
+    args = ["--model", "src/vfgym/permove/pretrained/settings_model.json", "--outside",
+            "--moves", "1", "--plants", "2", "--evals", "12", "--levels", "0.1"]  # fmt: skip
+    stdout = _run("bench_estimating.py", *args)
+    rows = [ln for ln in stdout.splitlines() if ln.startswith("| ")]
+    assert any(ln.startswith("| gain 1 x 0.9 |") for ln in rows), stdout
+    assert any(ln.startswith("| inertia 1.25 x 1.1 |") for ln in rows), stdout
+    assert sum(ln.startswith("| outside, all 6 |") for ln in rows) == 1, stdout
+    goals = next(ln for ln in stdout.splitlines() if ln.startswith("goals:"))
+    assert goals.startswith("goals: breaks where the base holds, outside: 0 "), goals

@@ -150,5 +150,7 @@ def test_adaptive_runs_a_settings_model_as_the_scheduler_that_tells_the_plant(tm
     rows = [ln for ln in out.splitlines() if "(move, plant)" not in ln and "/64 (" in ln]
     labels = ["model:settings_model", "adaptive:settings_model"]
     assert [r.split()[0] for r in rows] == [*labels, "paper"]
+    held = [ln for ln in out.splitlines() if ln.startswith("adaptive:settings_model: held its")]
+    assert len(held) == 1 and " of 96 (move, plant) runs: " in held[0], out  # 32 x (1 + 2)
     cfg = yaml.safe_load((tmp_path / "evaluate" / "a" / "config.yaml").read_text())
     assert [m["label"] for m in cfg["models"]] == labels

@@ -1,15 +1,19 @@
 """The scheduler that watches the response: on each design plant it is never worse than the
-base it holds first; it is deterministic; bad options name themselves."""
+base it holds first; it is deterministic; outside its design it holds the base where it
+would break a limit the base holds, and in range it still switches; bad options name
+themselves."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from vfgym import PAPER_AXIS, evaluate, load_axis
-from vfgym.permove import load_settings_model
+from vfgym.axis import VERDICT_PLANT_SEED, PlantVariant, draw_plants
+from vfgym.permove import adaptive, load_settings_model
 from vfgym.permove.adaptive import AdaptiveOptions, EstimatingScheduler
 
 AXIS = Path(__file__).resolve().parents[2] / "experiments" / "axes" / "loads-uncertain.yaml"
@@ -49,6 +53,105 @@ def test_it_is_deterministic(setup):
     assert np.array_equal(a.cost, b.cost)
 
 
+def test_in_range_it_still_switches_and_holds_no_base(setup):
+    """On plants drawn within the ranges every response fits a design plant and no
+    continuation is held back: it runs what it ran without the fallback, cheaper than the
+    base on some pairs."""
+    axis, sched, moves = setup
+    plants = list(draw_plants(axis.uncertainty, axis.plant.motor, 6, VERDICT_PLANT_SEED))
+    sched.runs.clear()
+    for sc in moves:
+        ctrls = [sched.table(sc).base, sched.without_fallback(), sched]
+        a = evaluate(ctrls, [sc], axis=axis, plants=plants).across
+        assert np.array_equal(a.cost[2], a.cost[1])
+        assert np.any(a.cost[2] < a.cost[0] - 1e-9), a.cost
+    assert sched.fallbacks().runs == len(moves) * (1 + len(plants))  # (and the modelled plant)
+    assert sched.fallbacks().held == 0, [r for r in sched.runs if r.held]
+
+
+def test_outside_the_range_it_holds_the_base_where_it_broke_a_limit():
+    """Inertia x1.3 (range 0.8-1.25) on test-11: told as the 1.25 corner, its continuation
+    broke a limit the base holds; the response fits no design plant, so the base is held to
+    the end, and the run says why."""
+    axis = load_axis(AXIS)
+    sched = EstimatingScheduler(axis, load_settings_model(), FAST)
+    sc, plant = axis.scenario("test-11"), PlantVariant(inertia=1.3)
+    ctrls = [sched.table(sc).base, sched.without_fallback(), sched]
+    a = evaluate(ctrls, [sc], axis=axis, plants=[plant]).across
+    ok = a.feasible[:, 0, 0]
+    assert ok[0] and not ok[1]  # the case: without the fallback, a limit the base holds broken
+    assert ok[2] and a.cost[2, 0, 0] == a.cost[0, 0, 0]  # the base, held
+    (run,) = [r for r in sched.runs if r.plant == plant]
+    assert run.held == "response" and run.told.inertia == 1.25
+    told = next(c for c in sched.table(sc).continuations if c.plant == run.told)
+    assert run.residual > told.threshold
+    assert sched.fallbacks().response == 1 and sched.fallbacks().shadow == 0
+
+
+def test_a_continuation_a_shadow_plant_breaks_is_replaced_or_the_base_held(setup, monkeypatch):
+    """test-1 on loads-uncertain: a correction that keeps every limit on the design plant of
+    inertia 0.917 breaks one on its shadow of drive gain x0.9 (outside the stated gain,
+    told as that plant: over the hold the gain does not show), which the base holds. The
+    table's check replaces it by a candidate that the shadow does not break; with none,
+    told that plant, the scheduler holds the base and says so."""
+    axis, sched, moves = setup
+    sc = moves[1]
+    table = sched.table(sc)
+    env = sched._tables[sc.name][0]
+    (i,) = [j for j, c in enumerate(table.continuations) if abs(c.plant.inertia - 0.9168) < 1e-3]
+    good = table.continuations[i]
+    bad = np.array([0.08724998, 0.0, 0.63170711, -0.994523])
+    shadow = replace(good.plant, torque_per_count=0.9)
+    assert shadow in adaptive.shadow_plants(sched.design, axis.plant.motor.rated_torque_nm, 0.1)
+    conts = list(table.continuations)
+    conts[i] = replace(good, action=bad, ramp=1)
+    forged = replace(table, continuations=tuple(conts))
+    cands = [[(c.action, c.ramp, c.cost)] for c in conts]
+    cands[i].append((good.action, good.ramp, good.cost))  # the search's next cheapest
+    fixed = adaptive._outside(env, forged, cands, axis, sched.options)
+    mended = fixed.continuations[i]
+    assert mended.safer and np.array_equal(mended.searched_action, bad)
+    assert not np.array_equal(mended.action, bad)
+    assert adaptive._holds(env, shadow, mended.action, mended.ramp, table.hold)
+    monkeypatch.setattr(adaptive, "GENTLER", ())  # no gentler version of it to fall back on
+    held = adaptive._outside(env, forged, [*cands[:i], cands[i][:1], *cands[i + 1 :]], axis,
+                             sched.options)  # fmt: skip
+    assert shadow in held.continuations[i].shadows
+    mine = EstimatingScheduler(axis, load_settings_model(), FAST)
+    mine._tables[sc.name] = (env, held)
+    a = evaluate([table.base, mine.without_fallback(), mine], [sc], axis=axis,
+                 plants=[shadow, good.plant]).across  # fmt: skip
+    ok = a.feasible[:, :, 0]
+    assert ok[0, 0] and not ok[1, 0]  # without the fallback: the break the check found
+    assert ok[2, 0] and a.cost[2, 0, 0] == a.cost[0, 0, 0]
+    assert [r.held for r in mine.runs if r.plant in (shadow, good.plant)] == ["shadow"] * 2
+
+
+def test_a_response_far_from_every_design_plant_fits_none(setup):
+    _, sched, moves = setup
+    table = sched.table(moves[0])
+    c = table.continuations[0]
+    assert table.tell(c.signature).fits and table.tell(c.signature).residual == 0.0
+    assert 0.0 < c.threshold < np.inf
+    far = table.tell(c.signature + 10.0 * max(x.threshold for x in table.continuations))
+    assert not far.fits
+
+
+def test_shadow_plants_lie_outside_one_range_each():
+    axis = load_axis(AXIS)
+    design = axis.design_plants()
+    shadows = adaptive.shadow_plants(design, axis.plant.motor.rated_torque_nm, 0.1)
+    lo = {k: min(getattr(p, k) for p in design) for k in adaptive.SHADOWED}
+    hi = {k: max(getattr(p, k) for p in design) for k in adaptive.SHADOWED}
+    for q in shadows:
+        out = [k for k in adaptive.SHADOWED if not lo[k] <= getattr(q, k) <= hi[k]]
+        assert len(out) == 1, q
+    assert len(shadows) == len(set(shadows))
+    inside = adaptive.calibration_plants(design, adaptive.CALIBRATION_PLANTS)
+    assert len(inside) == adaptive.CALIBRATION_PLANTS  # one uncertain quantity: 81 levels
+    assert all(lo["inertia"] <= q.inertia <= hi["inertia"] for q in inside)
+
+
 def test_an_exact_axis_is_refused():
     with pytest.raises(ValueError, match="states no uncertainty"):
         EstimatingScheduler(PAPER_AXIS, load_settings_model())
@@ -65,6 +168,10 @@ def test_an_exact_axis_is_refused():
         ({"neighbours": -1}, "neighbours"),
         ({"probes": -1}, "probes"),
         ({"seed": -2}, "seed"),
+        ({"margin": 0.5}, "margin"),
+        ({"shadow": 0.0}, "shadow"),
+        ({"shadow": 0.8}, "shadow"),
+        ({"fallback": "yes"}, "fallback"),
     ],
 )
 def test_bad_options_name_themselves(kwargs, name):

@@ -55,8 +55,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="MODEL.json",
         help="a settings model of the axis (vfgym fit's) run as a scheduler that holds its "
         "robust setting for 2 ms, tells the true plant from the response and ramps to "
-        "settings for that plant (vfgym.permove.EstimatingScheduler; an --axis with an "
-        "uncertainty: block); repeat to compare several",
+        "settings for that plant, or holds its robust setting to the end where the response "
+        "fits no plant within the axis's ranges (vfgym.permove.EstimatingScheduler; an "
+        "--axis with an uncertainty: block); repeat to compare several",
     )
     _add_moves_options(p)
     _add_judging_options(p)
@@ -189,6 +190,23 @@ def adaptive_scheduler(model_path: str, axis: Axis) -> Any:
     return EstimatingScheduler(axis, model)
 
 
+def fallback_lines(cands: list[Any]) -> list[str]:
+    """One line per ``--adaptive`` scheduler: on how many of its (move, plant) runs it held
+    its robust base to the end, and why (:meth:`vfgym.permove.EstimatingScheduler.fallbacks`)."""
+    from vfgym.permove import EstimatingScheduler
+
+    out = []
+    for c in cands:
+        if isinstance(c.policy, EstimatingScheduler):
+            f = c.policy.fallbacks()
+            out.append(
+                f"{c.label}: held its robust base to the end on {f.held} of {f.runs} (move, "
+                f"plant) runs: {f.response} whose response fit no design plant, {f.shadow} "
+                "whose told plant's continuation breaks a limit just outside the ranges"
+            )
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
     from vfgym.axis import AXIS_FILE, VERDICT_PLANTS, write_axis
     from vfgym.commands._common import axis_from_args
@@ -232,6 +250,8 @@ def run(args: argparse.Namespace) -> int:
     print(format_table(report), end="")
     assert report.across is not None  # (compare was given the plants)
     print("\n" + "\n".join(format_across([c.label for c in report.columns], report.across)))
+    for line in fallback_lines(cands):
+        print(line)
     print(f"\nwrote {run_dir}/ ({', '.join(paths)}, config.yaml, {AXIS_FILE}, command.txt)")
     return 0
 

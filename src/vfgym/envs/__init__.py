@@ -34,6 +34,7 @@ _LAZY = {
     "EnvConfig": "vfgym.envs._common",
     "N_SIGNATURE": "vfgym.envs._decision",
     "check_plants": "vfgym.envs._decision",
+    "plant_spans": "vfgym.envs._decision",
     "VFTuneEnv": "vfgym.envs.tune",
     "VFServoEnv": "vfgym.envs.servo",
     "VFTuneVectorEnv": "vfgym.envs.vector",
@@ -72,5 +73,6 @@ __all__ = [
     "VFTuneEnv",
     "VFTuneVectorEnv",
     "check_plants",
+    "plant_spans",
     "register_envs",
 ]

@@ -28,19 +28,46 @@ Online (:meth:`EstimatingScheduler.run_move`): hold the base, take the design pl
 signature is nearest to the observed one, and run its continuation. Everything runs
 through VFServo-v0 on the true plant, so :func:`vfgym.evaluate` scores it as every other
 controller.
+
+**Outside the design** (``AdaptiveOptions.fallback``): a plant outside the stated ranges
+would still be told as its nearest design plant, and its continuation run where nothing
+checked it. Two checks, both in the move's table:
+
+* *the response fits no design plant*: its distance to the nearest design plant's
+  signature exceeds that plant's *threshold*, ``margin`` times the farthest an in-range
+  plant told as it lies (the ranges sampled on a grid, and the check plants on the way to
+  its neighbours: the design's spacing as the encoder's quantisation renders it); the
+  scheduler then holds the base for the rest of the move;
+* *shadow plants*: the response does not tell every quantity (over a 2 ms hold a drive
+  gain ×0.95 looks as the nominal plant: the torque the drive commands is its gain as
+  set, times its error), so each continuation is also run on the *shadow* plants told as
+  its plant (whose responses fit it): the design plants with one quantity (inertia, drive
+  gain, load torque) ``shadow``, a half, a quarter and an eighth of it outside its range
+  (a share of the edge for a factor, of the motor's rated torque for the load torque;
+  a few plants between the edge and the first shadow may break where the base holds:
+  feasibility is not monotone in the plant). Where it
+  breaks a limit on one that the base holds, the cheapest that breaks none there of the
+  search's other candidates and of gentler versions of its own (scaled towards the base,
+  checked on its plants as the search checks) replaces it; if none does, told that plant,
+  the scheduler holds the base for the rest of the move.
+
+Each move's outcome is recorded in :attr:`EstimatingScheduler.runs`
+(:meth:`EstimatingScheduler.fallbacks` counts them). In range the first check fires only
+beyond the calibration plants' spread, and the second changes a continuation only where
+a shadow plant breaks it.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from vfgym._validate import check_int, check_real
 from vfgym.axis import Axis, PlantVariant
-from vfgym.envs import N_SIGNATURE, check_plants
+from vfgym.envs import N_SIGNATURE, check_plants, plant_spans
 from vfgym.envs.servo import VFServoEnv
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
@@ -52,6 +79,19 @@ SCALE = (1.0, 0.0, 1.0, 1.0)
 held at the base's."""
 INFEASIBLE = 10.0
 """Added to the search's cost of a continuation that breaks a limit on one of its plants."""
+CALIBRATION_PLANTS = 81
+"""In-range plants a table's thresholds are calibrated on: the ranges' grid of at most this
+many (9 levels a quantity for two uncertain quantities, 81 for one, 4 for three ...)."""
+RUNNERS_UP = 24
+"""Searched candidates (the cheapest feasible first) tried in turn where a shadow plant
+breaks a continuation."""
+GENTLER = (0.75, 0.5, 0.25)
+"""... then the search's cheapest scaled by these (checked on its plants as the search
+checks), the cheapest of all that no shadow plant breaks taken."""
+SHADOWED = ("inertia", "torque_per_count", "load_offset_nm")
+SHADOW_LEVELS = (0.125, 0.25, 0.5, 1.0)
+"""Shadow plants lie these shares of ``AdaptiveOptions.shadow`` outside each range's edge."""
+"""The quantities a shadow plant moves outside their ranges."""
 
 
 @dataclass(frozen=True)
@@ -74,6 +114,18 @@ class AdaptiveOptions:
         ... and on this many plants on the way to each, evenly up to halfway (≥ 0).
     seed : int
         CMA-ES's seed.
+    fallback : bool
+        Hold the base for the rest of the move when the response fits no design plant or
+        the told plant's continuation breaks a limit on a shadow plant, and run the
+        cheapest searched continuation no shadow plant breaks (module doc); ``False``:
+        the search's cheapest, always (the scheduler as it was without them).
+    margin : float
+        A response fits a design plant within this many times the farthest an in-range
+        plant told as it lies (≥ 1).
+    shadow : float
+        Shadow plants lie up to this far outside each range's edge (and a half, a quarter
+        and an eighth of it): a share of the edge for a factor (inertia, drive gain), of the
+        motor's rated torque for the load torque (0, 0.5].
     """
 
     hold_ms: float = 2.0
@@ -83,6 +135,9 @@ class AdaptiveOptions:
     neighbours: int = 2
     probes: int = 2
     seed: int = 0
+    fallback: bool = True
+    margin: float = 1.25
+    shadow: float = 0.1
 
     def __post_init__(self) -> None:
         check_real("hold_ms", self.hold_ms, 0.0, 50.0, lo_open=True)
@@ -92,6 +147,10 @@ class AdaptiveOptions:
         check_int("neighbours", self.neighbours, 0)
         check_int("probes", self.probes, 0)
         check_int("seed", self.seed, 0)
+        if not isinstance(self.fallback, bool):
+            raise ValueError(f"fallback={self.fallback!r} must be true or false")
+        check_real("margin", self.margin, 1.0, math.inf)
+        check_real("shadow", self.shadow, 0.0, 0.5, lo_open=True)
 
 
 @dataclass(frozen=True)
@@ -107,6 +166,83 @@ class Continuation:
     """Intervals of the ramp."""
     cost: float
     """Its cost on this plant (the search's)."""
+    threshold: float = math.inf
+    """A response farther than this from :attr:`signature` fits no design plant."""
+    shadows: tuple[PlantVariant, ...] = ()
+    """Shadow plants told as this one where :attr:`action` breaks a limit the base holds,
+    as every searched candidate did (any: the base is held instead)."""
+    searched_action: np.ndarray | None = None
+    """Where the search's cheapest broke a limit on a shadow plant told as this one that the
+    base holds, and :attr:`action` is the cheapest searched candidate that breaks none
+    there: the search's cheapest (run with the fallback off); else ``None``."""
+    searched_ramp: int = 1
+    """... and its ramp."""
+
+    @property
+    def safer(self) -> bool:
+        """Whether :attr:`action` replaces the search's cheapest (:attr:`searched_action`)."""
+        return self.searched_action is not None
+
+
+@dataclass(frozen=True)
+class Told:
+    """What a hold's response tells: the nearest design plant's continuation, how far the
+    response is from its signature, and whether that is within its threshold."""
+
+    continuation: Continuation
+    residual: float
+    fits: bool
+
+
+@dataclass(frozen=True)
+class ScheduledRun:
+    """One move the scheduler ran (:attr:`EstimatingScheduler.runs`).
+
+    Attributes
+    ----------
+    scenario : str
+        The move's name.
+    plant : PlantVariant
+        The true plant it ran on (recorded for evaluation; the scheduler never reads it).
+    told : PlantVariant
+        The design plant the response was nearest to.
+    residual : float
+        The response's distance from that plant's signature.
+    held : str
+        ``""`` if it ran the told plant's continuation; else why it held the base to the
+        end: ``"response"`` (the response fits no design plant) or ``"shadow"`` (the
+        continuation breaks a limit on a shadow plant told as this one).
+    """
+
+    scenario: str
+    plant: PlantVariant
+    told: PlantVariant
+    residual: float
+    held: str
+
+
+@dataclass(frozen=True)
+class Fallbacks:
+    """How often the scheduler held its base to the end (:meth:`EstimatingScheduler.fallbacks`).
+
+    Attributes
+    ----------
+    runs : int
+        Moves run.
+    response : int
+        ... held because the response fit no design plant.
+    shadow : int
+        ... held because the told plant's continuation breaks a limit on a shadow plant.
+    """
+
+    runs: int
+    response: int
+    shadow: int
+
+    @property
+    def held(self) -> int:
+        """Moves on which the base was held to the end."""
+        return self.response + self.shadow
 
 
 @dataclass(frozen=True)
@@ -120,8 +256,26 @@ class MoveTable:
 
     def told(self, signature: np.ndarray) -> Continuation:
         """The continuation whose plant's signature is nearest to ``signature``."""
+        return self.tell(signature).continuation
+
+    def tell(self, signature: np.ndarray) -> Told:
+        """The continuation whose plant's signature is nearest to ``signature``, the
+        distance and whether it is within that plant's threshold.
+
+        Parameters
+        ----------
+        signature : numpy.ndarray
+            A hold's response, flattened.
+
+        Returns
+        -------
+        Told
+            The nearest, its residual and fit.
+        """
         d = [float(np.sum((c.signature - signature) ** 2)) for c in self.continuations]
-        return self.continuations[int(np.argmin(d))]
+        i = int(np.argmin(d))
+        r = math.sqrt(d[i])
+        return Told(self.continuations[i], r, r <= self.continuations[i].threshold)
 
 
 class EstimatingScheduler(Scheduler):
@@ -150,6 +304,35 @@ class EstimatingScheduler(Scheduler):
         self.options = options or AdaptiveOptions()
         self.design = tuple(axis.design_plants())
         self._tables: dict[str, tuple[VFServoEnv, MoveTable]] = {}
+        self.runs: list[ScheduledRun] = []
+        """Every move run, in order (:class:`ScheduledRun`)."""
+
+    def fallbacks(self) -> Fallbacks:
+        """How often it held its base to the end, over :attr:`runs`.
+
+        Returns
+        -------
+        Fallbacks
+            The counts.
+        """
+        held = [r.held for r in self.runs]
+        return Fallbacks(len(held), held.count("response"), held.count("shadow"))
+
+    def without_fallback(self) -> EstimatingScheduler:
+        """The same scheduler (its tables shared, computed once) with the fallback off:
+        what it would run without it, for comparison.
+
+        Returns
+        -------
+        EstimatingScheduler
+            A scheduler of the same options but ``fallback=False``, with its own
+            :attr:`runs`.
+        """
+        other = EstimatingScheduler.__new__(EstimatingScheduler)
+        other.axis, other.model, other.design = self.axis, self.model, self.design
+        other.options = replace(self.options, fallback=False)
+        other._tables, other.runs = self._tables, []
+        return other
 
     def table(self, scenario: Scenario) -> MoveTable:
         """The move's base and continuations (computed once per move).
@@ -172,18 +355,25 @@ class EstimatingScheduler(Scheduler):
         env, table = self._table(scenario)
         seen: list[np.ndarray] = []
         env.reset(options={"plant": plant})
-        cont: Continuation | None = None
+        action, ramp, told = np.zeros(4), 1, None
         t = 0
         while True:
-            act = np.zeros(4) if cont is None else _ramp(cont.action, cont.ramp, table.hold, t)
-            obs, _, term, trunc, info = env.step(act)
+            obs, _, term, trunc, info = env.step(_ramp(action, ramp, table.hold, t))
             t += 1
+            if told is None and not (term or trunc):
+                seen.append(obs[:N_SIGNATURE])
+            if told is None and (t == table.hold or term or trunc):
+                told = table.tell(np.concatenate(seen) if seen else np.zeros(0))
+                held = _held(told, self.options.fallback) if t == table.hold else ""
+                self.runs.append(ScheduledRun(scenario.name, plant, told.continuation.plant,
+                                              told.residual, held))  # fmt: skip
+                c = told.continuation
+                if not held:
+                    action, ramp = c.action, c.ramp
+                if not self.options.fallback and c.searched_action is not None:
+                    action, ramp = c.searched_action, c.searched_ramp
             if term or trunc:
                 return {k: info[k] for k in METRIC_NAMES}
-            if cont is None:
-                seen.append(obs[:N_SIGNATURE])
-                if t == table.hold:
-                    cont = table.told(np.concatenate(seen))
 
     def _table(self, scenario: Scenario) -> tuple[VFServoEnv, MoveTable]:
         if scenario.name not in self._tables:
@@ -193,13 +383,140 @@ class EstimatingScheduler(Scheduler):
                              residual_scale=SCALE, interval_s=o.interval_ms * 1e-3)  # fmt: skip
             hold = max(1, math.ceil(o.hold_ms / o.interval_ms - 1e-9))
             sigs = [_signature(env, p, hold) for p in self.design]
-            conts = []
+            conts, cands = [], []
             for i, p in enumerate(self.design):  # checked where a plant told as p lies
                 near = check_plants(self.design, i, o.neighbours, o.probes)
-                action, ramp, cost = _search(env, hold, p, near, o)
-                conts.append(Continuation(p, sigs[i], action, ramp, cost))
-            self._tables[scenario.name] = (env, MoveTable(base, hold, tuple(conts)))
+                found = _search(env, hold, p, near, o)
+                conts.append(Continuation(p, sigs[i], *found[0]))
+                cands.append(found)
+            table = _outside(env, MoveTable(base, hold, tuple(conts)), cands, ax, o)
+            self._tables[scenario.name] = (env, table)
         return self._tables[scenario.name]
+
+
+def _held(told: Told, fallback: bool) -> str:
+    """Why the base is held to the end after ``told`` (``""``: it is not)."""
+    if not fallback:
+        return ""
+    if not told.fits:
+        return "response"
+    return "shadow" if told.continuation.shadows else ""
+
+
+def calibration_plants(design: tuple[PlantVariant, ...], count: int) -> list[PlantVariant]:
+    """In-range plants on a grid over the design's ranges (at most ``count``, at least 2
+    levels a quantity), where the design's thresholds are measured.
+
+    Parameters
+    ----------
+    design : tuple of PlantVariant
+        The axis's design plants (their corners span the ranges).
+    count : int
+        The most plants.
+
+    Returns
+    -------
+    list of PlantVariant
+        The grid's plants.
+    """
+    span = plant_spans(design)
+    lo = {k: min(getattr(p, k) for p in design) for k in span}
+    levels = max(2, math.floor(count ** (1.0 / max(1, len(span))) + 1e-9))
+    out = []
+    for idx in np.ndindex(*(levels,) * len(span)):
+        x = {k: lo[k] + w * j / (levels - 1) for (k, w), j in zip(span.items(), idx, strict=True)}
+        out.append(replace(design[0], **x))
+    return out
+
+
+def shadow_plants(
+    design: tuple[PlantVariant, ...], rated_torque_nm: float, shadow: float
+) -> list[PlantVariant]:
+    """The design plants each with one quantity of :data:`SHADOWED` just outside its
+    range: :data:`SHADOW_LEVELS` shares of ``shadow`` beyond each edge (a share of the edge
+    for a factor, of ``rated_torque_nm`` for the load torque).
+
+    Parameters
+    ----------
+    design : tuple of PlantVariant
+        The axis's design plants (their corners span the ranges; a quantity known exactly
+        has its one value as both edges).
+    rated_torque_nm : float
+        The motor's rated torque (the load torque's scale).
+    shadow : float
+        How far outside, (0, 0.5].
+
+    Returns
+    -------
+    list of PlantVariant
+        The shadow plants, each once.
+    """
+    out: dict[PlantVariant, None] = {}
+    for k in SHADOWED:
+        lo, hi = (f(getattr(p, k) for p in design) for f in (min, max))
+        for f in (shadow * j for j in SHADOW_LEVELS):
+            if k == "load_offset_nm":
+                vals = (lo - f * rated_torque_nm, hi + f * rated_torque_nm)
+            else:
+                vals = (lo * (1.0 - f), hi * (1.0 + f))
+            for p in design:
+                for v in vals:
+                    out[replace(p, **{k: v})] = None
+    return list(out)
+
+
+def _outside(
+    env: VFServoEnv, table: MoveTable, cands: list[list[_Found]], axis: Axis, o: AdaptiveOptions
+) -> MoveTable:
+    """``table`` with each continuation's threshold, and where a shadow plant told as its
+    plant breaks it, the cheapest of the search's ``cands`` and of the gentler versions of
+    its cheapest (:data:`GENTLER`) that breaks none, else the shadows that break it
+    (module doc)."""
+    conts, hold = table.continuations, table.hold
+    design = tuple(c.plant for c in conts)
+    far = np.zeros(len(conts))  # the farthest an in-range plant told as each lies
+    calib = calibration_plants(design, CALIBRATION_PLANTS)
+    calib += [q for i in range(len(design)) for q in check_plants(design, i, o.neighbours,
+                                                                   o.probes)]  # fmt: skip
+    for q in calib:
+        told = table.tell(_signature(env, q, hold))
+        i = conts.index(told.continuation)
+        far[i] = max(far[i], told.residual)
+    conts = tuple(replace(c, threshold=o.margin * far[i]) for i, c in enumerate(conts))
+    table = replace(table, continuations=conts)
+    mine: list[list[PlantVariant]] = [[] for _ in conts]  # told as each, the base holding
+    for q in shadow_plants(design, axis.plant.motor.rated_torque_nm, o.shadow):
+        told = table.tell(_signature(env, q, hold))
+        i = conts.index(told.continuation)
+        if told.fits and np.any(conts[i].action != 0.0) and _holds(env, q, np.zeros(4), 1, hold):
+            mine[i].append(q)
+    out = []
+    for c, qs, found in zip(conts, mine, cands, strict=True):
+        if all(_holds(env, q, c.action, c.ramp, hold) for q in qs):
+            out.append(c)
+            continue
+        near = [c.plant, *check_plants(design, conts.index(c), o.neighbours, o.probes)]
+        pool = [(f, True) for f in found[1 : 1 + RUNNERS_UP]]
+        for k in GENTLER:  # the cheapest, scaled down: its cost on its plant, if it holds there
+            a, r = c.action * k, c.ramp
+            info, _ = _episode(env, c.plant, lambda t, a=a, r=r: _ramp(a, r, hold, t))
+            if info["feasible"]:
+                pool.append(((a, r, float(info["cost"])), False))
+        for (a, r, cost), searched in sorted(pool, key=lambda x: x[0][2]):
+            if np.any(a != 0.0) and all(_holds(env, q, a, r, hold) for q in
+                                        [*qs, *(() if searched else near[1:])]):  # fmt: skip
+                out.append(replace(c, action=a, ramp=r, cost=cost, searched_action=c.action,
+                                   searched_ramp=c.ramp))  # fmt: skip
+                break
+        else:
+            broken = tuple(q for q in qs if not _holds(env, q, c.action, c.ramp, hold))
+            out.append(replace(c, shadows=broken))
+    return replace(table, continuations=tuple(out))
+
+
+def _holds(env: VFServoEnv, plant: PlantVariant, action: np.ndarray, ramp: int, hold: int) -> bool:
+    """Whether ``action``, ramped over ``ramp`` after the hold, keeps every limit on ``plant``."""
+    return bool(_episode(env, plant, lambda t: _ramp(action, ramp, hold, t))[0]["feasible"])
 
 
 def _ramp(action: np.ndarray, ramp: int, hold: int, t: int) -> np.ndarray:
@@ -234,11 +551,16 @@ def _signature(env: VFServoEnv, plant: PlantVariant, hold: int) -> np.ndarray:
     return np.concatenate(seen)
 
 
+_Found = tuple[np.ndarray, int, float]
+"""A searched candidate: (action, ramp intervals, cost on its plant)."""
+
+
 def _search(
     env: VFServoEnv, hold: int, plant: PlantVariant, near: list[PlantVariant], o: AdaptiveOptions
-) -> tuple[np.ndarray, int, float]:
-    """The continuation for ``plant``: (action, ramp intervals, cost on ``plant``); the best
-    of CMA-ES's, feasible on ``plant`` and ``near``, else the base held."""
+) -> list[_Found]:
+    """The continuation for ``plant`` first: (action, ramp intervals, cost on ``plant``), the
+    best of CMA-ES's, feasible on ``plant`` and ``near``, else the base held; then the
+    other feasible candidates, cheapest first."""
     from cmaes import CMA
 
     info, steps = _episode(env, plant, lambda t: np.zeros(4))
@@ -258,7 +580,7 @@ def _search(
 
     lo, hi = np.r_[-np.ones(4), 0.0], np.ones(5)
     opt = CMA(mean=np.r_[np.zeros(4), 0.2], sigma=o.sigma, bounds=np.c_[lo, hi], seed=o.seed)
-    done = 0
+    done, feasible = 0, []
     while done < o.evals:
         told = []
         for _ in range(opt.population_size):
@@ -266,10 +588,23 @@ def _search(
             r = run(x)
             told.append((x, -r[1] + (0.0 if r[0] else INFEASIBLE)))
             done += 1
+            if r[0]:
+                feasible.append((r[2], r[3], -r[1]))
             if r[0] and (not best[0] or r[1] > best[1]):
                 best = r
         opt.tell(told)
-    return best[2], best[3], -best[1]
+    rest = sorted(feasible, key=lambda f: f[2])
+    return [(best[2], best[3], -best[1]), *(f for f in rest if f[0] is not best[2])]
 
 
-__all__ = ["AdaptiveOptions", "Continuation", "EstimatingScheduler", "MoveTable"]
+__all__ = [
+    "AdaptiveOptions",
+    "Continuation",
+    "EstimatingScheduler",
+    "Fallbacks",
+    "MoveTable",
+    "ScheduledRun",
+    "Told",
+    "calibration_plants",
+    "shadow_plants",
+]
