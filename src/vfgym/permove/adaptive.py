@@ -67,10 +67,18 @@ import numpy as np
 
 from vfgym._validate import check_int, check_real
 from vfgym.axis import Axis, PlantVariant
-from vfgym.envs import N_SIGNATURE, check_plants, plant_spans
+from vfgym.envs import N_SIGNATURE, check_plants
 from vfgym.envs.servo import VFServoEnv
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
+from vfgym.permove._shadows import (
+    SHADOW_LEVELS,
+    SHADOWED,
+    boundary_plants,
+    calibration_plants,
+    shadow_lines,
+    shadow_plants,
+)
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.scoring import Scheduler
 
@@ -88,10 +96,6 @@ breaks a continuation."""
 GENTLER = (0.75, 0.5, 0.25)
 """... then the search's cheapest scaled by these (checked on its plants as the search
 checks), the cheapest of all that no shadow plant breaks taken."""
-SHADOWED = ("inertia", "torque_per_count", "load_offset_nm")
-SHADOW_LEVELS = (0.125, 0.25, 0.5, 1.0)
-"""Shadow plants lie these shares of ``AdaptiveOptions.shadow`` outside each range's edge."""
-"""The quantities a shadow plant moves outside their ranges."""
 
 
 @dataclass(frozen=True)
@@ -403,68 +407,6 @@ def _held(told: Told, fallback: bool) -> str:
     return "shadow" if told.continuation.shadows else ""
 
 
-def calibration_plants(design: tuple[PlantVariant, ...], count: int) -> list[PlantVariant]:
-    """In-range plants on a grid over the design's ranges (at most ``count``, at least 2
-    levels a quantity), where the design's thresholds are measured.
-
-    Parameters
-    ----------
-    design : tuple of PlantVariant
-        The axis's design plants (their corners span the ranges).
-    count : int
-        The most plants.
-
-    Returns
-    -------
-    list of PlantVariant
-        The grid's plants.
-    """
-    span = plant_spans(design)
-    lo = {k: min(getattr(p, k) for p in design) for k in span}
-    levels = max(2, math.floor(count ** (1.0 / max(1, len(span))) + 1e-9))
-    out = []
-    for idx in np.ndindex(*(levels,) * len(span)):
-        x = {k: lo[k] + w * j / (levels - 1) for (k, w), j in zip(span.items(), idx, strict=True)}
-        out.append(replace(design[0], **x))
-    return out
-
-
-def shadow_plants(
-    design: tuple[PlantVariant, ...], rated_torque_nm: float, shadow: float
-) -> list[PlantVariant]:
-    """The design plants each with one quantity of :data:`SHADOWED` just outside its
-    range: :data:`SHADOW_LEVELS` shares of ``shadow`` beyond each edge (a share of the edge
-    for a factor, of ``rated_torque_nm`` for the load torque).
-
-    Parameters
-    ----------
-    design : tuple of PlantVariant
-        The axis's design plants (their corners span the ranges; a quantity known exactly
-        has its one value as both edges).
-    rated_torque_nm : float
-        The motor's rated torque (the load torque's scale).
-    shadow : float
-        How far outside, (0, 0.5].
-
-    Returns
-    -------
-    list of PlantVariant
-        The shadow plants, each once.
-    """
-    out: dict[PlantVariant, None] = {}
-    for k in SHADOWED:
-        lo, hi = (f(getattr(p, k) for p in design) for f in (min, max))
-        for f in (shadow * j for j in SHADOW_LEVELS):
-            if k == "load_offset_nm":
-                vals = (lo - f * rated_torque_nm, hi + f * rated_torque_nm)
-            else:
-                vals = (lo * (1.0 - f), hi * (1.0 + f))
-            for p in design:
-                for v in vals:
-                    out[replace(p, **{k: v})] = None
-    return list(out)
-
-
 def _outside(
     env: VFServoEnv, table: MoveTable, cands: list[list[_Found]], axis: Axis, o: AdaptiveOptions
 ) -> MoveTable:
@@ -484,11 +426,21 @@ def _outside(
         far[i] = max(far[i], told.residual)
     conts = tuple(replace(c, threshold=o.margin * far[i]) for i, c in enumerate(conts))
     table = replace(table, continuations=conts)
+    base: dict[PlantVariant, bool] = {}  # where the base holds, each plant run once
+
+    def holds(q: PlantVariant) -> bool:
+        if q not in base:
+            base[q] = _holds(env, q, np.zeros(4), 1, hold)
+        return base[q]
+
+    lines = shadow_lines(design, axis.plant.motor.rated_torque_nm, o.shadow)
+    checked = {q: None for line in lines for q in line[1:]}
+    checked.update({q: None for line in lines for q in boundary_plants(line, holds)})
     mine: list[list[PlantVariant]] = [[] for _ in conts]  # told as each, the base holding
-    for q in shadow_plants(design, axis.plant.motor.rated_torque_nm, o.shadow):
+    for q in checked:
         told = table.tell(_signature(env, q, hold))
         i = conts.index(told.continuation)
-        if told.fits and np.any(conts[i].action != 0.0) and _holds(env, q, np.zeros(4), 1, hold):
+        if told.fits and np.any(conts[i].action != 0.0) and holds(q):
             mine[i].append(q)
     out = []
     for c, qs, found in zip(conts, mine, cands, strict=True):
@@ -598,6 +550,8 @@ def _search(
 
 
 __all__ = [
+    "SHADOWED",
+    "SHADOW_LEVELS",
     "AdaptiveOptions",
     "Continuation",
     "EstimatingScheduler",
