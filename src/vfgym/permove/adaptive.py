@@ -43,13 +43,16 @@ checked it. Two checks, both in the move's table:
   set, times its error), so each continuation is also run on the *shadow* plants told as
   its plant (whose responses fit it): the design plants with one quantity (inertia, drive
   gain, load torque) ``shadow``, a half, a quarter and an eighth of it outside its range
-  (a share of the edge for a factor, of the motor's rated torque for the load torque;
-  a few plants between the edge and the first shadow may break where the base holds:
-  feasibility is not monotone in the plant). Where it
-  breaks a limit on one that the base holds, the cheapest that breaks none there of the
-  search's other candidates and of gentler versions of its own (scaled towards the base,
-  checked on its plants as the search checks) replaces it; if none does, told that plant,
-  the scheduler holds the base for the rest of the move.
+  (a share of the edge for a factor, of the motor's rated torque for the load torque),
+  and, between two neighbours of that line (the edge first) where the base holds on one
+  and breaks a limit on the other, the plants where it holds found by bisecting towards
+  its boundary (a continuation tends to break a limit first where the base only just
+  keeps it; feasibility is not monotone in the plant, so the shadows alone leave gaps;
+  :mod:`vfgym.permove._shadows`). Where it breaks a limit on one that the base holds,
+  the cheapest that breaks none there of the search's other candidates and of gentler
+  versions of its own (scaled towards the base, checked on its plants as the search
+  checks) replaces it; if none does, told that plant, the scheduler holds the base for
+  the rest of the move.
 
 Each move's outcome is recorded in :attr:`EstimatingScheduler.runs`
 (:meth:`EstimatingScheduler.fallbacks` counts them). In range the first check fires only
@@ -72,6 +75,7 @@ from vfgym.envs.servo import VFServoEnv
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
 from vfgym.permove._shadows import (
+    BISECTIONS,
     SHADOW_LEVELS,
     SHADOWED,
     boundary_plants,
@@ -435,7 +439,7 @@ def _outside(
 
     lines = shadow_lines(design, axis.plant.motor.rated_torque_nm, o.shadow)
     checked = {q: None for line in lines for q in line[1:]}
-    checked.update({q: None for line in lines for q in boundary_plants(line, holds)})
+    checked.update({q: None for line in lines for q in boundary_plants(line, holds, BISECTIONS)})
     mine: list[list[PlantVariant]] = [[] for _ in conts]  # told as each, the base holding
     for q in checked:
         told = table.tell(_signature(env, q, hold))
@@ -550,6 +554,7 @@ def _search(
 
 
 __all__ = [
+    "BISECTIONS",
     "SHADOWED",
     "SHADOW_LEVELS",
     "AdaptiveOptions",
