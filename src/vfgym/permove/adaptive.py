@@ -452,11 +452,13 @@ def _outside(
             out.append(c)
             continue
         near = [c.plant, *check_plants(design, conts.index(c), o.neighbours, o.probes)]
-        pool = [(f, True) for f in found[1 : 1 + RUNNERS_UP]]
+        # never dearer than the base on its plant (held, it costs the base's)
+        base_cost = float(_episode(env, c.plant, lambda t: np.zeros(4))[0]["cost"])
+        pool = [(f, True) for f in found[1 : 1 + RUNNERS_UP] if f[2] <= base_cost]
         for k in GENTLER:  # the cheapest, scaled down: its cost on its plant, if it holds there
             a, r = c.action * k, c.ramp
             info, _ = _episode(env, c.plant, lambda t, a=a, r=r: _ramp(a, r, hold, t))
-            if info["feasible"]:
+            if info["feasible"] and float(info["cost"]) <= base_cost:
                 pool.append(((a, r, float(info["cost"])), False))
         for (a, r, cost), searched in sorted(pool, key=lambda x: x[0][2]):
             if np.any(a != 0.0) and all(_holds(env, q, a, r, hold) for q in
