@@ -51,8 +51,8 @@ checked it. Two checks, both in the move's table:
   :mod:`vfgym.permove._shadows`). Where it breaks a limit on one that the base holds,
   the cheapest that breaks none there of the search's other candidates and of gentler
   versions of its own (scaled towards the base, checked on its plants as the search
-  checks) replaces it; if none does, told that plant, the scheduler holds the base for
-  the rest of the move.
+  checks; none dearer than the base on its plant) replaces it; if none does, told that
+  plant, the scheduler holds the base for the rest of the move.
 
 Each move's outcome is recorded in :attr:`EstimatingScheduler.runs`
 (:meth:`EstimatingScheduler.fallbacks` counts them). In range the first check fires only
@@ -182,7 +182,8 @@ class Continuation:
     searched_action: np.ndarray | None = None
     """Where the search's cheapest broke a limit on a shadow plant told as this one that the
     base holds, and :attr:`action` is the cheapest searched candidate that breaks none
-    there: the search's cheapest (run with the fallback off); else ``None``."""
+    there (and is no dearer than the base on this plant): the search's cheapest (run with
+    the fallback off); else ``None``."""
     searched_ramp: int = 1
     """... and its ramp."""
 
