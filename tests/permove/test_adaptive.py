@@ -96,8 +96,9 @@ def test_a_continuation_a_shadow_plant_breaks_is_replaced_or_the_base_held(setup
     """test-1 on loads-uncertain: a correction that keeps every limit on the design plant of
     inertia 0.917 breaks one on its shadow of drive gain x0.9 (outside the stated gain,
     told as that plant: over the hold the gain does not show), which the base holds. The
-    table's check replaces it by a candidate that the shadow does not break; with none,
-    told that plant, the scheduler holds the base and says so."""
+    table's check replaces it by a candidate that the shadow does not break; with none (no
+    other candidate, no gentler version, none found searching again), told that plant, the
+    scheduler holds the base and says so."""
     axis, sched, moves = setup
     sc = moves[1]
     table = sched.table(sc)
@@ -109,7 +110,7 @@ def test_a_continuation_a_shadow_plant_breaks_is_replaced_or_the_base_held(setup
     shadow = replace(good.plant, torque_per_count=0.9)
     assert shadow in adaptive.shadow_plants(sched.design, axis.plant.motor.rated_torque_nm, 0.1)
     conts = list(table.continuations)
-    conts[i] = replace(good, action=bad, ramp=1, searched_action=None)
+    conts[i] = replace(good, action=bad, ramp=1, searched_action=None, shadows=())
     forged = replace(table, continuations=tuple(conts))
     cands = [[(c.action, c.ramp, c.cost)] for c in conts]
     cands[i].append((good.action, good.ramp, good.cost))  # the search's next cheapest
@@ -119,6 +120,8 @@ def test_a_continuation_a_shadow_plant_breaks_is_replaced_or_the_base_held(setup
     assert not np.array_equal(mended.action, bad)
     assert adaptive._holds(env, shadow, mended.action, mended.ramp, table.hold)
     monkeypatch.setattr(adaptive, "GENTLER", ())  # no gentler version of it to fall back on
+    nothing = [(np.zeros(4), 1, float(good.cost))]  # ... and the search again finds none
+    monkeypatch.setattr(adaptive, "_search", lambda *args: nothing)
     held = adaptive._outside(env, forged, [*cands[:i], cands[i][:1], *cands[i + 1 :]], axis,
                              sched.options)  # fmt: skip
     assert shadow in held.continuations[i].shadows

@@ -449,27 +449,31 @@ def _outside(
             mine[i].append(q)
     out = []
     for c, qs, found in zip(conts, mine, cands, strict=True):
-        if all(_holds(env, q, c.action, c.ramp, hold) for q in qs):
+        broken = [q for q in qs if not _holds(env, q, c.action, c.ramp, hold)]
+        if not broken:
             out.append(c)
             continue
-        near = [c.plant, *check_plants(design, conts.index(c), o.neighbours, o.probes)]
+        near = check_plants(design, conts.index(c), o.neighbours, o.probes)
         # never dearer than the base on its plant (held, it costs the base's)
         base_cost = float(_episode(env, c.plant, lambda t: np.zeros(4))[0]["cost"])
-        pool = [(f, True) for f in found[1 : 1 + RUNNERS_UP] if f[2] <= base_cost]
+        pool = [(f, qs) for f in found[1 : 1 + RUNNERS_UP] if f[2] <= base_cost]
         for k in GENTLER:  # the cheapest, scaled down: its cost on its plant, if it holds there
             a, r = c.action * k, c.ramp
             info, _ = _episode(env, c.plant, lambda t, a=a, r=r: _ramp(a, r, hold, t))
             if info["feasible"] and float(info["cost"]) <= base_cost:
-                pool.append(((a, r, float(info["cost"])), False))
-        for (a, r, cost), searched in sorted(pool, key=lambda x: x[0][2]):
-            if np.any(a != 0.0) and all(_holds(env, q, a, r, hold) for q in
-                                        [*qs, *(() if searched else near[1:])]):  # fmt: skip
+                pool.append(((a, r, float(info["cost"])), [*qs, *near]))
+        # searched again, feasible also where it broke and on the other plants checked
+        rest = [q for q in qs if q not in broken]
+        again = _search(env, hold, c.plant, [*broken, *near, *rest], o)[0]
+        if again[2] <= base_cost:
+            pool.append((again, []))
+        for (a, r, cost), check in sorted(pool, key=lambda x: x[0][2]):
+            if np.any(a != 0.0) and all(_holds(env, q, a, r, hold) for q in check):
                 out.append(replace(c, action=a, ramp=r, cost=cost, searched_action=c.action,
                                    searched_ramp=c.ramp))  # fmt: skip
                 break
         else:
-            broken = tuple(q for q in qs if not _holds(env, q, c.action, c.ramp, hold))
-            out.append(replace(c, shadows=broken))
+            out.append(replace(c, shadows=tuple(broken)))
     return replace(table, continuations=tuple(out))
 
 
