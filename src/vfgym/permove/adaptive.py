@@ -49,9 +49,10 @@ checked it. Two checks, both in the move's table:
   its boundary (a continuation tends to break a limit first where the base only just
   keeps it; feasibility is not monotone in the plant, so the shadows alone leave gaps;
   :mod:`vfgym.permove._shadows`). Where it breaks a limit on one that the base holds,
-  the cheapest that breaks none there of the search's other candidates and of gentler
+  the cheapest that breaks none there of the search's other candidates, of gentler
   versions of its own (scaled towards the base, checked on its plants as the search
-  checks; none dearer than the base on its plant) replaces it; if none does, told that
+  checks) and of a second search on its plants and those checked plants (none dearer
+  than the base on its plant) replaces it; if none does, told that
   plant, the scheduler holds the base for the rest of the move.
 
 Each move's outcome is recorded in :attr:`EstimatingScheduler.runs`
@@ -416,8 +417,9 @@ def _outside(
     env: VFServoEnv, table: MoveTable, cands: list[list[_Found]], axis: Axis, o: AdaptiveOptions
 ) -> MoveTable:
     """``table`` with each continuation's threshold, and where a shadow plant told as its
-    plant breaks it, the cheapest of the search's ``cands`` and of the gentler versions of
-    its cheapest (:data:`GENTLER`) that breaks none, else the shadows that break it
+    plant breaks it, the cheapest of the search's ``cands``, of the gentler versions of
+    its cheapest (:data:`GENTLER`) and of a second search on those plants too that breaks
+    none and is no dearer than the base on its plant, else the shadows that break it
     (module doc)."""
     conts, hold = table.continuations, table.hold
     design = tuple(c.plant for c in conts)
