@@ -55,15 +55,19 @@ def test_it_is_deterministic(setup):
 
 def test_in_range_it_still_switches_and_holds_no_base(setup):
     """On plants drawn within the ranges every response fits a design plant and no
-    continuation is held back: it runs what it ran without the fallback, cheaper than the
-    base on some pairs."""
+    continuation is held back: where the checks left the told plant's continuation as
+    searched, it runs what it ran without the fallback, and it is cheaper than the base on
+    some pairs."""
     axis, sched, moves = setup
     plants = list(draw_plants(axis.uncertainty, axis.plant.motor, 6, VERDICT_PLANT_SEED))
     sched.runs.clear()
     for sc in moves:
         ctrls = [sched.table(sc).base, sched.without_fallback(), sched]
         a = evaluate(ctrls, [sc], axis=axis, plants=plants).across
-        assert np.array_equal(a.cost[2], a.cost[1])
+        told = {r.plant: r.told for r in sched.runs if r.scenario == sc.name}
+        conts = {c.plant: c for c in sched.table(sc).continuations}
+        same = [j for j, q in enumerate(plants) if not conts[told[q]].safer]
+        assert np.array_equal(a.cost[2, same], a.cost[1, same])
         assert np.any(a.cost[2] < a.cost[0] - 1e-9), a.cost
     assert sched.fallbacks().runs == len(moves) * (1 + len(plants))  # (and the modelled plant)
     assert sched.fallbacks().held == 0, [r for r in sched.runs if r.held]
@@ -92,19 +96,21 @@ def test_a_continuation_a_shadow_plant_breaks_is_replaced_or_the_base_held(setup
     """test-1 on loads-uncertain: a correction that keeps every limit on the design plant of
     inertia 0.917 breaks one on its shadow of drive gain x0.9 (outside the stated gain,
     told as that plant: over the hold the gain does not show), which the base holds. The
-    table's check replaces it by a candidate that the shadow does not break; with none,
-    told that plant, the scheduler holds the base and says so."""
+    table's check replaces it by a candidate that the shadow does not break; with none (no
+    other candidate, no gentler version, none found searching again), told that plant, the
+    scheduler holds the base and says so."""
     axis, sched, moves = setup
     sc = moves[1]
     table = sched.table(sc)
     env = sched._tables[sc.name][0]
+    monkeypatch.setattr(adaptive, "BISECTIONS", 0)  # the shadows alone (the next test: between)
     (i,) = [j for j, c in enumerate(table.continuations) if abs(c.plant.inertia - 0.9168) < 1e-3]
     good = table.continuations[i]
     bad = np.array([0.08724998, 0.0, 0.63170711, -0.994523])
     shadow = replace(good.plant, torque_per_count=0.9)
     assert shadow in adaptive.shadow_plants(sched.design, axis.plant.motor.rated_torque_nm, 0.1)
     conts = list(table.continuations)
-    conts[i] = replace(good, action=bad, ramp=1)
+    conts[i] = replace(good, action=bad, ramp=1, searched_action=None, shadows=())
     forged = replace(table, continuations=tuple(conts))
     cands = [[(c.action, c.ramp, c.cost)] for c in conts]
     cands[i].append((good.action, good.ramp, good.cost))  # the search's next cheapest
@@ -114,6 +120,8 @@ def test_a_continuation_a_shadow_plant_breaks_is_replaced_or_the_base_held(setup
     assert not np.array_equal(mended.action, bad)
     assert adaptive._holds(env, shadow, mended.action, mended.ramp, table.hold)
     monkeypatch.setattr(adaptive, "GENTLER", ())  # no gentler version of it to fall back on
+    nothing = [(np.zeros(4), 1, float(good.cost))]  # ... and the search again finds none
+    monkeypatch.setattr(adaptive, "_search", lambda *args: nothing)
     held = adaptive._outside(env, forged, [*cands[:i], cands[i][:1], *cands[i + 1 :]], axis,
                              sched.options)  # fmt: skip
     assert shadow in held.continuations[i].shadows
@@ -125,6 +133,45 @@ def test_a_continuation_a_shadow_plant_breaks_is_replaced_or_the_base_held(setup
     assert ok[0, 0] and not ok[1, 0]  # without the fallback: the break the check found
     assert ok[2, 0] and a.cost[2, 0, 0] == a.cost[0, 0, 0]
     assert [r.held for r in mine.runs if r.plant in (shadow, good.plant)] == ["shadow"] * 2
+
+
+def test_a_plant_between_shadows_where_the_base_just_holds_is_checked(setup, monkeypatch):
+    """test-1 on loads-uncertain: the search's continuation for the inertia 0.8 corner keeps
+    every limit on its shadows told as that plant where the base does (load torque 1.25 %
+    of rated below, 2.5 % the base breaks), but breaks one at -0.01244 N·m (1.95 %), where
+    the base still holds. Without the bisection between shadows (``BISECTIONS`` 0) the
+    table keeps it and the scheduler breaks that limit; with it, the scheduler does not."""
+    axis, sched, moves = setup
+    sc = moves[1]
+    table = sched.table(sc)
+    env = sched._tables[sc.name][0]
+    (i,) = [j for j, c in enumerate(table.continuations) if c.plant.inertia == 0.8]
+    plant = replace(table.continuations[i].plant, load_offset_nm=-0.01244)
+    searched = [  # the search's cheapest, as before the shadow checks
+        replace(c, action=c.searched_action, ramp=c.searched_ramp, searched_action=None)
+        if c.safer
+        else replace(c, shadows=())
+        for c in table.continuations
+    ]
+    forged = replace(table, continuations=tuple(searched))
+    cands = [[(c.action, c.ramp, c.cost)] for c in searched]
+    c = searched[i]
+    assert adaptive._holds(env, plant, np.zeros(4), 1, table.hold)  # the base holds there
+    assert not adaptive._holds(env, plant, c.action, c.ramp, table.hold)  # the search's breaks
+    tables = {}
+    for steps in (0, adaptive.BISECTIONS):
+        monkeypatch.setattr(adaptive, "BISECTIONS", steps)
+        tables[steps] = adaptive._outside(env, forged, cands, axis, sched.options)
+    assert np.array_equal(tables[0].continuations[i].action, c.action)  # the shadows pass it
+    ok = []
+    for t in tables.values():
+        mine = EstimatingScheduler(axis, load_settings_model(), FAST)
+        mine._tables[sc.name] = (env, t)
+        a = evaluate([table.base, mine], [sc], axis=axis, plants=[plant]).across
+        (run,) = [r for r in mine.runs if r.plant == plant]
+        assert run.told == c.plant and run.residual <= c.threshold, run
+        ok.append(tuple(bool(x) for x in a.feasible[:, 0, 0]))
+    assert ok == [(True, False), (True, True)], ok
 
 
 def test_a_response_far_from_every_design_plant_fits_none(setup):
@@ -150,6 +197,25 @@ def test_shadow_plants_lie_outside_one_range_each():
     inside = adaptive.calibration_plants(design, adaptive.CALIBRATION_PLANTS)
     assert len(inside) == adaptive.CALIBRATION_PLANTS  # one uncertain quantity: 81 levels
     assert all(lo["inertia"] <= q.inertia <= hi["inertia"] for q in inside)
+
+
+def test_boundary_plants_bisect_where_the_base_changes_on_its_holding_side():
+    """Between neighbouring shadows where the base holds on one and breaks on the other,
+    the plants where it holds, nearer the boundary each step, from either side."""
+    line = tuple(PlantVariant(inertia=1.25 * (1 + f)) for f in (0, 0.0125, 0.025, 0.05, 0.1))
+
+    def holds(q: PlantVariant) -> bool:
+        return q.inertia < 1.277 or q.inertia > 1.35
+
+    found = adaptive.boundary_plants(line, holds, 4)
+    low = sorted(q.inertia for q in found if q.inertia < 1.3)
+    high = sorted(q.inertia for q in found if q.inertia > 1.3)
+    assert low and all(line[1].inertia < x < 1.277 for x in low)
+    assert 1.277 - low[-1] < (line[2].inertia - line[1].inertia) / 16
+    assert high and all(1.35 < x < line[4].inertia for x in high)
+    assert high[0] - 1.35 < (line[4].inertia - line[3].inertia) / 16
+    assert adaptive.boundary_plants(line, lambda q: True, 4) == []
+    assert adaptive.boundary_plants(line, holds, 0) == []
 
 
 def test_an_exact_axis_is_refused():

@@ -43,13 +43,17 @@ checked it. Two checks, both in the move's table:
   set, times its error), so each continuation is also run on the *shadow* plants told as
   its plant (whose responses fit it): the design plants with one quantity (inertia, drive
   gain, load torque) ``shadow``, a half, a quarter and an eighth of it outside its range
-  (a share of the edge for a factor, of the motor's rated torque for the load torque;
-  a few plants between the edge and the first shadow may break where the base holds:
-  feasibility is not monotone in the plant). Where it
-  breaks a limit on one that the base holds, the cheapest that breaks none there of the
-  search's other candidates and of gentler versions of its own (scaled towards the base,
-  checked on its plants as the search checks) replaces it; if none does, told that plant,
-  the scheduler holds the base for the rest of the move.
+  (a share of the edge for a factor, of the motor's rated torque for the load torque),
+  and, between two neighbours of that line (the edge first) where the base holds on one
+  and breaks a limit on the other, the plants where it holds found by bisecting towards
+  its boundary (a continuation tends to break a limit first where the base only just
+  keeps it; feasibility is not monotone in the plant, so the shadows alone leave gaps;
+  :mod:`vfgym.permove._shadows`). Where it breaks a limit on one that the base holds,
+  the cheapest that breaks none there of the search's other candidates, of gentler
+  versions of its own (scaled towards the base, checked on its plants as the search
+  checks) and of a second search on its plants and those checked plants (none dearer
+  than the base on its plant) replaces it; if none does, told that
+  plant, the scheduler holds the base for the rest of the move.
 
 Each move's outcome is recorded in :attr:`EstimatingScheduler.runs`
 (:meth:`EstimatingScheduler.fallbacks` counts them). In range the first check fires only
@@ -67,10 +71,19 @@ import numpy as np
 
 from vfgym._validate import check_int, check_real
 from vfgym.axis import Axis, PlantVariant
-from vfgym.envs import N_SIGNATURE, check_plants, plant_spans
+from vfgym.envs import N_SIGNATURE, check_plants
 from vfgym.envs.servo import VFServoEnv
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
+from vfgym.permove._shadows import (
+    BISECTIONS,
+    SHADOW_LEVELS,
+    SHADOWED,
+    boundary_plants,
+    calibration_plants,
+    shadow_lines,
+    shadow_plants,
+)
 from vfgym.plant.measures import NAMES as METRIC_NAMES
 from vfgym.scoring import Scheduler
 
@@ -88,10 +101,6 @@ breaks a continuation."""
 GENTLER = (0.75, 0.5, 0.25)
 """... then the search's cheapest scaled by these (checked on its plants as the search
 checks), the cheapest of all that no shadow plant breaks taken."""
-SHADOWED = ("inertia", "torque_per_count", "load_offset_nm")
-SHADOW_LEVELS = (0.125, 0.25, 0.5, 1.0)
-"""Shadow plants lie these shares of ``AdaptiveOptions.shadow`` outside each range's edge."""
-"""The quantities a shadow plant moves outside their ranges."""
 
 
 @dataclass(frozen=True)
@@ -174,7 +183,8 @@ class Continuation:
     searched_action: np.ndarray | None = None
     """Where the search's cheapest broke a limit on a shadow plant told as this one that the
     base holds, and :attr:`action` is the cheapest searched candidate that breaks none
-    there: the search's cheapest (run with the fallback off); else ``None``."""
+    there (and is no dearer than the base on this plant): the search's cheapest (run with
+    the fallback off); else ``None``."""
     searched_ramp: int = 1
     """... and its ramp."""
 
@@ -403,74 +413,13 @@ def _held(told: Told, fallback: bool) -> str:
     return "shadow" if told.continuation.shadows else ""
 
 
-def calibration_plants(design: tuple[PlantVariant, ...], count: int) -> list[PlantVariant]:
-    """In-range plants on a grid over the design's ranges (at most ``count``, at least 2
-    levels a quantity), where the design's thresholds are measured.
-
-    Parameters
-    ----------
-    design : tuple of PlantVariant
-        The axis's design plants (their corners span the ranges).
-    count : int
-        The most plants.
-
-    Returns
-    -------
-    list of PlantVariant
-        The grid's plants.
-    """
-    span = plant_spans(design)
-    lo = {k: min(getattr(p, k) for p in design) for k in span}
-    levels = max(2, math.floor(count ** (1.0 / max(1, len(span))) + 1e-9))
-    out = []
-    for idx in np.ndindex(*(levels,) * len(span)):
-        x = {k: lo[k] + w * j / (levels - 1) for (k, w), j in zip(span.items(), idx, strict=True)}
-        out.append(replace(design[0], **x))
-    return out
-
-
-def shadow_plants(
-    design: tuple[PlantVariant, ...], rated_torque_nm: float, shadow: float
-) -> list[PlantVariant]:
-    """The design plants each with one quantity of :data:`SHADOWED` just outside its
-    range: :data:`SHADOW_LEVELS` shares of ``shadow`` beyond each edge (a share of the edge
-    for a factor, of ``rated_torque_nm`` for the load torque).
-
-    Parameters
-    ----------
-    design : tuple of PlantVariant
-        The axis's design plants (their corners span the ranges; a quantity known exactly
-        has its one value as both edges).
-    rated_torque_nm : float
-        The motor's rated torque (the load torque's scale).
-    shadow : float
-        How far outside, (0, 0.5].
-
-    Returns
-    -------
-    list of PlantVariant
-        The shadow plants, each once.
-    """
-    out: dict[PlantVariant, None] = {}
-    for k in SHADOWED:
-        lo, hi = (f(getattr(p, k) for p in design) for f in (min, max))
-        for f in (shadow * j for j in SHADOW_LEVELS):
-            if k == "load_offset_nm":
-                vals = (lo - f * rated_torque_nm, hi + f * rated_torque_nm)
-            else:
-                vals = (lo * (1.0 - f), hi * (1.0 + f))
-            for p in design:
-                for v in vals:
-                    out[replace(p, **{k: v})] = None
-    return list(out)
-
-
 def _outside(
     env: VFServoEnv, table: MoveTable, cands: list[list[_Found]], axis: Axis, o: AdaptiveOptions
 ) -> MoveTable:
     """``table`` with each continuation's threshold, and where a shadow plant told as its
-    plant breaks it, the cheapest of the search's ``cands`` and of the gentler versions of
-    its cheapest (:data:`GENTLER`) that breaks none, else the shadows that break it
+    plant breaks it, the cheapest of the search's ``cands``, of the gentler versions of
+    its cheapest (:data:`GENTLER`) and of a second search on those plants too that breaks
+    none and is no dearer than the base on its plant, else the shadows that break it
     (module doc)."""
     conts, hold = table.continuations, table.hold
     design = tuple(c.plant for c in conts)
@@ -484,33 +433,49 @@ def _outside(
         far[i] = max(far[i], told.residual)
     conts = tuple(replace(c, threshold=o.margin * far[i]) for i, c in enumerate(conts))
     table = replace(table, continuations=conts)
+    base: dict[PlantVariant, bool] = {}  # where the base holds, each plant run once
+
+    def holds(q: PlantVariant) -> bool:
+        if q not in base:
+            base[q] = _holds(env, q, np.zeros(4), 1, hold)
+        return base[q]
+
+    lines = shadow_lines(design, axis.plant.motor.rated_torque_nm, o.shadow)
+    checked = {q: None for line in lines for q in line[1:]}
+    checked.update({q: None for line in lines for q in boundary_plants(line, holds, BISECTIONS)})
     mine: list[list[PlantVariant]] = [[] for _ in conts]  # told as each, the base holding
-    for q in shadow_plants(design, axis.plant.motor.rated_torque_nm, o.shadow):
+    for q in checked:
         told = table.tell(_signature(env, q, hold))
         i = conts.index(told.continuation)
-        if told.fits and np.any(conts[i].action != 0.0) and _holds(env, q, np.zeros(4), 1, hold):
+        if told.fits and np.any(conts[i].action != 0.0) and holds(q):
             mine[i].append(q)
     out = []
     for c, qs, found in zip(conts, mine, cands, strict=True):
-        if all(_holds(env, q, c.action, c.ramp, hold) for q in qs):
+        broken = [q for q in qs if not _holds(env, q, c.action, c.ramp, hold)]
+        if not broken:
             out.append(c)
             continue
-        near = [c.plant, *check_plants(design, conts.index(c), o.neighbours, o.probes)]
-        pool = [(f, True) for f in found[1 : 1 + RUNNERS_UP]]
+        near = check_plants(design, conts.index(c), o.neighbours, o.probes)
+        # never dearer than the base on its plant (held, it costs the base's)
+        base_cost = float(_episode(env, c.plant, lambda t: np.zeros(4))[0]["cost"])
+        pool = [(f, qs) for f in found[1 : 1 + RUNNERS_UP] if f[2] <= base_cost]
         for k in GENTLER:  # the cheapest, scaled down: its cost on its plant, if it holds there
             a, r = c.action * k, c.ramp
             info, _ = _episode(env, c.plant, lambda t, a=a, r=r: _ramp(a, r, hold, t))
-            if info["feasible"]:
-                pool.append(((a, r, float(info["cost"])), False))
-        for (a, r, cost), searched in sorted(pool, key=lambda x: x[0][2]):
-            if np.any(a != 0.0) and all(_holds(env, q, a, r, hold) for q in
-                                        [*qs, *(() if searched else near[1:])]):  # fmt: skip
+            if info["feasible"] and float(info["cost"]) <= base_cost:
+                pool.append(((a, r, float(info["cost"])), [*qs, *near]))
+        # searched again, feasible also where it broke and on the other plants checked
+        rest = [q for q in qs if q not in broken]
+        again = _search(env, hold, c.plant, [*broken, *near, *rest], o)[0]
+        if again[2] <= base_cost:
+            pool.append((again, []))
+        for (a, r, cost), check in sorted(pool, key=lambda x: x[0][2]):
+            if np.any(a != 0.0) and all(_holds(env, q, a, r, hold) for q in check):
                 out.append(replace(c, action=a, ramp=r, cost=cost, searched_action=c.action,
                                    searched_ramp=c.ramp))  # fmt: skip
                 break
         else:
-            broken = tuple(q for q in qs if not _holds(env, q, c.action, c.ramp, hold))
-            out.append(replace(c, shadows=broken))
+            out.append(replace(c, shadows=tuple(broken)))
     return replace(table, continuations=tuple(out))
 
 
@@ -598,6 +563,9 @@ def _search(
 
 
 __all__ = [
+    "BISECTIONS",
+    "SHADOWED",
+    "SHADOW_LEVELS",
     "AdaptiveOptions",
     "Continuation",
     "EstimatingScheduler",
