@@ -84,7 +84,6 @@ def heldout_result(model_path: str | Path, params: dict[str, Any]) -> HeldOutRes
     HeldOutResult
         The mean costs and win counts.
     """
-    from vfgym.params import Settings
     from vfgym.permove import load_settings_model
     from vfgym.report import Candidate, compare
 
