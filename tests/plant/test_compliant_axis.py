@@ -1,7 +1,8 @@
 """A compliant axis: ``plant.transmission`` read from an axis file (its fields, or a
 resonance and a damping ratio), as strictly as every other key, written back and read
-equal; a rigid axis's record and digest unchanged; stiffness and damping ranges in
-``uncertainty:`` and the true plants they give; and the shipped compliant axis."""
+equal; a rigid axis's record and digest unchanged; stiffness, damping and the load's
+friction ranges in ``uncertainty:`` and the true plants they give; and the shipped
+compliant axis."""
 
 from __future__ import annotations
 
@@ -102,9 +103,32 @@ def test_stiffness_and_damping_ranges_give_true_plants():
     assert Uncertainty(stiffness=(0.5, 1.0)).to_dict() == {"stiffness": [0.5, 1.0]}
 
 
+def test_a_load_friction_range_gives_true_plants_around_the_modelled_one():
+    ax = axis_with(FIELDS | {"load_coulomb_nm": 0.01}, {"load_coulomb_nm": [0.004, 0.03]})
+    assert ax.uncertainty.to_dict() == {"load_coulomb_nm": [0.004, 0.03]}
+    assert axis_from_dict(axis_to_dict(ax), "t") == ax
+    design = ax.design_plants()
+    true = sorted(v.apply(ax.plant).transmission.load_coulomb_nm for v in design)
+    assert true[0] == pytest.approx(0.004) and true[-1] == pytest.approx(0.03)
+    assert all(0.004 - 1e-15 <= c <= 0.03 + 1e-15 for c in true)
+    v = PlantVariant(load_coulomb_offset_nm=-0.006)
+    assert v.label() == "τc_L-0.006"
+    assert v.apply(ax.plant).transmission.load_coulomb_nm == pytest.approx(0.004)
+    assert v.apply(ax.plant).motor == ax.plant.motor  # the motor's own friction untouched
+    assert repr(PlantVariant(inertia=1.1)) == (
+        "PlantVariant(inertia=1.1, coulomb_offset_nm=0.0, viscous_offset_nm_s_rad=0.0, "
+        "load_offset_nm=0.0, torque_per_count=1.0)"
+    )  # a rigid axis's variants read (and digest) as before
+    with pytest.raises(ValueError, match="needs the modelled plant"):
+        plant_design(ax.uncertainty, ax.plant.motor)
+
+
 @pytest.mark.parametrize(
     ("transmission", "uncertainty", "needle"),
     [
+        (None, {"load_coulomb_nm": [0.0, 0.01]}, "uncertainty.load_coulomb_nm"),
+        (FIELDS, {"load_coulomb_nm": [-0.01, 0.01]}, r"uncertainty.load_coulomb_nm\[0\]"),
+        (FIELDS, {"load_coulomb_nm": [0.0, 50.0]}, r"uncertainty.load_coulomb_nm=.*peak_torque"),
         (None, {"stiffness": [0.8, 1.2]}, "uncertainty.stiffness"),
         (None, {"damping": [0.8, 1.2]}, "uncertainty.damping"),
         (FIELDS, {"stiffness": [0.8, 30.0]}, r"uncertainty.stiffness\[1\]"),
@@ -120,6 +144,8 @@ def test_transmission_ranges_are_checked_with_the_axis(transmission, uncertainty
         axis_with(transmission, uncertainty)
     with pytest.raises(ValueError, match="no transmission"):
         PlantVariant(stiffness=1.1).apply(axis_with().plant)
+    with pytest.raises(ValueError, match="no transmission"):
+        PlantVariant(load_coulomb_offset_nm=0.01).apply(axis_with().plant)
 
 
 def test_the_shipped_compliant_axis():

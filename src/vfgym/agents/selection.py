@@ -116,7 +116,7 @@ def validation_plants(n: int, axis: Axis | str | PathLike[str] = LOADS_AXIS) -> 
     ax = as_axis(axis)
     if ax.uncertainty.exact:
         return [NOMINAL] * n
-    return list(draw_plants(ax.uncertainty, ax.plant.motor, n, VALIDATION_PLANT_SEED))
+    return list(draw_plants(ax.uncertainty, ax.plant, n, VALIDATION_PLANT_SEED))
 
 
 def validation_scenarios(n: int, axis: Axis | str | PathLike[str] = LOADS_AXIS) -> list[Scenario]:

@@ -98,7 +98,7 @@ class Axis:
         tuple of PlantVariant
             The design's plants, relative to the modelled one.
         """
-        return plant_design(self.uncertainty, self.plant.motor)
+        return plant_design(self.uncertainty, self.plant)
 
     def scenarios(self, split: str) -> list[Scenario]:
         """The train or test moves.

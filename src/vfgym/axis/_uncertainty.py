@@ -97,6 +97,9 @@ class Uncertainty:
         axis only: a belt's tension, a screw's nut position).
     damping : tuple of float or None
         Factors on the transmission's damping c_S, each in [0.05, 20].
+    load_coulomb_nm : tuple of float or None
+        The transmission's true Coulomb friction on the load, τc_L (N·m at the motor
+        shaft), ≥ 0 (a compliant axis only: a guide's or a nut's friction).
 
     Raises
     ------
@@ -112,6 +115,7 @@ class Uncertainty:
     torque_per_count: tuple[float, float] | None = None
     stiffness: tuple[float, float] | None = None
     damping: tuple[float, float] | None = None
+    load_coulomb_nm: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         lo_f, hi_f = FACTOR_RANGE
@@ -123,6 +127,7 @@ class Uncertainty:
             ("torque_per_count", lo_f, hi_f),
             ("stiffness", lo_f, hi_f),
             ("damping", lo_f, hi_f),
+            ("load_coulomb_nm", 0.0, None),
         ):
             object.__setattr__(self, name, _pair(name, getattr(self, name), lo, hi, lo_open=False))
 
@@ -150,17 +155,8 @@ class Uncertainty:
             and load torque over the peak torque, viscous friction over the peak torque at
             the knee speed).
         """
+        self._check_held(motor)
         peak = motor.peak_torque_nm
-        c_hi = (self.coulomb_nm or (motor.coulomb_nm,) * 2)[1]
-        l_lo, l_hi = self.load_torque_nm or (motor.load_torque_nm,) * 2
-        held = c_hi + max(abs(l_lo), abs(l_hi))
-        if held >= peak:
-            key = "coulomb_nm" if self.coulomb_nm else "load_torque_nm"
-            raise ValueError(
-                f"uncertainty.{key}={list(getattr(self, key))!r} is out of range: the "
-                f"highest friction plus load torque ({held:g} N·m) must stay below "
-                f"peak_torque_nm={peak:g}, else the motor cannot move its load"
-            )
         if self.viscous_nm_s_rad:
             most = peak / motor.knee_speed_rad_s
             if self.viscous_nm_s_rad[1] > most:
@@ -168,6 +164,24 @@ class Uncertainty:
                     f"uncertainty.viscous_nm_s_rad={list(self.viscous_nm_s_rad)!r} is out of "
                     f"range: allowed [0, {most:g}] (the peak torque at the knee speed)"
                 )
+
+    def _check_held(self, motor: Motor, load_coulomb_nm: float = 0.0) -> None:
+        """The highest friction (the motor's, and the load's ``load_coulomb_nm`` or its
+        range) plus load torque below the peak torque, else naming the range that breaks it."""
+        c_hi = (self.coulomb_nm or (motor.coulomb_nm,) * 2)[1]
+        cl_hi = (self.load_coulomb_nm or (load_coulomb_nm,) * 2)[1]
+        l_lo, l_hi = self.load_torque_nm or (motor.load_torque_nm,) * 2
+        held = c_hi + cl_hi + max(abs(l_lo), abs(l_hi))
+        if held >= motor.peak_torque_nm:
+            key = next(
+                (k for k in ("load_coulomb_nm", "coulomb_nm") if getattr(self, k)),
+                "load_torque_nm",
+            )
+            raise ValueError(
+                f"uncertainty.{key}={list(getattr(self, key) or ())!r} is out of range: the "
+                f"highest friction plus load torque ({held:g} N·m) must stay below "
+                f"peak_torque_nm={motor.peak_torque_nm:g}, else the motor cannot move its load"
+            )
 
     def check_plant(self, plant: Plant) -> None:
         """:meth:`check_motor` on the plant's motor, and the transmission's ranges: stated
@@ -182,18 +196,21 @@ class Uncertainty:
         Raises
         ------
         ValueError
-            Naming the key, as :meth:`check_motor`; or ``stiffness`` / ``damping`` on a
-            plant without a transmission, or a corner whose resonance is too high.
+            Naming the key, as :meth:`check_motor` (with the load's friction too); or
+            ``stiffness`` / ``damping`` / ``load_coulomb_nm`` on a plant without a
+            transmission, or a corner whose resonance is too high.
         """
-        self.check_motor(plant.motor)
         if plant.transmission is None:
-            for key in ("stiffness", "damping"):
+            for key in ("stiffness", "damping", "load_coulomb_nm"):
                 if getattr(self, key) is not None:
                     raise ValueError(
                         f"uncertainty.{key}={list(getattr(self, key))!r} is not allowed: the "
                         "plant states no transmission (plant.transmission)"
                     )
+            self.check_motor(plant.motor)
             return
+        self.check_motor(plant.motor)
+        self._check_held(plant.motor, plant.transmission.load_coulomb_nm)
         for inertia in self.inertia or (1.0,):
             for stiffness in self.stiffness or (1.0,):
                 try:
@@ -212,6 +229,10 @@ class Uncertainty:
 
 EXACT = Uncertainty()
 """Nothing uncertain: the default of every axis."""
+
+
+_TRANSMISSION_AT = {"stiffness": 1.0, "damping": 1.0, "load_coulomb_offset_nm": 0.0}
+"""A variant's transmission fields and their values on the modelled plant."""
 
 
 @dataclass(frozen=True)
@@ -234,6 +255,9 @@ class PlantVariant:
         Factor on the transmission's stiffness K_S (a compliant plant only).
     damping : float
         Factor on the transmission's damping c_S (a compliant plant only).
+    load_coulomb_offset_nm : float
+        True Coulomb friction on the load minus the modelled (N·m; a compliant plant
+        only).
     """
 
     inertia: float = 1.0
@@ -243,14 +267,15 @@ class PlantVariant:
     torque_per_count: float = 1.0
     stiffness: float = 1.0
     damping: float = 1.0
+    load_coulomb_offset_nm: float = 0.0
 
     def __repr__(self) -> str:
-        # the dataclass's own repr, without the transmission's factors at 1: a variant of
-        # a rigid axis reads as it did before them, so digests of it stay
+        # the dataclass's own repr, without the transmission's factors at 1 and offset at
+        # 0: a variant of a rigid axis reads as it did before them, so digests of it stay
         shown = (
             f
             for f in fields(self)
-            if f.name not in ("stiffness", "damping") or getattr(self, f.name) != 1.0
+            if f.name not in _TRANSMISSION_AT or getattr(self, f.name) != _TRANSMISSION_AT[f.name]
         )
         parts = ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in shown)
         return f"{type(self).__qualname__}({parts})"
@@ -281,15 +306,16 @@ class PlantVariant:
         Raises
         ------
         ValueError
-            A stiffness or damping factor on a plant without a transmission, or a true
+            A stiffness, damping or load friction on a plant without a transmission, or a true
             plant whose resonance is above f/10 (:class:`vfgym.Plant`).
         """
         if self.nominal:
             return plant
         tr = plant.transmission
-        if tr is None and (self.stiffness != 1.0 or self.damping != 1.0):
+        if tr is None and any(getattr(self, k) != v for k, v in _TRANSMISSION_AT.items()):
             raise ValueError(
-                f"stiffness={self.stiffness!r}, damping={self.damping!r} is not allowed: "
+                f"stiffness={self.stiffness!r}, damping={self.damping!r}, "
+                f"load_coulomb_offset_nm={self.load_coulomb_offset_nm!r} is not allowed: "
                 "the plant states no transmission"
             )
         if tr is not None:
@@ -298,6 +324,7 @@ class PlantVariant:
                 load_inertia_kgm2=tr.load_inertia_kgm2 * self.inertia,
                 stiffness_nm_rad=tr.stiffness_nm_rad * self.stiffness,
                 damping_nm_s_rad=tr.damping_nm_s_rad * self.damping,
+                load_coulomb_nm=max(0.0, tr.load_coulomb_nm + self.load_coulomb_offset_nm),
             )
         m = plant.motor
         motor = replace(
@@ -327,6 +354,7 @@ class PlantVariant:
             parts.append(f"c_S×{self.damping:.3g}")
         for name, v in (
             ("τc", self.coulomb_offset_nm),
+            ("τc_L", self.load_coulomb_offset_nm),
             ("b", self.viscous_offset_nm_s_rad),
             ("τload", self.load_offset_nm),
         ):
@@ -339,9 +367,20 @@ NOMINAL = PlantVariant()
 """The modelled plant."""
 
 
-def _variant(unc: Uncertainty, motor: Motor, u: np.ndarray) -> PlantVariant:
+def _variant(unc: Uncertainty, base: Motor | Plant, u: np.ndarray) -> PlantVariant:
     """The variant at unit-cube point ``u`` (one coordinate per uncertain range, in the
-    order of :meth:`Uncertainty.ranges`)."""
+    order of :meth:`Uncertainty.ranges`), offsets taken from ``base`` (a plant, or its
+    motor where the load's friction is not uncertain)."""
+    if isinstance(base, Plant):
+        motor = base.motor
+        load_c = base.transmission.load_coulomb_nm if base.transmission is not None else 0.0
+    else:
+        motor, load_c = base, 0.0
+        if unc.load_coulomb_nm is not None:
+            raise ValueError(
+                f"uncertainty.load_coulomb_nm={list(unc.load_coulomb_nm)!r} needs the modelled "
+                "plant (its transmission's load_coulomb_nm), not only its motor"
+            )
     values = dict(zip(unc.ranges(), (float(x) for x in u), strict=True))
     at = {k: lo + values[k] * (hi - lo) for k, (lo, hi) in unc.ranges().items()}
     return PlantVariant(
@@ -354,6 +393,7 @@ def _variant(unc: Uncertainty, motor: Motor, u: np.ndarray) -> PlantVariant:
         torque_per_count=at.get("torque_per_count", 1.0),
         stiffness=at.get("stiffness", 1.0),
         damping=at.get("damping", 1.0),
+        load_coulomb_offset_nm=at.get("load_coulomb_nm", load_c) - load_c,
     )
 
 
@@ -366,7 +406,7 @@ def _stratified(n: int, d: int, rng: np.random.Generator) -> np.ndarray:
     return pts
 
 
-def draw_plant(unc: Uncertainty, motor: Motor, rng: np.random.Generator) -> PlantVariant:
+def draw_plant(unc: Uncertainty, motor: Motor | Plant, rng: np.random.Generator) -> PlantVariant:
     """One true plant drawn uniformly within the ranges from a generator (an env's
     episode; :data:`NOMINAL` where nothing is uncertain, drawing nothing).
 
@@ -374,8 +414,9 @@ def draw_plant(unc: Uncertainty, motor: Motor, rng: np.random.Generator) -> Plan
     ----------
     unc : Uncertainty
         The axis's uncertainty.
-    motor : Motor
-        The axis's modelled motor.
+    motor : Motor or Plant
+        The axis's modelled plant, or its motor where the load's friction is not
+        uncertain (absolute ranges become offsets from them).
     rng : numpy.random.Generator
         The generator (an env's ``np_random``).
 
@@ -390,7 +431,7 @@ def draw_plant(unc: Uncertainty, motor: Motor, rng: np.random.Generator) -> Plan
 
 
 def plant_design(
-    unc: Uncertainty, motor: Motor, drawn: int = DESIGN_DRAWN, seed: int = DESIGN_SEED
+    unc: Uncertainty, motor: Motor | Plant, drawn: int = DESIGN_DRAWN, seed: int = DESIGN_SEED
 ) -> tuple[PlantVariant, ...]:
     """The true plants a tuner must stay feasible on: every corner of the ranges, then
     ``drawn`` stratified points inside them.
@@ -399,8 +440,9 @@ def plant_design(
     ----------
     unc : Uncertainty
         The axis's uncertainty; exact gives no variant.
-    motor : Motor
-        The axis's modelled motor (absolute ranges become offsets from it).
+    motor : Motor or Plant
+        The axis's modelled plant, or its motor where the load's friction is not
+        uncertain (absolute ranges become offsets from them).
     drawn : int
         Points drawn inside the ranges, ≥ 0.
     seed : int
@@ -423,7 +465,10 @@ def plant_design(
 
 
 def draw_plants(
-    unc: Uncertainty, motor: Motor, count: int = VERDICT_PLANTS, seed: int = VERDICT_PLANT_SEED
+    unc: Uncertainty,
+    motor: Motor | Plant,
+    count: int = VERDICT_PLANTS,
+    seed: int = VERDICT_PLANT_SEED,
 ) -> tuple[PlantVariant, ...]:
     """``count`` held-out true plants drawn uniformly within the ranges.
 
@@ -431,8 +476,9 @@ def draw_plants(
     ----------
     unc : Uncertainty
         The axis's uncertainty; exact gives :func:`sensitivity_variants` instead.
-    motor : Motor
-        The axis's modelled motor.
+    motor : Motor or Plant
+        The axis's modelled plant, or its motor where the load's friction is not
+        uncertain (absolute ranges become offsets from them).
     count : int
         How many, ≥ 1.
     seed : int

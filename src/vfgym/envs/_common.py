@@ -191,7 +191,7 @@ class ScenarioSource:
             sc = self.seeded(int(rng.integers(self.seed_range[0], self.seed_range[1])))
         if "plant" in opts:
             return self.episode(sc, opts["plant"])
-        return self.episode(sc, draw_plant(self.uncertainty, self.base.motor, rng))
+        return self.episode(sc, draw_plant(self.uncertainty, self.base, rng))
 
     def _named(self, scenario: Any) -> Scenario:
         return self.axis.scenario(_check_scenario(scenario))

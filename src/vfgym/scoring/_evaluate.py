@@ -320,7 +320,7 @@ def _true_plants(
     if not isinstance(plants, int):
         return tuple(plants), seed
     seed = VERDICT_PLANT_SEED if seed is None else seed
-    drawn = draw_plants(axis.uncertainty, axis.plant.motor, plants, seed)
+    drawn = draw_plants(axis.uncertainty, axis.plant, plants, seed)
     return drawn, None if axis.uncertainty.exact else seed
 
 
