@@ -1,7 +1,8 @@
 """The cost judges the load where the plant states a transmission (docs/model.md §3.1, §6):
-the load's move time, overshoot and arrival, not the motor's; a rigid plant's score is
-the motor's, as before; and evaluate (the batched one scoring path) gives simulate's
-measures and score on a compliant plant."""
+the load's move time, overshoot and arrival, not the motor's, and prices its residual
+vibration; a rigid plant's score is the motor's, as before, with no residual term; and
+evaluate (the batched one scoring path) gives simulate's measures and score on a
+compliant plant."""
 
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ from vfgym import (
     simulate,
 )
 from vfgym.moves.scenarios import SCENARIOS, Scenario
-from vfgym.scoring import score, yardsticks
+from vfgym.scoring import CostWeights, score, yardsticks
 
 JM = PAPER_PLANT.motor.inertia_kgm2
 COMPLIANT = PAPER_PLANT.replace(transmission=Transmission.from_resonance(JM, JM, 100.0, 0.05))
@@ -40,6 +41,24 @@ def test_score_reads_the_loads_measures():
     motor_only = {k: v for k, v in m.items() if not k.startswith("load_")}
     rigid_view = score(motor_only, MOVE, COMPLIANT.replace(transmission=None), tr.measures)
     assert rigid_view.cost < s.cost
+
+
+def test_the_loads_residual_vibration_is_priced_like_overshoot():
+    """Ringing inside the window costs no move time; the residual term prices it, per
+    in-position window of peak-to-peak vibration, at the weight of a window of overshoot."""
+    tr = simulate(MOVE.command(COMPLIANT), PAPER_SETTINGS, COMPLIANT)
+    m = dict(tr.metrics)
+    y = yardsticks(MOVE, COMPLIANT, tr.measures)
+    s = score(m, MOVE, COMPLIANT, tr.measures)
+    assert m["load_residual_vibration_rad"] > 0.0
+    assert s.terms.residual == 0.1 * m["load_residual_vibration_rad"] / y.window_rad
+    assert s.cost == s.terms.running + s.terms.arrival + s.terms.residual
+    m["load_residual_vibration_rad"] *= 3.0
+    ringing = score(m, MOVE, COMPLIANT, tr.measures)
+    assert ringing.cost - s.cost == pytest.approx(2.0 * s.terms.residual, rel=1e-12)
+    assert ringing.terms.main == s.terms.main and ringing.feasible == s.feasible
+    quiet = score(m, MOVE, COMPLIANT, tr.measures, CostWeights(residual=0.0))
+    assert quiet.terms.residual == 0.0 and quiet.cost == s.terms.running + s.terms.arrival
 
 
 def test_a_load_still_ringing_at_the_end_has_not_arrived():
@@ -74,3 +93,5 @@ def test_a_rigid_plant_is_judged_at_the_motor():
     assert not y.load
     s = score(tr.metrics, MOVE, PAPER_PLANT, tr.measures)
     assert s.terms.main == tr.metrics["move_time_s"] / y.ideal_time_s
+    assert s.terms.residual == 0.0  # no residual term without a transmission
+    assert s.cost == s.terms.running + s.terms.arrival

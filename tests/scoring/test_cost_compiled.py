@@ -18,7 +18,15 @@ from vfgym.plant import _kernel as K
 from vfgym.plant import _layout as L
 from vfgym.plant import command_end_s, pack
 from vfgym.plant.measures import from_acc
-from vfgym.scoring import Bounds, CostWeights, arrival_constraint, arrival_term, score, yardsticks
+from vfgym.scoring import (
+    Bounds,
+    CostWeights,
+    arrival_constraint,
+    arrival_term,
+    residual_term,
+    score,
+    yardsticks,
+)
 from vfgym.scoring import _cost_compiled as CC
 from vfgym.space import SPACE, from_action
 
@@ -72,6 +80,7 @@ weights = st.builds(
     torque=weight,
     unsettled=weight,
     arrival=weight,
+    residual=weight,
 )
 bounds = st.builds(
     Bounds, overshoot_windows=st.floats(0.0, 5.0), torque_limit_time_s=st.floats(0, 0.01)
@@ -92,10 +101,15 @@ def check_against_score(stt, prm, scenario, plant, meas, w, b) -> None:
 
     assert CC.cost_terms(stt, prm, k) == tuple(s.terms[:4])
     assert CC.running_cost(stt, prm, k) == s.terms.running
-    # the one end-of-move term, added in one place
-    c_arr = arrival_constraint(m, yardsticks(scenario, plant, meas))
+    # the end-of-move terms, each added in one place: the arrival term, and the load's
+    # residual vibration where a transmission is stated (none on a rigid plant)
+    y = yardsticks(scenario, plant, meas)
+    c_arr = arrival_constraint(m, y)
     assert s.terms.arrival == arrival_term(c_arr, w)
-    assert s.cost == CC.running_cost(stt, prm, k) + arrival_term(c_arr, w)
+    assert s.terms.residual == residual_term(m, y, w)
+    if plant.transmission is None:
+        assert s.terms.residual == 0.0
+    assert s.cost == CC.running_cost(stt, prm, k) + arrival_term(c_arr, w) + residual_term(m, y, w)
     assert CC.running_constraints(stt, prm, k) == tuple(s.constraints[:3])
     assert s.constraints[3] == c_arr
     assert CC.violated(stt, prm, k) == bool(np.any(s.constraints[:3] > 0.0))

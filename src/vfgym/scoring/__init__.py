@@ -23,6 +23,7 @@ from vfgym.scoring._cost import (
     Yardsticks,
     arrival_constraint,
     arrival_term,
+    residual_term,
     score,
     yardsticks,
 )
@@ -57,6 +58,7 @@ __all__ = [
     "best_robust",
     "evaluate",
     "on_plant",
+    "residual_term",
     "robust_constraints",
     "score",
     "score_pairs",

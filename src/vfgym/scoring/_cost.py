@@ -15,6 +15,7 @@ Cost of one run (lower is better; weights in :class:`CostWeights`; :class:`CostT
          + accel · max(0, accel constraint)
          + torque · time at the torque limit / ideal_time
          + [not arrived] · (unsettled + arrival · arrival constraint)
+         + [a transmission] · residual · the load's residual vibration / in-position window
 
 ideal_time is the bang–coast–bang time at δ·f and the loaded motor's usable acceleration
 (:func:`vfgym.moves.scenarios.ideal_move_time_s`), so a perfect move costs about 1
@@ -22,13 +23,19 @@ whatever its length, and scenarios average fairly.
 
 The first four terms can be known while the move runs: the VFServo-v0 env's running cost
 is the same formula, compiled, on the measures streamed so far
-(:mod:`vfgym.scoring._cost_compiled`). The last one, the *arrival term*, is known only at
-the scenario's end, and is added in one place, :func:`arrival_term`.
+(:mod:`vfgym.scoring._cost_compiled`). The last two are known only at the scenario's end:
+the *residual term* (:func:`residual_term`) and the *arrival term*, added in one place,
+:func:`arrival_term`.
 
 Where the plant states a transmission (a compliant load, docs/model.md §3.1), the cost
 judges the load, not the motor: move time, overshoot, tracking error and arrival are the
 load's (``load_…`` measures, :mod:`vfgym.plant.measures`); the encoder on the motor may
-read "in position" while the tool still rings (:attr:`Yardsticks.load`).
+read "in position" while the tool still rings (:attr:`Yardsticks.load`). There the cost
+also prices the load's residual vibration, peak to peak from the motor's move time to the
+run's end (``load_residual_vibration_rad``), at ``residual`` per in-position window, the
+price of a window of overshoot: ringing inside the window costs no move time, and without
+this term a tuner would trade it for time. A rigid plant has no such term (its cost is
+bit for bit what it was before it).
 
 Arrival. A point-to-point move *arrives* when the motor is in the in-position window at
 the scenario's end (the measure ``settled``); a moving reference arrives when the motor
@@ -106,6 +113,10 @@ class CostWeights:
         The arrival term's price per unit of the arrival constraint (per in-position
         window still to go; for a moving reference, per unit of the tracking
         constraint): the same price per window as an overshoot.
+    residual : float
+        The price of the load's residual vibration (peak to peak) per in-position window,
+        where the plant states a transmission: the same price per window as an
+        overshoot.
     """
 
     time: float = 1.0
@@ -115,6 +126,7 @@ class CostWeights:
     torque: float = 1.0
     unsettled: float = 5.0
     arrival: float = 0.1
+    residual: float = 0.1
 
 
 @dataclass(frozen=True)
@@ -247,6 +259,9 @@ class CostTerms(NamedTuple):
     arrival : float
         0 for a run that arrives, else unsettled + arrival · arrival constraint
         (:func:`arrival_term`).
+    residual : float
+        residual · the load's residual vibration in in-position windows where the plant
+        states a transmission, else 0 (:func:`residual_term`).
     """
 
     main: float
@@ -254,6 +269,7 @@ class CostTerms(NamedTuple):
     accel: float
     torque: float
     arrival: float
+    residual: float = 0.0
 
     @property
     def running(self) -> float:
@@ -262,8 +278,9 @@ class CostTerms(NamedTuple):
 
     @property
     def total(self) -> float:
-        """The cost: the running terms, then the arrival term."""
-        return self.running + self.arrival
+        """The cost: the running terms, then the arrival term, then the residual term (0 on
+        a rigid plant, which leaves the sum bit for bit what it was without it)."""
+        return self.running + self.arrival + self.residual
 
 
 class Score(NamedTuple):
@@ -363,6 +380,31 @@ def arrival_term(c_arrival: float, weights: CostWeights) -> float:
     return weights.unsettled + weights.arrival * c_arrival
 
 
+def residual_term(m: dict[str, Any], y: Yardsticks, weights: CostWeights) -> float:
+    """The load's residual vibration term: ``residual`` × the load's residual vibration
+    (peak to peak, ``load_residual_vibration_rad``) in in-position windows, where the
+    plant states a transmission (:attr:`Yardsticks.load`); 0 on a rigid plant or with a
+    zero window.
+
+    Parameters
+    ----------
+    m : dict
+        The run's measures (:mod:`vfgym.plant.measures`).
+    y : Yardsticks
+        The move's yardsticks.
+    weights : CostWeights
+        Weights of the cost (``residual``).
+
+    Returns
+    -------
+    float
+        The term, ≥ 0.
+    """
+    if not y.load or y.window_rad <= 0.0:
+        return 0.0
+    return weights.residual * float(m["load_residual_vibration_rad"]) / y.window_rad
+
+
 def score(
     m: dict[str, Any],
     scenario: Scenario,
@@ -418,6 +460,7 @@ def score(
         accel=weights.accel * max(0.0, c_acc),
         torque=weights.torque * m["torque_limit_time_s"] / ideal,
         arrival=arrival_term(c_arr, weights),
+        residual=residual_term(m, y, weights),
     )
     extra = {
         "ideal_time_s": ideal,
