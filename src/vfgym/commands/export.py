@@ -2,7 +2,10 @@
 
 ``--format vcd`` writes the pulse and direction signals and the encoder's A/B channels as a
 Value Change Dump (GTKWave, PulseView; see :mod:`vfgym.io.vcd`); ``--format csv`` writes the
-per-tick trace (every ``--decimation``-th tick; see :data:`vfgym.io.trace_csv.TRACE_FIELDS`).
+per-tick trace (every ``--decimation``-th tick; see :data:`vfgym.io.trace_csv.TRACE_FIELDS`),
+with the load's columns where the axis states a transmission: ``load_rad`` and
+``load_speed_rad_s`` at the motor shaft, and ``load_mm`` of travel where it states
+``travel_mm_per_rad``.
 Without ``--out`` the file is ``SCENARIO-CONTROLLER.FORMAT`` in the current folder,
 replaced if an earlier export left it (the line printed says so). A file named with
 ``--out`` that exists, or that is an input (``--settings``, ``--axis``), is refused

@@ -30,11 +30,30 @@ TRACE_FIELDS = (
 """Columns of a trace CSV: sample j is the state at the end of tick ``tick`` (time
 (tick+1)·T); ``pulse`` is that tick's pulse (−1, 0, +1; empty when decimated),
 ``encoder_count`` = floor(θ / count angle), the count the servo sees; ``train_rad`` the
-pulse train's unquantised position (docs/model.md §5.1)."""
+pulse train's unquantised position (docs/model.md §5.1). A trace of a plant that states
+a transmission adds :data:`LOAD_FIELDS`."""
+
+LOAD_FIELDS = ("load_rad", "load_speed_rad_s", "load_mm")
+"""The load's columns, after :data:`TRACE_FIELDS`, where the plant states a transmission
+(docs/model.md §3.1): the load's angle θ_L beyond the spring and its speed, at the motor
+shaft (rad, rad/s), and its position in mm of travel, θ_L · ``travel_mm_per_rad``, where
+the transmission states that (else the column is left out)."""
+
+
+def trace_fields(trace: Any) -> tuple[str, ...]:
+    """The columns of ``trace``'s CSV: :data:`TRACE_FIELDS`, then the load's
+    (:data:`LOAD_FIELDS`) where its plant states a transmission."""
+    tr = trace.plant.transmission
+    if tr is None:
+        return TRACE_FIELDS
+    return TRACE_FIELDS + tuple(
+        f for f in LOAD_FIELDS if f != "load_mm" or tr.travel_mm_per_rad is not None
+    )
 
 
 def trace_columns(trace: Any) -> dict[str, np.ndarray]:
-    """A :class:`vfgym.Trace` as named per-sample columns (see :data:`TRACE_FIELDS`)."""
+    """A :class:`vfgym.Trace` as named per-sample columns (see :data:`TRACE_FIELDS` and
+    :func:`trace_fields`)."""
     n = trace.time_s.size
     dec = trace.decimation
     q = trace.plant.motor.count_rad
@@ -55,6 +74,12 @@ def trace_columns(trace: Any) -> dict[str, np.ndarray]:
         "speed_count": trace.speed_count,
         "train_rad": trace.train_rad,
     }
+    tr = trace.plant.transmission
+    if tr is not None:
+        cols["load_rad"] = trace.load_rad
+        cols["load_speed_rad_s"] = trace.load_speed_rad_s
+        if tr.travel_mm_per_rad is not None:
+            cols["load_mm"] = trace.load_rad * tr.travel_mm_per_rad
     return cols
 
 
@@ -64,9 +89,10 @@ def write_trace_csv(trace: Any, path: str | Path) -> Path:
     from vfgym.io.runs import write_text
 
     cols = trace_columns(trace)
+    names = trace_fields(trace)
     n = trace.time_s.size
     parts = []
-    for name in TRACE_FIELDS:
+    for name in names:
         c = cols[name]
         if c.size == 0:
             parts.append(np.full(n, "", dtype=object))
@@ -75,4 +101,4 @@ def write_trace_csv(trace: Any, path: str | Path) -> Path:
         else:
             parts.append(np.char.mod("%.17g", c))
     body = "\n".join(",".join(row) for row in zip(*parts, strict=True))
-    return write_text(path, ",".join(TRACE_FIELDS) + "\n" + body + "\n")
+    return write_text(path, ",".join(names) + "\n" + body + "\n")
