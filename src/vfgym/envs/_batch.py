@@ -13,7 +13,7 @@ single env and a batched one produce the same numbers bit for bit.
 Reward terms (see :class:`vfgym.envs.servo.VFServoEnv`): the running cost C(s) is the
 scoring path's cost formula evaluated on the measures streamed so far
 (:func:`vfgym.scoring._cost_compiled.running_cost`, the compiled copy that sits beside
-:func:`vfgym.scoring.score`), without the arrival term, which is known only at the end;
+:func:`vfgym.scoring.score`), without the arrival and residual terms, known only at the end;
 each interval's reward is C before minus C after, minus an optional tracking-error shaping
 term. The last interval's reward is finished in Python with the scoring path's own cost of
 the whole move.

@@ -363,7 +363,8 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     ``weights``); ΔISE is the interval's sum of squared tracking error (P − θ)². On the last
     step C(after) is the scoring path's cost of the whole move, including its arrival term
     (a move not settled in the in-position window at its end, or a sine not followed, pays
-    a penalty growing with the distance left), ΔISE runs to the end of the move, and
+    a penalty growing with the distance left) and, on a compliant axis, its residual term
+    (the load's residual vibration), ΔISE runs to the end of the move, and
     ``violation_penalty`` is subtracted on a violation. So the return of an episode is
     minus the cost of its move (to rounding) when ``tracking_weight=0``; C(before) = 0.
 
