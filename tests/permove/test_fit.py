@@ -54,7 +54,7 @@ def test_cli_fit_writes_the_model_and_its_verdict_and_predict_uses_it(tmp_path, 
 def test_a_fitted_model_checks_its_whole_library_by_default():
     """The best of more candidates simulated on the move is never dearer there, so a fit
     checks all its library's (docs/results/compliant.md: 2 moves more won on belt-compliant
-    than with 32, for 0.05 to 0.09 s of CPU a move)."""
+    than with 32, for about 0.07 s of CPU a move)."""
     cfg = F.FitConfig()
     assert cfg.check == cfg.library == 64
 

@@ -56,7 +56,7 @@ class FitConfig:
         Best-ranked candidates the model simulates on each new move, the best returned
         (:class:`vfgym.permove.pick.PickModel`), 0 to ``library``; by default the whole
         library: the best of more candidates is never dearer on the move, and checking
-        all 64 rather than 32 costs 0.05 to 0.09 s of CPU a move (docs/results/robust.md,
+        all 64 rather than 32 costs about 0.07 s of CPU a move (docs/results/robust.md,
         docs/results/compliant.md).
     sweep_trials : int
         Trials of the sweep for the best fixed setting, 1 to 10000.
