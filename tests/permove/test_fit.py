@@ -51,14 +51,6 @@ def test_cli_fit_writes_the_model_and_its_verdict_and_predict_uses_it(tmp_path, 
     assert "learnt on axis 'small', used on axis 'paper'" in capsys.readouterr().err
 
 
-def test_a_fitted_model_checks_its_whole_library_by_default():
-    """The best of more candidates simulated on the move is never dearer there, so a fit
-    checks all its library's (docs/results/compliant.md: 2 moves more won on belt-compliant
-    than with 32, for about 0.07 s of CPU a move)."""
-    cfg = F.FitConfig()
-    assert cfg.check == cfg.library == 64
-
-
 def test_an_interrupted_fit_keeps_its_optima_and_searches_only_the_rest(tmp_path, monkeypatch):
     axis = load_axis(REPO / "experiments/axes/paper.yaml")
     moves = F.fit_moves(axis, 6)

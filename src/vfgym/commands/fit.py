@@ -1,8 +1,8 @@
 """``vfgym fit``: a per-move settings model for one axis, learnt from per-move optima of moves
 drawn from the axis's move distribution (its ``random:`` train set, or one spanning the
-moves it lists) on its plant and measures. For a new move the model ranks the training
-moves' optimal settings (a library of 64) by their cost on the training moves most like it,
-and returns the best of them simulated on the move itself (feasible first). Writes
+moves it lists) on its plant and measures. For a new move the model picks, among the
+training moves' optimal settings, the one of least cost on the training moves most like it,
+of its 8 best-ranked the best when simulated on the move itself. Writes
 ``runs/fit/<name>/``: ``settings_model.json`` (for ``vfgym predict --model`` and ``vfgym
 evaluate --model``), ``optima.csv`` and ``costs.npz`` (what it learnt from), ``verdict.txt``
 and ``summary.yaml`` (the held-out verdict on the axis's test moves against the best fixed
