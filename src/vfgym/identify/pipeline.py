@@ -8,7 +8,10 @@ there and keeps whichever explains the count better (the analyser or the drive m
 seen the difference: the encoder says which); where the captures do not separate the
 gain and the gain as set does not explain them (a torque at its limit too briefly), fits
 the gain within its prior; fits the plants along the gain's prior where the captures do
-not separate the gain; and writes the identified axis with its
+not separate the gain; on an axis that states a transmission, guesses its resonance from
+the plan's resonance moves before the fit, fits on that guess, and refines the resonance
+and damping on the fitted plant (:mod:`vfgym.identify.resonance`); and writes the
+identified axis with its
 notes (:func:`~vfgym.identify.written.identify_report`). Whether that axis may be written
 is :attr:`~vfgym.identify.written.Identified.explained`.
 """
@@ -22,13 +25,20 @@ import numpy as np
 
 from vfgym.axis import Axis
 from vfgym.identify.checks import PlanMatch, check_capture, check_direction, plan_match
-from vfgym.identify.fit import EXPLAINED, QUANTISATION_FLOOR, fit
+from vfgym.identify.fit import EXPLAINED, QUANTISATION_FLOOR, Fit, fit
 from vfgym.identify.lines import Capture
 from vfgym.identify.model import Record, record_of
-from vfgym.identify.plan import make_plan
+from vfgym.identify.plan import RESONANCE_BURSTS, RESONANCE_MOVE, Plan, make_plan
 from vfgym.identify.prior import along_gain, gain_prior
+from vfgym.identify.resonance import (
+    Resonance,
+    guess_resonance,
+    refine_resonance,
+    resonance_segment,
+    with_resonance,
+)
 from vfgym.identify.written import Identified, identify_report
-from vfgym.params import Settings
+from vfgym.params import Plant, Settings
 
 
 def prior_source(axis: Axis, share: float | None) -> str:
@@ -63,6 +73,79 @@ def _planned(record: Record, match: PlanMatch, plan_pulses: np.ndarray) -> Recor
     pulses[at : at + n] = body[:n]
     pulses[:at] = 0
     return replace(record, pulses=pulses)
+
+
+def _resonance_ticks(plan: Plan, plant: Plant) -> int:
+    """The length of the plan's resonance moves (ticks)."""
+    move = next(m for m in plan.moves if m.name == RESONANCE_MOVE)
+    return round(move.duration_s * plant.tick_hz)
+
+
+def resonance_of(
+    records: Sequence[Record], plan: Plan, plant: Plant, settings: Settings
+) -> tuple[tuple[float, float], int, Plant]:
+    """The resonance guessed from the plan's resonance moves, before the fit.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The captures on the tick grid.
+    plan : Plan
+        The axis's plan (its resonance moves first).
+    plant : Plant
+        The nominal (compliant) plant.
+    settings : Settings
+        The servo's filter ratio in force.
+
+    Returns
+    -------
+    tuple
+        The guess (resonance in Hz, damping ratio), the simulations run, and the nominal
+        plant with the guessed transmission (the plant the fit starts from).
+    """
+    ticks = _resonance_ticks(plan, plant)
+    f, zeta, n = guess_resonance(records, plant, settings, ticks, ticks // RESONANCE_BURSTS)
+    return (f, zeta), n, with_resonance(plant, f, zeta)
+
+
+def refined_resonance(
+    records: Sequence[Record],
+    plan: Plan,
+    plant: Plant,
+    settings: Settings,
+    result: Fit,
+    guess: tuple[float, float],
+    evaluations: int,
+) -> Resonance:
+    """The resonance refined on the fitted plant, over the captures' resonance moves.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The captures on the tick grid.
+    plan : Plan
+        The axis's plan.
+    plant : Plant
+        The nominal (compliant) plant.
+    settings : Settings
+        The servo's filter ratio in force.
+    result : Fit
+        The fit (on the guessed transmission): its plant and states of rest.
+    guess : tuple of float
+        :func:`resonance_of`'s guess.
+    evaluations : int
+        The guess's simulations.
+
+    Returns
+    -------
+    Resonance
+        As :func:`~vfgym.identify.resonance.refine_resonance`.
+    """
+    ticks = _resonance_ticks(plan, plant)
+    segs = [resonance_segment(r, ticks) for r in records]
+    return refine_resonance(
+        segs, result.plant, settings, result.starts, guess, nominal=plant, evaluations=evaluations
+    )
 
 
 def identify_axis(
@@ -109,6 +192,10 @@ def identify_axis(
     check_direction(records, plant)
     plan = make_plan(axis, settings)
     matches = [plan_match(r, plan.pulses, plant.tick_hz) for r in records]
+    nominal = plant
+    guess = None
+    if nominal.transmission is not None:
+        guess, n_guess, plant = resonance_of(records, plan, nominal, settings)
     result = fit(records, plant, settings)
     if any(m.kind == "differs" for m in matches):
         other = [
@@ -129,6 +216,9 @@ def identify_axis(
         if alt.residual_rms_counts < result.residual_rms_counts:
             result = alt
     profile = along_gain(records, plant, settings, result, prior)
+    resonance = None
+    if guess is not None:
+        resonance = refined_resonance(records, plan, nominal, settings, result, guess, n_guess)
     ident = identify_report(
         axis,
         result,
@@ -137,8 +227,9 @@ def identify_axis(
         prior_source=prior_source(axis, gain_share),
         captures=captures,
         matches=matches,
+        resonance=resonance,
     )
     return ident, records, matches
 
 
-__all__ = ["identify_axis", "prior_source"]
+__all__ = ["identify_axis", "prior_source", "refined_resonance", "resonance_of"]
