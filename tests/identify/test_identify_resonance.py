@@ -1,0 +1,78 @@
+"""A compliant transmission's resonance identified from the motor encoder's capture."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import pytest
+
+from vfgym.axis import PAPER_AXIS, load_axis
+from vfgym.identify.capture import read_capture
+from vfgym.identify.fit import fit
+from vfgym.identify.model import record_of
+from vfgym.identify.pipeline import identify_axis, refined_resonance, resonance_of
+from vfgym.identify.plan import RESONANCE_BURSTS, RESONANCE_MOVE, make_plan
+from vfgym.identify.resonance import damping_ratio, with_resonance
+from vfgym.identify.simulated import record_capture
+from vfgym.params import PAPER_SETTINGS
+
+ROOT = Path(__file__).resolve().parents[2]
+COMPLIANT = ROOT / "experiments" / "axes" / "belt-compliant.yaml"
+
+RIGID_PLANS = {
+    "paper": "6c3882b81e2db957236301c42202270feb49dc045a73d3b0129940150a067e7b",
+    "belt": "3ecaab4cdbd3932519547f806de857f3ffc61dada70fb018844bc565b5889c35",
+}
+"""sha256 of the rigid axes' plan pulse trains before the resonance moves existed."""
+
+
+@pytest.mark.parametrize("name", sorted(RIGID_PLANS))
+def test_a_rigid_axis_plan_is_unchanged_bit_for_bit(name):
+    axis = PAPER_AXIS if name == "paper" else load_axis(ROOT / "experiments/axes/belt.yaml")
+    plan = make_plan(axis, PAPER_SETTINGS)
+    assert RESONANCE_MOVE not in [m.name for m in plan.moves]
+    assert hashlib.sha256(plan.pulses.tobytes()).hexdigest() == RIGID_PLANS[name]
+
+
+def test_a_compliant_axis_plan_starts_with_the_bursts():
+    plan = make_plan(load_axis(COMPLIANT), PAPER_SETTINGS)
+    first = plan.moves[0]
+    assert first.name == RESONANCE_MOVE
+    assert len(first.moves) == RESONANCE_BURSTS
+    assert sum(d for d, _ in first.moves) == 0.0  # ends where it began
+
+
+def _capture(tmp_path, plant, plan):
+    path = record_capture(plant, plan.pulses, tmp_path / "c.vcd", start_s=-0.05, rest_s=0.2,
+                          length_s=0.25 + plan.duration_s + 0.1)  # fmt: skip
+    return read_capture(path)
+
+
+def test_a_50_hz_transmission_is_identified_within_5_percent(tmp_path):
+    axis = load_axis(COMPLIANT)
+    true = with_resonance(axis.plant, 50.0, 0.05)
+    cap = _capture(tmp_path, true, make_plan(axis, PAPER_SETTINGS))
+    ident, _, _ = identify_axis(axis, [cap], PAPER_SETTINGS, from_enable=True)
+    res = ident.resonance
+    assert res is not None and res.shown
+    assert abs(res.resonance_hz / 50.0 - 1.0) <= 0.05
+    assert res.resonance_range_hz[0] <= 50.0 <= res.resonance_range_hz[1]
+    written = ident.axis.plant
+    assert abs(written.resonance_hz / 50.0 - 1.0) <= 0.05  # the axis holds it, not the nominal
+    assert abs(damping_ratio(written) - 0.05) <= 0.02
+    unc = ident.axis.uncertainty
+    assert unc.stiffness is not None and unc.stiffness[0] < 1.0 < unc.stiffness[1]
+
+
+def test_an_overdamped_transmission_keeps_the_nominal_with_a_note(tmp_path):
+    axis = load_axis(COMPLIANT)
+    plant = axis.plant
+    plan = make_plan(axis, PAPER_SETTINGS)
+    true = with_resonance(plant, 60.0, 1.0)
+    rec = record_of(_capture(tmp_path, true, plan), plant, True)
+    guess, n, guessed = resonance_of([rec], plan, plant, PAPER_SETTINGS)
+    result = fit([rec], guessed, PAPER_SETTINGS)
+    res = refined_resonance([rec], plan, plant, PAPER_SETTINGS, result, guess, n)
+    assert not res.shown
+    assert res.note is not None and "nominal's transmission" in res.note
