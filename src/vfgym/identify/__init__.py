@@ -28,6 +28,10 @@ fit
     The least-squares estimator and its intervals.
 resonance
     A compliant transmission's resonance and damping ratio, through the simulator.
+resonance_problem
+    The resonance moves' residuals over the resonance, damping ratio and a gain factor.
+ringing
+    The floor a servo that rings sets under a compliant axis's residual.
 covariance
     The covariance of the estimates from the encoder count's quantisation.
 prior

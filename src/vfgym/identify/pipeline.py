@@ -30,13 +30,9 @@ from vfgym.identify.lines import Capture
 from vfgym.identify.model import Record, record_of
 from vfgym.identify.plan import RESONANCE_BURSTS, RESONANCE_MOVE, Plan, make_plan
 from vfgym.identify.prior import along_gain, gain_prior
-from vfgym.identify.resonance import (
-    Resonance,
-    guess_resonance,
-    refine_resonance,
-    resonance_segment,
-    with_resonance,
-)
+from vfgym.identify.resonance import Guess, Resonance, guess_resonance, refine_resonance
+from vfgym.identify.resonance_problem import resonance_segment, with_resonance
+from vfgym.identify.ringing import ringing_floor
 from vfgym.identify.written import Identified, identify_report
 from vfgym.params import Plant, Settings
 
@@ -83,7 +79,7 @@ def _resonance_ticks(plan: Plan, plant: Plant) -> int:
 
 def resonance_of(
     records: Sequence[Record], plan: Plan, plant: Plant, settings: Settings
-) -> tuple[tuple[float, float], int, Plant]:
+) -> tuple[Guess, Plant]:
     """The resonance guessed from the plan's resonance moves, before the fit.
 
     Parameters
@@ -99,13 +95,13 @@ def resonance_of(
 
     Returns
     -------
-    tuple
-        The guess (resonance in Hz, damping ratio), the simulations run, and the nominal
-        plant with the guessed transmission (the plant the fit starts from).
+    tuple of (Guess, Plant)
+        The guess, and the nominal plant with the guessed transmission (the plant the fit
+        starts from).
     """
     ticks = _resonance_ticks(plan, plant)
-    f, zeta, n = guess_resonance(records, plant, settings, ticks, ticks // RESONANCE_BURSTS)
-    return (f, zeta), n, with_resonance(plant, f, zeta)
+    guess = guess_resonance(records, plant, settings, ticks, ticks // RESONANCE_BURSTS)
+    return guess, with_resonance(plant, guess.resonance_hz, guess.damping_ratio)
 
 
 def refined_resonance(
@@ -114,8 +110,7 @@ def refined_resonance(
     plant: Plant,
     settings: Settings,
     result: Fit,
-    guess: tuple[float, float],
-    evaluations: int,
+    guess: Guess,
 ) -> Resonance:
     """The resonance refined on the fitted plant, over the captures' resonance moves.
 
@@ -131,10 +126,8 @@ def refined_resonance(
         The servo's filter ratio in force.
     result : Fit
         The fit (on the guessed transmission): its plant and states of rest.
-    guess : tuple of float
+    guess : Guess
         :func:`resonance_of`'s guess.
-    evaluations : int
-        The guess's simulations.
 
     Returns
     -------
@@ -144,7 +137,15 @@ def refined_resonance(
     ticks = _resonance_ticks(plan, plant)
     segs = [resonance_segment(r, ticks) for r in records]
     return refine_resonance(
-        segs, result.plant, settings, result.starts, guess, nominal=plant, evaluations=evaluations
+        segs,
+        result.plant,
+        settings,
+        result.starts,
+        guess,
+        nominal=plant,
+        ticks=ticks,
+        bursts=RESONANCE_BURSTS,
+        evaluations=guess.evaluations,
     )
 
 
@@ -195,8 +196,12 @@ def identify_axis(
     nominal = plant
     guess = None
     if nominal.transmission is not None:
-        guess, n_guess, plant = resonance_of(records, plan, nominal, settings)
-    result = fit(records, plant, settings)
+        guess, plant = resonance_of(records, plan, nominal, settings)
+    if guess is None:
+        result = fit(records, plant, settings)
+    else:  # the resonance moves saw the ratio of the inertia to the gain: start there
+        phases = [st.servo_phase for st in guess.starts]
+        result = fit(records, plant, settings, start_inertia=1.0 / guess.gain, start_phases=phases)
     if any(m.kind == "differs" for m in matches):
         other = [
             _planned(r, m, plan.pulses) if m.kind == "differs" else r
@@ -206,9 +211,22 @@ def identify_axis(
         if alt.residual_rms_counts < result.residual_rms_counts:
             records, result = other, alt
             matches = [replace(m, fitted="plan") if m.kind == "differs" else m for m in matches]
+    floor = QUANTISATION_FLOOR
+    if guess is not None:  # a servo that rings: its own spread is the floor (its module doc)
+        floor = max(floor, ringing_floor(records, result.plant, result.starts, settings))
+        if result.residual_rms_counts > EXPLAINED * floor:
+            # the start from the guess can end in another servo phase's optimum: the
+            # search over the inertia and both phase starts, as on a rigid axis
+            cold = fit(records, plant, settings)
+            if cold.residual_rms_counts < result.residual_rms_counts:
+                result = cold
+                floor = max(
+                    QUANTISATION_FLOOR,
+                    ringing_floor(records, result.plant, result.starts, settings),
+                )
     if (
         not result.estimate("torque_per_count").excited
-        and result.residual_rms_counts > EXPLAINED * QUANTISATION_FLOOR
+        and result.residual_rms_counts > EXPLAINED * floor
     ):
         # the gain as set does not explain captures whose torque saturates too briefly to
         # separate the gain: fitted within its prior, the best plant along the line
@@ -218,7 +236,7 @@ def identify_axis(
     profile = along_gain(records, plant, settings, result, prior)
     resonance = None
     if guess is not None:
-        resonance = refined_resonance(records, plan, nominal, settings, result, guess, n_guess)
+        resonance = refined_resonance(records, plan, nominal, settings, result, guess)
     ident = identify_report(
         axis,
         result,
@@ -228,6 +246,7 @@ def identify_axis(
         captures=captures,
         matches=matches,
         resonance=resonance,
+        floor_counts=floor,
     )
     return ident, records, matches
 

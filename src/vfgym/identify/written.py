@@ -87,6 +87,10 @@ class Identified:
         The fits along the gain's prior (``None`` where the captures estimate the gain).
     resonance : Resonance or None
         A compliant axis's resonance estimate (``None`` on a rigid axis).
+    floor_counts : float
+        The residual's floor the fit is judged against (counts RMS): the quantisation's,
+        or on a compliant axis the larger of it and a ringing servo's own
+        (:func:`vfgym.identify.ringing.ringing_floor`).
     """
 
     axis: Axis
@@ -97,6 +101,7 @@ class Identified:
     kept: tuple[str, ...] = ()
     profile: Profile | None = None
     resonance: Resonance | None = None
+    floor_counts: float = QUANTISATION_FLOOR
 
 
 def identified_plant(nominal: Plant, fit: Fit, resonance: Resonance | None = None) -> Plant:
@@ -313,6 +318,7 @@ def identify_report(
     captures: Sequence[Capture] = (),
     matches: Sequence[PlanMatch | None] = (),
     resonance: Resonance | None = None,
+    floor_counts: float = QUANTISATION_FLOOR,
 ) -> Identified:
     """The identified axis and its notes.
 
@@ -334,6 +340,9 @@ def identify_report(
         Each capture's pulse train against the axis's plan.
     resonance : Resonance or None
         A compliant axis's resonance estimate (:mod:`vfgym.identify.resonance`).
+    floor_counts : float
+        The residual's floor the fit is judged against (:attr:`Identified.floor_counts`):
+        it explains the captures up to :data:`~vfgym.identify.fit.EXPLAINED` times it.
 
     Returns
     -------
@@ -363,14 +372,13 @@ def identify_report(
     matches = list(matches) or [None] * len(records)
     if captures:
         notes += capture_notes(captures, records, matches, nominal_axis.name)
-    explained = fit.residual_rms_counts <= EXPLAINED * QUANTISATION_FLOOR
+    explained = fit.residual_rms_counts <= EXPLAINED * floor_counts
     cause = None
     if not explained:
         cause = likely_cause(fit, records, nominal_axis.plant, matches)
         notes.append(
             f"the model does not explain the capture: residual {fit.residual_rms_counts:.3g} "
-            f"counts RMS against a quantisation floor of {QUANTISATION_FLOOR:.3g}; likely "
-            f"cause: {cause}"
+            f"counts RMS against {floor_text(floor_counts)}; likely cause: {cause}"
         )
     shown = spanned(fit, profile) if profile is not None else fit
     return Identified(
@@ -382,6 +390,28 @@ def identify_report(
         kept=tuple(kept),
         profile=profile,
         resonance=resonance,
+        floor_counts=floor_counts,
+    )
+
+
+def floor_text(floor_counts: float) -> str:
+    """The residual's floor in words, as the notes and the refusal say it.
+
+    Parameters
+    ----------
+    floor_counts : float
+        :attr:`Identified.floor_counts`.
+
+    Returns
+    -------
+    str
+        "a quantisation floor of …", or the ringing servo's floor beside it.
+    """
+    if floor_counts <= QUANTISATION_FLOOR:
+        return f"a quantisation floor of {QUANTISATION_FLOOR:.3g}"
+    return (
+        f"a floor of {floor_counts:.3g} (the ringing servo's own spread under starts no "
+        f"capture tells apart; the quantisation's {QUANTISATION_FLOOR:.3g})"
     )
 
 
@@ -390,6 +420,7 @@ __all__ = [
     "IN_USE",
     "MARGIN",
     "Identified",
+    "floor_text",
     "identified_plant",
     "identify_report",
     "uncertainty_of",
