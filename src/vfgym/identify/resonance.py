@@ -22,7 +22,8 @@ searches live in :mod:`vfgym.identify.resonance_problem`):
   (:func:`scipy.optimize.least_squares`, bounds, the Jacobian by central differences
   simulated in one batch) over every burst from each of the few best servo phases
   (:data:`~vfgym.identify.resonance_problem.PHASES`) of each capture (in steps of the
-  residuals' sample), the best kept; then the servo phase to the tick, and least squares again where it moved;
+  residuals' sample), the best kept; then the servo phase to the tick, and least squares
+  again where it moved;
 - the refinement (:func:`refine_resonance`): the same least squares on the plant the
   rigid fit found (:mod:`vfgym.identify.fit`, run on the guessed transmission), each
   capture from the state of rest that fit found. The load inertia is the nominal's,
