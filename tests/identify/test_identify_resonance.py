@@ -5,15 +5,21 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from vfgym.axis import PAPER_AXIS, load_axis
+from vfgym.cli import main
 from vfgym.identify.capture import read_capture
-from vfgym.identify.fit import fit
-from vfgym.identify.model import record_of
-from vfgym.identify.pipeline import identify_axis, refined_resonance, resonance_of
+from vfgym.identify.model import Start, record_of, respond
+from vfgym.identify.pipeline import identify_axis
 from vfgym.identify.plan import RESONANCE_BURSTS, RESONANCE_MOVE, make_plan
-from vfgym.identify.resonance_problem import damping_ratio, with_resonance
+from vfgym.identify.resonance_problem import (
+    damping_ratio,
+    resonance_segment,
+    trimmed,
+    with_resonance,
+)
 from vfgym.identify.simulated import record_capture
 from vfgym.params import PAPER_SETTINGS
 
@@ -64,17 +70,34 @@ def test_a_50_hz_transmission_is_identified_within_5_percent(tmp_path):
     assert unc.stiffness is not None and unc.stiffness[0] < 1.0 < unc.stiffness[1]
 
 
-def test_an_overdamped_transmission_is_refused_in_one_line(tmp_path):
+def test_an_overdamped_transmission_is_refused_in_one_line(tmp_path, capsys):
     """A critically damped spring hardly rings: the capture cannot tell its resonance, and
-    the resonance says so (what ``vfgym identify`` refuses on)."""
+    ``vfgym identify`` refuses in one line naming the transmission, writing nothing."""
     axis = load_axis(COMPLIANT)
-    plant = axis.plant
+    true = with_resonance(axis.plant, 60.0, 1.0)
+    path = record_capture(true, make_plan(axis, PAPER_SETTINGS).pulses, tmp_path / "c.vcd",
+                          start_s=-0.05, rest_s=0.2, length_s=3.9)  # fmt: skip
+    out = tmp_path / "identified.yaml"
+    args = ["identify", "--axis", str(COMPLIANT), "--capture", str(path), "--out", str(out)]
+    assert main([*args, "--from-enable"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err
+    assert "transmission: the capture cannot tell the resonance" in err, err
+    assert err.endswith("no axis written"), err
+    assert not out.exists()
+
+
+def test_a_trimmed_record_has_the_residuals_of_the_whole(tmp_path):
+    """Cutting the rest before the first pulse (whole servo periods) changes no residual."""
+    axis = load_axis(COMPLIANT)
     plan = make_plan(axis, PAPER_SETTINGS)
-    true = with_resonance(plant, 60.0, 1.0)
-    rec = record_of(_capture(tmp_path, true, plan), plant, True)
-    guess, guessed = resonance_of([rec], plan, plant, PAPER_SETTINGS)
-    result = fit([rec], guessed, PAPER_SETTINGS)
-    res = refined_resonance([rec], plan, plant, PAPER_SETTINGS, result, guess)
-    assert not res.shown
-    assert res.note is not None and res.note.startswith("transmission: the capture cannot tell")
-    assert "\n" not in res.note
+    rec = record_of(_capture(tmp_path, with_resonance(axis.plant, 80.0, 0.04), plan),
+                    axis.plant, True)  # fmt: skip
+    seg = resonance_segment(rec, 20_000)
+    cut = trimmed(seg, axis.plant)
+    assert cut.n_ticks < seg.n_ticks - 20_000  # the rest before the moves is gone
+    for phase in (0, 33):
+        start = Start(-0.4, phase)
+        whole = seg.residuals(respond(seg, axis.plant, PAPER_SETTINGS, start))
+        part = cut.residuals(respond(cut, axis.plant, PAPER_SETTINGS, start))
+        np.testing.assert_array_equal(part, whole)

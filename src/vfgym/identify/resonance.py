@@ -34,10 +34,12 @@ The stiffness and damping follow, K_S = ω_r²·μ and c_S = 2ζ·μ·ω_r
 from the Jacobian at the optimum with the residuals' own RMS (at least the count's
 quantisation floor) as their spread, the resonance's at least the Student-t interval of
 the estimates from each burst alone (a servo that rings leaves residuals that are no
-white noise), widened by the refinement's move from the guess (the fitted plant's own
-errors). The capture shows the resonance (:attr:`Resonance.shown`) when the
-resonance's interval is within :data:`SHOWN_SHARE` of it and the damping ratio below
-:data:`OVERDAMPED`; else a note says which (``vfgym identify`` refuses to write the axis).
+white noise) and the largest move of the estimate when each capture's start moves as
+little as :func:`~vfgym.identify.ringing.nudged_starts` moves it, widened by the
+refinement's move from the guess (the fitted plant's own errors). The capture shows the
+resonance (:attr:`Resonance.shown`) when the resonance's interval is within
+:data:`SHOWN_SHARE` of it and the damping ratio below :data:`OVERDAMPED`; else a note says
+which (``vfgym identify`` refuses to write the axis).
 """
 
 from __future__ import annotations
@@ -61,6 +63,7 @@ from vfgym.identify.resonance_problem import (
     window,
     with_resonance,
 )
+from vfgym.identify.ringing import NUDGES, nudged_starts
 from vfgym.mechanics import Transmission
 from vfgym.params import Plant, Settings
 
@@ -326,6 +329,15 @@ def refine_resonance(
             xb, _ = one.solve(x, max_nfev=BURST_EVALS)
             per_burst.append(float(xb[0]))
             n_burst += one.evaluations
+        # the starts no capture tells apart (a servo that rings depends on them): the
+        # estimate from each nudged start
+        per_start: list[float] = []
+        for i in range(NUDGES):
+            alt = [nudged_starts(st, plant)[i] for st in starts]
+            one = ResonanceProblem(recs, plant, settings, alt)
+            xn, _ = one.solve(x, max_nfev=BURST_EVALS)
+            per_start.append(float(xn[0]))
+            n_burst += one.evaluations
     rms = float(np.sqrt(np.mean(res**2)))
     spread = max(rms, QUANTISATION_FLOOR)
     try:
@@ -339,7 +351,8 @@ def refine_resonance(
     half_b = float(student_t.ppf(0.975, n - 1) * np.std(per_burst, ddof=1) / math.sqrt(n))
     # and the plant under it is the rigid fit's: the move from the guess's (on the nominal
     # plant, its gain factor free) is how far that plant's errors carry
-    half_f = max(Z95 * sd[0], half_b) + abs(x[0] - math.log(guess.resonance_hz))
+    half_s = max(abs(v - x[0]) for v in per_start)
+    half_f = max(Z95 * sd[0], half_b, half_s) + abs(x[0] - math.log(guess.resonance_hz))
     f, zeta = math.exp(x[0]), float(x[1])
     f_range = (
         (f * math.exp(-half_f), f * math.exp(half_f)) if math.isfinite(half_f) else (0.0, math.inf)

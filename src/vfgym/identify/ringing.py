@@ -26,7 +26,26 @@ NUDGE_COUNTS = 0.001
 """How far the start is moved (counts): far below what a capture can tell."""
 
 
-def _nudged(start: Start, plant: Plant) -> list[Start]:
+NUDGES = 4
+"""How many nudged starts :func:`nudged_starts` gives."""
+
+
+def nudged_starts(start: Start, plant: Plant) -> list[Start]:
+    """The starts no capture tells apart from ``start``: its held position moved by
+    :data:`NUDGE_COUNTS` either way, its servo phase by a tick either way.
+
+    Parameters
+    ----------
+    start : Start
+        A capture's state of rest as fitted.
+    plant : Plant
+        Gives the servo's sample period (ticks).
+
+    Returns
+    -------
+    list of Start
+        :data:`NUDGES` starts.
+    """
     ns = plant.servo.sample_ticks
     return [
         Start(start.held_counts + NUDGE_COUNTS, start.servo_phase),
@@ -59,7 +78,7 @@ def ringing_floor(
         The median over the four nudged starts of the RMS change (counts), every capture's
         samples used.
     """
-    nudged = [_nudged(s, plant) for s in starts]
+    nudged = [nudged_starts(s, plant) for s in starts]
     jobs = [(plant, list(starts))] + [
         (plant, [n[i] for n in nudged]) for i in range(len(nudged[0]))
     ]
@@ -74,4 +93,4 @@ def ringing_floor(
     return float(np.median(changes))
 
 
-__all__ = ["NUDGE_COUNTS", "ringing_floor"]
+__all__ = ["NUDGES", "NUDGE_COUNTS", "nudged_starts", "ringing_floor"]
