@@ -227,9 +227,8 @@ def identify_axis(
             )
             if again.residual_rms_counts < result.residual_rms_counts:
                 result = again
-                floor = max(
-                    QUANTISATION_FLOOR, ringing_floor(records, result.plant, result.starts, settings)
-                )
+                again_floor = ringing_floor(records, result.plant, result.starts, settings)
+                floor = max(QUANTISATION_FLOOR, again_floor)
     if (
         not result.estimate("torque_per_count").excited
         and result.residual_rms_counts > EXPLAINED * floor
