@@ -10,9 +10,12 @@ resonance log-uniform in 20–200 Hz, its damping ratio uniform in 0.02–0.1, t
 gain ×0.95–1.05 of the one set. The plan's moves run on it, captured at 1 MHz from 10-100
 ms before the drive's enable (as ``--part blocks`` does), then
 :func:`vfgym.identify.pipeline.identify_axis` identifies it. Printed per plant: the true
-and identified resonance, the error, the 95 % interval, whether the capture showed it,
-the wall and CPU seconds; then the goal lines (every resonance within 5 %; every
-identification within 30 s). It asserts nothing (the machine is shared).
+resonance, the guess and the identified one, the error, the 95 % interval, whether it
+holds the truth, whether the capture showed the resonance, whether the fit
+explains the capture (its residual against the floor it is judged against), the wall and
+CPU seconds; then the goal lines (every resonance within 5 %; every identification within
+30 s), the intervals that hold the truth and the axes written. It asserts nothing (the
+machine is shared).
 """
 
 from __future__ import annotations
@@ -49,7 +52,7 @@ def part_resonance(args: argparse.Namespace) -> None:
     )
     print(
         "plant  true Hz  zeta   gain   guess Hz  ident Hz  err %   95 % interval Hz     holds  "
-        "shown  explained  floor  wall s  cpu s"
+        "shown  explained  fit rms  floor  wall s  cpu s"
     )
     errs, walls = [], []
     holds: list[bool] = []
@@ -89,7 +92,8 @@ def part_resonance(args: argparse.Namespace) -> None:
                 f"{k:5d}  {f:7.2f}  {zeta:.3f}  {gain:.3f}  {res.guess_hz:8.2f}  "
                 f"{res.resonance_hz:8.2f}  {err:+6.2f}  [{lo:7.2f}, {hi:7.2f}]  "
                 f"{'yes' if holds[-1] else 'no':>5}  {'yes' if res.shown else 'no':>5}  "
-                f"{'yes' if ident.explained else 'no':>9}  {ident.floor_counts:5.2f}  "
+                f"{'yes' if ident.explained else 'no':>9}  {ident.fit.residual_rms_counts:7.2f}  "
+                f"{ident.floor_counts:5.2f}  "
                 f"{wall:6.1f}  {cpu:5.1f}",
                 flush=True,
             )
