@@ -9,7 +9,7 @@ kept as set); where the captures do not separate the gain, the one set. A transm
 load inertia scales with the inertia's estimate (as :class:`~vfgym.axis.PlantVariant`
 scales it); its stiffness and damping are the resonance's estimates
 (:mod:`vfgym.identify.resonance`) where the captures show the resonance, else the
-nominal's, with a note.
+nominal's, with a note (``vfgym identify`` then refuses to write the axis).
 
 Its ``uncertainty:`` block (:func:`uncertainty_of`), relative to the identified plant as
 :class:`~vfgym.axis.Uncertainty` states them, holds every plant the captures cannot rule
