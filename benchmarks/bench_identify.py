@@ -1,7 +1,7 @@
 """``vfgym identify`` on simulated captures of the planned moves: whether the written axis
 is safe to act on.
 
-    python benchmarks/bench_identify.py [--part blocks,faults,payload,regret]
+    python benchmarks/bench_identify.py [--part blocks,faults,payload,regret,resonance]
         [--plants 20] [--seed 20261205] [--after-enable] [--faults-plants 4]
         [--regret-plants K,K,...] [--regret-gains 0.9,1.07,1.1] [--runs-dir DIR]
 
@@ -41,6 +41,11 @@ The parts, each printing its goal line:
     Goal: the identified axis's fit feasible on every move and its mean cost at most 1.05×
     the true axis's.
 
+``resonance``
+    A compliant transmission's resonance, on ``belt-compliant.yaml``
+    (``bench_identify_resonance.py``): within 5 % on ``--resonance-plants`` plants with
+    resonances drawn in 20-200 Hz, each identification within 30 s.
+
 It asserts nothing (the machine is shared).
 """
 
@@ -65,6 +70,9 @@ from vfgym.identify.plan import make_plan
 from vfgym.identify.simulated import record_capture, with_faults
 from vfgym.identify.written import Identified
 from vfgym.params import PAPER_SETTINGS
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_identify_resonance import part_resonance
 
 ENABLE_TO_MOVES_S = 0.2
 """From the drive's enable to the first move (s), as the plan's procedure asks."""
@@ -489,8 +497,13 @@ def part_regret(axis: Axis, args: argparse.Namespace) -> None:
         )
 
 
+def part_resonance_(axis: Axis, args: argparse.Namespace) -> None:
+    """A compliant transmission's resonance (``bench_identify_resonance.py``; its own axis)."""
+    part_resonance(args)
+
+
 PARTS = {"blocks": part_blocks, "faults": part_faults, "payload": part_payload,
-         "regret": part_regret}  # fmt: skip
+         "regret": part_regret, "resonance": part_resonance_}  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -502,6 +515,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--after-enable", action="store_true",
                     help="blocks: captures started with the axis already held")  # fmt: skip
     ap.add_argument("--faults-plants", type=int, default=4)
+    ap.add_argument("--resonance-plants", type=int, default=10)
     ap.add_argument("--regret-plants", default="0,1")
     ap.add_argument("--regret-gains", default="0.9,1.07,1.1")
     ap.add_argument(

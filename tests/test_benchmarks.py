@@ -119,3 +119,10 @@ def test_bench_estimating_outside_runs_and_prints_the_goals():
     assert sum(ln.startswith("| outside, all 6 |") for ln in rows) == 1, stdout
     goals = next(ln for ln in stdout.splitlines() if ln.startswith("goals:"))
     assert goals.startswith("goals: breaks where the base holds, outside: 0 "), goals
+
+
+def test_bench_identify_resonance_runs_to_the_end_on_one_plant():
+    stdout = _run("bench_identify_resonance.py", "--resonance-plants", "1")
+    assert "== resonance: 1 plants of seed" in stdout
+    assert "goal: resonance within 5%: " in stdout
+    assert "goal: identification within 30 s wall: " in stdout

@@ -261,13 +261,42 @@ def _say_saturation(plan: Any) -> None:
         )
 
 
+def _refuse_unless_shown(ident: Any, fit: Any, paths: list[str]) -> None:
+    """One line and no axis written where the model does not explain the captures, or
+    they cannot tell a compliant axis's resonance."""
+    from vfgym.identify.written import floor_text
+
+    if not ident.explained:
+        raise ValueError(
+            f"{', '.join(paths)}: the model does not explain the capture (residual "
+            f"{fit.residual_rms_counts:.3g} counts RMS against "
+            f"{floor_text(ident.floor_counts)}): likely cause: {ident.cause}; no axis written"
+        )
+    if ident.resonance is not None and not ident.resonance.shown:
+        raise ValueError(f"{', '.join(paths)}: {ident.resonance.note}; no axis written")
+
+
+def _print_resonance(ident: Any) -> None:
+    """A compliant axis's transmission as identified (nothing on a rigid axis)."""
+    res = ident.resonance
+    if res is None:
+        return
+    lo, hi = res.resonance_range_hz
+    zlo, zhi = res.damping_ratio_range
+    print(
+        f"transmission: resonance {res.resonance_hz:.4g} Hz [{lo:.4g}, {hi:.4g}] (nominal "
+        f"{res.nominal_hz:.4g}), damping ratio {res.damping_ratio:.3g} [{zlo:.3g}, "
+        f"{zhi:.3g}]; residual on its moves {res.residual_rms_counts:.3g} counts RMS"
+    )
+
+
 def _identify(axis: Any, settings: Any, args: argparse.Namespace) -> int:
     from vfgym._validate import check_output_path
     from vfgym.axis import write_axis
     from vfgym.identify.capture import parse_signal_map, read_capture
     from vfgym.identify.fit import QUANTISATION_FLOOR
     from vfgym.identify.pipeline import identify_axis
-    from vfgym.identify.written import MARGIN
+    from vfgym.identify.written import MARGIN, floor_text
 
     out = check_output_path("--out", args.out)
     names = parse_signal_map(args.signals)
@@ -312,15 +341,16 @@ def _identify(axis: Any, settings: Any, args: argparse.Namespace) -> int:
         f"{fit.residual_max_counts:.3g}) beside the quantisation floor "
         f"{QUANTISATION_FLOOR:.3g} counts RMS; {fit.samples} samples, "
         f"{time.perf_counter() - t0:.3g} s"
+        + (
+            f"; judged against {floor_text(ident.floor_counts)}"
+            if ident.floor_counts > QUANTISATION_FLOOR
+            else ""
+        )
     )
+    _print_resonance(ident)
     for note in ident.notes:
         print(f"note: {note}")
-    if not ident.explained:
-        raise ValueError(
-            f"{', '.join(args.capture)}: the model does not explain the capture (residual "
-            f"{fit.residual_rms_counts:.3g} counts RMS against a quantisation floor of "
-            f"{QUANTISATION_FLOOR:.3g}): likely cause: {ident.cause}; no axis written"
-        )
+    _refuse_unless_shown(ident, fit, args.capture)
     for line in ident.kept:
         print(f"kept: {line}")
     write_axis(ident.axis, out)

@@ -3,7 +3,8 @@
 The recorded pulse train drives the axis's servo and motor in the exact simulator; the
 plant whose simulated encoder count best matches the recorded one, by least squares, gives
 the estimates (inertia, Coulomb and viscous friction, load torque, the drive's gain) and
-their 95 % intervals, written back as an axis with an ``uncertainty:`` block.
+their 95 % intervals (and, on a compliant axis, the transmission's stiffness and damping),
+written back as an axis with an ``uncertainty:`` block.
 
 Modules
 -------
@@ -25,6 +26,12 @@ problem
     The least squares' scaled coordinates and residuals.
 fit
     The least-squares estimator and its intervals.
+resonance
+    A compliant transmission's resonance and damping ratio, through the simulator.
+resonance_problem
+    The resonance moves' residuals over the resonance, damping ratio and a gain factor.
+ringing
+    The floor a servo that rings sets under a compliant axis's residual.
 covariance
     The covariance of the estimates from the encoder count's quantisation.
 prior

@@ -272,6 +272,8 @@ def fit(
     gain: float | None = None,
     near: Fit | None = None,
     gain_range: tuple[float, float] | None = None,
+    start_inertia: float | None = None,
+    start_phases: Sequence[int] | None = None,
 ) -> Fit:
     """Fit the captures: the plant near ``nominal`` whose response best matches them.
 
@@ -293,6 +295,12 @@ def fit(
         torque limit: where a capture saturates too briefly to separate the gain, yet the
         gain as set does not explain it. The gain's estimate is then not taken as
         separated: its interval is the range.
+    start_inertia : float or None
+        Start from this factor on the nominal inertia, every other parameter nominal,
+        instead of a search over the inertia (a compliant axis's resonance moves give it,
+        :mod:`vfgym.identify.resonance`).
+    start_phases : sequence of int or None
+        With ``start_inertia``: each capture's servo phase to start from (else 0).
 
     Returns
     -------
@@ -307,7 +315,7 @@ def fit(
     from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
     with threadpool_limits(1, user_api="blas"):
-        return _fit(records, nominal, settings, gain, near, gain_range)
+        return _fit(records, nominal, settings, gain, near, gain_range, start_inertia, start_phases)
 
 
 def _fit(
@@ -317,6 +325,8 @@ def _fit(
     gain: float | None,
     near: Fit | None,
     gain_range: tuple[float, float] | None = None,
+    start_inertia: float | None = None,
+    start_phases: Sequence[int] | None = None,
 ) -> Fit:
     """:func:`fit` itself."""
     scale = Scale(nominal, records)
@@ -343,6 +353,10 @@ def _fit(
         z = np.clip(z, scale.lo, scale.hi)
         phases = [st.servo_phase for st in near.starts]
         free[3] = bool(near.estimate("load_torque_nm").excited)
+    elif start_inertia is not None:
+        warm = True
+        z[0] = float(np.clip(math.log(start_inertia), scale.lo[0], scale.hi[0]))
+        phases = [0] * len(records) if start_phases is None else [int(p) for p in start_phases]
     all_phases = range(nominal.servo.sample_ticks)
     for attempt in range(3):
         problem = Problem(records, scale, settings, free)

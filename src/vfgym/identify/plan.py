@@ -6,6 +6,11 @@ Every parameter must leave its mark on the encoder's count (:mod:`vfgym.identify
   constant-speed segments at three speeds in both directions (viscous friction, Coulomb
   friction apart from the load torque), their ramps at a quarter of the usable
   acceleration (J/K3);
+- on an axis that states a compliant transmission, first, bursts of pulses at the top speed
+  (:data:`RESONANCE_BURST_S` long, forward and back, the highest jerk a pulse train asks)
+  each followed by :data:`RESONANCE_REST_S` at rest, long enough for the load's ringing to
+  show on the motor's encoder (:mod:`vfgym.identify.resonance`); a rigid axis's plan has
+  none of them;
 - velocity steps at nearly the top speed (``ramp`` moves), forward then back, then
   velocity reversals at that speed (``ramp`` moves one after the other with no rest: from
   +v to −v in one tick, eight times, back to where they started): the largest change of
@@ -59,6 +64,19 @@ REVERSALS = 8
 
 INERTIA_FACTORS = (1.0, 1.25, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0)
 """Factors on the nominal total inertia tried for :attr:`Plan.saturating_inertia`."""
+
+RESONANCE_BURST_S = 0.001
+"""Length of each burst of the resonance moves at the top speed (s): shorter than half a
+period of every resonance the moves are for (up to a few hundred Hz)."""
+
+RESONANCE_REST_S = 0.15
+"""Rest after each burst (s): three periods of a 20 Hz resonance."""
+
+RESONANCE_BURSTS = 4
+"""Bursts in the resonance moves, forward and back in turn (they end where they began)."""
+
+RESONANCE_MOVE = "identify-resonance"
+"""The resonance moves' name in the plan."""
 
 DWELL_S = 0.05
 """Rest after each move (s), included in its duration."""
@@ -133,11 +151,12 @@ def plan_moves(plant: Plant) -> tuple[Scenario, ...]:
     Returns
     -------
     tuple of Scenario
-        Trapezoids at each speed forward and back, the velocity steps, the reversals.
+        On a compliant axis the resonance moves (:func:`resonance_move`); then trapezoids
+        at each speed forward and back, the velocity steps, the reversals.
     """
     v_top = top_speed(plant)
     a = RAMP_ACCEL_SHARE * plant.motor.usable_accel_rad_s2
-    out = []
+    out = [] if plant.transmission is None else [resonance_move(plant)]
     for i, frac in enumerate(SPEED_FRACTIONS, start=1):
         v = frac * v_top
         d = v * CRUISE_S + v * v / a
@@ -187,6 +206,36 @@ def plan_moves(plant: Plant) -> tuple[Scenario, ...]:
         )
     )
     return tuple(out)
+
+
+def resonance_move(plant: Plant) -> Scenario:
+    """The moves that excite a compliant transmission's resonance (see the module doc).
+
+    Parameters
+    ----------
+    plant : Plant
+        The axis's (nominal) plant.
+
+    Returns
+    -------
+    Scenario
+        :data:`RESONANCE_BURSTS` steps of :data:`RESONANCE_BURST_S` at the top speed,
+        forward and back in turn, each followed by :data:`RESONANCE_REST_S` at rest.
+    """
+    v = top_speed(plant)
+    d = round(v * RESONANCE_BURST_S, 6)
+    steps = tuple(((d if i % 2 == 0 else -d), RESONANCE_REST_S) for i in range(RESONANCE_BURSTS))
+    return Scenario(
+        name=RESONANCE_MOVE,
+        profile="multi",
+        distance_rad=0.0,
+        duration_s=round(RESONANCE_BURSTS * RESONANCE_REST_S, 4),
+        speed_rad_s=round(v, 6),
+        moves=steps,
+        description=f"{RESONANCE_BURSTS} bursts of {RESONANCE_BURST_S * 1e3:g} ms at "
+        f"{v:.4g} rad/s, forward and back, each followed by {RESONANCE_REST_S:g} s at rest: "
+        "the transmission's ringing",
+    )
 
 
 def moves_pulses(moves: tuple[Scenario, ...], plant: Plant, lead_s: float = LEAD_S) -> np.ndarray:
@@ -278,6 +327,10 @@ __all__ = [
     "DWELL_S",
     "INERTIA_FACTORS",
     "LEAD_S",
+    "RESONANCE_BURSTS",
+    "RESONANCE_BURST_S",
+    "RESONANCE_MOVE",
+    "RESONANCE_REST_S",
     "REVERSALS",
     "REVERSE_S",
     "SPEED_FRACTIONS",
@@ -285,5 +338,6 @@ __all__ = [
     "make_plan",
     "moves_pulses",
     "plan_moves",
+    "resonance_move",
     "top_speed",
 ]

@@ -5,7 +5,11 @@ The identified axis is the nominal one with the estimates written in: the total 
 as the load's ``inertia_ratio`` (the rotor's inertia kept; below the rotor's own, the
 rotor's inertia itself is lowered, ratio 0), the friction and load torque as absolute
 values, and the drive's gain so that the K3 in force is the estimate (``follows_load``
-kept as set); where the captures do not separate the gain, the one set.
+kept as set); where the captures do not separate the gain, the one set. A transmission's
+load inertia scales with the inertia's estimate (as :class:`~vfgym.axis.PlantVariant`
+scales it); its stiffness and damping are the resonance's estimates
+(:mod:`vfgym.identify.resonance`) where the captures show the resonance, else the
+nominal's, with a note (``vfgym identify`` then refuses to write the axis).
 
 Its ``uncertainty:`` block (:func:`uncertainty_of`), relative to the identified plant as
 :class:`~vfgym.axis.Uncertainty` states them, holds every plant the captures cannot rule
@@ -20,6 +24,9 @@ out and every range the user stated:
   prior. A box holds plants off the line as well (the inertia high where the gain is
   low), which the captures rule out; over a prior of ±10 % they are at most 1.22x off in
   J/K3, the price of a block that holds the machine whatever its gain;
+- a transmission's stiffness and damping, where the captures show the resonance: their
+  95 % intervals widened by :data:`MARGIN` (factors on the estimates); else the nominal
+  file's own ranges, relative to its transmission, kept;
 - the ranges of the nominal file's own ``uncertainty:`` block for the inertia and the
   torques, which state how the axis varies in use (a payload picked up, friction warming
   up): one capture measures one payload, so each is kept, widened where the capture's
@@ -44,6 +51,7 @@ from vfgym.identify.lines import Capture
 from vfgym.identify.model import Record
 from vfgym.identify.notes import capture_notes, likely_cause, not_excited_notes
 from vfgym.identify.prior import Profile, spanned
+from vfgym.identify.resonance import Resonance
 from vfgym.params import Plant
 
 MARGIN = 2.0
@@ -77,6 +85,12 @@ class Identified:
         One line for each stated range the block kept, and each range it clipped.
     profile : Profile or None
         The fits along the gain's prior (``None`` where the captures estimate the gain).
+    resonance : Resonance or None
+        A compliant axis's resonance estimate (``None`` on a rigid axis).
+    floor_counts : float
+        The residual's floor the fit is judged against (counts RMS): the quantisation's,
+        or on a compliant axis the larger of it and a ringing servo's own
+        (:func:`vfgym.identify.ringing.ringing_floor`).
     """
 
     axis: Axis
@@ -86,9 +100,11 @@ class Identified:
     cause: str | None
     kept: tuple[str, ...] = ()
     profile: Profile | None = None
+    resonance: Resonance | None = None
+    floor_counts: float = QUANTISATION_FLOOR
 
 
-def identified_plant(nominal: Plant, fit: Fit) -> Plant:
+def identified_plant(nominal: Plant, fit: Fit, resonance: Resonance | None = None) -> Plant:
     """The nominal plant with the estimates written in (see the module doc).
 
     Parameters
@@ -97,6 +113,8 @@ def identified_plant(nominal: Plant, fit: Fit) -> Plant:
         The nominal axis's plant.
     fit : Fit
         The fit.
+    resonance : Resonance or None
+        A compliant axis's resonance estimate (its transmission written where shown).
 
     Returns
     -------
@@ -118,7 +136,56 @@ def identified_plant(nominal: Plant, fit: Fit) -> Plant:
     )
     k3 = nominal.torque_per_count_nm * fit.estimate("torque_per_count").value
     per = k3 / (1.0 + ratio) if sv.follows_load else k3
-    return replace(nominal, motor=motor, servo=replace(sv, torque_per_count_nm=per))
+    tr = nominal.transmission
+    if tr is not None:
+        j = fit.estimate("inertia").value
+        tr = replace(tr, load_inertia_kgm2=tr.load_inertia_kgm2 * j)
+        if resonance is not None and resonance.shown:
+            est = resonance.transmission
+            tr = replace(
+                tr, stiffness_nm_rad=est.stiffness_nm_rad, damping_nm_s_rad=est.damping_nm_s_rad
+            )
+    return replace(
+        nominal, motor=motor, servo=replace(sv, torque_per_count_nm=per), transmission=tr
+    )
+
+
+def _spring_ranges(
+    resonance: Resonance | None, nominal_axis: Axis
+) -> tuple[dict[str, tuple[float, float]], list[str]]:
+    """The stiffness and damping ranges (factors on the identified values), and a line
+    for each stated range kept (see the module doc)."""
+    stated = nominal_axis.uncertainty
+    out: dict[str, tuple[float, float]] = {}
+    kept: list[str] = []
+    if resonance is None or not resonance.shown:
+        for name in ("stiffness", "damping"):
+            s = getattr(stated, name)
+            if s is not None:
+                out[name] = s
+                kept.append(f"{name}: the nominal file's {_text(s)} kept with its transmission")
+        return out, kept
+    tr, nom = resonance.transmission, nominal_axis.plant.transmission
+    assert nom is not None
+    for name, value, span, was in (
+        ("stiffness", tr.stiffness_nm_rad, resonance.stiffness_range_nm_rad,
+         nom.stiffness_nm_rad),
+        ("damping", tr.damping_nm_s_rad, resonance.damping_range_nm_s_rad,
+         nom.damping_nm_s_rad),
+    ):  # fmt: skip
+        if value <= 0.0:
+            continue
+        lo = 1.0 - MARGIN * (1.0 - span[0] / value)
+        hi = 1.0 + MARGIN * (span[1] / value - 1.0)
+        s = getattr(stated, name)
+        if s is not None and was > 0.0:
+            lo, hi = min(lo, s[0] * was / value), max(hi, s[1] * was / value)
+            kept.append(
+                f"{name}: the nominal file's {_text(s)} (on its transmission) kept, widened "
+                "to hold the capture's"
+            )
+        out[name] = (max(FACTOR_RANGE[0], lo), min(FACTOR_RANGE[1], hi))
+    return out, kept
 
 
 def _widen(e: Estimate) -> tuple[float, float]:
@@ -154,7 +221,10 @@ def _text(r: tuple[float, float]) -> str:
 
 
 def uncertainty_of(
-    fit: Fit, nominal_axis: Axis, profile: Profile | None = None
+    fit: Fit,
+    nominal_axis: Axis,
+    profile: Profile | None = None,
+    resonance: Resonance | None = None,
 ) -> tuple[Uncertainty, list[str]]:
     """The uncertainty block of the identified axis (see the module doc).
 
@@ -166,6 +236,8 @@ def uncertainty_of(
         The nominal axis: its stated ranges, its motor's limits.
     profile : Profile or None
         The fits along the gain's prior.
+    resonance : Resonance or None
+        A compliant axis's resonance estimate.
 
     Returns
     -------
@@ -232,7 +304,8 @@ def uncertainty_of(
                 f"{name}: {_text(before[name])} clipped to {_text(out[name])}, the range a "
                 f"motor with a peak torque of {m.peak_torque_nm:g} N*m can hold"
             )
-    return Uncertainty(**out), kept
+    springs, spring_kept = _spring_ranges(resonance, nominal_axis)
+    return Uncertainty(**out, **springs), kept + spring_kept
 
 
 def identify_report(
@@ -244,6 +317,8 @@ def identify_report(
     prior_source: str = "the default",
     captures: Sequence[Capture] = (),
     matches: Sequence[PlanMatch | None] = (),
+    resonance: Resonance | None = None,
+    floor_counts: float = QUANTISATION_FLOOR,
 ) -> Identified:
     """The identified axis and its notes.
 
@@ -263,14 +338,19 @@ def identify_report(
         The captures read, for what in them did not belong (empty: not said).
     matches : sequence of PlanMatch or None
         Each capture's pulse train against the axis's plan.
+    resonance : Resonance or None
+        A compliant axis's resonance estimate (:mod:`vfgym.identify.resonance`).
+    floor_counts : float
+        The residual's floor the fit is judged against (:attr:`Identified.floor_counts`):
+        it explains the captures up to :data:`~vfgym.identify.fit.EXPLAINED` times it.
 
     Returns
     -------
     Identified
         The axis with the estimates and the uncertainty block, and what cannot be known.
     """
-    plant = identified_plant(nominal_axis.plant, fit)
-    unc, kept = uncertainty_of(fit, nominal_axis, profile)
+    plant = identified_plant(nominal_axis.plant, fit, resonance)
+    unc, kept = uncertainty_of(fit, nominal_axis, profile, resonance)
     axis = replace(
         nominal_axis,
         plant=plant,
@@ -279,6 +359,8 @@ def identify_report(
         + f"(identified from {', '.join(r.source for r in records)})",
     )
     notes = not_excited_notes(fit, profile, prior_source)
+    if resonance is not None and resonance.note is not None:
+        notes.append(resonance.note)
     g = fit.estimate("torque_per_count")
     stated = nominal_axis.uncertainty.torque_per_count
     if g.excited and stated is not None and not stated[0] <= g.value <= stated[1]:
@@ -290,14 +372,13 @@ def identify_report(
     matches = list(matches) or [None] * len(records)
     if captures:
         notes += capture_notes(captures, records, matches, nominal_axis.name)
-    explained = fit.residual_rms_counts <= EXPLAINED * QUANTISATION_FLOOR
+    explained = fit.residual_rms_counts <= EXPLAINED * floor_counts
     cause = None
     if not explained:
         cause = likely_cause(fit, records, nominal_axis.plant, matches)
         notes.append(
             f"the model does not explain the capture: residual {fit.residual_rms_counts:.3g} "
-            f"counts RMS against a quantisation floor of {QUANTISATION_FLOOR:.3g}; likely "
-            f"cause: {cause}"
+            f"counts RMS against {floor_text(floor_counts)}; likely cause: {cause}"
         )
     shown = spanned(fit, profile) if profile is not None else fit
     return Identified(
@@ -308,6 +389,29 @@ def identify_report(
         cause=cause,
         kept=tuple(kept),
         profile=profile,
+        resonance=resonance,
+        floor_counts=floor_counts,
+    )
+
+
+def floor_text(floor_counts: float) -> str:
+    """The residual's floor in words, as the notes and the refusal say it.
+
+    Parameters
+    ----------
+    floor_counts : float
+        :attr:`Identified.floor_counts`.
+
+    Returns
+    -------
+    str
+        "a quantisation floor of …", or the ringing servo's floor beside it.
+    """
+    if floor_counts <= QUANTISATION_FLOOR:
+        return f"a quantisation floor of {QUANTISATION_FLOOR:.3g}"
+    return (
+        f"a floor of {floor_counts:.3g} (the ringing servo's own spread under starts no "
+        f"capture tells apart; the quantisation's {QUANTISATION_FLOOR:.3g})"
     )
 
 
@@ -316,6 +420,7 @@ __all__ = [
     "IN_USE",
     "MARGIN",
     "Identified",
+    "floor_text",
     "identified_plant",
     "identify_report",
     "uncertainty_of",
