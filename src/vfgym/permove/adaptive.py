@@ -53,7 +53,11 @@ checked it. Two checks, both in the move's table:
   versions of its own (scaled towards the base, checked on its plants as the search
   checks) and of a second search on its plants and those checked plants (none dearer
   than the base on its plant) replaces it; if none does, told that
-  plant, the scheduler holds the base for the rest of the move.
+  plant, the scheduler holds the base for the rest of the move. Where every checked
+  plant that breaks the cheapest lies farther from its plant's signature than every
+  in-range plant told as it, a response nearer than halfway between the two still runs
+  the cheapest (:attr:`Continuation.trusted`): the replacement or the held base is for
+  the responses the breaking plants give, not for the plants in range.
 
 Each move's outcome is recorded in :attr:`EstimatingScheduler.runs`
 (:meth:`EstimatingScheduler.fallbacks` counts them). In range the first check fires only
@@ -187,11 +191,24 @@ class Continuation:
     the fallback off); else ``None``."""
     searched_ramp: int = 1
     """... and its ramp."""
+    trusted: float = 0.0
+    """Where :attr:`action` replaces the search's cheapest or the base is held: a response
+    within this of :attr:`signature` still runs the cheapest, since every checked plant
+    told as this one that breaks it lies farther (halfway from the farthest in-range plant
+    told as this one to the nearest that breaks it, within :attr:`threshold`; 0: none
+    lies so near)."""
 
     @property
     def safer(self) -> bool:
         """Whether :attr:`action` replaces the search's cheapest (:attr:`searched_action`)."""
         return self.searched_action is not None
+
+    @property
+    def cheapest(self) -> tuple[np.ndarray, int]:
+        """The search's cheapest: its action and ramp."""
+        if self.searched_action is not None:
+            return self.searched_action, self.searched_ramp
+        return self.action, self.ramp
 
 
 @dataclass(frozen=True)
@@ -375,13 +392,13 @@ class EstimatingScheduler(Scheduler):
             if told is None and (t == table.hold or term or trunc):
                 told = table.tell(np.concatenate(seen) if seen else np.zeros(0))
                 held = _held(told, self.options.fallback) if t == table.hold else ""
-                self.runs.append(ScheduledRun(scenario.name, plant, told.continuation.plant,
-                                              told.residual, held))  # fmt: skip
                 c = told.continuation
-                if not held:
+                if not self.options.fallback or told.residual < c.trusted:
+                    held, (action, ramp) = "", c.cheapest
+                elif not held:
                     action, ramp = c.action, c.ramp
-                if not self.options.fallback and c.searched_action is not None:
-                    action, ramp = c.searched_action, c.searched_ramp
+                self.runs.append(ScheduledRun(scenario.name, plant, c.plant, told.residual,
+                                              held))  # fmt: skip
             if term or trunc:
                 return {k: info[k] for k in METRIC_NAMES}
 
@@ -444,18 +461,23 @@ def _outside(
     checked = {q: None for line in lines for q in line[1:]}
     checked.update({q: None for line in lines for q in boundary_plants(line, holds, BISECTIONS)})
     mine: list[list[PlantVariant]] = [[] for _ in conts]  # told as each, the base holding
+    residual: dict[PlantVariant, float] = {}
     for q in checked:
         told = table.tell(_signature(env, q, hold))
         i = conts.index(told.continuation)
         if told.fits and np.any(conts[i].action != 0.0) and holds(q):
             mine[i].append(q)
+            residual[q] = told.residual
     out = []
-    for c, qs, found in zip(conts, mine, cands, strict=True):
+    for i, (c, qs, found, r_in) in enumerate(zip(conts, mine, cands, far, strict=True)):
         broken = [q for q in qs if not _holds(env, q, c.action, c.ramp, hold)]
         if not broken:
             out.append(c)
             continue
-        near = check_plants(design, conts.index(c), o.neighbours, o.probes)
+        r_out = min(residual[q] for q in broken)
+        if r_out > r_in:  # every plant that breaks it lies beyond the in-range ones
+            c = replace(c, trusted=min(c.threshold, 0.5 * (r_in + r_out)))
+        near = check_plants(design, i, o.neighbours, o.probes)
         # never dearer than the base on its plant (held, it costs the base's)
         base_cost = float(_episode(env, c.plant, lambda t: np.zeros(4))[0]["cost"])
         pool = [(f, qs) for f in found[1 : 1 + RUNNERS_UP] if f[2] <= base_cost]
