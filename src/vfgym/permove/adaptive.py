@@ -458,8 +458,8 @@ def _outside(
         return base[q]
 
     lines = shadow_lines(design, axis.plant.motor.rated_torque_nm, o.shadow)
-    checked = {q: None for line in lines for q in line[1:]}
-    checked.update({q: None for line in lines for q in boundary_plants(line, holds, BISECTIONS)})
+    bounds = {line: boundary_plants(line, holds, BISECTIONS) for line in lines}
+    checked = {q: None for line in lines for q in (*line[1:], *bounds[line])}
     mine: list[list[PlantVariant]] = [[] for _ in conts]  # told as each, the base holding
     residual: dict[PlantVariant, float] = {}
     for q in checked:
@@ -474,7 +474,8 @@ def _outside(
         if not broken:
             out.append(c)
             continue
-        r_out = min(residual[q] for q in broken)
+        lines_c = [(line, bounds[line]) for line in lines if set(qs) & {*line, *bounds[line]}]
+        r_out = _nearest_break(env, table, c, broken, lines_c, holds, residual)
         if r_out > r_in:  # every plant that breaks it lies beyond the in-range ones
             c = replace(c, trusted=min(c.threshold, 0.5 * (r_in + r_out)))
         near = check_plants(design, i, o.neighbours, o.probes)
@@ -499,6 +500,38 @@ def _outside(
         else:
             out.append(replace(c, shadows=tuple(broken)))
     return replace(table, continuations=tuple(out))
+
+
+def _nearest_break(
+    env: VFServoEnv,
+    table: MoveTable,
+    c: Continuation,
+    broken: list[PlantVariant],
+    lines: list[tuple[tuple[PlantVariant, ...], list[PlantVariant]]],
+    holds: Any,
+    residual: dict[PlantVariant, float],
+) -> float:
+    """The least residual, from ``c``'s signature, of a plant told as ``c`` where the base
+    holds and ``c``'s action breaks a limit: of ``broken`` and of the plants found by
+    bisecting, on each of ``lines`` (a shadow line with the base's boundary plants on it),
+    where the action's own feasibility changes (a break lies nearer than the first checked
+    plant that shows it)."""
+    cache: dict[PlantVariant, bool] = {}
+
+    def breaks(q: PlantVariant) -> bool:
+        if q not in cache:
+            cache[q] = not _holds(env, q, c.action, c.ramp, table.hold)
+        return cache[q]
+
+    r = min(residual[q] for q in broken)
+    for line, bound in lines:
+        k = next(f for f in SHADOWED if getattr(line[0], f) != getattr(line[-1], f))
+        pts = tuple(sorted({*line, *bound}, key=lambda q: abs(getattr(q, k) - getattr(line[0], k))))
+        for m in boundary_plants(pts, breaks, BISECTIONS):
+            told = table.tell(_signature(env, m, table.hold))
+            if told.continuation is c and told.fits and holds(m):
+                r = min(r, told.residual)
+    return r
 
 
 def _holds(env: VFServoEnv, plant: PlantVariant, action: np.ndarray, ramp: int, hold: int) -> bool:
