@@ -174,6 +174,36 @@ def test_a_plant_between_shadows_where_the_base_just_holds_is_checked(setup, mon
     assert ok == [(True, False), (True, True)], ok
 
 
+def test_a_response_nearer_than_every_plant_that_breaks_the_cheapest_still_runs_it(setup):
+    """test-1 on loads-uncertain: the inertia 0.8 corner's cheapest continuation breaks a
+    limit on checked plants just outside the ranges, so the table replaces it; but those
+    plants' responses lie farther from the corner's signature than every in-range plant
+    told as it, so a response nearer than halfway (:attr:`Continuation.trusted`) still
+    runs the cheapest: on the corner itself, what the scheduler ran without the fallback,
+    cheaper than the replacement."""
+    axis, sched, moves = setup
+    sc = moves[1]
+    table = sched.table(sc)
+    (c,) = [c for c in table.continuations if c.plant.inertia == 0.8]
+    assert c.safer and c.threshold / sched.options.margin < c.trusted <= c.threshold
+    action, ramp = c.cheapest
+    assert np.array_equal(action, c.searched_action) and ramp == c.searched_ramp
+    env = sched._tables[sc.name][0]
+    cost = {
+        k: float(
+            adaptive._episode(
+                env, c.plant, lambda t, a=a, r=r: adaptive._ramp(a, r, table.hold, t)
+            )[0]["cost"]
+        )
+        for k, (a, r) in {"cheapest": (action, ramp), "replacement": (c.action, c.ramp)}.items()
+    }
+    assert cost["cheapest"] < cost["replacement"], cost
+    sched.runs.clear()
+    a = evaluate([sched.without_fallback(), sched], [sc], axis=axis, plants=[c.plant]).across
+    assert a.cost[1, 0, 0] == a.cost[0, 0, 0] == pytest.approx(cost["cheapest"], rel=1e-12)
+    assert [r.held for r in sched.runs if r.plant == c.plant] == [""]
+
+
 def test_a_response_far_from_every_design_plant_fits_none(setup):
     _, sched, moves = setup
     table = sched.table(moves[0])

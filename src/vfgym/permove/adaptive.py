@@ -53,7 +53,11 @@ checked it. Two checks, both in the move's table:
   versions of its own (scaled towards the base, checked on its plants as the search
   checks) and of a second search on its plants and those checked plants (none dearer
   than the base on its plant) replaces it; if none does, told that
-  plant, the scheduler holds the base for the rest of the move.
+  plant, the scheduler holds the base for the rest of the move. Where every checked
+  plant that breaks the cheapest lies farther from its plant's signature than every
+  in-range plant told as it, a response nearer than halfway between the two still runs
+  the cheapest (:attr:`Continuation.trusted`): the replacement or the held base is for
+  the responses the breaking plants give, not for the plants in range.
 
 Each move's outcome is recorded in :attr:`EstimatingScheduler.runs`
 (:meth:`EstimatingScheduler.fallbacks` counts them). In range the first check fires only
@@ -75,6 +79,7 @@ from vfgym.envs import N_SIGNATURE, check_plants
 from vfgym.envs.servo import VFServoEnv
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
+from vfgym.permove._episodes import _episode, _Found, _holds, _ramp, _search, _signature
 from vfgym.permove._shadows import (
     BISECTIONS,
     SHADOW_LEVELS,
@@ -90,8 +95,6 @@ from vfgym.scoring import Scheduler
 SCALE = (1.0, 0.0, 1.0, 1.0)
 """Residual scales (value, L/value, k, Ts/Tf): ±1 moves a coordinate half its range; L/value
 held at the base's."""
-INFEASIBLE = 10.0
-"""Added to the search's cost of a continuation that breaks a limit on one of its plants."""
 CALIBRATION_PLANTS = 81
 """In-range plants a table's thresholds are calibrated on: the ranges' grid of at most this
 many (9 levels a quantity for two uncertain quantities, 81 for one, 4 for three ...)."""
@@ -187,11 +190,24 @@ class Continuation:
     the fallback off); else ``None``."""
     searched_ramp: int = 1
     """... and its ramp."""
+    trusted: float = 0.0
+    """Where :attr:`action` replaces the search's cheapest or the base is held: a response
+    within this of :attr:`signature` still runs the cheapest, since every checked plant
+    told as this one that breaks it lies farther (halfway from the farthest in-range plant
+    told as this one to the nearest that breaks it, within :attr:`threshold`; 0: none
+    lies so near)."""
 
     @property
     def safer(self) -> bool:
         """Whether :attr:`action` replaces the search's cheapest (:attr:`searched_action`)."""
         return self.searched_action is not None
+
+    @property
+    def cheapest(self) -> tuple[np.ndarray, int]:
+        """The search's cheapest: its action and ramp."""
+        if self.searched_action is not None:
+            return self.searched_action, self.searched_ramp
+        return self.action, self.ramp
 
 
 @dataclass(frozen=True)
@@ -375,13 +391,13 @@ class EstimatingScheduler(Scheduler):
             if told is None and (t == table.hold or term or trunc):
                 told = table.tell(np.concatenate(seen) if seen else np.zeros(0))
                 held = _held(told, self.options.fallback) if t == table.hold else ""
-                self.runs.append(ScheduledRun(scenario.name, plant, told.continuation.plant,
-                                              told.residual, held))  # fmt: skip
                 c = told.continuation
-                if not held:
+                if not self.options.fallback or told.residual < c.trusted:
+                    held, (action, ramp) = "", c.cheapest
+                elif not held:
                     action, ramp = c.action, c.ramp
-                if not self.options.fallback and c.searched_action is not None:
-                    action, ramp = c.searched_action, c.searched_ramp
+                self.runs.append(ScheduledRun(scenario.name, plant, c.plant, told.residual,
+                                              held))  # fmt: skip
             if term or trunc:
                 return {k: info[k] for k in METRIC_NAMES}
 
@@ -441,21 +457,27 @@ def _outside(
         return base[q]
 
     lines = shadow_lines(design, axis.plant.motor.rated_torque_nm, o.shadow)
-    checked = {q: None for line in lines for q in line[1:]}
-    checked.update({q: None for line in lines for q in boundary_plants(line, holds, BISECTIONS)})
+    bounds = {line: boundary_plants(line, holds, BISECTIONS) for line in lines}
+    checked = {q: None for line in lines for q in (*line[1:], *bounds[line])}
     mine: list[list[PlantVariant]] = [[] for _ in conts]  # told as each, the base holding
+    residual: dict[PlantVariant, float] = {}
     for q in checked:
         told = table.tell(_signature(env, q, hold))
         i = conts.index(told.continuation)
         if told.fits and np.any(conts[i].action != 0.0) and holds(q):
             mine[i].append(q)
+            residual[q] = told.residual
     out = []
-    for c, qs, found in zip(conts, mine, cands, strict=True):
+    for i, (c, qs, found, r_in) in enumerate(zip(conts, mine, cands, far, strict=True)):
         broken = [q for q in qs if not _holds(env, q, c.action, c.ramp, hold)]
         if not broken:
             out.append(c)
             continue
-        near = check_plants(design, conts.index(c), o.neighbours, o.probes)
+        lines_c = [(line, bounds[line]) for line in lines if set(qs) & {*line, *bounds[line]}]
+        r_out = _nearest_break(env, table, c, broken, lines_c, holds, residual)
+        if r_out > r_in:  # every plant that breaks it lies beyond the in-range ones
+            c = replace(c, trusted=min(c.threshold, 0.5 * (r_in + r_out)))
+        near = check_plants(design, i, o.neighbours, o.probes)
         # never dearer than the base on its plant (held, it costs the base's)
         base_cost = float(_episode(env, c.plant, lambda t: np.zeros(4))[0]["cost"])
         pool = [(f, qs) for f in found[1 : 1 + RUNNERS_UP] if f[2] <= base_cost]
@@ -479,87 +501,36 @@ def _outside(
     return replace(table, continuations=tuple(out))
 
 
-def _holds(env: VFServoEnv, plant: PlantVariant, action: np.ndarray, ramp: int, hold: int) -> bool:
-    """Whether ``action``, ramped over ``ramp`` after the hold, keeps every limit on ``plant``."""
-    return bool(_episode(env, plant, lambda t: _ramp(action, ramp, hold, t))[0]["feasible"])
+def _nearest_break(
+    env: VFServoEnv,
+    table: MoveTable,
+    c: Continuation,
+    broken: list[PlantVariant],
+    lines: list[tuple[tuple[PlantVariant, ...], list[PlantVariant]]],
+    holds: Any,
+    residual: dict[PlantVariant, float],
+) -> float:
+    """The least residual, from ``c``'s signature, of a plant told as ``c`` where the base
+    holds and ``c``'s action breaks a limit: of ``broken`` and of the plants found by
+    bisecting, on each of ``lines`` (a shadow line with the base's boundary plants on it),
+    where the action's own feasibility changes (a break lies nearer than the first checked
+    plant that shows it)."""
+    cache: dict[PlantVariant, bool] = {}
 
+    def breaks(q: PlantVariant) -> bool:
+        if q not in cache:
+            cache[q] = not _holds(env, q, c.action, c.ramp, table.hold)
+        return cache[q]
 
-def _ramp(action: np.ndarray, ramp: int, hold: int, t: int) -> np.ndarray:
-    """The action at interval ``t``: the base until ``hold``, then a linear ramp of
-    ``ramp`` intervals to ``action``."""
-    if t < hold:
-        return np.zeros(4)
-    return action * min(1.0, (t - hold + 1) / ramp)
-
-
-def _episode(env: VFServoEnv, plant: PlantVariant, act: Any) -> tuple[dict[str, Any], int]:
-    """One episode on ``plant`` under ``act(t)``: its last ``info`` and its length."""
-    env.reset(options={"plant": plant})
-    t = 0
-    while True:
-        *_, term, trunc, info = env.step(act(t))
-        t += 1
-        if term or trunc:
-            return info, t
-
-
-def _signature(env: VFServoEnv, plant: PlantVariant, hold: int) -> np.ndarray:
-    """The dynamic observations over the first ``hold`` intervals on ``plant``, base held."""
-    env.reset(options={"plant": plant})
-    seen = []
-    for _ in range(hold):
-        obs, _, term, trunc, _ = env.step(np.zeros(4))
-        seen.append(obs[:N_SIGNATURE])
-        if term or trunc:
-            break
-    seen += [seen[-1]] * (hold - len(seen))  # a move over before the hold: its last seen
-    return np.concatenate(seen)
-
-
-_Found = tuple[np.ndarray, int, float]
-"""A searched candidate: (action, ramp intervals, cost on its plant)."""
-
-
-def _search(
-    env: VFServoEnv, hold: int, plant: PlantVariant, near: list[PlantVariant], o: AdaptiveOptions
-) -> list[_Found]:
-    """The continuation for ``plant`` first: (action, ramp intervals, cost on ``plant``), the
-    best of CMA-ES's, feasible on ``plant`` and ``near``, else the base held; then the
-    other feasible candidates, cheapest first."""
-    from cmaes import CMA
-
-    info, steps = _episode(env, plant, lambda t: np.zeros(4))
-    best = (bool(info["feasible"]), -float(info["cost"]), np.zeros(4), 1)
-
-    def run(x: np.ndarray) -> tuple[bool, float, np.ndarray, int]:
-        a = np.clip(x[:4], -1.0, 1.0)
-        ramp = max(1, round(float(np.clip(x[4], 0.0, 1.0)) * steps))
-        ok, cost = True, math.nan
-        for i, p in enumerate([plant, *near]):
-            info, _ = _episode(env, p, lambda t: _ramp(a, ramp, hold, t))
-            ok = ok and bool(info["feasible"])
-            cost = float(info["cost"]) if i == 0 else cost
-            if not ok:
-                break
-        return ok, -cost, a, ramp
-
-    lo, hi = np.r_[-np.ones(4), 0.0], np.ones(5)
-    opt = CMA(mean=np.r_[np.zeros(4), 0.2], sigma=o.sigma, bounds=np.c_[lo, hi], seed=o.seed)
-    done, feasible = 0, []
-    while done < o.evals:
-        told = []
-        for _ in range(opt.population_size):
-            x = opt.ask()
-            r = run(x)
-            told.append((x, -r[1] + (0.0 if r[0] else INFEASIBLE)))
-            done += 1
-            if r[0]:
-                feasible.append((r[2], r[3], -r[1]))
-            if r[0] and (not best[0] or r[1] > best[1]):
-                best = r
-        opt.tell(told)
-    rest = sorted(feasible, key=lambda f: f[2])
-    return [(best[2], best[3], -best[1]), *(f for f in rest if f[0] is not best[2])]
+    r = min(residual[q] for q in broken)
+    for line, bound in lines:
+        k = next(f for f in SHADOWED if getattr(line[0], f) != getattr(line[-1], f))
+        pts = tuple(sorted({*line, *bound}, key=lambda q: abs(getattr(q, k) - getattr(line[0], k))))
+        for m in boundary_plants(pts, breaks, BISECTIONS):
+            told = table.tell(_signature(env, m, table.hold))
+            if told.continuation is c and told.fits and holds(m):
+                r = min(r, told.residual)
+    return r
 
 
 __all__ = [
