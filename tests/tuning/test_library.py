@@ -130,8 +130,10 @@ def test_an_interrupted_sweep_keeps_its_trials_and_gives_ctrl_c_back(tmp_path):
     import time
 
     before = signal.getsignal(signal.SIGINT)
+    # the timeout bounds the test if the interrupt is lost: it then fails, not hangs
     cfg = tuning.SweepConfig(scenarios="short-move", trials=100_000, workers=2, study="i",
-                             runs_dir=str(tmp_path), plots=False, progress=False)  # fmt: skip
+                             runs_dir=str(tmp_path), plots=False, progress=False,
+                             timeout=300.0)  # fmt: skip
     started = []
 
     def interrupt(p: tuning.SweepProgress) -> None:
