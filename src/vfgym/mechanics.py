@@ -285,6 +285,24 @@ class Transmission:
         jm, jl = motor_inertia_kgm2, self.load_inertia_kgm2
         return math.sqrt(self.stiffness_nm_rad * (jm + jl) / (jm * jl)) / (2.0 * math.pi)
 
+    def damping_ratio(self, motor_inertia_kgm2: float) -> float:
+        """The damping ratio ζ = c_S/(2·μ·ω_r), μ = J_M·J_L/(J_M + J_L), ω_r² = K_S/μ: the
+        inverse of :meth:`from_resonance`'s.
+
+        Parameters
+        ----------
+        motor_inertia_kgm2 : float
+            J_M (kg·m²), > 0.
+
+        Returns
+        -------
+        float
+            ζ (0 for an undamped spring).
+        """
+        jm, jl = motor_inertia_kgm2, self.load_inertia_kgm2
+        mu = jm * jl / (jm + jl)
+        return self.damping_nm_s_rad / (2.0 * mu * math.sqrt(self.stiffness_nm_rad / mu))
+
     @property
     def antiresonance_hz(self) -> float:
         """The anti-resonance (1/2π)·√(K_S/J_L) (Hz): the load ringing on a motor held still."""

@@ -198,6 +198,7 @@ def test_damped_oscillation_at_python_controls_poles():
     osc = poles[np.argmax(poles.imag)]
     assert abs(osc) / (2 * math.pi) == pytest.approx(60.0, rel=1e-9)
     assert -osc.real / abs(osc) == pytest.approx(0.05, rel=1e-9)
+    assert plant.transmission.damping_ratio(jm) == pytest.approx(-osc.real / abs(osc), rel=1e-9)
     x = free_run(plant, (0.0, 0.0, 1e-3, 0.0), 0.2)
     assert frequency(x[:, 2]) == pytest.approx(osc.imag / (2 * math.pi), rel=1e-3)
 

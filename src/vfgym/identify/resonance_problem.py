@@ -78,7 +78,7 @@ def with_resonance(plant: Plant, resonance_hz: float, damping_ratio: float) -> P
 
 
 def damping_ratio(plant: Plant) -> float:
-    """A compliant plant's damping ratio ζ = c_S / (2·μ·ω_r).
+    """A compliant plant's damping ratio ζ (:meth:`vfgym.Transmission.damping_ratio`).
 
     Parameters
     ----------
@@ -92,9 +92,7 @@ def damping_ratio(plant: Plant) -> float:
     """
     tr = plant.transmission
     assert tr is not None
-    jm, jl = plant.motor.inertia_kgm2, tr.load_inertia_kgm2
-    mu = jm * jl / (jm + jl)
-    return tr.damping_nm_s_rad / (2.0 * mu * math.sqrt(tr.stiffness_nm_rad / mu))
+    return tr.damping_ratio(plant.motor.inertia_kgm2)
 
 
 def resonance_segment(record: Record, ticks: int) -> Record:
