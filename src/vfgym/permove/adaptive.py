@@ -469,12 +469,13 @@ def _outside(
             residual[q] = told.residual
     out = []
     for i, (c, qs, found, r_in) in enumerate(zip(conts, mine, cands, far, strict=True)):
-        broken = [q for q in qs if not _holds(env, q, c.action, c.ramp, hold)]
+        breaks = {q: not _holds(env, q, c.action, c.ramp, hold) for q in qs}
+        broken = [q for q in qs if breaks[q]]
         if not broken:
             out.append(c)
             continue
         lines_c = [(line, bounds[line]) for line in lines if set(qs) & {*line, *bounds[line]}]
-        r_out = _nearest_break(env, table, c, broken, lines_c, holds, residual)
+        r_out = _nearest_break(env, table, c, breaks, lines_c, holds, residual)
         if r_out > r_in:  # every plant that breaks it lies beyond the in-range ones
             c = replace(c, trusted=min(c.threshold, 0.5 * (r_in + r_out)))
         near = check_plants(design, i, o.neighbours, o.probes)
@@ -505,24 +506,24 @@ def _nearest_break(
     env: VFServoEnv,
     table: MoveTable,
     c: Continuation,
-    broken: list[PlantVariant],
+    known: dict[PlantVariant, bool],
     lines: list[tuple[tuple[PlantVariant, ...], list[PlantVariant]]],
     holds: Any,
     residual: dict[PlantVariant, float],
 ) -> float:
     """The least residual, from ``c``'s signature, of a plant told as ``c`` where the base
-    holds and ``c``'s action breaks a limit: of ``broken`` and of the plants found by
-    bisecting, on each of ``lines`` (a shadow line with the base's boundary plants on it),
-    where the action's own feasibility changes (a break lies nearer than the first checked
-    plant that shows it)."""
-    cache: dict[PlantVariant, bool] = {}
+    holds and ``c``'s action breaks a limit: of the plants of ``known`` it breaks (plant →
+    whether it breaks, run already) and of the plants found by bisecting, on each of
+    ``lines`` (a shadow line with the base's boundary plants on it), where the action's own
+    feasibility changes (a break lies nearer than the first checked plant that shows it)."""
+    cache = dict(known)
 
     def breaks(q: PlantVariant) -> bool:
         if q not in cache:
             cache[q] = not _holds(env, q, c.action, c.ramp, table.hold)
         return cache[q]
 
-    r = min(residual[q] for q in broken)
+    r = min(residual[q] for q, b in known.items() if b)
     for line, bound in lines:
         k = next(f for f in SHADOWED if getattr(line[0], f) != getattr(line[-1], f))
         pts = tuple(sorted({*line, *bound}, key=lambda q: abs(getattr(q, k) - getattr(line[0], k))))
