@@ -40,20 +40,10 @@ shaft (rad, rad/s), and its position in mm of travel, θ_L · ``travel_mm_per_ra
 the transmission states that (else the column is left out)."""
 
 
-def trace_fields(trace: Any) -> tuple[str, ...]:
-    """The columns of ``trace``'s CSV: :data:`TRACE_FIELDS`, then the load's
-    (:data:`LOAD_FIELDS`) where its plant states a transmission."""
-    tr = trace.plant.transmission
-    if tr is None:
-        return TRACE_FIELDS
-    return TRACE_FIELDS + tuple(
-        f for f in LOAD_FIELDS if f != "load_mm" or tr.travel_mm_per_rad is not None
-    )
-
-
 def trace_columns(trace: Any) -> dict[str, np.ndarray]:
-    """A :class:`vfgym.Trace` as named per-sample columns (see :data:`TRACE_FIELDS` and
-    :func:`trace_fields`)."""
+    """A :class:`vfgym.Trace` as named per-sample columns, in the CSV's order
+    (:data:`TRACE_FIELDS`, then the load's where the plant states a transmission,
+    :data:`LOAD_FIELDS`)."""
     n = trace.time_s.size
     dec = trace.decimation
     q = trace.plant.motor.count_rad
@@ -89,7 +79,7 @@ def write_trace_csv(trace: Any, path: str | Path) -> Path:
     from vfgym.io.runs import write_text
 
     cols = trace_columns(trace)
-    names = trace_fields(trace)
+    names = tuple(cols)
     n = trace.time_s.size
     parts = []
     for name in names:
