@@ -194,12 +194,11 @@ def identify_axis(
     plan = make_plan(axis, settings)
     matches = [plan_match(r, plan.pulses, plant.tick_hz) for r in records]
     nominal = plant
-    guess = None
-    if nominal.transmission is not None:
-        guess, plant = resonance_of(records, plan, nominal, settings)
-    if guess is None:
+    guess: Guess | None = None
+    if nominal.transmission is None:
         result = fit(records, plant, settings)
     else:  # the resonance moves saw the ratio of the inertia to the gain: start there
+        guess, plant = resonance_of(records, plan, nominal, settings)
         phases = [st.servo_phase for st in guess.starts]
         result = fit(records, plant, settings, start_inertia=1.0 / guess.gain, start_phases=phases)
     if any(m.kind == "differs" for m in matches):
@@ -212,6 +211,7 @@ def identify_axis(
             records, result = other, alt
             matches = [replace(m, fitted="plan") if m.kind == "differs" else m for m in matches]
     floor = QUANTISATION_FLOOR
+    refined: tuple[Fit, Resonance] | None = None  # the resonance refined on a fit, kept
     if guess is not None:  # a servo that rings: its own spread is the floor (its module doc)
         floor = max(floor, ringing_floor(records, result.plant, result.starts, settings))
         if result.residual_rms_counts > EXPLAINED * floor:
@@ -219,6 +219,7 @@ def identify_axis(
             # times the residual): fitted again from its optimum on the resonance refined
             # on the fitted plant, the better kept
             res = refined_resonance(records, plan, nominal, settings, result, guess)
+            refined = (result, res)
             again = fit(
                 records,
                 with_resonance(plant, res.resonance_hz, res.damping_ratio),
@@ -240,7 +241,9 @@ def identify_axis(
             result = alt
     profile = along_gain(records, plant, settings, result, prior)
     resonance = None
-    if guess is not None:
+    if refined is not None and refined[0] is result:  # refined on the fit kept: not again
+        resonance = refined[1]
+    elif guess is not None:
         resonance = refined_resonance(records, plan, nominal, settings, result, guess)
     ident = identify_report(
         axis,
