@@ -146,3 +146,28 @@ def test_an_interrupted_sweep_keeps_its_trials_and_gives_ctrl_c_back(tmp_path):
     assert result.counts.complete >= 4 and result.verdict is None
     assert (result.run_dir / "summary.yaml").is_file() and result.best is not None
     assert signal.getsignal(signal.SIGINT) is before
+
+
+def test_a_ctrl_c_while_the_sweep_reads_its_study_is_not_lost(tmp_path):
+    """Ctrl-C that arrives while the parent reads the study (where library code could
+    swallow the KeyboardInterrupt, as a finaliser does) still stops a two-worker sweep."""
+    import signal
+    import time
+
+    cfg = tuning.SweepConfig(scenarios="short-move", trials=100_000, workers=2, study="j",
+                             runs_dir=str(tmp_path), plots=False, progress=False,
+                             timeout=120.0)  # fmt: skip
+    sent, swallowed = [], []
+
+    def swallowing(p: tuning.SweepProgress) -> None:
+        if p.complete >= 2 and not sent:
+            sent.append(time.monotonic())
+            try:  # as code that catches everything would
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.2)
+            except KeyboardInterrupt:
+                swallowed.append(True)
+
+    result = tuning.sweep(cfg, on_progress=swallowing)
+    assert sent and not swallowed and result.interrupted
+    assert time.monotonic() - sent[0] < 90.0

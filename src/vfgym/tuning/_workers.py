@@ -473,10 +473,14 @@ def run_processes(
 
     interrupted = False
     try:
-        while any(w.process.is_alive() for w in workers):
-            poll()
-            collect()
-            time.sleep(0.5)
+        # Ctrl-C is let through in the wait only: ``poll`` reads the study through Optuna's
+        # storage, where an interrupt could land in a finaliser and be lost
+        with DeferredInterrupt() as interrupts:
+            while any(w.process.is_alive() for w in workers):
+                poll()
+                collect()
+                with interrupts.allowed():
+                    time.sleep(0.5)
     except KeyboardInterrupt:
         interrupted = True
         signal.signal(signal.SIGINT, signal.SIG_IGN)
