@@ -98,7 +98,7 @@ def pairs(axis, moves: int, plants: int, seed: int):
     if axis.uncertainty.exact:
         raise SystemExit(f"--axis {axis.name}: states no uncertainty; adaptive agents need one")
     test = axis.scenarios("test")[:moves]
-    return test, draw_plants(axis.uncertainty, axis.plant.motor, plants, seed)
+    return test, draw_plants(axis.uncertainty, axis.plant, plants, seed)
 
 
 def judge(tuners, axis, test, variants) -> list[tuple[np.ndarray, np.ndarray]]:

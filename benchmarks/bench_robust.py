@@ -54,7 +54,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def judge(label: str, per_move: list[Settings], axis, plants, seed: int, optima=None) -> None:
     """Print one tuner's figures on the axis's test moves across the drawn plants."""
     test = axis.scenarios("test")
-    variants = draw_plants(axis.uncertainty, axis.plant.motor, plants, seed)
+    variants = draw_plants(axis.uncertainty, axis.plant, plants, seed)
     chosen = {sc.name: s for sc, s in zip(test, per_move, strict=True)}
     ev = evaluate([lambda sc: chosen[sc.name], "paper"], test, axis=axis, plants=variants,
                   plant_seed=seed)  # fmt: skip
@@ -138,7 +138,7 @@ def part_sweep(axis_file: str, axis, args) -> None:
 def part_evaluate(axis, args) -> None:
     test = axis.scenarios("test")
     s = Settings(value_rad=0.882, error_limit_rad=0.872, k=430.9, ts_over_tf=1.0)
-    variants = draw_plants(axis.uncertainty, axis.plant.motor, args.plants, args.plant_seed)
+    variants = draw_plants(axis.uncertainty, axis.plant, args.plants, args.plant_seed)
     evaluate([s], test, axis=axis)  # compiled
     one, many = [], []
     for _ in range(3):

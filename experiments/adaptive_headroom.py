@@ -138,7 +138,7 @@ def main() -> None:
     axis = load_axis(args.axis)
     model = load_settings_model(args.model)
     design = axis.design_plants()
-    variants = draw_plants(axis.uncertainty, axis.plant.motor, args.plants, args.plant_seed)
+    variants = draw_plants(axis.uncertainty, axis.plant, args.plants, args.plant_seed)
     arms = {"held": 0, "base, ramp": 1, "base, 2 ramps": 2}
     t0 = time.perf_counter()
     print(f"axis {axis.name}, {args.moves} test moves x {args.plants} plants "

@@ -59,7 +59,7 @@ def test_in_range_it_still_switches_and_holds_no_base(setup):
     searched, it runs what it ran without the fallback, and it is cheaper than the base on
     some pairs."""
     axis, sched, moves = setup
-    plants = list(draw_plants(axis.uncertainty, axis.plant.motor, 6, VERDICT_PLANT_SEED))
+    plants = list(draw_plants(axis.uncertainty, axis.plant, 6, VERDICT_PLANT_SEED))
     sched.runs.clear()
     for sc in moves:
         ctrls = [sched.table(sc).base, sched.without_fallback(), sched]

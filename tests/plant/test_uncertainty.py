@@ -106,8 +106,8 @@ def test_a_true_plant_keeps_the_modelled_drive_gain_and_scales_the_inertia(f, g,
 
 
 def test_the_design_holds_every_corner_and_stratified_draws_inside():
-    motor = PAPER_AXIS.plant.motor
-    design = plant_design(FULL, motor, drawn=6, seed=3)
+    plant = PAPER_AXIS.plant
+    design = plant_design(FULL, plant, drawn=6, seed=3)
     assert len(design) == 2**5 + 6
     ranges = FULL.ranges()
     corners = {
@@ -124,17 +124,17 @@ def test_the_design_holds_every_corner_and_stratified_draws_inside():
     assert np.all((inner > lo) & (inner < hi))
     # one draw in each sixth of the range (a Latin hypercube)
     assert sorted(np.floor((inner - lo) / (hi - lo) * 6).astype(int)) == list(range(6))
-    assert plant_design(FULL, motor, drawn=6, seed=3) == design
-    assert plant_design(FULL, motor, drawn=6, seed=4) != design
+    assert plant_design(FULL, plant, drawn=6, seed=3) == design
+    assert plant_design(FULL, plant, drawn=6, seed=4) != design
 
 
 def test_held_out_plants_are_drawn_within_the_ranges_from_their_seed():
     unc = Uncertainty(inertia=(0.8, 1.25), coulomb_nm=(0.001, 0.003))
-    motor = PAPER_AXIS.plant.motor
-    a = draw_plants(unc, motor, 50, seed=7)
-    assert a == draw_plants(unc, motor, 50, seed=7) != draw_plants(unc, motor, 50, seed=8)
+    plant = PAPER_AXIS.plant
+    a = draw_plants(unc, plant, 50, seed=7)
+    assert a == draw_plants(unc, plant, 50, seed=7) != draw_plants(unc, plant, 50, seed=8)
     assert all(0.8 <= v.inertia <= 1.25 and 0.001 <= v.coulomb_offset_nm <= 0.003 for v in a)
-    assert draw_plants(EXACT, motor, 50, seed=7) == sensitivity_variants()
+    assert draw_plants(EXACT, plant, 50, seed=7) == sensitivity_variants()
     assert [v.inertia for v in sensitivity_variants()] == [0.95, 1.05]
 
 
@@ -223,7 +223,7 @@ def test_evaluate_takes_an_axis_a_plant_count_and_any_tuner():
     tuner = load_tuner(None, axis)  # the shipped settings model, on this axis
     ev = evaluate([TUNED, tuner, "paper"], test, axis=axis, plants=4, plant_seed=9)
     assert ev.across is not None and ev.across.seed == 9 and len(ev.across.plants) == 4
-    assert ev.across.plants == draw_plants(axis.uncertainty, axis.plant.motor, 4, 9)
+    assert ev.across.plants == draw_plants(axis.uncertainty, axis.plant, 4, 9)
     by_hand = evaluate([tuner(sc) for sc in test], test, axis=axis, plants=ev.across.plants)
     assert by_hand.across is not None
     assert np.array_equal(ev.cost[1], np.diag(by_hand.cost))

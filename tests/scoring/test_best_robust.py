@@ -28,7 +28,7 @@ def test_the_lazy_check_picks_as_ranking_every_score(seed):
     near = rng.uniform(-0.25, 0.25, size=(12, 4)) + np.array([0.2, 0.2, 0.3, 0.9])
     cands = [from_action(np.clip(a, -1, 1)) for a in near] + [Settings()]
     wide = Uncertainty(inertia=(0.7, 1.4), coulomb_nm=(0.0, 0.01))
-    for plants in ((), plant_design(wide, PAPER_PLANT.motor)):
+    for plants in ((), plant_design(wide, PAPER_PLANT)):
         for chunk in (1, 4, 50):
             got = best_robust(cands, move, plants, chunk=chunk)
             assert got == _ranked(cands, move, plants), (plants, chunk)
@@ -45,7 +45,7 @@ def test_one_robust_rule_evaluate_and_score_robust_agree():
     rng = np.random.default_rng(5)
     cands = [from_action(a) for a in rng.uniform(-0.6, 0.9, size=(6, 4))]
     moves = [random_scenario(s, "test") for s in range(3)]
-    plants = plant_design(Uncertainty(inertia=(0.8, 1.25)), PAPER_PLANT.motor)
+    plants = plant_design(Uncertainty(inertia=(0.8, 1.25)), PAPER_PLANT)
     ev = evaluate(cands, moves, axis=PAPER_AXIS, plants=plants)
     robust = ev.robust_constraints
     assert robust.shape == ev.constraints.shape

@@ -367,20 +367,11 @@ NOMINAL = PlantVariant()
 """The modelled plant."""
 
 
-def _variant(unc: Uncertainty, base: Motor | Plant, u: np.ndarray) -> PlantVariant:
+def _variant(unc: Uncertainty, plant: Plant, u: np.ndarray) -> PlantVariant:
     """The variant at unit-cube point ``u`` (one coordinate per uncertain range, in the
-    order of :meth:`Uncertainty.ranges`), offsets taken from ``base`` (a plant, or its
-    motor where the load's friction is not uncertain)."""
-    if isinstance(base, Plant):
-        motor = base.motor
-        load_c = base.transmission.load_coulomb_nm if base.transmission is not None else 0.0
-    else:
-        motor, load_c = base, 0.0
-        if unc.load_coulomb_nm is not None:
-            raise ValueError(
-                f"uncertainty.load_coulomb_nm={list(unc.load_coulomb_nm)!r} needs the modelled "
-                "plant (its transmission's load_coulomb_nm), not only its motor"
-            )
+    order of :meth:`Uncertainty.ranges`), offsets taken from the modelled ``plant``."""
+    motor = plant.motor
+    load_c = plant.transmission.load_coulomb_nm if plant.transmission is not None else 0.0
     values = dict(zip(unc.ranges(), (float(x) for x in u), strict=True))
     at = {k: lo + values[k] * (hi - lo) for k, (lo, hi) in unc.ranges().items()}
     return PlantVariant(
@@ -406,7 +397,7 @@ def _stratified(n: int, d: int, rng: np.random.Generator) -> np.ndarray:
     return pts
 
 
-def draw_plant(unc: Uncertainty, motor: Motor | Plant, rng: np.random.Generator) -> PlantVariant:
+def draw_plant(unc: Uncertainty, plant: Plant, rng: np.random.Generator) -> PlantVariant:
     """One true plant drawn uniformly within the ranges from a generator (an env's
     episode; :data:`NOMINAL` where nothing is uncertain, drawing nothing).
 
@@ -414,9 +405,8 @@ def draw_plant(unc: Uncertainty, motor: Motor | Plant, rng: np.random.Generator)
     ----------
     unc : Uncertainty
         The axis's uncertainty.
-    motor : Motor or Plant
-        The axis's modelled plant, or its motor where the load's friction is not
-        uncertain (absolute ranges become offsets from them).
+    plant : Plant
+        The axis's modelled plant (absolute ranges become offsets from it).
     rng : numpy.random.Generator
         The generator (an env's ``np_random``).
 
@@ -427,11 +417,11 @@ def draw_plant(unc: Uncertainty, motor: Motor | Plant, rng: np.random.Generator)
     """
     if unc.exact:
         return NOMINAL
-    return _variant(unc, motor, rng.random(len(unc.ranges())))
+    return _variant(unc, plant, rng.random(len(unc.ranges())))
 
 
 def plant_design(
-    unc: Uncertainty, motor: Motor | Plant, drawn: int = DESIGN_DRAWN, seed: int = DESIGN_SEED
+    unc: Uncertainty, plant: Plant, drawn: int = DESIGN_DRAWN, seed: int = DESIGN_SEED
 ) -> tuple[PlantVariant, ...]:
     """The true plants a tuner must stay feasible on: every corner of the ranges, then
     ``drawn`` stratified points inside them.
@@ -440,9 +430,8 @@ def plant_design(
     ----------
     unc : Uncertainty
         The axis's uncertainty; exact gives no variant.
-    motor : Motor or Plant
-        The axis's modelled plant, or its motor where the load's friction is not
-        uncertain (absolute ranges become offsets from them).
+    plant : Plant
+        The axis's modelled plant (absolute ranges become offsets from it).
     drawn : int
         Points drawn inside the ranges, ≥ 0.
     seed : int
@@ -460,13 +449,13 @@ def plant_design(
         return ()
     corners = [np.array(c, float) for c in itertools.product((0.0, 1.0), repeat=d)]
     inner = list(_stratified(drawn, d, np.random.default_rng([seed, 1]))) if drawn else []
-    out = [_variant(unc, motor, u) for u in [*corners, *inner]]
+    out = [_variant(unc, plant, u) for u in [*corners, *inner]]
     return tuple(dict.fromkeys(v for v in out if not v.nominal))
 
 
 def draw_plants(
     unc: Uncertainty,
-    motor: Motor | Plant,
+    plant: Plant,
     count: int = VERDICT_PLANTS,
     seed: int = VERDICT_PLANT_SEED,
 ) -> tuple[PlantVariant, ...]:
@@ -476,9 +465,8 @@ def draw_plants(
     ----------
     unc : Uncertainty
         The axis's uncertainty; exact gives :func:`sensitivity_variants` instead.
-    motor : Motor or Plant
-        The axis's modelled plant, or its motor where the load's friction is not
-        uncertain (absolute ranges become offsets from them).
+    plant : Plant
+        The axis's modelled plant (absolute ranges become offsets from it).
     count : int
         How many, ≥ 1.
     seed : int
@@ -494,7 +482,7 @@ def draw_plants(
         return sensitivity_variants()
     d = len(unc.ranges())
     u = np.random.default_rng([seed, 2]).random((count, d))
-    return tuple(_variant(unc, motor, row) for row in u)
+    return tuple(_variant(unc, plant, row) for row in u)
 
 
 def sensitivity_variants() -> tuple[PlantVariant, ...]:
