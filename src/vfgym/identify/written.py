@@ -175,8 +175,7 @@ def _spring_ranges(
     ):  # fmt: skip
         if value <= 0.0:
             continue
-        lo = 1.0 - MARGIN * (1.0 - span[0] / value)
-        hi = 1.0 + MARGIN * (span[1] / value - 1.0)
+        lo, hi = (x / value for x in _widened(value, *span))
         s = getattr(stated, name)
         if s is not None and was > 0.0:
             lo, hi = min(lo, s[0] * was / value), max(hi, s[1] * was / value)
@@ -190,9 +189,14 @@ def _spring_ranges(
 
 def _widen(e: Estimate) -> tuple[float, float]:
     """The estimate's interval times :data:`MARGIN`, at least its resolution each side."""
-    lo = e.value - max(MARGIN * (e.value - e.low), e.resolution)
-    hi = e.value + max(MARGIN * (e.high - e.value), e.resolution)
-    return lo, hi
+    return _widened(e.value, e.low, e.high, e.resolution)
+
+
+def _widened(value: float, low: float, high: float, resolution: float = 0.0) -> tuple[float, float]:
+    """The interval ``[low, high]`` around ``value`` times :data:`MARGIN` each side, at
+    least ``resolution``."""
+    lo = value - max(MARGIN * (value - low), resolution)
+    return lo, value + max(MARGIN * (high - value), resolution)
 
 
 def _captured(fit: Fit, profile: Profile | None) -> dict[str, tuple[float, float]]:
