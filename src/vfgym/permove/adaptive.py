@@ -48,7 +48,10 @@ checked it. Two checks, both in the move's table:
   and breaks a limit on the other, the plants where it holds found by bisecting towards
   its boundary (a continuation tends to break a limit first where the base only just
   keeps it; feasibility is not monotone in the plant, so the shadows alone leave gaps;
-  :mod:`vfgym.permove._shadows`). Where it breaks a limit on one that the base holds,
+  :mod:`vfgym.permove._shadows`); and on the in-range plants the thresholds are
+  calibrated on that are told as its plant (with several uncertain quantities a
+  neighbour's check leaves much of the range between design plants unchecked). Where it
+  breaks a limit on one that the base holds,
   the cheapest that breaks none there of the search's other candidates, of gentler
   versions of its own (scaled towards the base, checked on its plants as the search
   checks) and of a second search on its plants and those checked plants (none dearer
@@ -62,7 +65,7 @@ checked it. Two checks, both in the move's table:
 Each move's outcome is recorded in :attr:`EstimatingScheduler.runs`
 (:meth:`EstimatingScheduler.fallbacks` counts them). In range the first check fires only
 beyond the calibration plants' spread, and the second changes a continuation only where
-a shadow plant breaks it.
+a shadow plant or an in-range calibration plant told as its plant breaks it.
 """
 
 from __future__ import annotations
@@ -443,8 +446,9 @@ def _outside(
     calib = calibration_plants(design, CALIBRATION_PLANTS)
     calib += [q for i in range(len(design)) for q in check_plants(design, i, o.neighbours,
                                                                    o.probes)]  # fmt: skip
+    sigs = {q: _signature(env, q, hold) for q in calib}
     for q in calib:
-        told = table.tell(_signature(env, q, hold))
+        told = table.tell(sigs[q])
         i = conts.index(told.continuation)
         far[i] = max(far[i], told.residual)
     conts = tuple(replace(c, threshold=o.margin * far[i]) for i, c in enumerate(conts))
@@ -458,11 +462,13 @@ def _outside(
 
     lines = shadow_lines(design, axis.plant.motor.rated_torque_nm, o.shadow)
     bounds = {line: boundary_plants(line, holds, BISECTIONS) for line in lines}
-    checked = {q: None for line in lines for q in (*line[1:], *bounds[line])}
+    # the in-range plants the thresholds were calibrated on, then the shadows: a
+    # continuation is checked on every plant told as its own
+    checked = dict.fromkeys([*calib, *(q for line in lines for q in (*line[1:], *bounds[line]))])
     mine: list[list[PlantVariant]] = [[] for _ in conts]  # told as each, the base holding
     residual: dict[PlantVariant, float] = {}
     for q in checked:
-        told = table.tell(_signature(env, q, hold))
+        told = table.tell(sigs[q] if q in sigs else _signature(env, q, hold))
         i = conts.index(told.continuation)
         if told.fits and np.any(conts[i].action != 0.0) and holds(q):
             mine[i].append(q)
