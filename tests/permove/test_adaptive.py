@@ -5,6 +5,7 @@ themselves."""
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import replace
 from pathlib import Path
 
@@ -188,6 +189,45 @@ def test_on_every_in_range_plant_it_calibrated_on_it_keeps_the_limits_the_base_k
         a = evaluate([sched.table(sc).base, sched], [sc], axis=axis, plants=calib).across
         broke = [q for j, q in enumerate(calib) if a.feasible[0, j, 0] and not a.feasible[1, j, 0]]
         assert not broke, (sc.name, broke)
+
+
+def test_a_continuation_an_in_range_plant_told_as_its_plant_breaks_is_replaced(setup, monkeypatch):
+    """test-0 on loads-uncertain, the shadows left out: a correction that keeps every limit
+    on its design plant but breaks one on an in-range calibration plant told as that
+    plant, where the base holds, is replaced by one that plant does not break, or the base
+    is held."""
+    axis, sched, moves = setup
+    sc = moves[0]
+    table = sched.table(sc)
+    env, hold = sched._tables[sc.name][0], table.hold
+    monkeypatch.setattr(adaptive, "shadow_lines", lambda *args: [])  # the in-range check alone
+    calib = adaptive.calibration_plants(sched.design, adaptive.CALIBRATION_PLANTS)
+    told = {q: table.tell(adaptive._signature(env, q, hold)) for q in calib}
+    conts = list(table.continuations)
+
+    def forged_break() -> tuple[int, np.ndarray, PlantVariant]:
+        for x in itertools.product((-1.0, 0.0, 1.0), (0.0,), (-1.0, 0.0, 1.0), (-1.0, 0.0, 1.0)):
+            a = np.array(x)
+            for i, c in enumerate(conts):
+                if not a.any() or not adaptive._holds(env, c.plant, a, 1, hold):
+                    continue
+                for q, t in told.items():
+                    mine = t.continuation is c and t.fits and q != c.plant
+                    base_holds = mine and adaptive._holds(env, q, np.zeros(4), 1, hold)
+                    if base_holds and not adaptive._holds(env, q, a, 1, hold):
+                        return i, a, q
+        raise AssertionError("no correction of the grid breaks an in-range plant")
+
+    i, bad, q = forged_break()
+    conts[i] = replace(conts[i], action=bad, ramp=1, searched_action=None, shadows=(), trusted=0.0)
+    forged = replace(table, continuations=tuple(conts))
+    cands = [[(c.action, c.ramp, c.cost)] for c in conts]
+    mended = adaptive._outside(env, forged, cands, axis, sched.options).continuations[i]
+    if mended.shadows:
+        assert q in mended.shadows
+    else:
+        assert mended.safer and np.array_equal(mended.searched_action, bad)
+        assert adaptive._holds(env, q, mended.action, mended.ramp, hold)
 
 
 def test_a_response_nearer_than_every_plant_that_breaks_the_cheapest_still_runs_it(setup):
