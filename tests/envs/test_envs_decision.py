@@ -18,7 +18,14 @@ from test_envs_vector import compare_runs
 import vfgym.envs  # noqa: F401  (registers the envs)
 from vfgym import load_axis
 from vfgym.axis import NOMINAL, PlantVariant
-from vfgym.envs._decision import N_SIGNATURE, REWARD_SCALE, check_plants, ramp_of
+from vfgym.envs._decision import (
+    CALIBRATION_PLANTS,
+    N_SIGNATURE,
+    REWARD_SCALE,
+    calibration_plants,
+    check_plants,
+    ramp_of,
+)
 from vfgym.envs.servo import VFServoEnv
 
 AXIS = Path(__file__).resolve().parents[2] / "experiments" / "axes" / "loads-uncertain.yaml"
@@ -85,8 +92,9 @@ def test_the_zero_action_is_the_base_exactly():
 
 def test_the_shield_checks_the_told_plants_and_never_the_true_one():
     """Whether a correction is shielded is what its runs on the told design plant, its
-    neighbours and the plants between say, against the base's, as the per-interval env
-    gives them: the same for two true plants told alike, whatever they give."""
+    neighbours, the plants between and the in-range grid's plants told as it say, against
+    the base's, as the per-interval env gives them: the same for two true plants told
+    alike, whatever they give."""
     axis = load_axis(AXIS)
     kw = {**ONCE, "axis": axis, "interval_s": 0.001}
     env = VFServoEnv(**kw, shield=True)
@@ -102,10 +110,17 @@ def test_the_shield_checks_the_told_plants_and_never_the_true_one():
         true = PlantVariant(inertia=float(rng.uniform(0.8, 1.25)))
         obs, _ = env.reset(options={"scenario_seed": seed, "plant": true})
         ramp = ramp_of(-0.8, -(-env.episode.command.size // 140) - hold)
-        told = int(np.argmin([np.sum((s - obs[: hold * N_SIGNATURE]) ** 2) for s in sigs]))
+
+        def told_as(sig: np.ndarray, sigs: list = sigs) -> int:
+            return int(np.argmin([np.sum((s - sig) ** 2) for s in sigs]))
+
+        told = told_as(obs[: hold * N_SIGNATURE])
+        grid = [q for q in calibration_plants(design, CALIBRATION_PLANTS) if told_as(
+            interval_episode(every, {"scenario_seed": seed, "plant": q}, hold, 1,
+                             np.zeros(4))[0]) == told]  # fmt: skip
         action = rng.uniform(-0.6, 0.6, 4).astype(np.float32)
         breaks = False
-        for p in [design[told], *check_plants(design, told, 2, 2)]:
+        for p in [design[told], *check_plants(design, told, 2, 2), *grid]:
             opts = {"scenario_seed": seed, "plant": p}
             _, cand = interval_episode(every, opts, hold, ramp, action)
             _, base = interval_episode(every, opts, hold, ramp, np.zeros(4))

@@ -32,7 +32,9 @@ _ENTRY_POINTS = {
 }
 _LAZY = {
     "EnvConfig": "vfgym.envs._common",
+    "CALIBRATION_PLANTS": "vfgym.envs._decision",
     "N_SIGNATURE": "vfgym.envs._decision",
+    "calibration_plants": "vfgym.envs._decision",
     "check_plants": "vfgym.envs._decision",
     "plant_spans": "vfgym.envs._decision",
     "VFTuneEnv": "vfgym.envs.tune",
@@ -65,6 +67,7 @@ def __getattr__(name: str) -> Any:
 register_envs()
 
 __all__ = [
+    "CALIBRATION_PLANTS",
     "ENV_IDS",
     "N_SIGNATURE",
     "EnvConfig",
@@ -72,6 +75,7 @@ __all__ = [
     "VFServoVectorEnv",
     "VFTuneEnv",
     "VFTuneVectorEnv",
+    "calibration_plants",
     "check_plants",
     "plant_spans",
     "register_envs",

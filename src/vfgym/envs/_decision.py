@@ -29,7 +29,10 @@ it): the design plant whose hold response is nearest to the one seen is *told* (
 exactly known axis, its one plant); the
 candidate runs on it, on its nearest design plants (each quantity over its range) and on
 plants on the way to them, up to halfway (:func:`check_plants`), and where it breaks a limit
-the base holds on one of them the base is run instead. The true plant is never read.
+the base holds on one of them the base is run instead; and on the in-range plants of a grid
+over the ranges (:func:`calibration_plants`) whose hold responses are told as the same
+design plant (with three uncertain quantities the neighbours' checks leave much of a
+design plant's cell unchecked). The true plant is never read.
 
 Every continuation of a step (the candidate and the base on the true plant and on each
 checked plant) starts from its plant's state at the end of the hold and runs in the
@@ -67,6 +70,11 @@ SHIELD_NEIGHBOURS = 2
 scheduler's search, :class:`vfgym.permove.adaptive.AdaptiveOptions`)."""
 SHIELD_PROBES = 2
 """... and this many plants on the way to each, evenly up to halfway."""
+CALIBRATION_PLANTS = 81
+"""In-range plants on a grid over the design's ranges (:func:`calibration_plants`: at most
+this many, 9 levels a quantity for two uncertain quantities, 81 for one, 4 for three ...),
+where the scheduler's thresholds are calibrated and, told as a design plant, a correction
+for it is checked (the shield, and the scheduler's table)."""
 CACHE_MOVES = 1024
 """Moves whose checked plants' hold states are remembered (a training pool's)."""
 
@@ -165,6 +173,33 @@ def check_plants(
     ]
 
 
+def calibration_plants(design: tuple[PlantVariant, ...], count: int) -> list[PlantVariant]:
+    """In-range plants on a grid over the design's ranges (at most ``count``, at least 2
+    levels a quantity): where the scheduler's fit thresholds are measured, and, each told
+    as its nearest design plant, where a correction for that plant is checked.
+
+    Parameters
+    ----------
+    design : tuple of PlantVariant
+        The axis's design plants (their corners span the ranges).
+    count : int
+        The most plants.
+
+    Returns
+    -------
+    list of PlantVariant
+        The grid's plants.
+    """
+    span = plant_spans(design)
+    lo = {k: min(getattr(p, k) for p in design) for k in span}
+    levels = max(2, math.floor(count ** (1.0 / max(1, len(span))) + 1e-9))
+    out = []
+    for idx in np.ndindex(*(levels,) * len(span)):
+        x = {k: lo[k] + w * j / (levels - 1) for (k, w), j in zip(span.items(), idx, strict=True)}
+        out.append(replace(design[0], **x))
+    return out
+
+
 def ramp_of(x: float, longest: int) -> int:
     """The ramp's length in control intervals for an action's fifth entry ``x`` in
     [-1, 1]: 1 (a jump) at -1 to ``longest`` at +1, rounded.
@@ -212,6 +247,13 @@ J.guard_cache(continue_move, (B, K, L))
 # --- one env's decisions ---------------------------------------------------------------
 
 
+class _Plants(dict):
+    """One move's checked plants' hold states (plant → :class:`_Held`), and, once worked
+    out, the calibration plants told as each design plant."""
+
+    told_as: list[list[PlantVariant]] | None = None
+
+
 class _Held:
     """One plant's state at the end of the hold on one move: workspace row, ring, the
     episode (for scoring) and the hold's response, with the base's outcome from there once
@@ -252,6 +294,10 @@ class DecisionCore:
                 check_plants(self.design, i, SHIELD_NEIGHBOURS, SHIELD_PROBES)
                 for i in range(len(self.design))
             ]
+        # the in-range plants a correction is also checked on, each where told as its own
+        self.calib: list[PlantVariant] = []
+        if c.shield and len(self.design) > 1:
+            self.calib = calibration_plants(self.design, CALIBRATION_PLANTS)
         self.spans = plant_spans(self.design) if len(self.design) > 1 else {}
         self.cache: OrderedDict = OrderedDict() if cache is None else cache
         self._obs32 = np.zeros(core.n_obs, dtype=np.float32)
@@ -324,13 +370,13 @@ class DecisionCore:
         return max(1, -(-n // m) - self.hold)
 
     # -- the shield's plants -----------------------------------------------------------
-    def _move_cache(self, ep: Episode) -> dict[PlantVariant, _Held]:
+    def _move_cache(self, ep: Episode) -> _Plants:
         """The move's checked plants' hold states (the design plants' first, whose
         responses tell the plant)."""
         key = ep.scenario
         held = self.cache.get(key)
         if held is None:
-            held = {}
+            held = _Plants()
             for p in self.design:
                 self._held(ep, held, p)
             self.cache[key] = held
@@ -340,7 +386,7 @@ class DecisionCore:
             self.cache.move_to_end(key)
         return held
 
-    def _held(self, ep: Episode, held: dict[PlantVariant, _Held], p: PlantVariant) -> _Held:
+    def _held(self, ep: Episode, held: _Plants, p: PlantVariant) -> _Held:
         """Plant ``p``'s state at the hold's end on ``ep``'s move, remembered in ``held``."""
         if p not in held:
             src = self.core.source
@@ -352,9 +398,24 @@ class DecisionCore:
 
     def told(self) -> int:
         """The design plant whose hold response is nearest to the one seen."""
-        held = self._move_cache(self.episode())
-        d = [float(np.sum((held[p].signature - self.signature) ** 2)) for p in self.design]
+        return self._nearest(self._move_cache(self.episode()), self.signature)
+
+    def _nearest(self, held: _Plants, signature: np.ndarray) -> int:
+        """The design plant whose hold response is nearest to ``signature``."""
+        d = [float(np.sum((held[p].signature - signature) ** 2)) for p in self.design]
         return int(np.argmin(d))
+
+    def _told_as(self, ep: Episode, held: _Plants, i: int) -> list[PlantVariant]:
+        """The calibration plants told as design plant ``i`` on ``ep``'s move, beyond the
+        plants :func:`check_plants` gives it (worked out once a move)."""
+        if held.told_as is None:
+            out: list[list[PlantVariant]] = [[] for _ in self.design]
+            for q in self.calib:
+                j = self._nearest(held, self._held(ep, held, q).signature)
+                if q != self.design[j] and q not in self.checks[j]:
+                    out[j].append(q)
+            held.told_as = out
+        return held.told_as[i]
 
     # -- the decision ------------------------------------------------------------------
     def _outcome(self, w: np.ndarray, ep: Episode) -> tuple[float, bool, Any]:
@@ -385,7 +446,7 @@ class DecisionCore:
         if self.shield:
             told = self.told()
             held = self._move_cache(ep)
-            for p in [self.design[told], *self.checks[told]]:
+            for p in [self.design[told], *self.checks[told], *self._told_as(ep, held, told)]:
                 h = self._held(ep, held, p)
                 checked.append(h)
                 runs.append((h.w, h.ring, action))

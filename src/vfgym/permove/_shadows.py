@@ -1,6 +1,6 @@
-"""The plants :class:`vfgym.permove.adaptive.EstimatingScheduler` checks a move's table on,
-beside its design plants: a grid within the ranges (where its fit thresholds are
-calibrated) and *shadow* plants just outside them (where its continuations are checked),
+"""The plants :class:`vfgym.permove.adaptive.EstimatingScheduler` checks a move's table on
+outside the ranges, beside its design plants and the grid within them
+(:func:`vfgym.envs.calibration_plants`): *shadow* plants just outside them,
 with the points between shadows where the base's feasibility changes, located by
 bisection (feasibility is not monotone in the plant, and a continuation tends to break a
 limit first where the base only just keeps it)."""
@@ -8,14 +8,10 @@ limit first where the base only just keeps it)."""
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Callable
 from dataclasses import replace
 
-import numpy as np
-
 from vfgym.axis import PlantVariant
-from vfgym.envs import plant_spans
 
 SHADOWED = ("inertia", "torque_per_count", "load_offset_nm")
 """The quantities a shadow plant moves outside their ranges."""
@@ -24,32 +20,6 @@ SHADOW_LEVELS = (0.125, 0.25, 0.5, 1.0)
 BISECTIONS = 4
 """Halvings between two neighbouring points of a shadow line where the base holds on one and
 breaks a limit on the other (:func:`boundary_plants`)."""
-
-
-def calibration_plants(design: tuple[PlantVariant, ...], count: int) -> list[PlantVariant]:
-    """In-range plants on a grid over the design's ranges (at most ``count``, at least 2
-    levels a quantity), where the design's thresholds are measured.
-
-    Parameters
-    ----------
-    design : tuple of PlantVariant
-        The axis's design plants (their corners span the ranges).
-    count : int
-        The most plants.
-
-    Returns
-    -------
-    list of PlantVariant
-        The grid's plants.
-    """
-    span = plant_spans(design)
-    lo = {k: min(getattr(p, k) for p in design) for k in span}
-    levels = max(2, math.floor(count ** (1.0 / max(1, len(span))) + 1e-9))
-    out = []
-    for idx in np.ndindex(*(levels,) * len(span)):
-        x = {k: lo[k] + w * j / (levels - 1) for (k, w), j in zip(span.items(), idx, strict=True)}
-        out.append(replace(design[0], **x))
-    return out
 
 
 def shadow_lines(
@@ -155,7 +125,6 @@ __all__ = [
     "SHADOWED",
     "SHADOW_LEVELS",
     "boundary_plants",
-    "calibration_plants",
     "shadow_lines",
     "shadow_plants",
 ]

@@ -78,7 +78,7 @@ import numpy as np
 
 from vfgym._validate import check_int, check_real
 from vfgym.axis import Axis, PlantVariant
-from vfgym.envs import N_SIGNATURE, check_plants
+from vfgym.envs import CALIBRATION_PLANTS, N_SIGNATURE, calibration_plants, check_plants
 from vfgym.envs.servo import VFServoEnv
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
@@ -88,7 +88,6 @@ from vfgym.permove._shadows import (
     SHADOW_LEVELS,
     SHADOWED,
     boundary_plants,
-    calibration_plants,
     shadow_lines,
     shadow_plants,
 )
@@ -98,9 +97,6 @@ from vfgym.scoring import Scheduler
 SCALE = (1.0, 0.0, 1.0, 1.0)
 """Residual scales (value, L/value, k, Ts/Tf): ±1 moves a coordinate half its range; L/value
 held at the base's."""
-CALIBRATION_PLANTS = 81
-"""In-range plants a table's thresholds are calibrated on: the ranges' grid of at most this
-many (9 levels a quantity for two uncertain quantities, 81 for one, 4 for three ...)."""
 RUNNERS_UP = 24
 """Searched candidates (the cheapest feasible first) tried in turn where a shadow plant
 breaks a continuation."""
