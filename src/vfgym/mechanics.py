@@ -186,6 +186,11 @@ that the tick resolves it and Coulomb friction's events, at tick boundaries, sta
 tenth of its period (docs/model.md §3.1)."""
 
 
+def _reduced_inertia(jm: float, jl: float) -> float:
+    """The two-mass reduced inertia μ = J_M·J_L/(J_M + J_L) (kg·m²)."""
+    return jm * jl / (jm + jl)
+
+
 @dataclass(frozen=True)
 class Transmission:
     """A compliant transmission (belt, screw, coupling): the load J_L beyond a spring K_S
@@ -266,7 +271,7 @@ class Transmission:
         jm = check_real("motor_inertia_kgm2", motor_inertia_kgm2, 0.0, lo_open=True)
         w = 2.0 * math.pi * check_real("resonance_hz", resonance_hz, 0.0, lo_open=True)
         zeta = check_real("damping_ratio", damping_ratio, 0.0, 1.0)
-        mu = jm * jl / (jm + jl)
+        mu = _reduced_inertia(jm, jl)
         return cls(jl, w * w * mu, 2.0 * zeta * mu * w, load_coulomb_nm, travel_mm_per_rad)
 
     def resonance_hz(self, motor_inertia_kgm2: float) -> float:
@@ -299,8 +304,7 @@ class Transmission:
         float
             ζ (0 for an undamped spring).
         """
-        jm, jl = motor_inertia_kgm2, self.load_inertia_kgm2
-        mu = jm * jl / (jm + jl)
+        mu = _reduced_inertia(motor_inertia_kgm2, self.load_inertia_kgm2)
         return self.damping_nm_s_rad / (2.0 * mu * math.sqrt(self.stiffness_nm_rad / mu))
 
     @property
