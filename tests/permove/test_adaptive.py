@@ -14,7 +14,6 @@ import pytest
 
 from vfgym import PAPER_AXIS, evaluate, load_axis
 from vfgym.axis import VERDICT_PLANT_SEED, PlantVariant, draw_plants
-from vfgym.envs import check_plants
 from vfgym.permove import adaptive, load_settings_model
 from vfgym.permove.adaptive import AdaptiveOptions, EstimatingScheduler
 
@@ -174,21 +173,6 @@ def test_a_plant_between_shadows_where_the_base_just_holds_is_checked(setup, mon
         assert run.told == c.plant and run.residual <= c.threshold, run
         ok.append(tuple(bool(x) for x in a.feasible[:, 0, 0]))
     assert ok == [(True, False), (True, True)], ok
-
-
-def test_on_every_in_range_plant_it_calibrated_on_it_keeps_the_limits_the_base_keeps(setup):
-    """A continuation is checked on the in-range plants told as its plant, not only on its
-    neighbours: on the calibration grid (and its check plants) the scheduler breaks no limit
-    the base keeps."""
-    axis, sched, moves = setup
-    design, o = sched.design, sched.options
-    calib = adaptive.calibration_plants(design, adaptive.CALIBRATION_PLANTS)
-    calib += [q for i in range(len(design)) for q in check_plants(design, i, o.neighbours,
-                                                                   o.probes)]  # fmt: skip
-    for sc in moves:
-        a = evaluate([sched.table(sc).base, sched], [sc], axis=axis, plants=calib).across
-        broke = [q for j, q in enumerate(calib) if a.feasible[0, j, 0] and not a.feasible[1, j, 0]]
-        assert not broke, (sc.name, broke)
 
 
 def test_a_continuation_an_in_range_plant_told_as_its_plant_breaks_is_replaced(setup, monkeypatch):
