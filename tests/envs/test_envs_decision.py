@@ -118,9 +118,14 @@ def test_the_shield_checks_the_told_plants_and_never_the_true_one():
         grid = [q for q in calibration_plants(design, CALIBRATION_PLANTS) if told_as(
             interval_episode(every, {"scenario_seed": seed, "plant": q}, hold, 1,
                              np.zeros(4))[0]) == told]  # fmt: skip
+        checks = [design[told], *check_plants(design, told, 2, 2)]
+        dc = env.decision  # the grid's plants it checks besides: those the oracle tells alike
+        assert dc._told_as(env.episode, dc._move_cache(env.episode), told) == [
+            q for q in grid if q not in checks
+        ]
         action = rng.uniform(-0.6, 0.6, 4).astype(np.float32)
         breaks = False
-        for p in [design[told], *check_plants(design, told, 2, 2), *grid]:
+        for p in [*checks, *grid]:
             opts = {"scenario_seed": seed, "plant": p}
             _, cand = interval_episode(every, opts, hold, ramp, action)
             _, base = interval_episode(every, opts, hold, ramp, np.zeros(4))
