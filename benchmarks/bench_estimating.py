@@ -61,6 +61,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--oracle", default=None, help="a bench_adaptive.py --out folder")
     p.add_argument("--outside", action="store_true", help="also plants outside the ranges")
     p.add_argument("--levels", default="0.02,0.05,0.1", help="how far outside (--outside)")
+    p.add_argument("--count-margin", action="store_true",
+                   help="AdaptiveOptions.count_margin: a count inside the window")  # fmt: skip
     args = p.parse_args(argv)
     axis = load_axis(args.axis)
     test, variants = pairs(axis, args.moves, args.plants, args.plant_seed)
@@ -71,6 +73,7 @@ def main(argv: list[str] | None = None) -> int:
         neighbours=args.neighbours,
         probes=args.probes,
         seed=args.seed,
+        count_margin=args.count_margin,
     )
     sched = EstimatingScheduler(axis, load_settings_model(args.model), opts)
     base = load_tuner(args.model, axis, warn=print)

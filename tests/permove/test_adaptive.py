@@ -14,7 +14,7 @@ import pytest
 
 from vfgym import PAPER_AXIS, evaluate, load_axis
 from vfgym.axis import VERDICT_PLANT_SEED, PlantVariant, draw_plants
-from vfgym.permove import adaptive, load_settings_model
+from vfgym.permove import _episodes, adaptive, load_settings_model
 from vfgym.permove.adaptive import AdaptiveOptions, EstimatingScheduler
 
 AXIS = Path(__file__).resolve().parents[2] / "experiments" / "axes" / "loads-uncertain.yaml"
@@ -119,7 +119,7 @@ def test_a_continuation_a_shadow_plant_breaks_is_replaced_or_the_base_held(setup
     mended = fixed.continuations[i]
     assert mended.safer and np.array_equal(mended.searched_action, bad)
     assert not np.array_equal(mended.action, bad)
-    assert adaptive._holds(env, shadow, mended.action, mended.ramp, table.hold)
+    assert _episodes._holds(env, shadow, mended.action, mended.ramp, table.hold)
     monkeypatch.setattr(adaptive, "GENTLER", ())  # no gentler version of it to fall back on
     nothing = [(np.zeros(4), 1, float(good.cost))]  # ... and the search again finds none
     monkeypatch.setattr(adaptive, "_search", lambda *args: nothing)
@@ -157,8 +157,8 @@ def test_a_plant_between_shadows_where_the_base_just_holds_is_checked(setup, mon
     forged = replace(table, continuations=tuple(searched))
     cands = [[(c.action, c.ramp, c.cost)] for c in searched]
     c = searched[i]
-    assert adaptive._holds(env, plant, np.zeros(4), 1, table.hold)  # the base holds there
-    assert not adaptive._holds(env, plant, c.action, c.ramp, table.hold)  # the search's breaks
+    assert _episodes._holds(env, plant, np.zeros(4), 1, table.hold)  # the base holds there
+    assert not _episodes._holds(env, plant, c.action, c.ramp, table.hold)  # the search's breaks
     tables = {}
     for steps in (0, adaptive.BISECTIONS):
         monkeypatch.setattr(adaptive, "BISECTIONS", steps)
@@ -193,12 +193,12 @@ def test_a_continuation_an_in_range_plant_told_as_its_plant_breaks_is_replaced(s
         for x in itertools.product((-1.0, 0.0, 1.0), (0.0,), (-1.0, 0.0, 1.0), (-1.0, 0.0, 1.0)):
             a = np.array(x)
             for i, c in enumerate(conts):
-                if not a.any() or not adaptive._holds(env, c.plant, a, 1, hold):
+                if not a.any() or not _episodes._holds(env, c.plant, a, 1, hold):
                     continue
                 for q, t in told.items():
                     mine = t.continuation is c and t.fits and q != c.plant
-                    base_holds = mine and adaptive._holds(env, q, np.zeros(4), 1, hold)
-                    if base_holds and not adaptive._holds(env, q, a, 1, hold):
+                    base_holds = mine and _episodes._holds(env, q, np.zeros(4), 1, hold)
+                    if base_holds and not _episodes._holds(env, q, a, 1, hold):
                         return i, a, q
         raise AssertionError("no correction of the grid breaks an in-range plant")
 
@@ -211,7 +211,7 @@ def test_a_continuation_an_in_range_plant_told_as_its_plant_breaks_is_replaced(s
         assert q in mended.shadows
     else:
         assert mended.safer and np.array_equal(mended.searched_action, bad)
-        assert adaptive._holds(env, q, mended.action, mended.ramp, hold)
+        assert _episodes._holds(env, q, mended.action, mended.ramp, hold)
 
 
 def test_a_response_nearer_than_every_plant_that_breaks_the_cheapest_still_runs_it(setup):
@@ -308,8 +308,67 @@ def test_an_exact_axis_is_refused():
         ({"shadow": 0.0}, "shadow"),
         ({"shadow": 0.8}, "shadow"),
         ({"fallback": "yes"}, "fallback"),
+        ({"count_margin": 1}, "count_margin"),
     ],
 )
 def test_bad_options_name_themselves(kwargs, name):
     with pytest.raises(ValueError, match=name):
         AdaptiveOptions(**kwargs)
+
+
+def test_with_count_margin_a_continuation_that_ends_a_count_from_a_limit_is_replaced(
+    setup, monkeypatch
+):
+    """test-0 and test-1 on loads-uncertain, the shadows left out: a correction that keeps
+    every limit on the in-range calibration plants told as its plant, but on one of them
+    ends the move less than one encoder count inside the overshoot or in-position limit
+    where the base ends farther inside, is kept by the default checks (the limits alone)
+    and, with ``count_margin``, replaced or the base held: where the motor comes to rest is
+    quantised to a count, and a plant the checks cannot tell from that one may put it a
+    count farther (test-8's break, docs/results/agents.md)."""
+    axis, sched, moves = setup
+    monkeypatch.setattr(adaptive, "shadow_lines", lambda *args: [])  # the in-range check alone
+    count = 1.0 / axis.measures.in_position_counts
+    calib = adaptive.calibration_plants(sched.design, adaptive.CALIBRATION_PLANTS)
+
+    def end(env, q, a, hold):
+        act = lambda t: _episodes._ramp(a, 1, hold, t)  # noqa: E731
+        return _episodes._end(_episodes._episode(env, q, act)[0])
+
+    def forged(sc):
+        table = sched.table(sc)
+        env, hold = sched._tables[sc.name][0], table.hold
+        told = {q: table.tell(adaptive._signature(env, q, hold)) for q in calib}
+        for x in itertools.product((-1.0, -0.5, 0.5, 1.0), (0.0,), (-1.0, 0.0, 1.0), (0.0, 1.0)):
+            a = np.array(x)
+            for i, c in enumerate(table.continuations):
+                mine = [q for q, t in told.items() if t.continuation is c and t.fits]
+                ends = {q: (end(env, q, np.zeros(4), hold), end(env, q, a, hold)) for q in mine}
+                base_holds = [q for q, (b, _) in ends.items() if np.isfinite(b).all()]
+                if not base_holds or not np.isfinite(end(env, c.plant, a, hold)).all():
+                    continue
+                if any(not np.isfinite(ends[q][1]).all() for q in base_holds):
+                    continue  # a limit broken: the check of the limits alone replaces it too
+                near = [q for q in base_holds
+                        if np.any(ends[q][1] > np.maximum(ends[q][0], -count))]  # fmt: skip
+                if near:
+                    return table, env, i, a, near[0]
+        return None
+
+    found = next((f for f in map(forged, moves) if f is not None), None)
+    assert found is not None, "no correction of the grid ends a count from a limit"
+    table, env, i, bad, q = found
+    conts = list(table.continuations)
+    conts[i] = replace(conts[i], action=bad, ramp=1, searched_action=None, shadows=(), trusted=0.0)
+    table = replace(table, continuations=tuple(conts))
+    cands = [[(c.action, c.ramp, c.cost)] for c in conts]
+    strict = replace(sched.options, count_margin=True)
+    mended = adaptive._outside(env, table, cands, axis, strict).continuations[i]
+    if mended.shadows:
+        assert q in mended.shadows
+    else:
+        assert mended.safer and np.array_equal(mended.searched_action, bad)
+        base = end(env, q, np.zeros(4), table.hold)
+        assert _episodes._keeps(env, q, mended.action, mended.ramp, table.hold, base, count)
+    kept = adaptive._outside(env, table, cands, axis, sched.options).continuations[i]
+    assert not kept.shadows and not kept.safer and np.array_equal(kept.action, bad)

@@ -28,6 +28,8 @@ class SearchOptions(Protocol):
     def seed(self) -> int: ...
 
 
+END_CONSTRAINTS = ("overshoot", "arrival")
+"""The constraints settled where the move ends (:data:`vfgym.scoring.CONSTRAINTS`)."""
 INFEASIBLE = 10.0
 """Added to the search's cost of a continuation that breaks a limit on one of its plants."""
 
@@ -35,6 +37,31 @@ INFEASIBLE = 10.0
 def _holds(env: VFServoEnv, plant: PlantVariant, action: np.ndarray, ramp: int, hold: int) -> bool:
     """Whether ``action``, ramped over ``ramp`` after the hold, keeps every limit on ``plant``."""
     return bool(_episode(env, plant, lambda t: _ramp(action, ramp, hold, t))[0]["feasible"])
+
+
+def _end(info: dict[str, Any]) -> np.ndarray:
+    """An episode's end-of-move constraints (:data:`END_CONSTRAINTS`), ``inf`` where it
+    breaks any limit."""
+    if not info["feasible"]:
+        return np.full(len(END_CONSTRAINTS), math.inf)
+    return np.array([info[f"constraint_{n}"] for n in END_CONSTRAINTS])
+
+
+def _keeps(
+    env: VFServoEnv,
+    plant: PlantVariant,
+    action: np.ndarray,
+    ramp: int,
+    hold: int,
+    base: np.ndarray,
+    count: float,
+) -> bool:
+    """Whether ``action`` keeps every limit on ``plant`` and ends the move at least
+    ``count`` (one encoder count in the constraints' units; 0: the limits alone) inside the
+    overshoot and in-position limits wherever the base's end (``base``: :func:`_end` of the
+    base's episode) is (``AdaptiveOptions.count_margin``)."""
+    end = _end(_episode(env, plant, lambda t: _ramp(action, ramp, hold, t))[0])
+    return bool(np.all(end <= np.maximum(base, -count)))
 
 
 def _ramp(action: np.ndarray, ramp: int, hold: int, t: int) -> np.ndarray:

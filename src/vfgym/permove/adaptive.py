@@ -51,7 +51,12 @@ checked it. Two checks, both in the move's table:
   :mod:`vfgym.permove._shadows`); and on the in-range plants the thresholds are
   calibrated on that are told as its plant (with several uncertain quantities a
   neighbour's check leaves much of the range between design plants unchecked). Where it
-  breaks a limit on one that the base holds,
+  breaks a limit on one that the base holds (with ``count_margin``, or ends the move there
+  less than one encoder count inside the overshoot or in-position limit where the base
+  ends farther inside: where the motor comes to rest is quantised to a count, and under a
+  load torque the base and a continuation rest a count apart, so a plant the checks
+  cannot tell from a checked one may put the continuation's a count beyond the window's
+  edge, the base's not),
   the cheapest that breaks none there of the search's other candidates, of gentler
   versions of its own (scaled towards the base, checked on its plants as the search
   checks) and of a second search on its plants and those checked plants (none dearer
@@ -82,7 +87,7 @@ from vfgym.envs import CALIBRATION_PLANTS, N_SIGNATURE, calibration_plants, chec
 from vfgym.envs.servo import VFServoEnv
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import Settings
-from vfgym.permove._episodes import _episode, _Found, _holds, _ramp, _search, _signature
+from vfgym.permove._episodes import _end, _episode, _Found, _keeps, _ramp, _search, _signature
 from vfgym.permove._shadows import (
     BISECTIONS,
     SHADOW_LEVELS,
@@ -137,6 +142,12 @@ class AdaptiveOptions:
         Shadow plants lie up to this far outside each range's edge (and a half, a quarter
         and an eighth of it): a share of the edge for a factor (inertia, drive gain), of the
         motor's rated torque for the load torque (0, 0.5].
+    count_margin : bool
+        Also replace a continuation that ends the move less than one encoder count inside
+        the overshoot or in-position limit on a checked plant where the base ends farther
+        inside (module doc). Off by default: it closes breaks at the base's own boundary
+        that the checks miss, at a cost in range (docs/results/agents.md, "A count inside
+        the window").
     """
 
     hold_ms: float = 2.0
@@ -149,6 +160,7 @@ class AdaptiveOptions:
     fallback: bool = True
     margin: float = 1.25
     shadow: float = 0.1
+    count_margin: bool = False
 
     def __post_init__(self) -> None:
         check_real("hold_ms", self.hold_ms, 0.0, 50.0, lo_open=True)
@@ -158,8 +170,9 @@ class AdaptiveOptions:
         check_int("neighbours", self.neighbours, 0)
         check_int("probes", self.probes, 0)
         check_int("seed", self.seed, 0)
-        if not isinstance(self.fallback, bool):
-            raise ValueError(f"fallback={self.fallback!r} must be true or false")
+        for name in ("fallback", "count_margin"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name}={getattr(self, name)!r} must be true or false")
         check_real("margin", self.margin, 1.0, math.inf)
         check_real("shadow", self.shadow, 0.0, 0.5, lo_open=True)
 
@@ -449,12 +462,21 @@ def _outside(
         far[i] = max(far[i], told.residual)
     conts = tuple(replace(c, threshold=o.margin * far[i]) for i, c in enumerate(conts))
     table = replace(table, continuations=conts)
-    base: dict[PlantVariant, bool] = {}  # where the base holds, each plant run once
+    base: dict[PlantVariant, np.ndarray] = {}  # the base's end on each plant, run once
+    count = 0.0  # with count_margin, one encoder count in the end constraints' units
+    if o.count_margin:
+        count = 1.0 / axis.measures.in_position_counts if axis.measures.in_position_counts else 1.0
+
+    def end(q: PlantVariant) -> np.ndarray:
+        if q not in base:
+            base[q] = _end(_episode(env, q, lambda t: np.zeros(4))[0])
+        return base[q]
 
     def holds(q: PlantVariant) -> bool:
-        if q not in base:
-            base[q] = _holds(env, q, np.zeros(4), 1, hold)
-        return base[q]
+        return bool(np.all(np.isfinite(end(q))))
+
+    def keeps(q: PlantVariant, a: np.ndarray, r: int) -> bool:
+        return _keeps(env, q, a, r, hold, end(q), count)
 
     lines = shadow_lines(design, axis.plant.motor.rated_torque_nm, o.shadow)
     bounds = {line: boundary_plants(line, holds, BISECTIONS) for line in lines}
@@ -471,13 +493,13 @@ def _outside(
             residual[q] = told.residual
     out = []
     for i, (c, qs, found, r_in) in enumerate(zip(conts, mine, cands, far, strict=True)):
-        breaks = {q: not _holds(env, q, c.action, c.ramp, hold) for q in qs}
+        breaks = {q: not keeps(q, c.action, c.ramp) for q in qs}
         broken = [q for q in qs if breaks[q]]
         if not broken:
             out.append(c)
             continue
         lines_c = [(line, bounds[line]) for line in lines if set(qs) & {*line, *bounds[line]}]
-        r_out = _nearest_break(env, table, c, breaks, lines_c, holds, residual)
+        r_out = _nearest_break(env, table, c, breaks, lines_c, holds, keeps, residual)
         if r_out > r_in:  # every plant that breaks it lies beyond the in-range ones
             c = replace(c, trusted=min(c.threshold, 0.5 * (r_in + r_out)))
         near = check_plants(design, i, o.neighbours, o.probes)
@@ -493,9 +515,9 @@ def _outside(
         rest = [q for q in qs if q not in broken]
         again = _search(env, hold, c.plant, [*broken, *near, *rest], o)[0]
         if again[2] <= base_cost:
-            pool.append((again, []))
+            pool.append((again, qs))
         for (a, r, cost), check in sorted(pool, key=lambda x: x[0][2]):
-            if np.any(a != 0.0) and all(_holds(env, q, a, r, hold) for q in check):
+            if np.any(a != 0.0) and all(keeps(q, a, r) for q in check):
                 out.append(replace(c, action=a, ramp=r, cost=cost, searched_action=c.action,
                                    searched_ramp=c.ramp))  # fmt: skip
                 break
@@ -511,6 +533,7 @@ def _nearest_break(
     known: dict[PlantVariant, bool],
     lines: list[tuple[tuple[PlantVariant, ...], list[PlantVariant]]],
     holds: Any,
+    keeps: Any,
     residual: dict[PlantVariant, float],
 ) -> float:
     """The least residual, from ``c``'s signature, of a plant told as ``c`` where the base
@@ -522,7 +545,7 @@ def _nearest_break(
 
     def breaks(q: PlantVariant) -> bool:
         if q not in cache:
-            cache[q] = not _holds(env, q, c.action, c.ramp, table.hold)
+            cache[q] = not keeps(q, c.action, c.ramp)
         return cache[q]
 
     r = min(residual[q] for q, b in known.items() if b)
