@@ -2,7 +2,7 @@
 drawn from the axis's move distribution (its ``random:`` train set, or one spanning the
 moves it lists) on its plant and measures. For a new move the model picks, among the
 training moves' optimal settings, the one of least cost on the training moves most like it,
-of its 8 best-ranked the best when simulated on the move itself. Writes
+of its 64 candidates the best when simulated on the move itself. Writes
 ``runs/fit/<name>/``: ``settings_model.json`` (for ``vfgym predict --model`` and ``vfgym
 evaluate --model``), ``optima.csv`` and ``costs.npz`` (what it learnt from), ``verdict.txt``
 and ``summary.yaml`` (the held-out verdict on the axis's test moves against the best fixed
@@ -39,7 +39,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--moves",
         type=whole(8, 5000),
         default=d.moves,
-        help=f"training moves, 8 to 5000 (default {d.moves}: about 3 min on 2 cores)",
+        help=f"training moves, 8 to 5000 (default {d.moves}: about 7 min on 2 cores)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
