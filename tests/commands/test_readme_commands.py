@@ -47,7 +47,7 @@ TRIMS = {
         "evaluate 269 543 settings in ~3 min)"
     ),
     "evaluate": "evaluate: 4 test scenarios and 200 bootstrap resamples (README: 32 and 2000)",
-    "fit": "fit: 8 training moves (the default 160 take ~3-4 min here)",
+    "fit": "fit: 8 training moves (the default 160 take ~7 min here)",
     "refine": "refine: 3 trials (the docs' 150 on a long belt move take a minute or more)",
     "train": (
         "train: 64 timesteps on 2 envs with tiny batches, one held-out scenario (README: "
