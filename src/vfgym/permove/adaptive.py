@@ -514,8 +514,8 @@ def _outside(
         # searched again, feasible also where it broke and on the other plants checked
         rest = [q for q in qs if q not in broken]
         again = _search(env, hold, c.plant, [*broken, *near, *rest], o)[0]
-        if again[2] <= base_cost:
-            pool.append((again, qs))
+        if again[2] <= base_cost:  # feasible on qs by its search; their ends checked apart
+            pool.append((again, qs if count else []))
         for (a, r, cost), check in sorted(pool, key=lambda x: x[0][2]):
             if np.any(a != 0.0) and all(keeps(q, a, r) for q in check):
                 out.append(replace(c, action=a, ramp=r, cost=cost, searched_action=c.action,
