@@ -21,6 +21,12 @@ AXIS = Path(__file__).resolve().parents[2] / "experiments" / "axes" / "loads-unc
 FAST = AdaptiveOptions(evals=12, neighbours=1, probes=1)
 
 
+def _holds(env, plant, action, ramp, hold) -> bool:
+    """Whether ``action``, ramped over ``ramp`` after the hold, keeps every limit on ``plant``."""
+    act = lambda t: _episodes._ramp(action, ramp, hold, t)  # noqa: E731
+    return bool(_episodes._episode(env, plant, act)[0]["feasible"])
+
+
 @pytest.fixture(scope="module")
 def setup():
     axis = load_axis(AXIS)
@@ -119,7 +125,7 @@ def test_a_continuation_a_shadow_plant_breaks_is_replaced_or_the_base_held(setup
     mended = fixed.continuations[i]
     assert mended.safer and np.array_equal(mended.searched_action, bad)
     assert not np.array_equal(mended.action, bad)
-    assert _episodes._holds(env, shadow, mended.action, mended.ramp, table.hold)
+    assert _holds(env, shadow, mended.action, mended.ramp, table.hold)
     monkeypatch.setattr(adaptive, "GENTLER", ())  # no gentler version of it to fall back on
     nothing = [(np.zeros(4), 1, float(good.cost))]  # ... and the search again finds none
     monkeypatch.setattr(adaptive, "_search", lambda *args: nothing)
@@ -157,8 +163,8 @@ def test_a_plant_between_shadows_where_the_base_just_holds_is_checked(setup, mon
     forged = replace(table, continuations=tuple(searched))
     cands = [[(c.action, c.ramp, c.cost)] for c in searched]
     c = searched[i]
-    assert _episodes._holds(env, plant, np.zeros(4), 1, table.hold)  # the base holds there
-    assert not _episodes._holds(env, plant, c.action, c.ramp, table.hold)  # the search's breaks
+    assert _holds(env, plant, np.zeros(4), 1, table.hold)  # the base holds there
+    assert not _holds(env, plant, c.action, c.ramp, table.hold)  # the search's breaks
     tables = {}
     for steps in (0, adaptive.BISECTIONS):
         monkeypatch.setattr(adaptive, "BISECTIONS", steps)
@@ -193,12 +199,12 @@ def test_a_continuation_an_in_range_plant_told_as_its_plant_breaks_is_replaced(s
         for x in itertools.product((-1.0, 0.0, 1.0), (0.0,), (-1.0, 0.0, 1.0), (-1.0, 0.0, 1.0)):
             a = np.array(x)
             for i, c in enumerate(conts):
-                if not a.any() or not _episodes._holds(env, c.plant, a, 1, hold):
+                if not a.any() or not _holds(env, c.plant, a, 1, hold):
                     continue
                 for q, t in told.items():
                     mine = t.continuation is c and t.fits and q != c.plant
-                    base_holds = mine and _episodes._holds(env, q, np.zeros(4), 1, hold)
-                    if base_holds and not _episodes._holds(env, q, a, 1, hold):
+                    base_holds = mine and _holds(env, q, np.zeros(4), 1, hold)
+                    if base_holds and not _holds(env, q, a, 1, hold):
                         return i, a, q
         raise AssertionError("no correction of the grid breaks an in-range plant")
 
@@ -211,7 +217,7 @@ def test_a_continuation_an_in_range_plant_told_as_its_plant_breaks_is_replaced(s
         assert q in mended.shadows
     else:
         assert mended.safer and np.array_equal(mended.searched_action, bad)
-        assert _episodes._holds(env, q, mended.action, mended.ramp, hold)
+        assert _holds(env, q, mended.action, mended.ramp, hold)
 
 
 def test_a_response_nearer_than_every_plant_that_breaks_the_cheapest_still_runs_it(setup):

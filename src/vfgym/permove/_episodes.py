@@ -1,7 +1,8 @@
 """The episodes :class:`vfgym.permove.adaptive.EstimatingScheduler` runs on VFServo-v0 to
 build a move's table: the base held over the hold and a residual action ramped to after it
 (:func:`_ramp`), a plant's signature over the hold, whether an action keeps every limit on
-a plant, and the CMA-ES search of a continuation."""
+a plant (and, with a count, ends the move inside the window wherever the base does), and
+the CMA-ES search of a continuation."""
 
 from __future__ import annotations
 
@@ -32,11 +33,6 @@ END_CONSTRAINTS = ("overshoot", "arrival")
 """The constraints settled where the move ends (:data:`vfgym.scoring.CONSTRAINTS`)."""
 INFEASIBLE = 10.0
 """Added to the search's cost of a continuation that breaks a limit on one of its plants."""
-
-
-def _holds(env: VFServoEnv, plant: PlantVariant, action: np.ndarray, ramp: int, hold: int) -> bool:
-    """Whether ``action``, ramped over ``ramp`` after the hold, keeps every limit on ``plant``."""
-    return bool(_episode(env, plant, lambda t: _ramp(action, ramp, hold, t))[0]["feasible"])
 
 
 def _end(info: dict[str, Any]) -> np.ndarray:
