@@ -22,6 +22,7 @@ from vfgym.envs._decision import (
     CALIBRATION_PLANTS,
     N_SIGNATURE,
     REWARD_SCALE,
+    alike_plants,
     calibration_plants,
     check_plants,
     ramp_of,
@@ -29,6 +30,7 @@ from vfgym.envs._decision import (
 from vfgym.envs.servo import VFServoEnv
 
 AXIS = Path(__file__).resolve().parents[2] / "experiments" / "axes" / "loads-uncertain.yaml"
+AXIS3 = AXIS.with_name("loads-uncertain-3.yaml")
 SERVO = "vfgym/VFServo-v0"
 ONCE = {"residual": True, "residual_scale": [1.0, 0.0, 1.0, 1.0], "decision": "once"}
 
@@ -90,6 +92,15 @@ def test_the_zero_action_is_the_base_exactly():
         assert reward == 0.0 and info["cost"] == info["base_cost"]
 
 
+def test_a_move_over_within_the_hold_decides_nothing():
+    env = VFServoEnv(**ONCE, interval_s=0.001, hold_s=0.1)
+    env.reset(seed=0)
+    assert env.decision.ended_in_hold is not None  # this move settles within 100 ms
+    _, reward, terminated, _, info = env.step(np.array([0.1, 0, 0.1, 0.1, 0.5], np.float32))
+    assert reward == 0.0 and terminated and info["cost"] == info["base_cost"]
+    assert not info["shielded"] and not np.any(info["correction"])
+
+
 def test_the_shield_checks_the_told_plants_and_never_the_true_one():
     """Whether a correction is shielded is what its runs on the told design plant, its
     neighbours, the plants between and the in-range grid's plants told as it say, against
@@ -140,10 +151,136 @@ def test_the_shield_checks_the_told_plants_and_never_the_true_one():
     assert shielded and kept  # both seen
 
 
+def test_a_gentler_shield_runs_the_first_halving_that_breaks_no_checked_plant():
+    """With ``shield_gentler=g`` a correction that breaks a limit the base holds on a
+    checked plant is tried halved, quartered ... g times on the same plants, and the first
+    that breaks none runs on the true plant (the base where none does): each checked
+    against the per-interval env's episodes of the same schedules."""
+    axis = load_axis(AXIS)
+    kw = {**ONCE, "axis": axis, "interval_s": 0.001}
+    env = VFServoEnv(**kw, shield=True, shield_gentler=2)
+    every = VFServoEnv(**{**kw, "decision": "interval"})
+    design = tuple(axis.design_plants())
+    hold = 2
+    rng = np.random.default_rng(3)
+    seen = set()
+    for k in range(5):
+        seed = 40 + k
+        true = PlantVariant(inertia=float(rng.uniform(0.8, 1.25)))
+        env.reset(options={"scenario_seed": seed, "plant": true})
+        ramp = ramp_of(-0.9, -(-env.episode.command.size // 140) - hold)
+        dc = env.decision
+        told = dc.told()
+        plants = [design[told], *check_plants(design, told, 2, 2)]
+        plants += dc._told_as(env.episode, dc._move_cache(env.episode), told)
+        action = rng.uniform(-0.9, 0.9, 4).astype(np.float32).astype(np.float64)
+        base_ok = {}
+        for p in plants:
+            opts = {"scenario_seed": seed, "plant": p}
+            base_ok[p] = interval_episode(every, opts, hold, ramp, np.zeros(4))[1]["feasible"]
+        ran = None  # the halvings: the first that breaks no limit the base holds
+        for i in range(3):
+            tried = action * 0.5**i
+            ends = [interval_episode(every, {"scenario_seed": seed, "plant": p}, hold, ramp,
+                                     tried)[1] for p in plants if base_ok[p]]  # fmt: skip
+            if all(e["feasible"] for e in ends):
+                ran = i
+                break
+        opts = {"scenario_seed": seed, "plant": true}
+        want = np.zeros(4) if ran is None else action * 0.5**ran
+        _, expect = interval_episode(every, opts, hold, ramp, want)
+        info = env.step(np.r_[action, -0.9].astype(np.float32))[4]
+        assert info["cost"] == expect["cost"] and info["shielded"] == (ran != 0)
+        seen.add(ran)
+    assert seen & {1, 2}, seen  # a halving run (besides the whole or the base)
+
+
+def hold_signature(env: VFServoEnv, options: dict, hold: int) -> np.ndarray:
+    """The per-interval env's first ``hold`` observations' dynamic features, the base held."""
+    env.reset(options=options)
+    return np.concatenate([env.step(np.zeros(4))[0][:N_SIGNATURE] for _ in range(hold)])
+
+
+def test_alike_plants_are_every_combination_of_ends_and_own_values():
+    design = tuple(load_axis(AXIS3).design_plants())
+    for i, count in ((0, 2**3 - 1), (len(design) - 1, 3**3 - 1)):  # a corner, a point inside
+        out = alike_plants(design, i)
+        assert len(out) == len(set(out)) == count and design[i] not in out
+        for k in ("inertia", "torque_per_count", "load_offset_nm"):
+            ends = {min(getattr(p, k) for p in design), max(getattr(p, k) for p in design)}
+            assert {getattr(q, k) for q in out} == ends | {getattr(design[i], k)}
+
+
+def test_the_shield_checks_the_plants_the_hold_cannot_tell_from_the_told_one():
+    """With three uncertain quantities a 2 ms hold tells the inertia, hardly the drive's
+    gain or a load torque: the shield also checks the told design plant with those at
+    their ranges' ends (those told as it), each against the per-interval env's episodes;
+    on some moves only such a plant breaks the correction."""
+    axis = load_axis(AXIS3)
+    kw = {**ONCE, "axis": axis, "interval_s": 0.001}
+    env = VFServoEnv(**kw, shield=True)
+    every = VFServoEnv(**{**kw, "decision": "interval"})
+    design = tuple(axis.design_plants())
+    hold = 2
+    rng = np.random.default_rng(5)
+    seen = set()
+    for k in range(8):
+        seed = 60 + k
+        sigs = [hold_signature(every, {"scenario_seed": seed, "plant": p}, hold) for p in design]
+
+        def told_as(p: PlantVariant, seed: int = seed, sigs: list = sigs) -> int:
+            sig = hold_signature(every, {"scenario_seed": seed, "plant": p}, hold)
+            return int(np.argmin([np.sum((s - sig) ** 2) for s in sigs]))
+
+        true = replace_plant(rng)
+        env.reset(options={"scenario_seed": seed, "plant": true})
+        told = told_as(true)
+        dc = env.decision
+        held = dc._move_cache(env.episode)
+        alike = [q for q in alike_plants(design, told) if told_as(q) == told]
+        assert dc.told() == told and dc._alike(env.episode, held, told) == alike
+        others = [design[told], *check_plants(design, told, 2, 2)]
+        others += dc._told_as(env.episode, held, told)
+        ramp = ramp_of(-0.8, -(-env.episode.command.size // 140) - hold)
+        action = rng.uniform([-0.3, -0.3, 0.0, 0.0], 0.9).astype(np.float32)  # k, Ts/Tf up
+
+        def breaks(plants: list, action=action, seed: int = seed, ramp: int = ramp) -> bool:
+            for p in plants:
+                opts = {"scenario_seed": seed, "plant": p}
+                _, cand = interval_episode(every, opts, hold, ramp, action)
+                _, base = interval_episode(every, opts, hold, ramp, np.zeros(4))
+                if base["feasible"] and not cand["feasible"]:
+                    return True
+            return False
+
+        by_others = breaks(others, action)
+        for _ in range(3):  # toward the edge the told plant's checks allow
+            if not by_others:
+                break
+            action = (action / 2).astype(np.float32)
+            by_others = breaks(others, action)
+        by_alike = not by_others and breaks([q for q in alike if q not in others], action)
+        _, _, _, _, info = env.step(np.r_[action, -0.8].astype(np.float32))
+        assert info["shielded"] == (by_others or by_alike)
+        seen.add((by_others, by_alike))
+    assert (False, True) in seen, seen  # a correction only a plant alike breaks
+
+
+def replace_plant(rng: np.random.Generator) -> PlantVariant:
+    """A true plant drawn uniformly in loads-uncertain-3's ranges."""
+    return PlantVariant(
+        inertia=float(rng.uniform(0.8, 1.25)),
+        torque_per_count=float(rng.uniform(0.85, 1.15)),
+        load_offset_nm=float(rng.uniform(-0.003, 0.003)),
+    )
+
+
 def test_the_vector_env_equals_single_envs_and_sb3_accepts_it():
     kw = {**ONCE, "seed_range": (0, 20), "interval_s": 0.001, "hold_s": 0.002}
     for mode in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP):
         assert compare_runs(SERVO, 3, 4, mode, **kw) >= 6
+    shielded = {"axis": str(AXIS3), "tell": True, "shield": True, "shield_gentler": 2}
+    assert compare_runs(SERVO, 3, 3, AutoresetMode.NEXT_STEP, **kw, **shielded) >= 3
     check_env = pytest.importorskip("stable_baselines3.common.env_checker").check_env
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -217,6 +354,10 @@ def test_bad_decision_actions_name_themselves():
         ({**ONCE, "hold_s": 0.2, "interval_s": 0.001}, "hold_s=0.2 is not allowed"),
         ({"shield": True, "axis": str(AXIS), "residual": True}, "shield=True is not allowed"),
         ({**ONCE, "shield": 1, "axis": str(AXIS)}, "shield=1 must be a bool"),
+        ({**ONCE, "shield_gentler": 1}, "shield_gentler=1 is not allowed here"),
+        ({**ONCE, "shield": True, "shield_gentler": -1}, "shield_gentler=-1"),
+        ({**ONCE, "shield": True, "shield_gentler": 9}, "shield_gentler=9"),
+        ({**ONCE, "shield": True, "shield_gentler": 1.5}, "shield_gentler=1.5"),
         ({"tell": True, "residual": True}, "tell=True is not allowed"),
     ],
 )

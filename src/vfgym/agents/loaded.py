@@ -471,7 +471,8 @@ def schedule_of(
     start (ms) and the settings in force through it (read back from the observation's
     ``setting_*`` entries, float32), then the scored move's cost and feasibility. An agent
     of one decision a move (``decision="once"``) has its decision replayed interval by
-    interval: the base over the hold, the ramp, the correction (the base if shielded).
+    interval: the base over the hold, the ramp, the correction that ran (``info["correction"]``:
+    gentler or the base's where shielded).
 
     Parameters
     ----------
@@ -499,13 +500,14 @@ def schedule_of(
         obs, _ = env.reset(options={"scenario": scenario})
         action = np.asarray(agent.act(obs), dtype=np.float64)
         *_, info = env.step(action)
-        act = np.zeros(4) if info["shielded"] else action[:4]
+        act = info["correction"]  # the one run: the action, a gentler one or the base's 0
         hold, ramp = config.hold_intervals, info["ramp"]
 
         def plan(t: int) -> np.ndarray:
             return np.zeros(4) if t < hold else act * min(1.0, (t - hold + 1) / ramp)
 
-        env = make_env(agent.env_id, {**kw, "decision": "interval", "tell": False, "shield": False})
+        off = {"decision": "interval", "tell": False, "shield": False, "shield_gentler": 0}
+        env = make_env(agent.env_id, {**kw, **off})
     law = env.unwrapped.accel_law
     interval_ms = env.unwrapped.core.config.interval_s * 1e3
     first = SERVO_FEATURES.index("setting_value")

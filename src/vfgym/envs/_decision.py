@@ -32,7 +32,11 @@ plants on the way to them, up to halfway (:func:`check_plants`), and where it br
 the base holds on one of them the base is run instead; and on the in-range plants of a grid
 over the ranges (:func:`calibration_plants`) whose hold responses are told as the same
 design plant (with three uncertain quantities the neighbours' checks leave much of a
-design plant's cell unchecked). The true plant is never read.
+design plant's cell unchecked); and on the told plant with its quantities at their ranges'
+ends (:func:`alike_plants`) where their hold responses are told as it (a 2 ms hold shows
+the inertia, hardly the drive's gain or a load torque). With ``shield_gentler`` a
+correction that breaks is tried halved, quartered ... on the same plants before the base.
+The true plant is never read.
 
 Every continuation of a step (the candidate and the base on the true plant and on each
 checked plant) starts from its plant's state at the end of the hold and runs in the
@@ -43,6 +47,7 @@ were no faster on a whole move (16 continuations of a 21 000-tick move: 20 ms in
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections import OrderedDict
 from dataclasses import fields, replace
@@ -200,6 +205,35 @@ def calibration_plants(design: tuple[PlantVariant, ...], count: int) -> list[Pla
     return out
 
 
+def alike_plants(design: tuple[PlantVariant, ...], i: int) -> list[PlantVariant]:
+    """Design plant ``i`` with each uncertain quantity at its range's low end, its own
+    value or the high end, every combination but itself (3^d - 1 plants for d
+    quantities): where a true plant that responds as plant ``i`` over the hold may lie.
+
+    Parameters
+    ----------
+    design : tuple of PlantVariant
+        The axis's design plants (their corners span the ranges).
+    i : int
+        The plant's index.
+
+    Returns
+    -------
+    list of PlantVariant
+        The plants, without duplicates.
+    """
+    span = plant_spans(design)
+    p = design[i]
+    levels = {k: (min(getattr(q, k) for q in design), getattr(p, k),
+                  max(getattr(q, k) for q in design)) for k in span}  # fmt: skip
+    out = []
+    for idx in itertools.product(range(3), repeat=len(span)):
+        q = replace(p, **{k: levels[k][j] for k, j in zip(span, idx, strict=True)})
+        if q != p:
+            out.append(q)
+    return list(dict.fromkeys(out))
+
+
 def ramp_of(x: float, longest: int) -> int:
     """The ramp's length in control intervals for an action's fifth entry ``x`` in
     [-1, 1]: 1 (a jump) at -1 to ``longest`` at +1, rounded.
@@ -249,9 +283,10 @@ J.guard_cache(continue_move, (B, K, L))
 
 class _Plants(dict):
     """One move's checked plants' hold states (plant → :class:`_Held`), and, once worked
-    out, the calibration plants told as each design plant."""
+    out, the calibration plants told as each design plant and the plants alike each."""
 
     told_as: list[list[PlantVariant]] | None = None
+    alike: dict[int, list[PlantVariant]] | None = None
 
 
 class _Held:
@@ -417,6 +452,19 @@ class DecisionCore:
             held.told_as = out
         return held.told_as[i]
 
+    def _alike(self, ep: Episode, held: _Plants, i: int) -> list[PlantVariant]:
+        """Design plant ``i`` with its quantities at their ranges' ends and its own values
+        (every combination, :func:`alike_plants`) that are told as it on ``ep``'s move: the
+        plants its hold response cannot tell from it (a 2 ms hold shows the inertia, hardly
+        the drive's gain or a load torque)."""
+        if held.alike is None:
+            held.alike = {}
+        if i not in held.alike:
+            own = [q for q in alike_plants(self.design, i)
+                   if self._nearest(held, self._held(ep, held, q).signature) == i]  # fmt: skip
+            held.alike[i] = own
+        return held.alike[i]
+
     # -- the decision ------------------------------------------------------------------
     def _outcome(self, w: np.ndarray, ep: Episode) -> tuple[float, bool, Any]:
         """The scored move of a lane's accumulators on its plant: (cost, feasible, score)."""
@@ -435,46 +483,48 @@ class DecisionCore:
         if self.ended_in_hold is not None:  # nothing left to decide
             reward, info = self.ended_in_hold
             info.update(base_cost=info["cost"], base_feasible=info["feasible"], shielded=False,
-                        ramp=ramp_of(action[4], self.longest()))  # fmt: skip
+                        ramp=self.ramp, correction=np.zeros(4))  # fmt: skip
             return 0.0, info
-        runs: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = [
-            (self._w, self._ring, action),
-            (self._w, self._ring, np.zeros(4)),
-        ]
         checked: list[_Held] = []
         told = -1
         if self.shield:
             told = self.told()
             held = self._move_cache(ep)
-            for p in [self.design[told], *self.checks[told], *self._told_as(ep, held, told)]:
-                h = self._held(ep, held, p)
-                checked.append(h)
-                runs.append((h.w, h.ring, action))
-                if h.base is None:
-                    runs.append((h.w, h.ring, np.zeros(4)))
-        out = self._run(runs)
-        (c, ok, s), (c0, ok0, s0) = (self._outcome(out[0], ep), self._outcome(out[1], ep))
-        shielded = False
-        k = 2
-        for h in checked:
-            _, okk, _ = self._outcome(out[k], h.ep)
-            k += 1
-            if h.base is None:
-                cb, okb, _ = self._outcome(out[k], h.ep)
-                h.base = (cb, okb)
-                k += 1
-            if h.base[1] and not okk:
-                shielded = True
-        if shielded:
+            told_as = self._told_as(ep, held, told)
+            alike = self._alike(ep, held, told)
+            for p in dict.fromkeys([self.design[told], *self.checks[told], *told_as, *alike]):
+                checked.append(self._held(ep, held, p))
+        c0, ok0, s0 = self._outcome(self._run([(self._w, self._ring, np.zeros(4))])[0], ep)
+        shielded, ran = False, np.zeros(4)
+        for i in range(self.config.shield_gentler + 1 if checked else 1):
+            tried = action * 0.5**i  # the correction, then halved ... toward the base
+            if not self._breaks(checked, tried):
+                shielded, ran = i > 0, tried
+                c, ok, s = self._outcome(self._run([(self._w, self._ring, tried)])[0], ep)
+                break
+        else:
+            shielded = True
             c, ok, s = c0, ok0, s0
         reward = REWARD_SCALE * (c0 - c) / c0
         if ok0 and not ok:
             reward -= self.config.violation_penalty
         info = scored_info(ep, s.metrics, s.cost, s.constraints)
-        info.update(base_cost=c0, base_feasible=ok0, shielded=shielded, ramp=self.ramp)
+        info.update(base_cost=c0, base_feasible=ok0, shielded=shielded, ramp=self.ramp,
+                    correction=ran)  # fmt: skip
         if told >= 0:
             info["told_plant"] = self.design[told]  # for evaluation: the estimate
         return reward, info
+
+    def _breaks(self, checked: list[_Held], action: np.ndarray) -> bool:
+        """Whether ``action`` breaks a limit on a checked plant where the base holds it
+        (each plant's base run once a move, then remembered)."""
+        for h in checked:
+            if h.base is None:
+                cb, okb, _ = self._outcome(self._run([(h.w, h.ring, np.zeros(4))])[0], h.ep)
+                h.base = (cb, okb)
+        held = [h for h in checked if h.base[1]]
+        out = self._run([(h.w, h.ring, action) for h in held])
+        return any(not self._outcome(w, h.ep)[1] for w, h in zip(out, held, strict=True))
 
     def _run(self, runs: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> list[np.ndarray]:
         """Each (workspace, ring, action) run from the hold to the move's end; each one's
@@ -491,6 +541,8 @@ __all__ = [
     "N_SIGNATURE",
     "REWARD_SCALE",
     "DecisionCore",
+    "alike_plants",
+    "calibration_plants",
     "check_plants",
     "continue_move",
     "plant_between",

@@ -9,7 +9,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from vfgym._validate import check_choice, check_real
+from vfgym._validate import check_choice, check_int, check_real
 from vfgym.moves.features import OBS_BOUND, SCENARIO_FEATURES
 from vfgym.moves.scenarios import Scenario
 from vfgym.params import PAPER_SETTINGS, Settings
@@ -122,8 +122,15 @@ class ServoConfig(EnvConfig):
         nearest design plant's quantities and a blend of the three nearest).
     shield : bool
         With ``decision="once"``: check the correction on the axis's design plants whose
-        hold response is nearest the one seen (on an exactly known axis, its plant), and
-        run the base instead where it breaks a limit the base holds there.
+        hold response is nearest the one seen (on an exactly known axis, its plant), on
+        in-range plants told as the same and on the plants the hold cannot tell from it
+        (:mod:`vfgym.envs._decision`), and run the base instead where it breaks a limit
+        the base holds there.
+    shield_gentler : int
+        With ``shield``: where the correction breaks, try it halved, then quartered ...
+        this many times (0 to 8), each on the same plants, and run
+        the first that breaks none of their limits the base holds; the base only where
+        none does (the scheduler's gentler candidate, :mod:`vfgym.permove.adaptive`).
 
     Raises
     ------
@@ -141,6 +148,7 @@ class ServoConfig(EnvConfig):
     hold_s: float = SERVO_HOLD_S
     tell: bool = False
     shield: bool = False
+    shield_gentler: int = 0
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -175,6 +183,9 @@ class ServoConfig(EnvConfig):
         for name in ("tell", "shield"):
             if getattr(self, name) and self.decision != "once":
                 raise ValueError(f"{name}=True is not allowed here: it needs decision='once'")
+        s(self, "shield_gentler", g := check_int("shield_gentler", self.shield_gentler, 0, 8))
+        if g and not self.shield:
+            raise ValueError(f"shield_gentler={g!r} is not allowed here: it needs shield=True")
 
     def default_base(self) -> Settings:
         """The base of residual actions when ``residual_base`` is None, and the settings
@@ -390,7 +401,7 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
     accel_law="rise", interval_s=1e-3, settle_time_s=5e-3,
     initial_settings=PAPER_SETTINGS, tracking_weight=0.0, terminate_on_violation=False,
     violation_penalty=5.0, residual=False, residual_scale=0.25, residual_base=None,
-    decision="interval", hold_s=0.002, tell=False, shield=False,
+    decision="interval", hold_s=0.002, tell=False, shield=False, shield_gentler=0,
     axis=LOADS_AXIS, weights=DEFAULT_WEIGHTS, bounds=DEFAULT_BOUNDS, render_mode=None)``; see
     Parameters.
 
@@ -418,7 +429,8 @@ class VFServoEnv(gym.Env[np.ndarray, np.ndarray]):
         before the first action), ``tracking_weight`` (weight of the tracking-error
         shaping term; 0: none), ``terminate_on_violation`` and ``violation_penalty`` (end
         on a constraint violation, with this extra negative reward), ``decision``,
-        ``hold_s``, ``tell`` and ``shield`` (one decision a move, above).
+        ``hold_s``, ``tell``, ``shield`` and ``shield_gentler`` (one decision a move,
+        above).
 
     Raises
     ------
