@@ -470,7 +470,7 @@ def main(argv: list[str] | None = None) -> int:
     n = len(test) * max(1, len(variants))
     if args.base == "own":
         first, how = own_base(folders, axis)
-        where = None if args.exact else args.axis
+        where = axis if args.exact else args.axis
     else:
         first, how = load_tuner(base_file, axis, warn=print), f"vfgym fit --axis {args.axis}"
         where = axis

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
+import yaml
 
 from vfgym.cli import main
 
@@ -142,3 +143,25 @@ def test_adaptive_headroom_runs_and_no_schedule_is_worse_than_the_base():
     ratio = next(ln for ln in out.stdout.splitlines() if ln.startswith("| / base |"))
     cells = [c.strip() for c in ratio.split("|")[2:] if c.strip()]
     assert len(cells) == 4 and all(float(x) <= 1.0 for x in cells)
+
+
+def test_judged_with_copies_runs_with_env_arguments_and_benchmarks_the_copies(tmp_path):
+    from vfgym.agents import hyperparams as hp
+    from vfgym.agents import train
+
+    tiny = {"n_envs": 2, "n_steps": 16, "batch_size": 32, "n_epochs": 1, "n_timesteps": 64,
+            "eval_freq": 32, "n_eval_scenarios": 2, "checkpoint_freq": 32,
+            "policy_kwargs": {"net_arch": [8]}}  # fmt: skip
+    params = hp.load("ppo", "vfgym/VFServo-v0", hp.HYPERPARAMS_DIR / "ppo.yml", tiny)
+    trained = tmp_path / "run"
+    trained.mkdir()
+    train("ppo", "vfgym/VFServo-v0", params, trained, seed=0, progress=False, log=lambda _: None)
+    out = tmp_path / "judged"
+    text = run("judged_with.py", "--runs", str(trained), "--set", "shield_gentler=1",
+               "--out", str(out), "--", "--exact", "--base", "own", "--moves", "2")  # fmt: skip
+    assert re.search(r"^\| ppo \| 0 \|", text, re.M), text
+    copied = yaml.safe_load((out / "runs" / "run" / "config.yaml").read_text())
+    assert copied["hyperparams"]["eval_env_kwargs"] == {"shield_gentler": 1}
+    assert params["env_kwargs"].get("shield_gentler") == 3  # the run's own, kept
+    assert yaml.safe_load((trained / "config.yaml").read_text())["hyperparams"].get(
+        "eval_env_kwargs") is None  # fmt: skip

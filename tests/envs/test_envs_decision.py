@@ -151,16 +151,21 @@ def test_the_shield_checks_the_told_plants_and_never_the_true_one():
     assert shielded and kept  # both seen
 
 
+def shield_and_oracle(axis_file: Path, **options) -> tuple:
+    """(a shielded one-decision env, the per-interval env as its oracle, the design
+    plants) on an axis, 1 ms intervals."""
+    axis = load_axis(axis_file)
+    kw = {**ONCE, "axis": axis, "interval_s": 0.001}
+    every = VFServoEnv(**{**kw, "decision": "interval"})
+    return VFServoEnv(**kw, shield=True, **options), every, tuple(axis.design_plants())
+
+
 def test_a_gentler_shield_runs_the_first_halving_that_breaks_no_checked_plant():
     """With ``shield_gentler=g`` a correction that breaks a limit the base holds on a
     checked plant is tried halved, quartered ... g times on the same plants, and the first
     that breaks none runs on the true plant (the base where none does): each checked
     against the per-interval env's episodes of the same schedules."""
-    axis = load_axis(AXIS)
-    kw = {**ONCE, "axis": axis, "interval_s": 0.001}
-    env = VFServoEnv(**kw, shield=True, shield_gentler=2)
-    every = VFServoEnv(**{**kw, "decision": "interval"})
-    design = tuple(axis.design_plants())
+    env, every, design = shield_and_oracle(AXIS, shield_gentler=2)
     hold = 2
     rng = np.random.default_rng(3)
     seen = set()
@@ -216,11 +221,7 @@ def test_the_shield_checks_the_plants_the_hold_cannot_tell_from_the_told_one():
     gain or a load torque: the shield also checks the told design plant with those at
     their ranges' ends (those told as it), each against the per-interval env's episodes;
     on some moves only such a plant breaks the correction."""
-    axis = load_axis(AXIS3)
-    kw = {**ONCE, "axis": axis, "interval_s": 0.001}
-    env = VFServoEnv(**kw, shield=True)
-    every = VFServoEnv(**{**kw, "decision": "interval"})
-    design = tuple(axis.design_plants())
+    env, every, design = shield_and_oracle(AXIS3)
     hold = 2
     rng = np.random.default_rng(5)
     seen = set()
