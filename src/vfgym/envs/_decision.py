@@ -518,11 +518,13 @@ class DecisionCore:
     def _breaks(self, checked: list[_Held], action: np.ndarray) -> bool:
         """Whether ``action`` breaks a limit on a checked plant where the base holds it
         (each plant's base run once a move, then remembered)."""
+        held = []
         for h in checked:
             if h.base is None:
                 cb, okb, _ = self._outcome(self._run([(h.w, h.ring, np.zeros(4))])[0], h.ep)
                 h.base = (cb, okb)
-        held = [h for h in checked if h.base[1]]
+            if h.base[1]:
+                held.append(h)
         out = self._run([(h.w, h.ring, action) for h in held])
         return any(not self._outcome(w, h.ep)[1] for w, h in zip(out, held, strict=True))
 
