@@ -233,7 +233,7 @@ def test_the_shield_checks_the_plants_the_hold_cannot_tell_from_the_told_one():
             sig = hold_signature(every, {"scenario_seed": seed, "plant": p}, hold)
             return int(np.argmin([np.sum((s - sig) ** 2) for s in sigs]))
 
-        true = replace_plant(rng)
+        true = draw_plant_3(rng)
         env.reset(options={"scenario_seed": seed, "plant": true})
         told = told_as(true)
         dc = env.decision
@@ -267,7 +267,7 @@ def test_the_shield_checks_the_plants_the_hold_cannot_tell_from_the_told_one():
     assert (False, True) in seen, seen  # a correction only a plant alike breaks
 
 
-def replace_plant(rng: np.random.Generator) -> PlantVariant:
+def draw_plant_3(rng: np.random.Generator) -> PlantVariant:
     """A true plant drawn uniformly in loads-uncertain-3's ranges."""
     return PlantVariant(
         inertia=float(rng.uniform(0.8, 1.25)),

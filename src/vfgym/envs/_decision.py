@@ -495,8 +495,8 @@ class DecisionCore:
             for p in dict.fromkeys([self.design[told], *self.checks[told], *told_as, *alike]):
                 checked.append(self._held(ep, held, p))
         c0, ok0, s0 = self._outcome(self._run([(self._w, self._ring, np.zeros(4))])[0], ep)
-        shielded, ran = False, np.zeros(4)
-        for i in range(self.config.shield_gentler + 1 if checked else 1):
+        ran = np.zeros(4)
+        for i in range(self.config.shield_gentler + 1):  # unshielded: nothing checked breaks
             tried = action * 0.5**i  # the correction, then halved ... toward the base
             if not self._breaks(checked, tried):
                 shielded, ran = i > 0, tried
@@ -517,16 +517,15 @@ class DecisionCore:
 
     def _breaks(self, checked: list[_Held], action: np.ndarray) -> bool:
         """Whether ``action`` breaks a limit on a checked plant where the base holds it
-        (each plant's base run once a move, then remembered)."""
-        held = []
+        (each plant's base run once a move, then remembered; no plant run after the first
+        that breaks)."""
         for h in checked:
             if h.base is None:
                 cb, okb, _ = self._outcome(self._run([(h.w, h.ring, np.zeros(4))])[0], h.ep)
                 h.base = (cb, okb)
-            if h.base[1]:
-                held.append(h)
-        out = self._run([(h.w, h.ring, action) for h in held])
-        return any(not self._outcome(w, h.ep)[1] for w, h in zip(out, held, strict=True))
+            if h.base[1] and not self._outcome(self._run([(h.w, h.ring, action)])[0], h.ep)[1]:
+                return True
+        return False
 
     def _run(self, runs: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> list[np.ndarray]:
         """Each (workspace, ring, action) run from the hold to the move's end; each one's
